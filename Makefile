@@ -1,0 +1,28 @@
+# Everything a fresh machine needs: `make run` (main job) and `make test` (test suite).
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: run test lint bench clean-venv
+
+$(STAMP): requirements.txt pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet -r requirements.txt
+	$(PY) -m pip install --quiet --no-deps -e .
+	touch $(STAMP)
+
+## Main job on the embedded default: build the FMU from models/, simulate the paper's five
+## experiments, run the selection comparison on them and on the real recording.
+run: $(STAMP)
+	$(VENV)/bin/spindlebench demo --out results
+
+test: $(STAMP)
+	$(VENV)/bin/ruff check pipeline tests bench
+	$(PY) -m pytest
+
+bench: $(STAMP)
+	for script in bench/*.py; do $(PY) $$script || exit 1; done
+
+clean-venv:
+	rm -rf $(VENV)

@@ -1,0 +1,50 @@
+"""The ``spindlebench`` command line: one sub-command per job, each in its own module.
+
+Each module listed in ``COMMAND_MODULES`` exposes ``register(subparsers)``, which adds its
+sub-command and sets ``func`` on the parser's defaults to a callable taking the parsed args and
+returning an exit status.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from spindlebench import __version__
+from spindlebench.errors import SpindlebenchError
+
+COMMAND_MODULES: tuple[str, ...] = (
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full argument parser with every sub-command registered."""
+    parser = argparse.ArgumentParser(
+        prog="spindlebench",
+        description="Modelica/FMU testbench and temperature-sensitive point selection "
+        "for machine-tool thermal error.",
+    )
+    parser.add_argument("--version", action="version", version=f"spindlebench {__version__}")
+    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module_name in COMMAND_MODULES:
+        importlib.import_module(module_name).register(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: run a sub-command; user errors become one ``error:`` line and status 2."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except SpindlebenchError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,54 @@
+"""Provenance records: every output says which inputs, FMU, seed and packages made it."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import platform
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import spindlebench
+
+TRACKED_PACKAGES = (
+    "numpy", "scipy", "pandas", "matplotlib", "casadi", "pymoca", "fmpy", "scikit-learn",
+)
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for chunk in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def package_versions() -> dict[str, str]:
+    """Installed versions of the packages whose behaviour shapes the numbers."""
+    versions = {"python": platform.python_version(), "spindlebench": spindlebench.__version__}
+    for name in TRACKED_PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    return versions
+
+
+def provenance(**fields: Any) -> dict[str, Any]:
+    """A provenance dict: the caller's fields plus package versions and a creation time.
+
+    The creation time is informational; everything that determines the numbers is in the
+    other fields, so two runs with equal fields give equal data.
+    """
+    record: dict[str, Any] = dict(fields)
+    record["package_versions"] = package_versions()
+    record["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+    return record
+
+
+def file_entry(path: str | os.PathLike[str]) -> dict[str, str]:
+    """Name and hash of an input file, for a provenance record."""
+    return {"path": str(Path(path)), "sha256": sha256_file(path)}
