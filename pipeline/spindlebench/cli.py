@@ -16,6 +16,7 @@ from spindlebench import __version__
 from spindlebench.errors import SpindlebenchError
 
 COMMAND_MODULES: tuple[str, ...] = (
+    "spindlebench.adapters.command",
 )
 
 

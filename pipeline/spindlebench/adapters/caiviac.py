@@ -1,0 +1,192 @@
+"""Cut the CAIVIAC FL_THERMAL 46-hour recording into its runs and write canonical recordings.
+
+The source is one continuous logger file (15 s steps) following a speed schedule: an idle
+baseline, five constant-speed cycles (4 h spindle on, 4 h off) and a stepped-speed block.
+Runs are found from ``spindle_rpm`` alone: a run starts where the spindle switches on after
+standing still, its heating phase lasts while the spindle turns, and its cooling phase is the
+idle stretch up to the next switch-on (or the end of the file). A heating phase with one speed
+is a constant-speed cycle; one with several speeds is the stepped block.
+
+Two ways to cut (``phase``):
+- ``heating`` (default): only the spindle-on part of each run. This is the analogue of the
+  paper's experiments, which are warm-up runs with the machine running; temperature rises and
+  the error are taken relative to the run's first sample, as in the paper.
+- ``cycle``: heating plus the following cool-down. A harder test the paper never made: a static
+  regression has to follow the error back down while parts cool at different rates.
+
+Canonical output per run (``<name>.csv``): ``time_s`` from 0, ``spindle_speed_rpm``,
+``t1_C`` … ``t16_C`` (absolute °C, as measured) and ``ch1_um`` … ``ch5_um`` re-zeroed at the
+run's first sample, like a displacement probe zeroed at the start of an experiment (the offsets
+subtracted are in the sidecar, so the source values are recoverable). ``<name>.json`` carries the
+provenance: source file and SHA-256, 0-based row range, speeds.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+
+from spindlebench import atomic
+from spindlebench.adapters import shared_recordings_dir
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import file_entry, provenance
+
+DATASET = "caiviac-fl-thermal"
+TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
+DISPLACEMENTS = tuple(f"ch{i}_um" for i in range(1, 6))
+SOURCE_COLUMNS = ("time_s", "spindle_rpm", *DISPLACEMENTS, *TEMPERATURES)
+AXIAL_TARGET = "ch3_um"
+SAMPLE_STEP_S = 15.0
+
+Phase = Literal["heating", "cycle"]
+PHASES: tuple[str, ...] = ("heating", "cycle")
+
+
+def default_source() -> Path:
+    """Where the recording lives: ``../shared/recordings/caiviac-fl-thermal/data.csv``."""
+    return shared_recordings_dir() / DATASET / "data.csv"
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of the schedule as 0-based, half-open source row ranges.
+
+    ``start:heating_stop`` is the spindle-on phase, ``heating_stop:stop`` the idle cool-down.
+    """
+
+    name: str
+    kind: Literal["constant", "stepped"]
+    start: int
+    heating_stop: int
+    stop: int
+    speeds_rpm: tuple[float, ...]
+
+    def rows(self, phase: Phase) -> range:
+        """Source rows of this run for the given phase."""
+        return range(self.start, self.heating_stop if phase == "heating" else self.stop)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The whole file cut up: the idle baseline before the first run, then the runs."""
+
+    n_rows: int
+    baseline: range
+    runs: tuple[Run, ...]
+
+
+def read_source(path: str | Path) -> pd.DataFrame:
+    """Read and check the source CSV; every problem is one line naming the file."""
+    path = Path(path)
+    if not path.is_file():
+        raise SpindlebenchError(f"{path}: caiviac source file not found")
+    try:
+        frame = pd.read_csv(path)
+    except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
+        raise SpindlebenchError(f"{path}: not a readable CSV ({exc})") from exc
+    missing = [c for c in SOURCE_COLUMNS if c not in frame.columns]
+    if missing:
+        raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
+    frame = frame[list(SOURCE_COLUMNS)]
+    for column in SOURCE_COLUMNS:
+        values = pd.to_numeric(frame[column], errors="coerce")
+        bad = np.flatnonzero(values.isna().to_numpy())
+        if bad.size:
+            # +2: one header line, 1-based line numbers.
+            raise SpindlebenchError(
+                f"{path}: line {bad[0] + 2}, column {column}: missing or non-numeric value"
+            )
+        frame[column] = values.astype(float)
+    if len(frame) < 2:
+        raise SpindlebenchError(f"{path}: fewer than two data rows")
+    steps = np.diff(frame["time_s"].to_numpy())
+    bad = np.flatnonzero((steps <= 0) | ~np.isclose(steps, steps[0]))
+    if bad.size:
+        raise SpindlebenchError(
+            f"{path}: line {bad[0] + 3}: time_s does not advance by a constant step"
+        )
+    return frame
+
+
+def _blocks(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal half-open index ranges where ``mask`` is true."""
+    padded = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def find_schedule(spindle_rpm: np.ndarray) -> Schedule:
+    """Cut the file at every switch-on of the spindle; see the module docstring."""
+    rpm = np.asarray(spindle_rpm, dtype=float)
+    on_blocks = _blocks(rpm > 0)
+    if not on_blocks:
+        raise SpindlebenchError("spindle_rpm: the spindle never turns, no run to cut")
+    runs: list[Run] = []
+    for number, (start, heating_stop) in enumerate(on_blocks, start=1):
+        stop = on_blocks[number][0] if number < len(on_blocks) else rpm.size
+        speeds = tuple(dict.fromkeys(rpm[start:heating_stop].tolist()))
+        if len(speeds) == 1:
+            kind: Literal["constant", "stepped"] = "constant"
+            name = f"run{number}_{speeds[0]:g}rpm"
+        else:
+            kind = "stepped"
+            name = f"run{number}_stepped"
+        runs.append(Run(name, kind, start, heating_stop, stop, speeds))
+    return Schedule(n_rows=rpm.size, baseline=range(0, on_blocks[0][0]), runs=tuple(runs))
+
+
+def canonical_run(source: pd.DataFrame, run: Run, phase: Phase) -> tuple[pd.DataFrame, dict]:
+    """The canonical table of one run and the zero offsets subtracted from the channels."""
+    rows = source.iloc[run.rows(phase).start : run.rows(phase).stop]
+    table = pd.DataFrame({"time_s": rows["time_s"].to_numpy() - rows["time_s"].iloc[0]})
+    table["spindle_speed_rpm"] = rows["spindle_rpm"].to_numpy()
+    for column in TEMPERATURES:
+        table[column] = rows[column].to_numpy()
+    offsets = {column: float(rows[column].iloc[0]) for column in DISPLACEMENTS}
+    for column in DISPLACEMENTS:
+        table[column] = rows[column].to_numpy() - offsets[column]
+    return table, offsets
+
+
+def write_runs(
+    out_dir: str | Path, source_path: str | Path | None = None, phase: Phase = "heating"
+) -> list[Path]:
+    """Write every run as ``<out_dir>/<name>.csv`` + ``<name>.json``; return the CSV paths."""
+    if phase not in PHASES:
+        raise SpindlebenchError(f"phase: {phase!r} is not one of {', '.join(PHASES)}")
+    source_path = Path(source_path) if source_path is not None else default_source()
+    source = read_source(source_path)
+    schedule = find_schedule(source["spindle_rpm"].to_numpy())
+    source_entry = file_entry(source_path)
+    out_dir = Path(out_dir)
+    written: list[Path] = []
+    for run in schedule.runs:
+        table, offsets = canonical_run(source, run, phase)
+        rows = run.rows(phase)
+        csv_path = out_dir / f"{run.name}.csv"
+        with atomic.atomic_path(csv_path) as tmp:
+            table.to_csv(tmp, index=False, float_format="%.6f")
+        record = provenance(
+            dataset=DATASET,
+            adapter="spindlebench.adapters.caiviac",
+            source=source_entry,
+            phase=phase,
+            run=asdict(run),
+            source_rows={"first": rows.start, "last": rows.stop - 1, "count": len(rows)},
+            source_time_s={
+                "first": float(source["time_s"].iloc[rows.start]),
+                "last": float(source["time_s"].iloc[rows.stop - 1]),
+            },
+            speeds_rpm=list(run.speeds_rpm),
+            axial_target=AXIAL_TARGET,
+            displacement_zero_offsets_um=offsets,
+            license="MIT (c) 2024 CAIVIAC, see LICENSE-MIT-CAIVIAC.txt beside the source",
+        )
+        atomic.write_text(out_dir / f"{run.name}.json", json.dumps(record, indent=2) + "\n")
+        written.append(csv_path)
+    return written
