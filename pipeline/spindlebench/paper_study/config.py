@@ -1,0 +1,167 @@
+"""What the paper comparison runs on: experiments, target, the three sensor groups, k values.
+
+The defaults are the paper's set-up on the canonical synthetic recordings (``exp1`` … ``exp5``,
+``T1`` … ``T20``, the six T1, T6, T8, T10, T13, T16, target ``drift_um``). A TOML file
+(``--config``) or flags change any of it, so the same command runs on real data; flags win
+over the file, the file over the defaults.
+
+TOML keys (all optional)::
+
+    title = "caiviac-fl-thermal, heating runs"
+    target = "ch3_um"
+    train = "run4_5000rpm"                 # recording stem in --recordings
+    tests = ["run1_1250rpm", "run2_2500rpm"]
+    sensors_all = ["t1_C", "t2_C"]          # reference group 1
+    six = "auto"                           # or a list: reference group 2 and the base of
+                                           # the difference group
+    clusters = [2, 3, 4]
+    similarity = "abs-pearson"             # or "literal"
+
+``six = "auto"`` picks the subset by a rule that does not look at the thermal error (the paper
+chose its six by location, one per region of the machine): cut the fuzzy equivalence hierarchy
+of ``sensors_all`` on the training experiment into six clusters and keep, from each, the sensor
+with the largest temperature range (the most active point of that thermal region).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from spindlebench.errors import SpindlebenchError
+
+PAPER_SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
+PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
+AUTO_SIX = "auto"
+SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
+
+_KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity")
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """One comparison: train on ``train``, predict ``tests``, for each group and k."""
+
+    title: str = "paper set-up (exp1 … exp5)"
+    target: str = "drift_um"
+    train: str = "exp1"
+    tests: tuple[str, ...] = ("exp2", "exp3", "exp4", "exp5")
+    sensors_all: tuple[str, ...] = PAPER_SENSORS
+    six: tuple[str, ...] | str = PAPER_SIX
+    clusters: tuple[int, ...] = (2, 3, 4)
+    similarity: str = "abs-pearson"
+    source: str = field(default="defaults", compare=False)
+
+    @property
+    def experiments(self) -> tuple[str, ...]:
+        """Training experiment first, then the predicted ones."""
+        return (self.train, *self.tests)
+
+    def checked(self) -> StudyConfig:
+        """Self, after checks that need no data; one-line errors naming the key."""
+        where = self.source
+        if not self.tests:
+            raise SpindlebenchError(f"{where}: tests: at least one experiment to predict")
+        if self.train in self.tests:
+            raise SpindlebenchError(f"{where}: tests: {self.train!r} is also the training run")
+        if len(set(self.tests)) != len(self.tests):
+            raise SpindlebenchError(f"{where}: tests: an experiment is listed twice")
+        if len(self.sensors_all) < 2 or len(set(self.sensors_all)) != len(self.sensors_all):
+            raise SpindlebenchError(f"{where}: sensors_all: need two or more distinct sensors")
+        if isinstance(self.six, str):
+            if self.six != AUTO_SIX:
+                raise SpindlebenchError(f"{where}: six: {self.six!r} is neither a list nor 'auto'")
+        else:
+            if len(self.six) < 2 or len(set(self.six)) != len(self.six):
+                raise SpindlebenchError(f"{where}: six: need two or more distinct sensors")
+            unknown = [s for s in self.six if s not in self.sensors_all]
+            if unknown:
+                raise SpindlebenchError(
+                    f"{where}: six: {', '.join(unknown)} not among sensors_all"
+                )
+        if not self.clusters or any(k < 1 for k in self.clusters):
+            raise SpindlebenchError(f"{where}: clusters: need one or more integers >= 1")
+        if self.similarity not in SIMILARITIES:
+            raise SpindlebenchError(
+                f"{where}: similarity: {self.similarity!r} is not one of {', '.join(SIMILARITIES)}"
+            )
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values, for provenance and the README."""
+        return {
+            "title": self.title, "target": self.target, "train": self.train,
+            "tests": list(self.tests), "sensors_all": list(self.sensors_all),
+            "six": self.six if isinstance(self.six, str) else list(self.six),
+            "clusters": list(self.clusters), "similarity": self.similarity,
+            "source": self.source,
+        }
+
+
+def split_list(text: str) -> tuple[str, ...]:
+    """``"a, b,c"`` -> ``("a", "b", "c")`` (for comma-separated flags)."""
+    return tuple(item.strip() for item in text.split(",") if item.strip())
+
+
+def _names(value: Any, key: str, where: str) -> tuple[str, ...]:
+    if isinstance(value, str):
+        return split_list(value)
+    if isinstance(value, list) and all(isinstance(item, str) for item in value):
+        return tuple(value)
+    raise SpindlebenchError(f"{where}: {key}: expected a list of names")
+
+
+def _ints(value: Any, key: str, where: str) -> tuple[int, ...]:
+    if isinstance(value, str):
+        try:
+            return tuple(int(item) for item in split_list(value))
+        except ValueError:
+            raise SpindlebenchError(f"{where}: {key}: expected integers, got {value!r}") from None
+    if isinstance(value, list) and all(isinstance(i, int) and not isinstance(i, bool)
+                                       for i in value):
+        return tuple(value)
+    raise SpindlebenchError(f"{where}: {key}: expected a list of integers")
+
+
+def updated(config: StudyConfig, values: dict[str, Any], where: str) -> StudyConfig:
+    """``config`` with the given keys replaced (from TOML or flags), each value checked."""
+    unknown = sorted(set(values) - set(_KEYS))
+    if unknown:
+        raise SpindlebenchError(f"{where}: unknown key(s) {', '.join(unknown)}")
+    changes: dict[str, Any] = {}
+    for key, value in values.items():
+        if value is None:
+            continue
+        if key in ("title", "target", "train", "similarity"):
+            if not isinstance(value, str) or not value:
+                raise SpindlebenchError(f"{where}: {key}: expected a non-empty string")
+            changes[key] = value
+        elif key in ("tests", "sensors_all"):
+            changes[key] = _names(value, key, where)
+        elif key == "six":
+            changes[key] = AUTO_SIX if value == AUTO_SIX else _names(value, key, where)
+        else:
+            changes[key] = _ints(value, key, where)
+    if not changes:
+        return config
+    source = where if config.source == "defaults" else f"{config.source} + {where}"
+    return replace(config, source=source, **changes)
+
+
+def load(path: str | Path | None, overrides: dict[str, Any] | None = None) -> StudyConfig:
+    """Defaults, then the TOML file (if any), then flag overrides; checked."""
+    config = StudyConfig()
+    if path is not None:
+        path = Path(path)
+        try:
+            values = tomllib.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise SpindlebenchError(f"{path}: config file not found") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise SpindlebenchError(f"{path}: not valid TOML ({exc})") from None
+        config = updated(config, values, str(path))
+    if overrides:
+        config = updated(config, overrides, "command line")
+    return config.checked()

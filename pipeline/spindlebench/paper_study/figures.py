@@ -1,0 +1,166 @@
+"""The analogues of the paper's Figures 3-6, plus the dendrogram the paper lacks.
+
+Drawn with matplotlib's object API (``matplotlib.figure.Figure`` renders with Agg and touches
+no global pyplot state), saved as PNG atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from scipy.cluster.hierarchy import dendrogram, linkage
+from scipy.spatial.distance import squareform
+
+from spindlebench import atomic
+from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+
+DPI = 110
+GROUP_COLORS = {"all_raw": "tab:blue", "six_raw": "tab:orange", "six_diff": "tab:green"}
+
+
+def _save(figure: Figure, path: Path) -> Path:
+    figure.tight_layout()
+    with atomic.atomic_path(path) as tmp:
+        figure.savefig(tmp, format="png", dpi=DPI)
+    return path
+
+
+def _hours(result: StudyResult, name: str) -> np.ndarray:
+    frame = result.frames[name]
+    if "time_s" in frame.columns:
+        return frame["time_s"].to_numpy(dtype=float) / 3600.0
+    return np.arange(len(frame)) / 3600.0
+
+
+def error_curves(result: StudyResult, path: Path) -> Path:
+    """Fig. 3: the measured thermal error of every experiment."""
+    figure = Figure(figsize=(7, 4))
+    ax = figure.add_subplot()
+    for name in result.config.experiments:
+        label = f"{name} (train)" if name == result.config.train else name
+        ax.plot(_hours(result, name), result.frames[name][result.config.target], label=label)
+    ax.set_xlabel("time (h)")
+    ax.set_ylabel(f"{result.config.target} (measured)")
+    ax.set_title("Thermal error of every experiment")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    return _save(figure, path)
+
+
+def six_temperatures(result: StudyResult, path: Path) -> Path:
+    """Fig. 4: temperatures of the six sensors in the training experiment."""
+    name = result.config.train
+    figure = Figure(figsize=(7, 4))
+    ax = figure.add_subplot()
+    for sensor in result.six:
+        ax.plot(_hours(result, name), result.frames[name][sensor], label=sensor)
+    ax.set_xlabel("time (h)")
+    ax.set_ylabel("temperature (°C)")
+    ax.set_title(f"The six sensors in {name}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small", ncol=2)
+    return _save(figure, path)
+
+
+def measured_vs_predicted(result: StudyResult, path: Path, experiment: str) -> Path:
+    """Fig. 5: measured and predicted error of one test experiment, one panel per k."""
+    ks = result.config.clusters
+    figure = Figure(figsize=(7, 2.6 * len(ks)))
+    hours = _hours(result, experiment)
+    measured = result.frames[experiment][result.config.target]
+    for row, k in enumerate(ks, start=1):
+        ax = figure.add_subplot(len(ks), 1, row)
+        ax.plot(hours, measured, color="black", lw=2, label="measured")
+        for group in result.groups:
+            cell = result.cell(group, k)
+            ax.plot(hours, cell.predictions_um[experiment], color=GROUP_COLORS[group],
+                    label=f"{GROUP_LABELS[group]} (RMSE {cell.rmse_um[experiment]:.1f})")
+        ax.set_title(f"{experiment}, {k} clusters", fontsize="medium")
+        ax.set_ylabel(result.config.target)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="x-small")
+    ax.set_xlabel("time (h)")
+    return _save(figure, path)
+
+
+def rmse_bars(result: StudyResult, path: Path) -> Path:
+    """Fig. 6: RMSE of every prediction, grouped by experiment, one panel per k."""
+    ks = result.config.clusters
+    tests = list(result.config.tests)
+    figure = Figure(figsize=(3.2 * len(ks) + 1, 3.8))
+    width = 0.8 / len(result.groups)
+    x = np.arange(len(tests) + 1)
+    top = max(max(c.rmse_um.values()) for c in result.cells) * 1.1
+    for column, k in enumerate(ks, start=1):
+        ax = figure.add_subplot(1, len(ks), column)
+        for i, group in enumerate(result.groups):
+            cell = result.cell(group, k)
+            heights = [cell.rmse_um[t] for t in tests] + [cell.mean_rmse_um]
+            ax.bar(x + (i - (len(result.groups) - 1) / 2) * width, heights, width,
+                   color=GROUP_COLORS[group], label=GROUP_LABELS[group])
+        ax.set_xticks(x, [*tests, "mean"], rotation=45, ha="right", fontsize="small")
+        ax.set_title(f"{k} clusters", fontsize="medium")
+        ax.set_ylim(0, top)
+        ax.grid(axis="y", alpha=0.3)
+        if column == 1:
+            ax.set_ylabel("RMSE (µm)")
+            ax.legend(fontsize="x-small")
+    return _save(figure, path)
+
+
+def linkage_of_closure(closure: np.ndarray) -> np.ndarray:
+    """Single-linkage tree whose merge heights are 1 - t(R): cutting it at height 1 - η
+    gives exactly the λ-cut t(R) >= η."""
+    distance = 1.0 - np.asarray(closure, dtype=float)
+    distance = (distance + distance.T) / 2.0
+    np.fill_diagonal(distance, 0.0)
+    return linkage(squareform(distance, checks=False), method="single")
+
+
+def cut_height(merge_heights: np.ndarray, eta: float) -> float:
+    """A y position for the cut line at η: between the last merge kept and the first one cut."""
+    level = 1.0 - eta
+    kept = merge_heights[merge_heights <= level + 1e-12]
+    cut = merge_heights[merge_heights > level + 1e-12]
+    low = kept.max() if kept.size else 0.0
+    high = cut.min() if cut.size else low + 0.05 * (merge_heights.max() or 1.0)
+    return float((low + high) / 2.0)
+
+
+def closure_dendrogram(result: StudyResult, group: str, path: Path) -> Path:
+    """Fuzzy equivalence hierarchy of a group on the training experiment, with the η cuts."""
+    names, closure = result.closure(group)
+    tree = linkage_of_closure(closure)
+    figure = Figure(figsize=(max(6.0, 0.35 * len(names) + 2), 4.5))
+    ax = figure.add_subplot()
+    dendrogram(tree, labels=names, ax=ax, leaf_rotation=90, color_threshold=0,
+               above_threshold_color="0.3")
+    styles = ["--", "-.", ":", (0, (5, 1))]
+    for i, k in enumerate(result.config.clusters):
+        eta = result.cell(group, k).eta
+        ax.axhline(cut_height(tree[:, 2], eta), color=f"C{i + 1}", ls=styles[i % len(styles)],
+                   label=f"k = {k}: η = {eta:.4f}")
+    ax.set_ylabel("1 − t(R)")
+    ax.set_title(f"{GROUP_LABELS[group]}: fuzzy equivalence hierarchy on {result.config.train}")
+    ax.legend(fontsize="small")
+    return _save(figure, path)
+
+
+def write_all(result: StudyResult, out_dir: Path) -> dict[str, Path]:
+    """Every figure; keys name them for the README."""
+    first_test = result.config.tests[0]
+    figures = {
+        "error_curves": error_curves(result, out_dir / "fig3_error_curves.png"),
+        "six_temperatures": six_temperatures(result, out_dir / "fig4_six_temperatures.png"),
+        "measured_vs_predicted": measured_vs_predicted(
+            result, out_dir / f"fig5_measured_vs_predicted_{first_test}.png", first_test
+        ),
+        "rmse_bars": rmse_bars(result, out_dir / "fig6_rmse_bars.png"),
+    }
+    for group in result.groups:
+        figures[f"dendrogram_{group}"] = closure_dendrogram(
+            result, group, out_dir / f"dendrogram_{group}.png"
+        )
+    return figures

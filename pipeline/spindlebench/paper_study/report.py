@@ -1,0 +1,189 @@
+"""Write a study's outputs: tables (CSV + Markdown), figures, results JSON, README, provenance.
+
+Every file is written atomically; the README is the page a reader opens first.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from spindlebench import atomic
+from spindlebench.paper_study import figures, reference, tables
+from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+from spindlebench.provenance import file_entry, provenance
+
+
+def _json(value: Any) -> Any:
+    """Plain JSON values (numpy scalars and arrays become numbers and lists; NaN -> null)."""
+    if isinstance(value, dict):
+        return {str(k): _json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _json(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def _write_json(path: Path, data: Any) -> Path:
+    atomic.write_text(path, json.dumps(_json(data), indent=2, ensure_ascii=False) + "\n")
+    return path
+
+
+def _write_csv(path: Path, frame) -> Path:
+    with atomic.atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.6g")
+    return path
+
+
+def _inputs(result: StudyResult) -> dict[str, Any]:
+    """Each recording's hash, plus its own sidecar provenance when it has one."""
+    entries: dict[str, Any] = {}
+    for name, path in result.paths.items():
+        entry: dict[str, Any] = file_entry(path)
+        sidecar = path.with_suffix(".json")
+        if sidecar.is_file():
+            try:
+                entry["sidecar"] = json.loads(sidecar.read_text(encoding="utf-8"))
+            except json.JSONDecodeError:
+                entry["sidecar"] = f"{sidecar.name}: not valid JSON, not embedded"
+        entries[name] = entry
+    return entries
+
+
+def _groups_markdown(result: StudyResult) -> str:
+    lines = []
+    for group in result.groups:
+        sensors, differences = result.group_sensors(group)
+        n_diff = len(sensors) * (len(sensors) - 1) // 2 if differences else 0
+        extra = f" plus their {n_diff} pairwise differences" if differences else ""
+        lines.append(
+            f"- **{GROUP_LABELS[group]}** (`{group}`): {len(sensors)} raw sensors "
+            f"({', '.join(sensors)}){extra}."
+        )
+    return "\n".join(lines)
+
+
+def readme_text(result: StudyResult, figure_paths: dict[str, Path], command: str) -> str:
+    """The results page: set-up, the three tables with the paper's beside ours, the figures."""
+    config = result.config
+    fig = {key: path.name for key, path in figure_paths.items()}
+    best = min(result.cells, key=lambda c: c.mean_rmse_um)
+    paper_note = (
+        "The paper's columns are its own experiments (exp2 … exp5 of a different machine); "
+        "they show the size of the effect it reported, not numbers these data should reproduce."
+    )
+    tests = ", ".join(config.tests)
+    dendrograms = "\n".join(
+        f"  - {GROUP_LABELS[g]}: ![dendrogram]({fig[f'dendrogram_{g}']})" for g in result.groups
+    )
+    return f"""# Paper comparison: {config.title}
+
+The comparison of Xu et al. (2023), section 3, rerun by `spindlebench paper`: temperature-
+sensitive points chosen by fuzzy clustering (similarity `{config.similarity}`, max-min
+transitive closure, λ-cut into k clusters, largest |ψ| per cluster), multiple linear regression
+of `{config.target}` on the temperature rises of the chosen points, trained on
+**{config.train}** and used to predict {", ".join(f"**{t}**" for t in config.tests)}.
+
+Command:
+
+```
+{command}
+```
+
+## Set-up
+- Target: `{config.target}`; training experiment `{config.train}`; predicted: {tests}.
+- Numbers of clusters: {", ".join(str(k) for k in config.clusters)}.
+{_groups_markdown(result)}
+- Six-sensor subset: {result.six_rule}
+
+Lowest mean RMSE here: **{best.mean_rmse_um:.2f} µm** ({GROUP_LABELS[best.group]}, k = {best.k}).
+The paper's headline (k = 2): mean RMSE 11.1 and 10.3 µm for the raw groups vs 3.6 µm with
+differences.
+
+## Table 4 analogue: selected points and ψ (on {config.train})
+
+ψ is the Pearson correlation of a candidate with `{config.target}` (sign kept; the paper prints
+magnitudes).
+
+{tables.table4_markdown(result)}
+
+## Table 5 analogue: training R²
+
+{tables.table5_markdown(result)}
+
+## Table 6 analogue: RMSE of the predictions (µm)
+
+Ours first, then the paper's Table 6 in the same row. {paper_note}
+
+{tables.table6_markdown(result)}
+
+## Figures
+
+- Thermal error of every experiment (paper Fig. 3): ![error curves]({fig["error_curves"]})
+- The six sensors in the training experiment (paper Fig. 4):
+  ![six temperatures]({fig["six_temperatures"]})
+- Measured vs predicted, {config.tests[0]} (paper Fig. 5):
+  ![measured vs predicted]({fig["measured_vs_predicted"]})
+- RMSE of every prediction (paper Fig. 6, as grouped bars): ![rmse]({fig["rmse_bars"]})
+- Fuzzy equivalence hierarchies with the λ-cuts (not in the paper): single-linkage dendrograms
+  of 1 − t(R) on {config.train}; a horizontal line at k clusters cuts the tree into exactly
+  the clusters of t(R) ≥ η.
+{dendrograms}
+
+## Files
+- `table4_selected.csv`, `table5_r2.csv`, `table6_rmse.csv`: the tables (paper's numbers in
+  the `paper_*` columns).
+- `results.json`: every model's full evaluation (selected, ψ, η, clusters, coefficients, R²,
+  RMSE per experiment).
+- `provenance.json`: inputs with their SHA-256 (and their own provenance), configuration,
+  package versions.
+
+Paper: {reference.CITATION}.
+"""
+
+
+def write_outputs(result: StudyResult, out_dir: str | Path, command: str) -> dict[str, Path]:
+    """Write everything for ``result`` into ``out_dir``; return the paths by role."""
+    out_dir = Path(out_dir)
+    paths: dict[str, Path] = {
+        "table4_csv": _write_csv(out_dir / "table4_selected.csv", tables.table4_frame(result)),
+        "table5_csv": _write_csv(out_dir / "table5_r2.csv", tables.table5_frame(result)),
+        "table6_csv": _write_csv(out_dir / "table6_rmse.csv", tables.table6_frame(result)),
+    }
+    for number, render in ((4, tables.table4_markdown), (5, tables.table5_markdown),
+                           (6, tables.table6_markdown)):
+        target = out_dir / f"table{number}.md"
+        atomic.write_text(target, render(result) + "\n")
+        paths[f"table{number}_md"] = target
+    figure_paths = figures.write_all(result, out_dir)
+    paths.update(figure_paths)
+    paths["results"] = _write_json(out_dir / "results.json", {
+        "config": result.config.to_dict(),
+        "six": list(result.six),
+        "cells": [
+            {"group": c.group, "k": c.k, "sensors": c.sensors, "differences": c.differences,
+             **c.evaluation}
+            for c in result.cells
+        ],
+    })
+    readme = out_dir / "README.md"
+    atomic.write_text(readme, readme_text(result, figure_paths, command))
+    paths["readme"] = readme
+    paths["provenance"] = _write_json(out_dir / "provenance.json", provenance(
+        command=command,
+        study=result.config.to_dict(),
+        six=list(result.six),
+        six_rule=result.six_rule,
+        inputs=_inputs(result),
+        outputs=sorted(p.name for p in paths.values()),
+        paper=reference.CITATION,
+    ))
+    return paths

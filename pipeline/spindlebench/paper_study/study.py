@@ -1,0 +1,192 @@
+"""Run the paper's comparison: three sensor groups x several cluster counts, train on one
+experiment, predict the others (Xu et al. 2023, section 3).
+
+Groups, in the paper's words: reference group 1 = all raw sensors, reference group 2 = six raw
+sensors, reconstructed group = those six plus their pairwise differences. Every number comes
+from ``spindlebench.selection`` (the method lives there, not here); this module only arranges
+the runs and keeps what the tables and figures need.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.paper_study.config import AUTO_SIX, StudyConfig
+from spindlebench.recordings import read_recording
+from spindlebench.selection import evaluate
+from spindlebench.selection.closure import transitive_closure
+from spindlebench.selection.cut import cut_for_clusters
+from spindlebench.selection.differences import with_differences
+from spindlebench.selection.similarity import constant_columns, similarity_matrix
+
+GROUPS: tuple[str, ...] = ("all_raw", "six_raw", "six_diff")
+GROUP_LABELS: dict[str, str] = {
+    "all_raw": "all raw",
+    "six_raw": "six raw",
+    "six_diff": "six + differences",
+}
+AUTO_SIX_RULE = (
+    "six = auto: the fuzzy equivalence hierarchy (same similarity, t(R)) of all raw sensors on "
+    "the training experiment cut into 6 clusters; from each cluster the sensor with the largest "
+    "temperature range (max - min) on the training experiment. The thermal error is not used."
+)
+
+
+@dataclass
+class Cell:
+    """One model of the comparison: a group at one number of clusters."""
+
+    group: str
+    k: int
+    sensors: list[str]
+    differences: bool
+    selected: list[str]
+    psi: list[float]
+    eta: float
+    clusters: list[list[str]]
+    coefficients: dict[str, float]
+    r2: float
+    rmse_um: dict[str, float]
+    mean_rmse_um: float
+    predictions_um: dict[str, np.ndarray] = field(repr=False)
+    evaluation: dict = field(repr=False)
+
+
+@dataclass
+class StudyResult:
+    """All cells plus what they were computed from."""
+
+    config: StudyConfig
+    six: tuple[str, ...]
+    six_rule: str
+    frames: dict[str, pd.DataFrame] = field(repr=False)
+    paths: dict[str, Path]
+    cells: list[Cell]
+    groups: tuple[str, ...] = GROUPS
+
+    def cell(self, group: str, k: int) -> Cell:
+        """The cell of ``group`` at ``k`` clusters."""
+        for cell in self.cells:
+            if cell.group == group and cell.k == k:
+                return cell
+        raise KeyError((group, k))
+
+    def group_sensors(self, group: str) -> tuple[list[str], bool]:
+        """(raw sensors, with differences?) of a group."""
+        if group == "all_raw":
+            return list(self.config.sensors_all), False
+        return list(self.six), group == "six_diff"
+
+    def closure(self, group: str) -> tuple[list[str], np.ndarray]:
+        """Candidate names and t(R) of a group on the training experiment (no target needed)."""
+        sensors, differences = self.group_sensors(group)
+        candidates = candidate_frame(self.frames[self.config.train], sensors, differences)
+        varying = candidates.loc[:, ~constant_columns(candidates.to_numpy(dtype=float))]
+        matrix = similarity_matrix(varying.to_numpy(dtype=float), self.config.similarity)
+        return list(varying.columns), transitive_closure(matrix)
+
+
+def candidate_frame(frame: pd.DataFrame, sensors: Sequence[str], differences: bool) -> pd.DataFrame:
+    """The candidate variables of a group: raw sensors, plus their differences if asked."""
+    if differences:
+        return with_differences(frame, sensors)
+    return frame.loc[:, list(sensors)].astype(float)
+
+
+def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, dict]:
+    """Read ``<directory>/<name>.csv`` for every experiment; check the columns the study needs."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise SpindlebenchError(f"{directory}: recordings folder not found")
+    frames: dict[str, pd.DataFrame] = {}
+    paths: dict[str, Path] = {}
+    needed = [config.target, *config.sensors_all]
+    for name in config.experiments:
+        path = directory / f"{name}.csv"
+        if not path.is_file():
+            found = ", ".join(sorted(p.stem for p in directory.glob("*.csv"))) or "none"
+            raise SpindlebenchError(f"{path}: experiment {name!r} not found (have: {found})")
+        frame = read_recording(path)
+        missing = [column for column in needed if column not in frame.columns]
+        if missing:
+            raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
+        frames[name] = frame
+        paths[name] = path
+    return frames, paths
+
+
+def choose_six(frame: pd.DataFrame, sensors: Sequence[str], similarity: str) -> tuple[str, ...]:
+    """The target-free six-sensor rule (``AUTO_SIX_RULE``), in ``sensors`` order."""
+    raw = frame.loc[:, list(sensors)].astype(float)
+    constant = constant_columns(raw.to_numpy())
+    varying = [name for name, fixed in zip(sensors, constant, strict=True) if not fixed]
+    if len(varying) < 6:
+        raise SpindlebenchError(f"six = auto needs 6 varying sensors, have {len(varying)}")
+    closure = transitive_closure(similarity_matrix(raw[varying].to_numpy(), similarity))
+    ranges = (raw[varying].max() - raw[varying].min()).to_numpy()
+    picks = {
+        varying[int(members[np.argmax(ranges[members])])]
+        for members in cut_for_clusters(closure, 6).clusters
+    }
+    return tuple(name for name in sensors if name in picks)
+
+
+def _cell(
+    config: StudyConfig,
+    frames: Mapping[str, pd.DataFrame],
+    group: str,
+    k: int,
+    sensors: list[str],
+    differences: bool,
+) -> Cell:
+    result = evaluate(
+        frames[config.train],
+        {name: frames[name] for name in config.tests},
+        target=config.target,
+        sensors=sensors,
+        k=k,
+        differences=differences,
+        similarity=config.similarity,
+    )
+    record = result.to_dict()
+    predictions = {name: np.asarray(result.predict(frames[name])) for name in config.experiments}
+    return Cell(
+        group=group,
+        k=k,
+        sensors=sensors,
+        differences=differences,
+        selected=list(record["selected"]),
+        psi=[float(v) for v in record["psi"]],
+        eta=float(record["eta"]),
+        clusters=[list(c) for c in record["clusters"]],
+        coefficients=dict(record["coefficients"]),
+        r2=float(record["r2"]),
+        rmse_um={name: float(record["rmse_um"][name]) for name in config.tests},
+        mean_rmse_um=float(record["mean_rmse_um"]),
+        predictions_um=predictions,
+        evaluation=record,
+    )
+
+
+def run_study(directory: str | Path, config: StudyConfig) -> StudyResult:
+    """Every group at every k; the six-sensor subset resolved first (fixed or by the rule)."""
+    frames, paths = load_experiments(directory, config)
+    if config.six == AUTO_SIX:
+        six = choose_six(frames[config.train], config.sensors_all, config.similarity)
+        rule = AUTO_SIX_RULE
+    else:
+        six = tuple(config.six)
+        rule = "six: fixed list from the configuration"
+    result = StudyResult(config=config, six=six, six_rule=rule, frames=frames, paths=paths,
+                         cells=[])
+    for k in config.clusters:
+        for group in GROUPS:
+            sensors, differences = result.group_sensors(group)
+            result.cells.append(_cell(config, frames, group, k, sensors, differences))
+    return result
