@@ -1,0 +1,153 @@
+"""Reading and validating canonical recordings (synthetic or real), one CSV per experiment.
+
+A canonical recording is a CSV with a header line and one numeric row per sample: ``time_s``,
+sensor temperatures, the measured thermal error, optionally drivers and ``true_*`` columns.
+``read_recording`` refuses anything it would otherwise have to guess about, with a one-line
+``SpindlebenchError`` naming the file, line and column: a missing file, an empty file, repeated
+or empty column names, rows with the wrong number of fields, empty/NaN/non-numeric/infinite
+cells, fewer than 2 samples, or a ``time_s`` that does not strictly increase. Missing values
+are never interpolated: whoever made the file knows better how to fill them.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from spindlebench.errors import SpindlebenchError
+
+TIME_COLUMN = "time_s"
+
+#: Columns that are never sensors by default: the synthetic testbench's driver inputs and
+#: noise-free truth, and, on any recording, thermal errors/displacements (``*_um``), speeds
+#: (``*_rpm``) and feed rates. ``ambient_C`` is the testbench's ambient *driver*; the measured
+#: ambient sensor is a T column.
+_NOT_SENSOR = re.compile(r"^(true_.*|.*_um|.*_rpm|feed_.*|.*_mm_per_min|.*_W|ambient_C)$")
+
+
+def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read and validate one recording; all columns become float64.
+
+    ``frame.attrs["path"]`` keeps the file name for later messages.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SpindlebenchError(f"recording {path}: file not found")
+    if not path.is_file():
+        raise SpindlebenchError(f"recording {path}: not a file")
+    header = _read_header(path)
+    try:
+        raw = pd.read_csv(
+            path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c"
+        )
+    except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
+        detail = " ".join(str(exc).split())
+        raise SpindlebenchError(f"recording {path}: cannot parse CSV: {detail}") from exc
+    if raw.shape[1] != len(header):
+        raise SpindlebenchError(f"recording {path}: header and data have different widths")
+    raw.columns = header  # names stripped of surrounding spaces
+    raw = _drop_trailing_blank_rows(raw)
+    frame = pd.DataFrame(
+        {name: _numeric_column(path, name, raw[name]) for name in header}, index=raw.index
+    )
+    if len(frame) < 2:
+        raise SpindlebenchError(
+            f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
+        )
+    if TIME_COLUMN in frame:
+        steps = np.diff(frame[TIME_COLUMN].to_numpy())
+        bad = np.flatnonzero(steps <= 0)
+        if bad.size:
+            raise SpindlebenchError(
+                f"recording {path}, line {bad[0] + 3}: '{TIME_COLUMN}' does not increase "
+                f"({frame[TIME_COLUMN].iloc[bad[0]]:g} -> {frame[TIME_COLUMN].iloc[bad[0] + 1]:g})"
+            )
+    frame.attrs["path"] = str(path)
+    return frame
+
+
+def _read_header(path: Path) -> list[str]:
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            header = next(csv.reader(handle), None)
+    except UnicodeDecodeError as exc:
+        raise SpindlebenchError(f"recording {path}: not UTF-8 text") from exc
+    if not header:
+        raise SpindlebenchError(f"recording {path}: empty file (no header line)")
+    names = [name.strip() for name in header]
+    for number, name in enumerate(names, start=1):
+        if not name:
+            raise SpindlebenchError(f"recording {path}, line 1: column {number} has no name")
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise SpindlebenchError(f"recording {path}, line 1: repeated column(s) {repeated}")
+    return names
+
+
+def _drop_trailing_blank_rows(raw: pd.DataFrame) -> pd.DataFrame:
+    blank = raw.isna() | (raw == "")
+    filled = np.flatnonzero(~blank.all(axis=1).to_numpy())
+    return raw.iloc[: filled[-1] + 1] if filled.size else raw.iloc[:0]
+
+
+def _numeric_column(path: Path, name: str, cells: pd.Series) -> pd.Series:
+    """One column as float64, or an error naming the first bad line (header = line 1)."""
+    values = pd.to_numeric(cells.str.strip(), errors="coerce").astype(float)
+    bad = np.flatnonzero(~np.isfinite(values.to_numpy()))
+    if bad.size:
+        row = int(bad[0])
+        cell = cells.iloc[row]
+        if pd.isna(cell) or not str(cell).strip():
+            what = "missing value"
+        elif str(cell).strip().lower() in {"nan", "na", "n/a", "null", "none"}:
+            what = f"NaN value {cell!r}"
+        elif np.isinf(values.iloc[row]):
+            what = f"infinite value {cell!r}"
+        else:
+            what = f"non-numeric value {cell!r}"
+        raise SpindlebenchError(
+            f"recording {path}, line {row + 2}, column '{name}': {what} "
+            f"({bad.size} bad cell(s) in this column)"
+        )
+    return values
+
+
+def recording_name(frame: pd.DataFrame, fallback: str = "<data frame>") -> str:
+    """The file a frame was read from, for messages."""
+    return str(frame.attrs.get("path", fallback))
+
+
+def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> None:
+    """Raise naming the recording and the ``what`` columns it lacks."""
+    missing = [name for name in columns if name not in frame.columns]
+    if missing:
+        raise SpindlebenchError(
+            f"recording {recording_name(frame)}: {what} column(s) not found: "
+            f"{', '.join(missing)} (columns are: {', '.join(map(str, frame.columns))})"
+        )
+
+
+def is_default_sensor(name: str) -> bool:
+    """Whether a column counts as a sensor when none are named (see ``default_sensors``)."""
+    return name != TIME_COLUMN and not _NOT_SENSOR.match(name)
+
+
+def default_sensors(frame: pd.DataFrame, target: str) -> list[str]:
+    """Sensor columns when none are given: every numeric column except the target,
+    ``time_s``, ``true_*`` truth, driver/command columns (``ambient_C``, ``feed_*``,
+    ``*_rpm``, ``*_mm_per_min``, heat flows ``*_W``) and other thermal-error or displacement
+    channels (``*_um``), which are outputs, not temperatures.
+    """
+    return [
+        str(name)
+        for name in frame.columns
+        if name != target
+        and is_default_sensor(str(name))
+        and pd.api.types.is_numeric_dtype(frame[name])
+    ]

@@ -1,0 +1,99 @@
+"""Lambda-cut of the fuzzy equivalence matrix into clusters (eq. 3 of Xu et al. 2023).
+
+Candidates i and j share a cluster at threshold eta when t(R)_ij >= eta. Because t(R) is the
+single-linkage closure, the clusters at eta are the connected components of the maximum
+spanning tree's edges with similarity >= eta, and the distinct off-diagonal values of t(R) are
+exactly the tree's edge similarities. So the number of clusters at eta is
+1 + #(tree edges with similarity < eta), which lets ``cut_for_clusters`` pick eta without
+scanning the matrix. It gives the same clusters whether it is handed R or t(R).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
+
+from spindlebench.selection.closure import check_similarity, maximum_spanning_tree
+from spindlebench.selection.errors import SelectionError, SelectionWarning
+
+
+@dataclass(frozen=True)
+class Cut:
+    """Result of a cut: the threshold and the clusters (index arrays, each sorted, clusters
+    ordered by their first member)."""
+
+    eta: float
+    clusters: list[np.ndarray]
+
+    @property
+    def labels(self) -> np.ndarray:
+        """Cluster number of every candidate."""
+        n = sum(len(members) for members in self.clusters)
+        labels = np.empty(n, dtype=np.intp)
+        for number, members in enumerate(self.clusters):
+            labels[members] = number
+        return labels
+
+
+def _components(n: int, child: np.ndarray, parent: np.ndarray) -> list[np.ndarray]:
+    """Connected components of the graph with the given edges, ordered by first member."""
+    graph = coo_array((np.ones(len(child)), (child, parent)), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    first_seen = {}
+    for index, label in enumerate(labels):
+        first_seen.setdefault(int(label), index)
+    ordered = sorted(first_seen, key=first_seen.__getitem__)
+    return [np.flatnonzero(labels == label) for label in ordered]
+
+
+def cut_at(T: np.ndarray, eta: float) -> Cut:
+    """Clusters of the cut t(R) >= ``eta``."""
+    T = check_similarity(T)
+    child, parent, weight = maximum_spanning_tree(T).edges()
+    keep = weight >= eta
+    return Cut(eta=float(eta), clusters=_components(T.shape[0], child[keep], parent[keep]))
+
+
+def cut_for_clusters(T: np.ndarray, n_clusters: int) -> Cut:
+    """The cut with the smallest eta among the distinct values of t(R) giving at least
+    ``n_clusters`` clusters.
+
+    When tied similarities make exactly ``n_clusters`` impossible, a ``SelectionWarning`` says
+    so and the finer partition (more clusters) is returned.
+    """
+    T = check_similarity(T)
+    n = T.shape[0]
+    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
+        raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
+    if n_clusters < 1:
+        raise SelectionError(f"the number of clusters must be at least 1, got {n_clusters}")
+    if n_clusters > n:
+        raise SelectionError(
+            f"cannot make {n_clusters} clusters from {n} candidate(s): "
+            f"n_clusters is larger than the number of candidates"
+        )
+    child, parent, weight = maximum_spanning_tree(T).edges()
+    levels = np.unique(np.append(weight, 1.0))  # distinct values of t(R), ascending
+    sorted_weights = np.sort(weight)
+    counts = 1 + np.searchsorted(sorted_weights, levels, side="left")
+    reachable = np.flatnonzero(counts >= n_clusters)
+    if reachable.size == 0:
+        raise SelectionError(
+            f"cannot make {n_clusters} clusters: at most {counts[-1]} candidates are "
+            f"distinguishable (the others have similarity 1 with each other)"
+        )
+    eta = float(levels[reachable[0]])
+    keep = weight >= eta
+    clusters = _components(n, child[keep], parent[keep])
+    if len(clusters) != n_clusters:
+        warnings.warn(
+            f"tied similarities: no threshold gives exactly {n_clusters} clusters; "
+            f"using eta={eta:.6g} with {len(clusters)} clusters",
+            SelectionWarning,
+            stacklevel=2,
+        )
+    return Cut(eta=eta, clusters=clusters)

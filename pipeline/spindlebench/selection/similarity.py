@@ -1,0 +1,82 @@
+"""Fuzzy similarity matrix R between candidate variables (eq. 1 of Xu et al. 2023).
+
+Two readings of eq. 1:
+
+- ``abs-pearson`` (default): |Pearson r|, the usual reading.
+- ``literal``: the formula as printed, sum |a-mean(a)| |b-mean(b)| / (norm(a-mean) norm(b-mean)),
+  which by Cauchy-Schwarz also lies in [0, 1] and is 1 on the diagonal; it ignores the sign of
+  co-variation, so it is never smaller than |Pearson r|.
+
+Columns are centred twice (the second pass removes the rounding left by the first, which
+matters for temperatures of ~25 degC varying by hundredths) and scaled to unit norm before the
+product, so R is exactly symmetric, exactly 1 on the diagonal and clipped into [0, 1].
+Constant columns have no correlation; they must be removed first (see ``constant_columns``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from spindlebench.selection.errors import SelectionError
+
+SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
+
+#: A column whose peak-to-peak range is below this fraction of its magnitude is constant:
+#: differences of two sensors offset by a constant vary only by rounding.
+CONSTANT_RTOL = 1e-12
+
+
+def constant_columns(X: np.ndarray) -> np.ndarray:
+    """Boolean mask of columns that are constant up to floating-point rounding."""
+    X = np.asarray(X, dtype=float)
+    spread = np.ptp(X, axis=0)
+    scale = np.max(np.abs(X), axis=0)
+    return spread <= CONSTANT_RTOL * scale
+
+
+def standardized(X: np.ndarray) -> np.ndarray:
+    """Columns centred (two passes) and scaled to unit Euclidean norm."""
+    X = np.asarray(X, dtype=float)
+    centred = X - X.mean(axis=0)
+    centred -= centred.mean(axis=0)
+    norms = np.sqrt(np.einsum("ij,ij->j", centred, centred))
+    if np.any(norms == 0) or np.any(constant_columns(X)):
+        raise SelectionError("similarity needs non-constant columns; drop constant ones first")
+    return centred / norms
+
+
+def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
+    """Mirror the upper triangle, clip into [0, 1] and put exact ones on the diagonal."""
+    upper = np.triu(matrix, k=1)
+    out = upper + upper.T
+    np.clip(out, 0.0, 1.0, out=out)
+    np.fill_diagonal(out, 1.0)
+    return out
+
+
+def similarity_matrix(X: np.ndarray, method: str = "abs-pearson") -> np.ndarray:
+    """Fuzzy similarity R (n_candidates x n_candidates) of the columns of ``X``."""
+    if method not in SIMILARITIES:
+        raise SelectionError(
+            f"unknown similarity {method!r}; choose one of {', '.join(SIMILARITIES)}"
+        )
+    X = np.asarray(X, dtype=float)
+    if X.ndim != 2 or X.shape[0] < 2:
+        raise SelectionError(f"similarity needs at least 2 samples, got shape {X.shape}")
+    Z = standardized(X)
+    if method == "literal":
+        Z = np.abs(Z)
+        return _symmetric_unit(Z.T @ Z)
+    return _symmetric_unit(np.abs(Z.T @ Z))
+
+
+def correlation_with(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Pearson correlation of every column of ``X`` with ``y`` (eq. 4), sign kept."""
+    y = np.asarray(y, dtype=float).ravel()
+    X = np.asarray(X, dtype=float)
+    if X.shape[0] != y.shape[0]:
+        raise SelectionError(f"X has {X.shape[0]} samples but the target has {y.shape[0]}")
+    if constant_columns(y[:, None])[0]:
+        raise SelectionError("the target (thermal error) is constant; no correlation exists")
+    zy = standardized(y[:, None])[:, 0]
+    return np.clip(standardized(X).T @ zy, -1.0, 1.0)
