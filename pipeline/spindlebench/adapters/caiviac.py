@@ -18,7 +18,8 @@ Canonical output per run (``<name>.csv``): ``time_s`` from 0, ``spindle_speed_rp
 ``t1_C`` … ``t16_C`` (absolute °C, as measured) and ``ch1_um`` … ``ch5_um`` re-zeroed at the
 run's first sample, like a displacement probe zeroed at the start of an experiment (the offsets
 subtracted are in the sidecar, so the source values are recoverable). ``<name>.json`` carries the
-provenance: source file and SHA-256, 0-based row range, speeds.
+provenance: source file and SHA-256, 0-based row range, speeds. ``paper_study.toml`` beside
+them configures ``spindlebench paper`` for these runs (see ``study_config_text``).
 """
 
 from __future__ import annotations
@@ -153,10 +154,45 @@ def canonical_run(source: pd.DataFrame, run: Run, phase: Phase) -> tuple[pd.Data
     return table, offsets
 
 
+STUDY_FILE = "paper_study.toml"
+
+
+def study_config_text(schedule: Schedule, phase: Phase) -> str:
+    """A ``spindlebench paper --config`` file for these runs.
+
+    Training run: the constant-speed run with the highest speed, the analogue of the paper's
+    experiment 1 (its fastest set-up), so the other runs are predicted inside the trained range
+    of heat input. Predicted: every other run, the stepped block included. Six sensors: the
+    target-free ``auto`` rule (locations are not documented, so no choice by location).
+    """
+    constant = [run for run in schedule.runs if run.kind == "constant"]
+    train = max(constant, key=lambda run: run.speeds_rpm[0]).name
+    tests = [run.name for run in schedule.runs if run.name != train]
+
+    def names(items: list[str] | tuple[str, ...]) -> str:
+        return "[" + ", ".join(f'"{item}"' for item in items) + "]"
+
+    return "\n".join([
+        f"# Paper comparison on the {DATASET} runs ({phase} phase), written by",
+        "# `spindlebench adapt caiviac`. Use: spindlebench paper --recordings <this folder>",
+        f"#   --config <this folder>/{STUDY_FILE}",
+        f'title = "{DATASET}, {phase} runs"',
+        f'target = "{AXIAL_TARGET}"',
+        f'train = "{train}"',
+        f"tests = {names(tests)}",
+        f"sensors_all = {names(TEMPERATURES)}",
+        'six = "auto"',
+        "clusters = [2, 3, 4]",
+        'similarity = "abs-pearson"',
+        "",
+    ])
+
+
 def write_runs(
     out_dir: str | Path, source_path: str | Path | None = None, phase: Phase = "heating"
 ) -> list[Path]:
-    """Write every run as ``<out_dir>/<name>.csv`` + ``<name>.json``; return the CSV paths."""
+    """Write every run as ``<out_dir>/<name>.csv`` + ``<name>.json``, and a study config
+    (``paper_study.toml``) for ``spindlebench paper``; return the CSV paths."""
     if phase not in PHASES:
         raise SpindlebenchError(f"phase: {phase!r} is not one of {', '.join(PHASES)}")
     source_path = Path(source_path) if source_path is not None else default_source()
@@ -189,4 +225,5 @@ def write_runs(
         )
         atomic.write_text(out_dir / f"{run.name}.json", json.dumps(record, indent=2) + "\n")
         written.append(csv_path)
+    atomic.write_text(out_dir / STUDY_FILE, study_config_text(schedule, phase))
     return written
