@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
-from scipy.cluster.hierarchy import dendrogram, linkage
-from scipy.spatial.distance import squareform
+from scipy.cluster.hierarchy import dendrogram
 
 from spindlebench import atomic
 from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+from spindlebench.selection import linkage_from_similarity
 
 DPI = 110
 GROUP_COLORS = {"all_raw": "tab:blue", "six_raw": "tab:orange", "six_diff": "tab:green"}
@@ -110,15 +110,6 @@ def rmse_bars(result: StudyResult, path: Path) -> Path:
     return _save(figure, path)
 
 
-def linkage_of_closure(closure: np.ndarray) -> np.ndarray:
-    """Single-linkage tree whose merge heights are 1 - t(R): cutting it at height 1 - η
-    gives exactly the λ-cut t(R) >= η."""
-    distance = 1.0 - np.asarray(closure, dtype=float)
-    distance = (distance + distance.T) / 2.0
-    np.fill_diagonal(distance, 0.0)
-    return linkage(squareform(distance, checks=False), method="single")
-
-
 def cut_height(merge_heights: np.ndarray, eta: float) -> float:
     """A y position for the cut line at η: between the last merge kept and the first one cut."""
     level = 1.0 - eta
@@ -132,7 +123,7 @@ def cut_height(merge_heights: np.ndarray, eta: float) -> float:
 def closure_dendrogram(result: StudyResult, group: str, path: Path) -> Path:
     """Fuzzy equivalence hierarchy of a group on the training experiment, with the η cuts."""
     names, closure = result.closure(group)
-    tree = linkage_of_closure(closure)
+    tree = linkage_from_similarity(closure)  # heights 1 - t(R); cut at 1 - η = λ-cut
     figure = Figure(figsize=(max(6.0, 0.35 * len(names) + 2), 4.5))
     ax = figure.add_subplot()
     dendrogram(tree, labels=names, ax=ax, leaf_rotation=90, color_threshold=0,

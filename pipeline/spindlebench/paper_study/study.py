@@ -22,7 +22,6 @@ from spindlebench.recordings import read_recording
 from spindlebench.selection import evaluate
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
-from spindlebench.selection.differences import with_differences
 from spindlebench.selection.similarity import constant_columns, similarity_matrix
 
 GROUPS: tuple[str, ...] = ("all_raw", "six_raw", "six_diff")
@@ -56,6 +55,8 @@ class Cell:
     mean_rmse_um: float
     predictions_um: dict[str, np.ndarray] = field(repr=False)
     evaluation: dict = field(repr=False)
+    closure_names: list[str] = field(repr=False)
+    closure: np.ndarray = field(repr=False)
 
 
 @dataclass
@@ -84,19 +85,10 @@ class StudyResult:
         return list(self.six), group == "six_diff"
 
     def closure(self, group: str) -> tuple[list[str], np.ndarray]:
-        """Candidate names and t(R) of a group on the training experiment (no target needed)."""
-        sensors, differences = self.group_sensors(group)
-        candidates = candidate_frame(self.frames[self.config.train], sensors, differences)
-        varying = candidates.loc[:, ~constant_columns(candidates.to_numpy(dtype=float))]
-        matrix = similarity_matrix(varying.to_numpy(dtype=float), self.config.similarity)
-        return list(varying.columns), transitive_closure(matrix)
-
-
-def candidate_frame(frame: pd.DataFrame, sensors: Sequence[str], differences: bool) -> pd.DataFrame:
-    """The candidate variables of a group: raw sensors, plus their differences if asked."""
-    if differences:
-        return with_differences(frame, sensors)
-    return frame.loc[:, list(sensors)].astype(float)
+        """Candidate names and t(R) of a group on the training experiment (the same at every
+        k; constant candidates left out)."""
+        cell = next(c for c in self.cells if c.group == group)
+        return cell.closure_names, cell.closure
 
 
 def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, dict]:
@@ -155,7 +147,6 @@ def _cell(
         similarity=config.similarity,
     )
     record = result.to_dict()
-    predictions = {name: np.asarray(result.predict(frames[name])) for name in config.experiments}
     return Cell(
         group=group,
         k=k,
@@ -169,8 +160,10 @@ def _cell(
         r2=float(record["r2"]),
         rmse_um={name: float(record["rmse_um"][name]) for name in config.tests},
         mean_rmse_um=float(record["mean_rmse_um"]),
-        predictions_um=predictions,
+        predictions_um=dict(result.predictions),
         evaluation=record,
+        closure_names=[result.candidates[i] for i in result.selection.kept],
+        closure=result.selection.closure,
     )
 
 
