@@ -1,0 +1,248 @@
+"""Run a study's tasks on local worker processes, in-process, or on a Dask cluster.
+
+Every backend is a ``concurrent.futures.Executor``: a ``ProcessPoolExecutor`` by default, an
+in-process executor for ``workers=0`` (debugging, profiling), and for a Dask address the
+executor of a ``distributed.Client`` connected to that scheduler, so a study that outgrows
+one machine runs on many without a line of study code changing.
+
+:func:`TaskRunner.run` isolates failures: an exception inside a task becomes a failed
+:class:`Outcome` carrying its one-line message, and a worker process that dies (a crash in
+native FMU code) breaks only the tasks it was running, which are retried one by one in
+quarantine so the crash is pinned to the task that caused it. Handlers may answer an
+outcome with follow-up tasks (an evaluation once its simulations are in), so the workers
+never idle between the phases of a study.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from tqdm.auto import tqdm
+
+from spindlebench.errors import SpindlebenchError
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: ``fn(*args)`` under a unique ``key``; ``fn`` must be importable."""
+
+    key: str
+    fn: Callable[..., Any]
+    args: tuple[Any, ...] = ()
+    kind: str = "task"
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What became of a task: its value, or the one-line error and the traceback."""
+
+    task: Task
+    value: Any = None
+    error: str | None = None
+    detail: str = ""
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+@dataclass
+class RunStats:
+    """Counts per task kind, for reports, benchmarks and tests."""
+
+    done: dict[str, int] = field(default_factory=dict)
+    failed: dict[str, int] = field(default_factory=dict)
+    seconds: float = 0.0
+
+    def count(self, outcome: Outcome) -> None:
+        bucket = self.done if outcome.ok else self.failed
+        bucket[outcome.task.kind] = bucket.get(outcome.task.kind, 0) + 1
+
+    def total(self, kind: str | None = None) -> int:
+        if kind is None:
+            return sum(self.done.values()) + sum(self.failed.values())
+        return self.done.get(kind, 0) + self.failed.get(kind, 0)
+
+
+def call_isolated(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, str | None, str,
+                                                                          float]:
+    """Run ``fn(*args)`` in a worker; an exception comes back as data, never as a raise."""
+    start = time.perf_counter()
+    try:
+        value = fn(*args)
+    except Exception as exc:  # failure isolation: every error becomes a recorded outcome
+        return None, one_line_error(exc), traceback.format_exc(), time.perf_counter() - start
+    return value, None, "", time.perf_counter() - start
+
+
+def one_line_error(exc: BaseException) -> str:
+    """``Type: message`` on one line, short enough for a results table."""
+    message = " ".join(str(exc).split()) or "(no message)"
+    if len(message) > 300:
+        message = message[:297] + "..."
+    return f"{type(exc).__name__}: {message}"
+
+
+class InlineExecutor(cf.Executor):
+    """Runs each task at submission, in this process: no pickling, easy to debug."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future[Any]:
+        future: cf.Future[Any] = cf.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:
+            future.set_exception(exc)
+        return future
+
+
+def default_workers() -> int:
+    return max(1, os.cpu_count() or 1)
+
+
+def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
+    # forkserver: forking a process that runs threads (tqdm, Dask) can deadlock the child.
+    context = multiprocessing.get_context("forkserver")
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=context)
+
+
+@contextmanager
+def dask_executor(address: str) -> Iterator[cf.Executor]:
+    """The executor of a Dask client connected to the scheduler at ``address``."""
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - distributed is a pinned requirement
+        raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
+    try:
+        client = distributed.Client(address, timeout="10s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SpindlebenchError(
+            f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
+        ) from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()
+
+
+class TaskRunner:
+    """Runs tasks with failure isolation, follow-up tasks and a done/total progress bar."""
+
+    def __init__(self, workers: int | None = None, dask_address: str | None = None,
+                 progress: bool = True, desc: str = "tasks", unit: str = "task") -> None:
+        if workers is not None and workers < 0:
+            raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
+        self.workers = default_workers() if workers is None else workers
+        self.dask_address = dask_address
+        self.progress = progress
+        self.desc = desc
+        self.unit = unit
+
+    def describe(self) -> str:
+        if self.dask_address:
+            return f"Dask cluster at {self.dask_address}"
+        if self.workers == 0:
+            return "in-process"
+        return f"{self.workers} local worker process(es)"
+
+    def _open(self) -> cf.Executor:
+        if self.workers == 0:
+            return InlineExecutor()
+        return _local_pool(self.workers)
+
+    def run(self, tasks: Iterable[Task],
+            on_outcome: Callable[[Outcome], Iterable[Task] | None] | None = None) -> RunStats:
+        """Run ``tasks`` (and any follow-ups ``on_outcome`` returns) to completion.
+
+        ``on_outcome`` runs in this process, in completion order; it is where results are
+        written to disk, so a sweep interrupted at any moment keeps every finished task.
+        """
+        stats = RunStats()
+        start = time.perf_counter()
+        queue = list(tasks)
+        bar = tqdm(total=len(queue), desc=self.desc, unit=self.unit,
+                   disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
+        try:
+            if self.dask_address:
+                with dask_executor(self.dask_address) as executor:
+                    self._drain(lambda: executor, queue, on_outcome, stats, bar)
+            else:
+                self._drain(self._open, queue, on_outcome, stats, bar)
+        finally:
+            bar.close()
+            stats.seconds = time.perf_counter() - start
+        return stats
+
+    def _drain(self, open_executor: Callable[[], cf.Executor], queue: list[Task],
+               on_outcome: Callable[[Outcome], Iterable[Task] | None] | None,
+               stats: RunStats, bar: Any) -> None:
+        """Submit, collect and hand over outcomes until no task is left.
+
+        When a local worker dies the pool is unusable: the tasks it was running are rerun
+        one by one in quarantine (each in a fresh one-worker pool) so the crash is pinned on
+        the task that causes it, then a fresh pool takes the rest.
+        """
+
+        def finish(outcome: Outcome) -> None:
+            stats.count(outcome)
+            bar.update(1)
+            follow_ups = list(on_outcome(outcome) or ()) if on_outcome else []
+            if follow_ups:
+                bar.total += len(follow_ups)
+                bar.refresh()
+                queue.extend(follow_ups)
+
+        while queue:
+            executor = open_executor()
+            running: dict[cf.Future[Any], Task] = {}
+            victims: list[Task] = []
+            try:
+                while queue or running:
+                    while queue and not victims:
+                        task = queue.pop(0)
+                        try:
+                            future = executor.submit(call_isolated, task.fn, task.args)
+                        except BrokenProcessPool:
+                            victims.append(task)
+                            break
+                        running[future] = task
+                    if not running:
+                        break
+                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                    for future in done:
+                        task = running.pop(future)
+                        try:
+                            value, error, detail, seconds = future.result()
+                        except BrokenProcessPool:
+                            victims.append(task)
+                            continue
+                        except Exception as exc:  # a Dask worker lost, an unpicklable result
+                            finish(Outcome(task, error=one_line_error(exc), detail=repr(exc)))
+                            continue
+                        finish(Outcome(task, value, error, detail, seconds))
+            finally:
+                if not isinstance(executor, InlineExecutor) and not self.dask_address:
+                    executor.shutdown(wait=True, cancel_futures=True)
+            for task in victims:
+                finish(_run_quarantined(task))
+
+
+def _run_quarantined(task: Task) -> Outcome:
+    pool = _local_pool(1)
+    try:
+        value, error, detail, seconds = pool.submit(call_isolated, task.fn, task.args).result()
+    except BrokenProcessPool:
+        return Outcome(task, error="worker process died while running this task "
+                                   "(crash in native code, e.g. the FMU?)")
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    return Outcome(task, value, error, detail, seconds)

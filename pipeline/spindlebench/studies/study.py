@@ -1,0 +1,411 @@
+"""The season-sweep study file: schema, defaults and validation.
+
+A study describes a family of virtual experiments and how to judge the selection methods on
+it. Experiments are the cross product of the *experiment axes* (months of a climate, spindle
+speeds, speed programmes, cooling modes); every experiment is simulated once per random
+replica (its own day's weather and sensor noise). The *condition axes* (sensor noise levels,
+sensor faults) describe the instruments, not the machine: each condition re-measures the same
+simulated truth, so conditions are compared on identical thermal histories.
+
+Faults strike the held-out experiments only: they model a sensor that goes bad after the
+compensation model was trained on healthy data, the case a practitioner worries about.
+
+Every problem becomes one line naming the study file and the dotted key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
+from spindlebench.studies.schema import Table, load_toml, non_negative, positive
+from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_climate_path
+
+REPO_ROOT = Path(__file__).resolve().parents[3]
+DEFAULT_FMU = REPO_ROOT / "fmus" / "SpindleBench.fmu"
+
+SENSORS = tuple(f"T{i}" for i in range(1, 21))
+#: The paper's six-sensor subset (spindle front, headstock, motor, ambient, X motor, Y motor).
+PAPER_SIX = ("T1", "T6", "T8", "T10", "T13", "T16")
+
+GROUPS = ("raw20", "raw6", "raw6+diff")
+BASELINES = ("top-k-correlated", "ridge")
+TRAINING_RULES = ("one", "each-season")
+PROGRAMME_KINDS = ("constant", "cycles", "steps")
+COOLING_MODES = ("off", "absolute", "follow_ambient")
+FAULT_KINDS = ("dropout", "stuck", "offset")
+NO_FAULT = "none"
+
+
+@dataclass(frozen=True)
+class Programme:
+    """A speed programme relative to the experiment's speed (the speed is an axis)."""
+
+    name: str
+    kind: str
+    on_s: float = 0.0
+    off_s: float = 0.0
+    step_at_s: tuple[float, ...] = ()
+    step_fraction: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class CoolingMode:
+    name: str
+    mode: str
+    setpoint_C: float = 0.0  # noqa: N815
+
+
+@dataclass(frozen=True)
+class NoiseLevel:
+    """Instrument model of a condition (maps onto the testbench's ``SensorModel``)."""
+
+    name: str
+    noise_C: float  # noqa: N815
+    quantum_C: float  # noqa: N815
+    probe_noise_um: float
+    probe_quantum_um: float
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One sensor fault applied to every held-out experiment from ``start_s`` on."""
+
+    name: str
+    sensor: str
+    kind: str
+    start_s: float
+    value_C: float | None = None  # noqa: N815
+    offset_C: float | None = None  # noqa: N815
+
+
+@dataclass(frozen=True)
+class Training:
+    rule: str
+    month: str
+    speed_rpm: float
+    programme: str
+    cooling: str
+
+
+@dataclass(frozen=True)
+class Methods:
+    clusters: tuple[int, ...]
+    groups: tuple[str, ...]
+    baselines: tuple[str, ...]
+    similarity: str
+    ground_truth: bool
+
+
+@dataclass(frozen=True)
+class SweepStudy:
+    """A validated season-sweep study."""
+
+    path: Path
+    name: str
+    description: str
+    seed: int
+    replicas: int
+    climate: Climate
+    fmu: Path
+    duration_s: float
+    step_s: float
+    sample_interval_s: float
+    start_hour: float
+    weather_sd_C: float  # noqa: N815
+    feed: str
+    feed_x_mm_per_min: float
+    feed_y_mm_per_min: float
+    months: tuple[str, ...]
+    speeds_rpm: tuple[float, ...]
+    programmes: tuple[Programme, ...]
+    cooling: tuple[CoolingMode, ...]
+    noise: tuple[NoiseLevel, ...]
+    faults: tuple[Fault | None, ...]
+    training: Training
+    methods: Methods
+    parameters: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def sha256(self) -> str:
+        return sha256_file(self.path)
+
+
+def load_study(path: str | Path) -> SweepStudy:
+    """Read and validate a sweep study file."""
+    path = Path(path)
+    root = Table(load_toml(path), path)
+    here = path.resolve().parent
+
+    head = root.table("study")
+    name = head.get("name", str, default=path.stem)
+    description = head.get("description", str, default="")
+    seed = head.get("seed", int, check=non_negative)
+    replicas = head.get("replicas", int, check=lambda v: None if 1 <= v <= 10_000
+                        else "must be between 1 and 10000")
+    climate_name = head.get("climate", str)
+    climate_path = resolve_climate_path(climate_name, here)
+    if not climate_path.exists():
+        raise head.error("climate", f"no climate table {climate_path}")
+    climate = load_climate(climate_path)
+    fmu_text = head.get("fmu", str, default="")
+    fmu = (here / fmu_text).resolve() if fmu_text else DEFAULT_FMU
+    if fmu_text and not fmu.is_file():
+        raise head.error("fmu", f"no such FMU: {fmu}")
+    head.finish()
+
+    exp = root.table("experiment")
+    duration_s, duration_key = _duration_s(exp)
+    step_s = exp.get("step_s", float, check=positive)
+    sample_interval_s = exp.get("sample_interval_s", float, default=max(step_s, 60.0),
+                                check=positive)
+    if step_s > duration_s:
+        raise exp.error("step_s", f"{step_s:g} s is longer than the duration ({duration_s:g} s)")
+    if sample_interval_s > duration_s / 2:
+        raise exp.error("sample_interval_s", f"{sample_interval_s:g} s leaves fewer than 3 "
+                                             f"samples in {duration_s:g} s")
+    for key, value, unit_name, unit in (("sample_interval_s", sample_interval_s, "step_s", step_s),
+                                        (duration_key, duration_s, "sample_interval_s",
+                                         sample_interval_s)):
+        ratio = value / unit
+        if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio):
+            raise exp.error(key, f"{value:g} s is not a multiple of {unit_name} ({unit:g} s)")
+    start_hour = exp.get("start_hour", float, default=8.0,
+                         check=lambda v: None if 0 <= v < 24 else "must be in [0, 24)")
+    weather_sd = exp.get("weather_sd_C", float, default=1.0,
+                         check=lambda v: None if 0 <= v <= 10 else "must be in [0, 10] K")
+    feed = exp.get("feed", str, default="constant",
+                   check=lambda v: None if v in ("constant", "with_spindle")
+                   else "must be 'constant' or 'with_spindle'")
+    feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=non_negative)
+    feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=non_negative)
+    exp.finish()
+
+    definitions = {
+        "programmes": root.table("programmes", required=False),
+        "cooling": root.table("cooling", required=False),
+        "noise": root.table("noise", required=False),
+        "faults": root.table("faults", required=False),
+    }
+
+    axes = root.table("axes")
+    months = tuple(axes.get_list("months", str, check=lambda m: None if m in MONTHS
+                                 else f"not a month (use {', '.join(MONTHS)})"))
+    speeds = tuple(axes.get_list("speeds_rpm", float, check=lambda v: None if 0 < v <= 40_000
+                                 else "must be > 0 and at most 40000 rpm"))
+    programme_names = axes.get_list("programmes", str, default=["constant"])
+    cooling_names = axes.get_list("cooling", str, default=["off"])
+    noise_names = axes.get_list("noise", str, default=["default"])
+    fault_names = axes.get_list("faults", str, default=[NO_FAULT])
+    axes.finish()
+
+    programmes = tuple(_programme(definitions["programmes"], axes, n, duration_s)
+                       for n in programme_names)
+    cooling = tuple(_cooling(definitions["cooling"], axes, n) for n in cooling_names)
+    noise = tuple(_noise(definitions["noise"], axes, n) for n in noise_names)
+    faults = tuple(_fault(definitions["faults"], axes, n, duration_s) for n in fault_names)
+    for table in definitions.values():
+        for defined in table.unused():
+            raise table.error(defined, "defined but not listed in [axes]")
+
+    training = _training(root.table("training"), months, speeds, programme_names,
+                         cooling_names, climate)
+    methods = _methods(root.table("methods", required=False))
+
+    params = root.table("parameters", required=False)
+    parameters = {name: params.get(name, float) for name in list(params.names())}
+    params.finish()
+    root.finish()
+
+    n_experiments = len(months) * len(speeds) * len(programmes) * len(cooling)
+    if n_experiments < 2:
+        raise root.error("axes", "the axes give only one experiment; a sweep needs a training "
+                                 "experiment and at least one held-out experiment")
+    return SweepStudy(
+        path=path, name=name, description=description, seed=seed, replicas=replicas,
+        climate=climate, fmu=fmu, duration_s=duration_s, step_s=step_s,
+        sample_interval_s=sample_interval_s, start_hour=start_hour, weather_sd_C=weather_sd,
+        feed=feed, feed_x_mm_per_min=feed_x, feed_y_mm_per_min=feed_y, months=months,
+        speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
+        training=training, methods=methods, parameters=parameters,
+    )
+
+
+def _duration_s(exp: Table) -> tuple[float, str]:
+    """``duration_h`` or ``duration_min`` (exactly one of them), in seconds, and its key."""
+    given = [key for key in ("duration_h", "duration_min") if exp.has(key)]
+    if len(given) != 1:
+        raise exp.error("duration_h", "give exactly one of duration_h and duration_min")
+    key = given[0]
+    scale = 3600.0 if key == "duration_h" else 60.0
+    value = exp.get(key, float, check=lambda v: None if 0 < v * scale <= 30 * 86400.0
+                    else "must be > 0 and at most 30 days")
+    return value * scale, key
+
+
+def _definition(table: Table, axes: Table, axis: str, name: str) -> Table:
+    if not table.has(name):
+        raise axes.error(axis, f"'{name}' is not defined (add a [{table.prefix}.{name}] table)")
+    return table.table(name)
+
+
+def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Programme:
+    if name == "constant" and not table.has(name):
+        return Programme(name, "constant")
+    t = _definition(table, axes, "programmes", name)
+    kind = t.get("kind", str, check=lambda v: None if v in PROGRAMME_KINDS
+                 else f"must be one of {', '.join(PROGRAMME_KINDS)}")
+    if kind == "constant":
+        programme = Programme(name, kind)
+    elif kind == "cycles":
+        on_s = t.get("on_min", float, check=positive) * 60.0
+        off_s = t.get("off_min", float, check=positive) * 60.0
+        if on_s + off_s > duration_s:
+            raise t.error("on_min", f"one cycle ({(on_s + off_s) / 60:g} min) is longer than "
+                                    f"the experiment ({duration_s / 60:g} min)")
+        programme = Programme(name, kind, on_s=on_s, off_s=off_s)
+    else:
+        at_h = t.get_list("at_h", float, check=non_negative)
+        fractions = t.get_list("fraction", float, check=lambda v: None if 0 <= v <= 1.5
+                               else "must be in [0, 1.5] (a fraction of the axis speed)")
+        if len(at_h) != len(fractions):
+            raise t.error("fraction", f"has {len(fractions)} values but at_h has {len(at_h)}")
+        if at_h != sorted(at_h) or at_h[-1] * 3600.0 >= duration_s:
+            raise t.error("at_h", "must increase and stay within the experiment's duration")
+        programme = Programme(name, kind, step_at_s=tuple(h * 3600.0 for h in at_h),
+                              step_fraction=tuple(fractions))
+    t.finish()
+    return programme
+
+
+def _cooling(table: Table, axes: Table, name: str) -> CoolingMode:
+    if name == "off" and not table.has(name):
+        return CoolingMode(name, "off")
+    t = _definition(table, axes, "cooling", name)
+    mode = t.get("mode", str, check=lambda v: None if v in COOLING_MODES
+                 else f"must be one of {', '.join(COOLING_MODES)}")
+    setpoint = 0.0
+    if mode == "absolute":
+        setpoint = t.get("setpoint_C", float, check=lambda v: None if 0 <= v <= 60
+                         else "must be an absolute setpoint in degC (0-60)")
+    elif mode == "follow_ambient":
+        setpoint = t.get("setpoint_C", float, default=0.0,
+                         check=lambda v: None if -20 <= v <= 20
+                         else "must be an offset from ambient in K (-20..20)")
+    t.finish()
+    return CoolingMode(name, mode, setpoint)
+
+
+def _noise(table: Table, axes: Table, name: str) -> NoiseLevel:
+    if name == "default" and not table.has(name):
+        return NoiseLevel(name, 0.05, 0.1, 0.3, 0.1)
+    t = _definition(table, axes, "noise", name)
+
+    def bounded(limit: float):
+        return lambda v: None if 0 <= v <= limit else f"must be in [0, {limit:g}]"
+
+    level = NoiseLevel(
+        name,
+        noise_C=t.get("noise_C", float, check=bounded(5.0)),
+        quantum_C=t.get("quantum_C", float, default=0.1, check=bounded(5.0)),
+        probe_noise_um=t.get("probe_noise_um", float, default=0.3, check=bounded(100.0)),
+        probe_quantum_um=t.get("probe_quantum_um", float, default=0.1, check=bounded(100.0)),
+    )
+    t.finish()
+    return level
+
+
+def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | None:
+    if name == NO_FAULT:
+        if table.has(name):
+            raise table.error(name, f"'{NO_FAULT}' is reserved for 'no fault'")
+        return None
+    t = _definition(table, axes, "faults", name)
+    sensor = t.get("sensor", str, check=lambda v: None if v in SENSORS
+                   else "must be one of T1..T20")
+    kind = t.get("kind", str, check=lambda v: None if v in FAULT_KINDS
+                 else f"must be one of {', '.join(FAULT_KINDS)}")
+    start_s = t.get("start_h", float, default=0.0, check=non_negative) * 3600.0
+    if start_s >= duration_s:
+        raise t.error("start_h", "must be within the experiment's duration")
+    value = offset = None
+    if kind == "stuck" and t.has("value_C"):
+        value = t.get("value_C", float, check=lambda v: None if -40 <= v <= 60
+                      else "must be a temperature in degC")
+    if kind == "offset":
+        offset = t.get("offset_C", float, check=lambda v: None if v != 0 and abs(v) <= 50
+                       else "must be non-zero and at most 50 K")
+    t.finish()
+    return Fault(name, sensor, kind, start_s, value, offset)
+
+
+def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
+              programmes: list[str], cooling: list[str], climate: Climate) -> Training:
+    rule = t.get("rule", str, default="one", check=lambda v: None if v in TRAINING_RULES
+                 else f"must be one of {', '.join(TRAINING_RULES)}")
+    month = t.get("month", str, default=months[0],
+                  check=lambda v: None if v in months else
+                  f"must be one of the study's months ({', '.join(months)})")
+    speed = t.get("speed_rpm", float, default=speeds[0],
+                  check=lambda v: None if v in speeds else
+                  f"must be one of the study's speeds ({', '.join(f'{s:g}' for s in speeds)})")
+    programme = t.get("programme", str, default=programmes[0],
+                      check=lambda v: None if v in programmes else
+                      f"must be one of the study's programmes ({', '.join(programmes)})")
+    cooling_mode = t.get("cooling", str, default=cooling[0],
+                         check=lambda v: None if v in cooling else
+                         f"must be one of the study's cooling modes ({', '.join(cooling)})")
+    if rule == "each-season" and t.has("month"):
+        raise t.error("month", "with rule 'each-season' the first listed month of every "
+                               "season trains; remove 'month'")
+    t.finish()
+    if rule == "each-season" and len({climate.season_of(m) for m in months}) < 2:
+        raise t.error("rule", "'each-season' needs months from at least two seasons")
+    return Training(rule, month, speed, programme, cooling_mode)
+
+
+def _methods(t: Table) -> Methods:
+    clusters = t.get_list("clusters", int, default=[2, 3, 4],
+                          check=lambda v: None if 1 <= v <= 6 else "must be between 1 and 6")
+    groups = t.get_list("groups", str, default=list(GROUPS), allow_empty=True,
+                        check=lambda v: None if v in GROUPS
+                        else f"must be one of {', '.join(GROUPS)}")
+    baselines = t.get_list("baselines", str, default=list(BASELINES), allow_empty=True,
+                           check=lambda v: None if v in BASELINES
+                           else f"must be one of {', '.join(BASELINES)}")
+    similarity = t.get("similarity", str, default="abs-pearson",
+                       check=lambda v: None if v in ("abs-pearson", "literal")
+                       else "must be 'abs-pearson' or 'literal'")
+    ground_truth = t.get("ground_truth", bool, default=True)
+    t.finish()
+    if not groups and not baselines:
+        raise t.error("groups", "no method left to evaluate (groups and baselines are empty)")
+    return Methods(tuple(clusters), tuple(groups), tuple(baselines), similarity, ground_truth)
+
+
+def describe(study: SweepStudy) -> dict[str, Any]:
+    """A JSON-ready summary of the study's axes (for provenance and the README)."""
+    return {
+        "name": study.name,
+        "climate": study.climate.name,
+        "months": list(study.months),
+        "speeds_rpm": list(study.speeds_rpm),
+        "programmes": [p.name for p in study.programmes],
+        "cooling": [c.name for c in study.cooling],
+        "noise": [n.name for n in study.noise],
+        "faults": [f.name if f else NO_FAULT for f in study.faults],
+        "replicas": study.replicas,
+        "duration_h": study.duration_s / 3600.0,
+        "training_rule": study.training.rule,
+    }
+
+
+def check_fmu(study: SweepStudy) -> Path:
+    """The FMU the study runs; a missing default FMU gets a message that says how to build."""
+    if not study.fmu.is_file():
+        raise SpindlebenchError(f"{study.path}: FMU {study.fmu} not found; build it with "
+                                "'spindlebench build' or set study.fmu")
+    return study.fmu
