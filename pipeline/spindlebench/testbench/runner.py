@@ -1,0 +1,352 @@
+"""Co-simulation of a scenario with the SpindleBench FMU (FMI 3.0 model exchange) via FMPy.
+
+The loop follows FMPy's own ``simulateME``: instantiate, set parameters and the initial state
+by name, initialise, then integrate with FMPy's CVode wrapper from one communication point to
+the next. Inputs are held constant over each step (zero-order hold): they are set at the start
+of the step, and CVode is stopped exactly at the step's end (``CVodeSetStopTime``) so it never
+integrates past a point where an input changes. Where a programmed input jumps (a speed or feed
+step) the solver is re-initialised, so its step-size history does not straddle the jump.
+
+Per-step Python work is kept small: the driver values for all steps are computed up front, the
+value references are turned into ctypes arrays once, inputs are set and outputs read with one
+``fmi3SetFloat64`` / ``fmi3GetFloat64`` call each, straight from and into numpy rows.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import difflib
+import json
+import shutil
+import sys
+import time as wallclock
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi3 import FMU3Model, fmi3Float64, fmi3ValueReference
+from fmpy.model_description import ModelDescription, ScalarVariable, ValidationError
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
+from spindlebench.testbench.scenario import Scenario
+
+#: The project's default FMU, built from models/ by ``spindlebench build``.
+DEFAULT_FMU = Path(__file__).resolve().parents[3] / "fmus" / "SpindleBench.fmu"
+#: The paper's sensors as FMU outputs.
+SENSOR_OUTPUTS = tuple(f"T{i}_C" for i in range(1, 21))
+KELVIN_OFFSET = 273.15
+#: CVode's relative tolerance; absolute tolerance = nominal × this (K for temperatures).
+RELATIVE_TOLERANCE = 1e-6
+#: Cooling settings of the scenario map onto these FMU parameters.
+COOLING_PARAMETERS = ("cooling_enabled", "cooling_follows_ambient", "cooling_setpoint_C")
+
+
+@dataclass(frozen=True)
+class FmuInterface:
+    """What the runner needs to know about an FMU, looked up once by name."""
+
+    path: Path
+    model_description: ModelDescription
+    input_vrs: tuple[int, ...]
+    output_names: tuple[str, ...]
+    output_vrs: tuple[int, ...]
+    state_names: tuple[str, ...]
+    state_vrs: tuple[int, ...]
+    parameters: Mapping[str, ScalarVariable] = field(repr=False)
+
+
+def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
+    """Read an FMU's model description and check it offers the contract's interface."""
+    fmu_path = Path(fmu_path)
+    if not fmu_path.is_file():
+        hint = " (build it with `spindlebench build`)" if fmu_path == DEFAULT_FMU else ""
+        raise SpindlebenchError(f"{fmu_path}: no such FMU{hint}")
+    try:
+        md = read_model_description(str(fmu_path))
+    except ValidationError as exc:
+        first = str(exc).splitlines()[1:2] or [str(exc)]
+        raise SpindlebenchError(f"{fmu_path}: invalid modelDescription.xml: "
+                                f"{first[0].lstrip('- ')}") from None
+    except Exception as exc:  # not a zip, no modelDescription.xml, bad XML
+        raise SpindlebenchError(f"{fmu_path}: not a readable FMU: {exc}") from None
+    if not md.fmiVersion.startswith("3.") or md.modelExchange is None:
+        raise SpindlebenchError(f"{fmu_path}: need an FMI 3.0 model-exchange FMU, got FMI "
+                                f"{md.fmiVersion}{'' if md.modelExchange else ' without ME'}")
+    by_name = {v.name: v for v in md.modelVariables}
+    inputs = []
+    for name in INPUT_NAMES:
+        var = by_name.get(name)
+        if var is None or var.causality != "input" or var.type != "Float64":
+            raise SpindlebenchError(f"{fmu_path}: no Float64 input {name!r}")
+        inputs.append(var.valueReference)
+    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Float64"]
+    names = {v.name for v in outputs}
+    for required in (*SENSOR_OUTPUTS, "drift_um"):
+        if required not in names:
+            raise SpindlebenchError(f"{fmu_path}: no output {required!r}")
+    states = [d.variable.derivative for d in md.derivatives]
+    parameters = {v.name: v for v in md.modelVariables
+                  if v.causality == "parameter" and v.variability in ("fixed", "tunable")}
+    return FmuInterface(
+        path=fmu_path,
+        model_description=md,
+        input_vrs=tuple(inputs),
+        output_names=tuple(v.name for v in outputs),
+        output_vrs=tuple(v.valueReference for v in outputs),
+        state_names=tuple(v.name for v in states),
+        state_vrs=tuple(v.valueReference for v in states),
+        parameters=parameters,
+    )
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Noise-free result of a co-simulation, sampled at the scenario's interval."""
+
+    time_s: np.ndarray
+    outputs: Mapping[str, np.ndarray]  # FMU output name -> samples
+    drivers: DriverSignals  # driver values at the sample times
+    initial_state_K: Mapping[str, float]  # noqa: N815
+    end_state_K: Mapping[str, float]  # noqa: N815
+    parameters: Mapping[str, float]  # every parameter value the FMU was given
+    solver: Mapping[str, Any]
+
+
+# --------------------------------------------------------------------------- set-up helpers
+
+
+def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
+    """Scenario parameters and cooling settings as FMU parameter values; unknown names fail."""
+    values: dict[str, float] = {}
+    for name, value in scenario.parameters.items():
+        if name in COOLING_PARAMETERS:
+            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': set cooling "
+                                    "in the [cooling] table (mode, setpoint_C)")
+        if name not in fmu.parameters:
+            near = difflib.get_close_matches(name, list(fmu.parameters), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': the FMU "
+                                    f"{fmu.path.name} has no parameter {name!r}{hint}")
+        values[name] = value
+    cooling = scenario.cooling
+    wanted = {
+        "cooling_enabled": 0.0 if cooling.mode == "off" else 1.0,
+        "cooling_follows_ambient": 1.0 if cooling.mode == "follow_ambient" else 0.0,
+        "cooling_setpoint_C": cooling.setpoint_C,
+    }
+    for name, value in wanted.items():
+        if name in fmu.parameters:
+            values[name] = value
+        elif cooling.mode != "off":
+            raise SpindlebenchError(f"{scenario.path}: key 'cooling.mode': the FMU "
+                                    f"{fmu.path.name} has no parameter {name!r}")
+    return values
+
+
+def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> dict[str, float]:
+    """Initial value (K) of every state: a cold soak, or a previous run's end state."""
+    initial = scenario.initial
+    if initial.kind == "cold":
+        start_C = ambient0_C if initial.temperature_C is None else initial.temperature_C
+        return dict.fromkeys(fmu.state_names, start_C + KELVIN_OFFSET)
+    source = initial.from_file
+    where = f"{scenario.path}: key 'initial.from'"
+    try:
+        saved = json.loads(Path(source).read_text(encoding="utf-8"))["end_state"]["states_K"]
+    except FileNotFoundError:
+        raise SpindlebenchError(f"{where}: no such file {source} (simulate the previous "
+                                "run first)") from None
+    except (json.JSONDecodeError, KeyError, TypeError):
+        raise SpindlebenchError(f"{where}: {source} is not a recording sidecar with an "
+                                "end_state") from None
+    missing = [n for n in fmu.state_names if n not in saved]
+    extra = [n for n in saved if n not in fmu.state_names]
+    if missing or extra:
+        what = f"lacks state {missing[0]!r}" if missing else f"has unknown state {extra[0]!r}"
+        raise SpindlebenchError(f"{where}: {source} {what} of {fmu.path.name} (saved from a "
+                                "different model build?)")
+    return {name: float(saved[name]) for name in fmu.state_names}
+
+
+def _row_pointer(matrix: np.ndarray, row: int) -> Any:
+    """Pointer to one row of a C-contiguous float64 matrix, for FMI get/set calls."""
+    address = matrix.ctypes.data + row * matrix.strides[0]
+    return ctypes.cast(address, ctypes.POINTER(fmi3Float64))
+
+
+def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=round(total_s), unit="sim s", desc=label, delay=2.0, file=sys.stderr,
+                leave=False, dynamic_ncols=True)
+
+
+# --------------------------------------------------------------------------- the loop
+
+
+def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
+                progress: bool = False) -> Simulation:
+    """Run a scenario through the FMU and return the noise-free sampled outputs."""
+    from fmpy.sundials import CVodeSolver
+
+    set_stop_time = _cvode_set_stop_time()
+    fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
+    md = fmu_info.model_description
+    signals = drive(scenario)
+    inputs = np.ascontiguousarray(signals.matrix)
+    jumps = signals.jumps()
+    x0 = initial_state(scenario, fmu_info, float(signals.ambient_C[0]))
+    params = parameter_values(scenario, fmu_info)
+
+    n_steps, every = scenario.n_steps, scenario.steps_per_sample
+    n_samples = n_steps // every + 1
+    n_out = len(fmu_info.output_vrs)
+    samples = np.empty((n_samples, n_out))
+
+    unzip_dir = extract(str(fmu_info.path))
+    fmu = FMU3Model(guid=md.guid, unzipDirectory=unzip_dir,
+                    modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="spindlebench")
+    started = wallclock.perf_counter()
+    bar = _progress_bar(scenario.duration_s, progress, scenario.name)
+    instantiated = False
+    try:
+        fmu.instantiate()
+        instantiated = True
+        if params:
+            names = list(params)
+            fmu.setFloat64([fmu_info.parameters[n].valueReference for n in names],
+                           [params[n] for n in names])
+        fmu.setFloat64(list(fmu_info.state_vrs), [x0[n] for n in fmu_info.state_names])
+        fmu.enterInitializationMode(startTime=0.0, stopTime=scenario.duration_s)
+        input_vrs = (fmi3ValueReference * len(fmu_info.input_vrs))(*fmu_info.input_vrs)
+        output_vrs = (fmi3ValueReference * n_out)(*fmu_info.output_vrs)
+        n_in = len(fmu_info.input_vrs)
+        component = fmu.component
+        set_inputs = fmu.fmi3SetFloat64
+        get_outputs = fmu.fmi3GetFloat64
+        set_inputs(component, input_vrs, n_in, _row_pointer(inputs, 0), n_in)
+        fmu.exitInitializationMode()
+        need_update = True
+        while need_update:
+            need_update, terminate, *_ = fmu.updateDiscreteStates()
+            if terminate:
+                raise SpindlebenchError(f"{fmu_info.path}: model asked to terminate at start")
+        fmu.enterContinuousTimeMode()
+        _check_initial_state(fmu, fmu_info, x0)
+
+        solver = CVodeSolver(
+            nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,
+            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
+            get_dx=fmu.getContinuousStateDerivatives, get_z=fmu.getEventIndicators,
+            get_nominals=fmu.getNominalsOfContinuousStates, set_time=fmu.setTime,
+            input=_HeldInputs(fmu, input_vrs, inputs, scenario.step_s),
+            startTime=0.0, maxStep=scenario.step_s, relativeTolerance=RELATIVE_TOLERANCE,
+        )
+        completed_step = md.modelExchange.needsCompletedIntegratorStep
+        get_outputs(component, output_vrs, n_out, _row_pointer(samples, 0), n_out)
+        t = 0.0
+        step_s = scenario.step_s
+        report_every = max(1, n_steps // 200)
+        for k in range(n_steps):
+            t_next = (k + 1) * step_s
+            set_stop_time(solver.cvode_mem, t_next)
+            _, _, t = solver.step(t, t_next)
+            if not np.isclose(t, t_next, rtol=0.0, atol=1e-9 * max(1.0, t_next)):
+                raise SpindlebenchError(f"{fmu_info.path}: CVode stopped at t={t:g} s "
+                                        f"instead of {t_next:g} s")
+            t = t_next
+            fmu.setTime(t)
+            set_inputs(component, input_vrs, n_in, _row_pointer(inputs, k + 1), n_in)
+            if completed_step:
+                _, terminate = fmu.completedIntegratorStep()
+                if terminate:
+                    raise SpindlebenchError(f"{fmu_info.path}: model terminated at t={t:g} s")
+            if jumps[k + 1]:
+                solver.reset(t)
+            if (k + 1) % every == 0:
+                row = (k + 1) // every
+                get_outputs(component, output_vrs, n_out, _row_pointer(samples, row), n_out)
+            if bar is not None and (k + 1) % report_every == 0:
+                bar.update(round(t) - bar.n)
+        end_values = fmu.getFloat64(list(fmu_info.state_vrs))
+        fmu.terminate()
+    except RuntimeError as exc:  # CVode failure
+        raise SpindlebenchError(f"{fmu_info.path}: integration failed in scenario "
+                                f"{scenario.path}: {exc}") from None
+    finally:
+        if bar is not None:
+            bar.close()
+        if instantiated:
+            fmu.freeInstance()
+        shutil.rmtree(unzip_dir, ignore_errors=True)
+    wall_s = wallclock.perf_counter() - started
+
+    sample_rows = np.arange(n_samples) * every
+    sampled = DriverSignals(*(getattr(signals, f)[sample_rows]
+                              for f in DriverSignals.__dataclass_fields__))
+    return Simulation(
+        time_s=sampled.time_s,
+        outputs={name: samples[:, i] for i, name in enumerate(fmu_info.output_names)},
+        drivers=sampled,
+        initial_state_K=x0,
+        end_state_K=dict(zip(fmu_info.state_names, end_values, strict=True)),
+        parameters=params,
+        solver={
+            "integrator": "FMPy CVodeSolver (SUNDIALS CVODE, BDF)",
+            "relative_tolerance": RELATIVE_TOLERANCE,
+            "communication_step_s": scenario.step_s,
+            "input_hold": "zero-order hold, set at the start of each communication step",
+            "restarts_at_input_jumps": int(jumps.sum()),
+            "wall_time_s": round(wall_s, 3),
+        },
+    )
+
+
+def _cvode_set_stop_time() -> Any:
+    """``CVodeSetStopTime`` from the SUNDIALS library FMPy ships (FMPy binds it only in a comment).
+
+    A stop time makes CVode end each call exactly at the communication point instead of
+    stepping past it and interpolating back, so the zero-order hold is exact.
+    """
+    from fmpy.sundials.libraries import sundials_cvode
+    from fmpy.sundials.sundials_types import sunrealtype
+
+    function = sundials_cvode.CVodeSetStopTime
+    function.argtypes = [ctypes.c_void_p, sunrealtype]
+    function.restype = ctypes.c_int
+    return function
+
+
+class _HeldInputs:
+    """FMPy's solver ``input`` hook: applies the zero-order-held inputs valid at time ``t``.
+
+    CVode calls it only for event indicators (root finding), which SpindleBench has none of,
+    but it keeps the solver correct for an FMU build that does.
+    """
+
+    def __init__(self, fmu: FMU3Model, vrs: ctypes.Array, inputs: np.ndarray, step_s: float):
+        self.fmu, self.vrs, self.inputs, self.step_s = fmu, vrs, inputs, step_s
+
+    def apply(self, t: float, **_: Any) -> None:
+        row = min(int(np.floor(t / self.step_s + 1e-9)), len(self.inputs) - 1)
+        n = len(self.vrs)
+        self.fmu.fmi3SetFloat64(self.fmu.component, self.vrs, n, _row_pointer(self.inputs, row),
+                                n)
+
+
+def _check_initial_state(fmu: FMU3Model, info: FmuInterface, x0: Mapping[str, float]) -> None:
+    """Make sure the FMU really starts from the state we set by name (order and values)."""
+    n = info.model_description.numberOfContinuousStates
+    x = (fmi3Float64 * n)()
+    fmu.getContinuousStates(x, n)
+    expected = np.array([x0[name] for name in info.state_names])
+    if not np.allclose(np.array(x), expected, rtol=0.0, atol=1e-9):
+        raise SpindlebenchError(f"{info.path}: the FMU ignored the initial state set by name "
+                                "(state start values not applied)")

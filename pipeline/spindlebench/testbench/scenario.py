@@ -1,0 +1,648 @@
+"""Scenario files (TOML) → frozen, validated dataclasses.
+
+A scenario says what the virtual machine does during one experiment: how long, at which
+communication step, which spindle speed and feed programme, which ambient, cooling, sensor model
+and initial state. Every problem in a file becomes one ``SpindlebenchError`` line that names the
+file and the dotted key, so a user never has to read a traceback to fix a typo.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from spindlebench.errors import SpindlebenchError
+
+#: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
+KELVIN_SUSPECT_C = 60.0
+#: Coldest ambient a workshop scenario may ask for (°C).
+COLDEST_AMBIENT_C = -40.0
+#: The paper's sensors, the only ones a fault can target.
+SENSOR_NAMES = tuple(f"T{i}" for i in range(1, 21))
+
+_MISSING = object()
+
+
+# --------------------------------------------------------------------------- dataclasses
+
+
+@dataclass(frozen=True)
+class ConstantSpeed:
+    """The spindle turns at one speed for the whole run."""
+
+    rpm: float
+    kind: Literal["constant"] = "constant"
+
+
+@dataclass(frozen=True)
+class SpeedStep:
+    """From ``at_s`` on (until the next step) the spindle turns at ``rpm``."""
+
+    at_s: float
+    rpm: float
+
+
+@dataclass(frozen=True)
+class SteppedSpeed:
+    """Piecewise-constant speed; the spindle stands still before the first step."""
+
+    steps: tuple[SpeedStep, ...]
+    kind: Literal["steps"] = "steps"
+
+
+@dataclass(frozen=True)
+class SpeedCycles:
+    """Start/stop cycles: ``on_s`` at ``rpm``, then ``off_s`` standing, from ``start_s`` on."""
+
+    rpm: float
+    on_s: float
+    off_s: float
+    start_s: float = 0.0
+    count: int | None = None  # None: repeat until the end of the run
+    kind: Literal["cycles"] = "cycles"
+
+
+SpeedProgramme = ConstantSpeed | SteppedSpeed | SpeedCycles
+
+
+@dataclass(frozen=True)
+class ConstantFeed:
+    """Both feed axes move all the time at these mean absolute feed rates."""
+
+    x_mm_per_min: float
+    y_mm_per_min: float
+    kind: Literal["constant"] = "constant"
+
+
+@dataclass(frozen=True)
+class FeedWithSpindle:
+    """The feed axes move while the spindle turns and stand while it stands (machining)."""
+
+    x_mm_per_min: float
+    y_mm_per_min: float
+    kind: Literal["with_spindle"] = "with_spindle"
+
+
+@dataclass(frozen=True)
+class FeedStep:
+    """From ``at_s`` on the axes move at these feed rates."""
+
+    at_s: float
+    x_mm_per_min: float
+    y_mm_per_min: float
+
+
+@dataclass(frozen=True)
+class SteppedFeed:
+    """Piecewise-constant feed; the axes stand before the first step."""
+
+    steps: tuple[FeedStep, ...]
+    kind: Literal["steps"] = "steps"
+
+
+FeedProgramme = ConstantFeed | FeedWithSpindle | SteppedFeed
+
+
+@dataclass(frozen=True)
+class ConstantAmbient:
+    """A climate-controlled room."""
+
+    temperature_C: float  # noqa: N815
+    kind: Literal["constant"] = "constant"
+
+
+@dataclass(frozen=True)
+class SeasonAmbient:
+    """A day of a season: the air swings between the day's low and high.
+
+    The daily cycle is a smooth asymmetric cosine: it rises from ``low_C`` at ``trough_hour``
+    to ``high_C`` at ``peak_hour`` and falls back until the next day's trough. ``start_hour``
+    is the clock time at which the run starts.
+    """
+
+    low_C: float  # noqa: N815
+    high_C: float  # noqa: N815
+    start_hour: float = 8.0
+    trough_hour: float = 6.0
+    peak_hour: float = 15.0
+    kind: Literal["season"] = "season"
+
+
+@dataclass(frozen=True)
+class MeasuredAmbient:
+    """A measured ambient series from a CSV file, linearly interpolated in time."""
+
+    file: Path
+    time_column: str
+    value_column: str
+    times_s: tuple[float, ...] = field(repr=False)
+    values_C: tuple[float, ...] = field(repr=False)  # noqa: N815
+    kind: Literal["csv"] = "csv"
+
+
+AmbientModel = ConstantAmbient | SeasonAmbient | MeasuredAmbient
+
+
+@dataclass(frozen=True)
+class Cooling:
+    """Spindle cooling unit: off, an absolute setpoint, or a setpoint that follows the ambient.
+
+    With ``follow_ambient`` the setpoint is an offset (K) from the ambient air temperature.
+    """
+
+    mode: Literal["off", "absolute", "follow_ambient"] = "off"
+    setpoint_C: float = 0.0  # noqa: N815
+
+
+@dataclass(frozen=True)
+class SensorFault:
+    """One misbehaving sensor over ``[start_s, end_s)``.
+
+    ``dropout`` records missing values (NaN, an empty CSV field); ``stuck`` repeats one value
+    (``value_C``, or the last good reading before the fault); ``offset`` adds ``offset_C``.
+    """
+
+    sensor: str
+    kind: Literal["dropout", "stuck", "offset"]
+    start_s: float
+    end_s: float
+    value_C: float | None = None  # noqa: N815
+    offset_C: float | None = None  # noqa: N815
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """How the virtual data logger turns true temperatures and drift into measurements."""
+
+    noise_C: float = 0.05  # noqa: N815
+    quantum_C: float = 0.1  # noqa: N815
+    probe_noise_um: float = 0.2
+    probe_quantum_um: float = 0.1
+    faults: tuple[SensorFault, ...] = ()
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Cold start (every node at one temperature) or continue from a saved end state.
+
+    ``cold`` uses ``temperature_C`` or, if absent, the ambient at the start of the run;
+    ``continue`` reads the end state from a previous run's JSON sidecar (``from_file``).
+    """
+
+    kind: Literal["cold", "continue"] = "cold"
+    temperature_C: float | None = None  # noqa: N815
+    from_file: Path | None = None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One virtual experiment, validated."""
+
+    path: Path
+    name: str
+    description: str
+    duration_s: float
+    step_s: float
+    sample_interval_s: float
+    seed: int
+    speed: SpeedProgramme
+    feed: FeedProgramme
+    ambient: AmbientModel
+    cooling: Cooling
+    sensors: SensorModel
+    initial: InitialState
+    parameters: Mapping[str, float]
+
+    @property
+    def n_steps(self) -> int:
+        """Number of communication steps."""
+        return round(self.duration_s / self.step_s)
+
+    @property
+    def steps_per_sample(self) -> int:
+        """Communication steps between two recorded samples."""
+        return round(self.sample_interval_s / self.step_s)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scenario as parsed, JSON-ready (for the recording's provenance)."""
+        return _jsonable(self)
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, MeasuredAmbient):
+        return {
+            "kind": value.kind,
+            "file": str(value.file),
+            "time_column": value.time_column,
+            "value_column": value.value_column,
+            "n_points": len(value.times_s),
+        }
+    if hasattr(value, "__dataclass_fields__"):
+        return {name: _jsonable(getattr(value, name)) for name in value.__dataclass_fields__}
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, tuple | list):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+# --------------------------------------------------------------------------- reading helpers
+
+
+class _Table:
+    """One TOML table being read: typed getters, and a check that no key was left unread."""
+
+    def __init__(self, path: Path, data: Mapping[str, Any], prefix: str = "") -> None:
+        self.path = path
+        self.data = data
+        self.prefix = prefix
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}{name}"
+
+    def fail(self, name: str, message: str) -> SpindlebenchError:
+        return SpindlebenchError(f"{self.path}: key '{self.key(name)}': {message}")
+
+    def _raw(self, name: str, default: Any) -> Any:
+        self.used.add(name)
+        if name in self.data:
+            return self.data[name]
+        if default is _MISSING:
+            near = difflib.get_close_matches(name, [str(k) for k in self.data], n=1)
+            hint = f"; is {self.key(near[0])!r} a misspelling of it?" if near else ""
+            raise self.fail(name, f"missing (required){hint}")
+        return default
+
+    def number(
+        self,
+        name: str,
+        default: Any = _MISSING,
+        *,
+        minimum: float | None = None,
+        maximum: float | None = None,
+        positive: bool = False,
+        unit: str = "",
+    ) -> float:
+        value = self._raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(name, f"must be a number{unit and ' in ' + unit}, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.fail(name, f"must be finite, got {value!r}")
+        if positive and value <= 0:
+            raise self.fail(name, f"must be > 0, got {value:g}")
+        if minimum is not None and value < minimum:
+            raise self.fail(name, f"must be >= {minimum:g}, got {value:g}")
+        if maximum is not None and value > maximum:
+            raise self.fail(name, f"must be <= {maximum:g}, got {value:g}")
+        return value
+
+    def temperature(self, name: str, default: Any = _MISSING) -> float:
+        """A temperature in °C, rejecting values that look like kelvin or are absurd."""
+        value = self.number(name, default)
+        if value is None:
+            return value
+        if value > KELVIN_SUSPECT_C:
+            raise self.fail(
+                name, f"{value:g} °C is implausible for a workshop (looks like kelvin?); "
+                "give degrees Celsius",
+            )
+        if value < COLDEST_AMBIENT_C:
+            raise self.fail(name, f"{value:g} °C is colder than {COLDEST_AMBIENT_C:g} °C")
+        return value
+
+    def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None) -> int:
+        value = self._raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(name, f"must be an integer, got {value!r}")
+        if minimum is not None and value < minimum:
+            raise self.fail(name, f"must be >= {minimum}, got {value}")
+        return value
+
+    def string(self, name: str, default: Any = _MISSING, *, choices: tuple[str, ...] = ()) -> str:
+        value = self._raw(name, default)
+        if not isinstance(value, str):
+            raise self.fail(name, f"must be a string, got {value!r}")
+        if choices and value not in choices:
+            raise self.fail(name, f"must be one of {', '.join(choices)}; got {value!r}")
+        return value
+
+    def table(self, name: str, *, required: bool = False) -> _Table:
+        value = self._raw(name, _MISSING if required else {})
+        if not isinstance(value, Mapping):
+            raise self.fail(name, f"must be a table, got {value!r}")
+        return _Table(self.path, value, f"{self.key(name)}.")
+
+    def tables(self, name: str, default: Any = _MISSING) -> list[_Table]:
+        value = self._raw(name, default)
+        if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
+            raise self.fail(name, "must be an array of tables ([[...]] or [{...}, ...])")
+        return [_Table(self.path, v, f"{self.key(name)}[{i}].") for i, v in enumerate(value)]
+
+    def finish(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            near = difflib.get_close_matches(unknown[0], sorted(self.used), n=1)
+            hint = f"did you mean {near[0]!r}? " if near else ""
+            raise SpindlebenchError(
+                f"{self.path}: key '{self.key(unknown[0])}': unknown key ({hint}"
+                f"allowed here: {', '.join(sorted(self.used)) or 'none'})"
+            )
+
+
+def _kind(table: _Table, choices: tuple[str, ...], default: str | None = None) -> str:
+    return table.string("kind", _MISSING if default is None else default, choices=choices)
+
+
+# --------------------------------------------------------------------------- sections
+
+
+def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
+    t = top.table("speed", required=True)
+    kind = _kind(t, ("constant", "steps", "cycles"))
+    if kind == "constant":
+        programme: SpeedProgramme = ConstantSpeed(rpm=t.number("rpm", minimum=0.0))
+    elif kind == "steps":
+        steps = []
+        for step in t.tables("steps"):
+            at_s = step.number("at_s", minimum=0.0)
+            if at_s >= duration_s:
+                raise step.fail("at_s", f"step at {at_s:g} s is not within the duration "
+                                f"({duration_s:g} s)")
+            if steps and at_s <= steps[-1].at_s:
+                raise step.fail("at_s", "steps must be in increasing time order")
+            steps.append(SpeedStep(at_s=at_s, rpm=step.number("rpm", minimum=0.0)))
+            step.finish()
+        if not steps:
+            raise t.fail("steps", "needs at least one step")
+        programme = SteppedSpeed(steps=tuple(steps))
+    else:
+        start_s = t.number("start_s", 0.0, minimum=0.0)
+        if start_s >= duration_s:
+            raise t.fail("start_s", f"{start_s:g} s is not within the duration ({duration_s:g} s)")
+        on_s = t.number("on_s", positive=True)
+        off_s = t.number("off_s", positive=True)
+        if on_s + off_s > duration_s:
+            raise t.fail("on_s", f"one cycle ({on_s + off_s:g} s) is longer than the duration "
+                         f"({duration_s:g} s)")
+        programme = SpeedCycles(
+            rpm=t.number("rpm", minimum=0.0), on_s=on_s, off_s=off_s, start_s=start_s,
+            count=t.integer("count", None, minimum=1),
+        )
+    t.finish()
+    return programme
+
+
+def _read_feed(top: _Table, duration_s: float) -> FeedProgramme:
+    t = top.table("feed", required=True)
+    kind = _kind(t, ("constant", "with_spindle", "steps"))
+    if kind in ("constant", "with_spindle"):
+        x = t.number("x_mm_per_min", minimum=0.0)
+        y = t.number("y_mm_per_min", minimum=0.0)
+        programme: FeedProgramme = (
+            ConstantFeed(x, y) if kind == "constant" else FeedWithSpindle(x, y)
+        )
+    else:
+        steps: list[FeedStep] = []
+        for step in t.tables("steps"):
+            at_s = step.number("at_s", minimum=0.0)
+            if at_s >= duration_s:
+                raise step.fail("at_s", f"step at {at_s:g} s is not within the duration "
+                                f"({duration_s:g} s)")
+            if steps and at_s <= steps[-1].at_s:
+                raise step.fail("at_s", "steps must be in increasing time order")
+            steps.append(FeedStep(
+                at_s=at_s,
+                x_mm_per_min=step.number("x_mm_per_min", minimum=0.0),
+                y_mm_per_min=step.number("y_mm_per_min", minimum=0.0),
+            ))
+            step.finish()
+        if not steps:
+            raise t.fail("steps", "needs at least one step")
+        programme = SteppedFeed(steps=tuple(steps))
+    t.finish()
+    return programme
+
+
+def _hour(t: _Table, name: str, default: float) -> float:
+    return t.number(name, default, minimum=0.0, maximum=24.0)
+
+
+def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float) -> AmbientModel:
+    t = top.table("ambient", required=True)
+    kind = _kind(t, ("constant", "season", "csv"))
+    if kind == "constant":
+        model: AmbientModel = ConstantAmbient(temperature_C=t.temperature("temperature_C"))
+    elif kind == "season":
+        low = t.temperature("low_C")
+        high = t.temperature("high_C")
+        if high < low:
+            raise t.fail("high_C", f"daily high {high:g} °C is below the daily low {low:g} °C")
+        trough = _hour(t, "trough_hour", 6.0)
+        peak = _hour(t, "peak_hour", 15.0)
+        if math.isclose(trough % 24, peak % 24):
+            raise t.fail("peak_hour", "must differ from trough_hour")
+        model = SeasonAmbient(
+            low_C=low, high_C=high, start_hour=_hour(t, "start_hour", 8.0),
+            trough_hour=trough, peak_hour=peak,
+        )
+    else:
+        file_name = t.string("file")
+        time_column = t.string("time_column", "time_s")
+        value_column = t.string("value_column", "ambient_C")
+        file = (scenario_dir / file_name).resolve()
+        times, values = _read_ambient_csv(t, file, time_column, value_column)
+        if times[0] > 0.0 or times[-1] < duration_s:
+            raise t.fail("file", f"{file} covers {times[0]:g}–{times[-1]:g} s but the run needs "
+                         f"0–{duration_s:g} s")
+        model = MeasuredAmbient(
+            file=file, time_column=time_column, value_column=value_column,
+            times_s=tuple(times), values_C=tuple(values),
+        )
+    t.finish()
+    return model
+
+
+def _read_ambient_csv(
+    t: _Table, file: Path, time_column: str, value_column: str
+) -> tuple[list[float], list[float]]:
+    """Read and check a measured ambient series; errors name the CSV file and line.
+
+    Lines starting with ``#`` are comments (a place for the series' origin and units).
+    """
+    if not file.is_file():
+        raise t.fail("file", f"no such file: {file}")
+    times: list[float] = []
+    values: list[float] = []
+    header: list[str] | None = None
+    with open(file, newline="", encoding="utf-8") as handle:
+        for line_no, line in enumerate(handle, start=1):
+            if not line.strip() or line.startswith("#"):
+                continue
+            cells = next(csv.reader([line]))
+            if header is None:
+                header = [c.strip() for c in cells]
+                for column, key in ((time_column, "time_column"), (value_column, "value_column")):
+                    if column not in header:
+                        raise t.fail(key, f"column {column!r} not in {file} "
+                                     f"(it has {', '.join(header)})")
+                i_time, i_value = header.index(time_column), header.index(value_column)
+                continue
+            where = f"{file}: line {line_no}"
+            try:
+                time_s = float(cells[i_time])
+                value = float(cells[i_value])
+            except (IndexError, ValueError):
+                raise SpindlebenchError(
+                    f"{where}: expected numbers in columns {time_column} and {value_column}"
+                ) from None
+            if not (math.isfinite(time_s) and math.isfinite(value)):
+                raise SpindlebenchError(f"{where}: non-finite value")
+            if value > KELVIN_SUSPECT_C or value < COLDEST_AMBIENT_C:
+                raise SpindlebenchError(
+                    f"{where}: ambient {value:g} °C is implausible (kelvin?); give °C"
+                )
+            if times and time_s <= times[-1]:
+                raise SpindlebenchError(f"{where}: time {time_s:g} s does not increase")
+            times.append(time_s)
+            values.append(value)
+    if len(times) < 2:
+        raise t.fail("file", f"{file} needs at least two samples")
+    return times, values
+
+
+def _read_cooling(top: _Table) -> Cooling:
+    t = top.table("cooling")
+    mode = t.string("mode", "off", choices=("off", "absolute", "follow_ambient"))
+    if mode == "off":
+        cooling = Cooling()
+    elif mode == "absolute":
+        cooling = Cooling(mode="absolute", setpoint_C=t.temperature("setpoint_C"))
+    else:
+        cooling = Cooling(
+            mode="follow_ambient",
+            setpoint_C=t.number("setpoint_C", minimum=-20.0, maximum=20.0, unit="K from ambient"),
+        )
+    t.finish()
+    return cooling
+
+
+def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
+    t = top.table("sensors")
+    defaults = SensorModel()
+    noise = t.number("noise_C", defaults.noise_C, minimum=0.0, maximum=5.0)
+    quantum = t.number("quantum_C", defaults.quantum_C, minimum=0.0, maximum=5.0)
+    probe_noise = t.number("probe_noise_um", defaults.probe_noise_um, minimum=0.0, maximum=100.0)
+    probe_quantum = t.number(
+        "probe_quantum_um", defaults.probe_quantum_um, minimum=0.0, maximum=100.0
+    )
+    faults = []
+    for ft in t.tables("faults", []):
+        sensor = ft.string("sensor", choices=SENSOR_NAMES)
+        kind = ft.string("kind", choices=("dropout", "stuck", "offset"))
+        start_s = ft.number("start_s", 0.0, minimum=0.0)
+        if start_s >= duration_s:
+            raise ft.fail("start_s", f"{start_s:g} s is not within the duration "
+                          f"({duration_s:g} s)")
+        end_s = ft.number("end_s", duration_s, minimum=0.0)
+        if end_s <= start_s:
+            raise ft.fail("end_s", f"must be after start_s ({start_s:g} s), got {end_s:g}")
+        value = ft.temperature("value_C", None) if kind == "stuck" else None
+        offset = ft.number("offset_C", minimum=-50.0, maximum=50.0) if kind == "offset" else None
+        ft.finish()
+        faults.append(SensorFault(sensor, kind, start_s, end_s, value, offset))  # type: ignore[arg-type]
+    t.finish()
+    return SensorModel(noise, quantum, probe_noise, probe_quantum, tuple(faults))
+
+
+def _read_initial(top: _Table, scenario_dir: Path) -> InitialState:
+    t = top.table("initial")
+    kind = t.string("kind", "cold", choices=("cold", "continue"))
+    if kind == "cold":
+        initial = InitialState(temperature_C=t.temperature("temperature_C", None))
+    else:
+        name = t.string("from")
+        source = (scenario_dir / name).resolve()
+        if source.suffix == ".csv":
+            source = source.with_suffix(".json")
+        initial = InitialState(kind="continue", from_file=source)
+    t.finish()
+    return initial
+
+
+def _read_parameters(top: _Table) -> dict[str, float]:
+    t = top.table("parameters")
+    values = {name: t.number(name) for name in sorted(t.data)}
+    t.finish()
+    return values
+
+
+def _check_grid(top: _Table, name: str, value: float, unit_name: str, unit_s: float) -> None:
+    ratio = value / unit_s
+    if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio):
+        raise top.fail(name, f"{value:g} s is not a multiple of {unit_name} ({unit_s:g} s)")
+
+
+# --------------------------------------------------------------------------- entry point
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file; raise ``SpindlebenchError`` on any problem."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as handle:
+            data = tomllib.load(handle)
+    except FileNotFoundError:
+        raise SpindlebenchError(f"{path}: no such scenario file") from None
+    except IsADirectoryError:
+        raise SpindlebenchError(f"{path}: is a directory, expected a scenario .toml file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SpindlebenchError(f"{path}: not valid TOML: {exc}") from None
+    top = _Table(path, data)
+    scenario_dir = path.resolve().parent
+    name = top.string("name", path.stem)
+    description = top.string("description", "")
+    duration_s = top.number("duration_s", positive=True, maximum=90 * 86400.0)
+    step_s = top.number("step_s", positive=True)
+    if step_s > duration_s:
+        raise top.fail("step_s", f"communication step {step_s:g} s is larger than the duration "
+                       f"({duration_s:g} s)")
+    _check_grid(top, "duration_s", duration_s, "step_s", step_s)
+    sample_interval_s = top.number("sample_interval_s", positive=True)
+    if sample_interval_s > duration_s:
+        raise top.fail("sample_interval_s", f"{sample_interval_s:g} s is larger than the "
+                       f"duration ({duration_s:g} s)")
+    _check_grid(top, "sample_interval_s", sample_interval_s, "step_s", step_s)
+    _check_grid(top, "duration_s", duration_s, "sample_interval_s", sample_interval_s)
+    seed = top.integer("seed", 0, minimum=0)
+    scenario = Scenario(
+        path=path,
+        name=name,
+        description=description,
+        duration_s=duration_s,
+        step_s=step_s,
+        sample_interval_s=sample_interval_s,
+        seed=seed,
+        speed=_read_speed(top, duration_s),
+        feed=_read_feed(top, duration_s),
+        ambient=_read_ambient(top, scenario_dir, duration_s),
+        cooling=_read_cooling(top),
+        sensors=_read_sensors(top, duration_s),
+        initial=_read_initial(top, scenario_dir),
+        parameters=_read_parameters(top),
+    )
+    top.finish()
+    return scenario
