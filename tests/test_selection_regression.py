@@ -1,0 +1,49 @@
+"""OLS on rises: against numpy lstsq, R^2 and RMSE by definition, rises per experiment."""
+
+import numpy as np
+import pytest
+from spindlebench.selection import SelectionError, fit_ols, r2_score, rises, rmse
+
+
+def test_ols_matches_lstsq_with_intercept_column():
+    rng = np.random.default_rng(2)
+    X = 25 + rng.normal(size=(100, 3)).cumsum(axis=0)  # far from zero, like temperatures
+    y = 2.0 - 3.0 * X[:, 0] + 0.7 * X[:, 2] + rng.normal(0, 0.5, 100)
+    fit = fit_ols(X, y)
+    design = np.column_stack([np.ones(100), X])
+    expected, *_ = np.linalg.lstsq(design, y, rcond=None)
+    np.testing.assert_allclose([fit.intercept, *fit.coefficients], expected, rtol=1e-9)
+    fitted = design @ expected
+    assert fit.r2 == pytest.approx(1 - np.sum((y - fitted) ** 2) / np.sum((y - y.mean()) ** 2))
+    np.testing.assert_allclose(fit.predict(X), fitted, rtol=1e-10)
+    assert 0.9 < fit.r2 < 1.0
+
+
+def test_exact_recovery_and_metrics():
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 2.0], [3.0, 1.0]])
+    y = 1.5 + 2.0 * X[:, 0] - 0.5 * X[:, 1]
+    fit = fit_ols(X, y)
+    assert fit.intercept == pytest.approx(1.5)
+    np.testing.assert_allclose(fit.coefficients, [2.0, -0.5])
+    assert fit.r2 == pytest.approx(1.0)
+    assert rmse([1.0, 2.0, 3.0], [1.0, 2.0, 7.0]) == pytest.approx(np.sqrt(16 / 3))
+    assert r2_score([1.0, 2.0, 3.0], [2.0, 2.0, 2.0]) == pytest.approx(0.0)
+    assert np.isnan(r2_score([1.0, 1.0], [1.0, 1.0]))
+
+
+def test_rises_relative_to_first_sample_of_each_experiment():
+    X = np.array([[10.0, 1.0], [12.0, 4.0], [20.0, 5.0], [23.0, 5.0], [11.0, 2.0]])
+    np.testing.assert_array_equal(rises(X), X - X[0])
+    groups = np.array(["a", "a", "b", "b", "a"])
+    np.testing.assert_array_equal(
+        rises(X, groups), [[0, 0], [2, 3], [0, 0], [3, 0], [1, 1]]
+    )
+    with pytest.raises(SelectionError, match="label each"):
+        rises(X, groups[:3])
+
+
+def test_bad_regression_input():
+    with pytest.raises(SelectionError, match="at least 2 samples"):
+        fit_ols(np.ones((1, 2)), np.ones(1))
+    with pytest.raises(SelectionError, match="finite"):
+        fit_ols(np.array([[1.0], [np.inf]]), np.array([1.0, 2.0]))

@@ -1,0 +1,85 @@
+"""Steps 2-5 together: one candidate per cluster, the one with the largest |psi|, sign kept;
+constant candidates dropped with a warning."""
+
+import numpy as np
+import pytest
+from spindlebench.selection import (
+    SelectionError,
+    SelectionWarning,
+    select_sensitive_points,
+)
+
+
+@pytest.fixture
+def data():
+    """Two families of candidates: family A follows a, family B follows b; the error is
+    -3a + 0.5b, so within A the cleanest copy of a wins, with a negative psi."""
+    rng = np.random.default_rng(4)
+    t = np.linspace(0, 1, 200)
+    a = 1 - np.exp(-5 * t)
+    b = np.sin(9 * t)
+    X = np.column_stack([
+        a + rng.normal(0, 0.05, 200),   # 0: A, noisy
+        a + rng.normal(0, 0.001, 200),  # 1: A, clean -> kept
+        b + rng.normal(0, 0.01, 200),   # 2: B, clean -> kept
+        b + rng.normal(0, 0.2, 200),    # 3: B, noisy
+    ])
+    y = -3 * a + 0.5 * b
+    return X, y
+
+
+def test_keeps_strongest_per_cluster_with_sign(data):
+    X, y = data
+    result = select_sensitive_points(X, y, 2)
+    assert [m.tolist() for m in result.clusters] == [[0, 1], [2, 3]]
+    assert result.selected.tolist() == [1, 2]
+    assert result.selected_psi[0] < -0.9  # negative correlation, reported with its sign
+    np.testing.assert_allclose(result.psi, [np.corrcoef(x, y)[0, 1] for x in X.T], atol=1e-12)
+    assert np.all(np.abs(result.psi[result.selected]) >= np.abs(result.psi[[0, 3]]))
+
+
+def test_squaring_and_literal_options_run(data):
+    X, y = data
+    fast = select_sensitive_points(X, y, 2)
+    slow = select_sensitive_points(X, y, 2, closure="squaring")
+    np.testing.assert_array_equal(fast.closure, slow.closure)
+    assert fast.selected.tolist() == slow.selected.tolist()
+    literal = select_sensitive_points(X, y, 2, similarity="literal")
+    assert np.all(literal.similarity >= fast.similarity - 1e-12)
+
+
+def test_constant_candidate_dropped_with_warning_never_nan(data):
+    X, y = data
+    X = np.column_stack([X[:, :2], np.full(200, 21.5), X[:, 2:]])
+    with pytest.warns(SelectionWarning, match=r"dropping 1 constant candidate.*: T_const"):
+        result = select_sensitive_points(X, y, 2, names=["A0", "A1", "T_const", "B0", "B1"])
+    assert result.dropped.tolist() == [2] and 2 not in result.selected
+    assert np.isnan(result.psi[2])
+    assert np.all(np.isfinite(result.similarity)) and np.all(np.isfinite(result.closure))
+    assert result.similarity.shape == (4, 4)
+
+
+@pytest.mark.parametrize(("k", "message"), [
+    (0, "at least 1"), (5, "larger than the number of candidates"), (True, "integer"),
+])
+def test_bad_cluster_counts(data, k, message):
+    X, y = data
+    with pytest.raises(SelectionError, match=message):
+        select_sensitive_points(X, y, k)
+
+
+def test_k_larger_than_varying_candidates(data):
+    X, y = data
+    X = np.column_stack([X[:, 0], np.zeros(200), np.ones(200)])
+    with pytest.warns(SelectionWarning), pytest.raises(SelectionError, match="only 1 candidate"):
+        select_sensitive_points(X, y, 2)
+
+
+def test_bad_samples(data):
+    X, y = data
+    with pytest.raises(SelectionError, match="at least 2 samples"):
+        select_sensitive_points(X[:1], y[:1], 1)
+    X = X.copy()
+    X[5, 1] = np.nan
+    with pytest.raises(SelectionError, match="NaN"):
+        select_sensitive_points(X, y, 2)
