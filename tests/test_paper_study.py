@@ -1,0 +1,208 @@
+"""``spindlebench paper``: the whole comparison on generated recordings and on the real runs."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.cluster.hierarchy import fcluster
+from spindlebench import cli
+from spindlebench.adapters import caiviac
+from spindlebench.errors import SpindlebenchError
+from spindlebench.paper_study import config as study_config
+from spindlebench.paper_study import reference
+from spindlebench.paper_study.figures import cut_height
+from spindlebench.paper_study.study import GROUPS, choose_six, run_study
+from spindlebench.recordings import read_recording
+from spindlebench.selection import evaluate, linkage_from_similarity
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+FIGURES = [
+    "fig3_error_curves.png", "fig4_six_temperatures.png", "fig6_rmse_bars.png",
+    "dendrogram_all_raw.png", "dendrogram_six_raw.png", "dendrogram_six_diff.png",
+]
+
+
+def _experiment(seed: int, speed: float, ambient_start: float, ambient_slope: float):
+    """A warm-up with the paper's column names; the drift depends on T1-T10 and T13-T16."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(150) * 60.0
+    ambient = ambient_start + ambient_slope * t / t[-1]
+    columns = {"time_s": t}
+    gains = np.linspace(0.2, 3.0, 20) * speed / 4000
+    taus = np.linspace(900, 6000, 20)
+    for i in range(20):
+        heat = gains[i] * 8 * (1 - np.exp(-t / taus[i]))
+        columns[f"T{i + 1}"] = ambient + heat + rng.normal(0, 0.02, t.size)
+    columns["T10"] = ambient + rng.normal(0, 0.02, t.size)  # the ambient sensor
+    drift = 8.0 * (columns["T1"] - columns["T10"]) - 2.0 * (columns["T13"] - columns["T16"])
+    drift += rng.normal(0, 0.1, t.size)
+    columns["drift_um"] = drift - drift[0]
+    return pd.DataFrame(columns)
+
+
+@pytest.fixture(scope="module")
+def generated(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("synthetic")
+    setups = [(4000, 5.3, 5.1), (2000, 7.3, 3.8), (4000, 9.6, 3.0), (4000, 20.5, 3.2),
+              (2000, 23.6, 3.9)]  # the paper's speeds and ambient ranges
+    for number, (speed, start, slope) in enumerate(setups, start=1):
+        _experiment(number, speed, start, slope).to_csv(folder / f"exp{number}.csv", index=False)
+    out = folder / "study"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out)]) == 0
+    return folder, out
+
+
+def test_defaults_write_every_table_and_figure(generated):
+    _folder, out = generated
+    for name in [*FIGURES, "fig5_measured_vs_predicted_exp2.png"]:
+        assert (out / name).read_bytes()[:8] == PNG_SIGNATURE, name
+    table4 = pd.read_csv(out / "table4_selected.csv")
+    assert len(table4) == 3 * (2 + 3 + 4)
+    assert table4.groupby(["clusters", "group"]).size().to_dict() == {
+        (k, g): k for k in (2, 3, 4) for g in GROUPS
+    }
+    table5 = pd.read_csv(out / "table5_r2.csv")
+    assert table5.shape == (3, 7)
+    assert ((table5[list(GROUPS)] > 0.9) & (table5[list(GROUPS)] <= 1)).all().all()
+    table6 = pd.read_csv(out / "table6_rmse.csv")
+    assert list(table6.columns) == [
+        "clusters", "group", "exp2", "exp3", "exp4", "exp5", "mean",
+        "paper_exp2", "paper_exp3", "paper_exp4", "paper_exp5", "paper_mean",
+    ]
+    assert len(table6) == 9
+    tests = table6[["exp2", "exp3", "exp4", "exp5"]]
+    np.testing.assert_allclose(table6["mean"], tests.mean(axis=1), rtol=1e-5)
+    provenance = json.loads((out / "provenance.json").read_text())
+    assert provenance["study"]["six"] == ["T1", "T6", "T8", "T10", "T13", "T16"]
+    assert set(provenance["inputs"]) == {f"exp{i}" for i in range(1, 6)}
+    assert "package_versions" in provenance
+
+
+def test_differences_recover_the_generating_terms(generated):
+    _, out = generated
+    table4 = pd.read_csv(out / "table4_selected.csv")
+    diff = table4[table4["group"] == "six_diff"]
+    # T1-T10, the main generating term, is kept at every k
+    assert all("T1-T10" in set(chosen) for _, chosen in diff.groupby("clusters")["selected"])
+    table6 = pd.read_csv(out / "table6_rmse.csv").set_index(["clusters", "group"])
+    mean = table6["mean"]
+    assert mean[(2, "six_diff")] < 1.0
+    assert mean[(2, "six_diff")] < min(mean[(2, "all_raw")], mean[(2, "six_raw")])
+
+
+def test_table6_matches_evaluate_called_directly(generated):
+    folder, out = generated
+    table6 = pd.read_csv(out / "table6_rmse.csv").set_index(["clusters", "group"])
+    direct = evaluate(
+        folder / "exp1.csv",
+        {f"exp{i}": folder / f"exp{i}.csv" for i in range(2, 6)},
+        target="drift_um",
+        sensors=list(study_config.PAPER_SIX),
+        k=3,
+        differences=True,
+    )
+    for name, value in direct.rmse_um.items():
+        assert table6.loc[(3, "six_diff"), name] == pytest.approx(value, rel=1e-5)
+    results = json.loads((out / "results.json").read_text())
+    cell = next(c for c in results["cells"] if c["group"] == "six_diff" and c["k"] == 3)
+    assert cell["selected"] == direct.selected
+    assert cell["coefficients"] == pytest.approx(direct.coefficients)
+
+
+def test_paper_numbers_appear_beside_ours(generated):
+    _, out = generated
+    readme = (out / "README.md").read_text()
+    table6 = pd.read_csv(out / "table6_rmse.csv").set_index(["clusters", "group"])
+    for k, groups in reference.RMSE_UM.items():
+        for group, numbers in groups.items():
+            row = table6.loc[(k, group)]
+            assert tuple(row[[f"paper_exp{i}" for i in range(2, 6)] + ["paper_mean"]]) == numbers
+    assert "| 2 | six + differences |" in readme
+    assert "**3.6**" in readme and "**11.1**" in readme and "**10.3**" in readme
+    assert "T1-T10 (ψ=0.9961)" in readme
+    assert "0.9943" in (out / "table5.md").read_text()
+
+
+def test_paper_reference_means_match_its_rows():
+    """Transcription check: each printed mean is the mean of its four RMSE values."""
+    for groups in reference.RMSE_UM.values():
+        for *values, mean in groups.values():
+            assert abs(np.mean(values) - mean) <= 0.051
+
+
+def test_dendrogram_cut_line_gives_the_cells_clusters(generated):
+    folder, _ = generated
+    config = study_config.load(None, {"clusters": "2,3,4"})
+    result = run_study(folder, config)
+    for group in GROUPS:
+        names, closure = result.closure(group)
+        tree = linkage_from_similarity(closure)
+        for k in config.clusters:
+            cell = result.cell(group, k)
+            labels = fcluster(tree, cut_height(tree[:, 2], cell.eta), criterion="distance")
+            found = {frozenset(n for n, lab in zip(names, labels, strict=True) if lab == label)
+                     for label in set(labels)}
+            assert found == {frozenset(c) for c in cell.clusters}
+
+
+@pytest.fixture(scope="module")
+def caiviac_runs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("caiviac")
+    caiviac.write_runs(folder, phase="heating")
+    return folder
+
+
+def test_real_runs_comparison(caiviac_runs, tmp_path, capsys):
+    config_path = caiviac_runs / caiviac.STUDY_FILE
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(caiviac_runs), "--config", str(config_path),
+                     "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    config = study_config.load(config_path)
+    assert config.train == "run4_5000rpm" and config.target == "ch3_um"
+    table6 = pd.read_csv(out / "table6_rmse.csv")
+    assert list(table6.columns[2:7]) == list(config.tests)
+    assert len(table6) == 9
+    # the six come from the stated rule, applied to the training run
+    six = choose_six(read_recording(caiviac_runs / "run4_5000rpm.csv"), config.sensors_all,
+                     "abs-pearson")
+    assert f"six = {', '.join(six)}" in printed
+    table4 = pd.read_csv(out / "table4_selected.csv")
+    raw_six = table4[table4["group"] == "six_raw"]["selected"]
+    assert set(raw_six) <= set(six)
+    # our Table 6 is evaluate()'s numbers
+    direct = evaluate(
+        caiviac_runs / "run4_5000rpm.csv",
+        {name: caiviac_runs / f"{name}.csv" for name in config.tests},
+        target="ch3_um", sensors=list(config.sensors_all), k=2,
+    )
+    row = table6[(table6["clusters"] == 2) & (table6["group"] == "all_raw")].iloc[0]
+    for name, value in direct.rmse_um.items():
+        assert row[name] == pytest.approx(value, rel=1e-5)
+    for name in FIGURES:
+        assert (out / name).read_bytes()[:8] == PNG_SIGNATURE
+
+
+def test_bad_configuration_is_one_line(tmp_path, generated):
+    folder, _ = generated
+    bad = tmp_path / "bad.toml"
+    bad.write_text('target = "drift_um"\nsix_sensors = ["T1"]\n')
+    with pytest.raises(SpindlebenchError, match=r"bad.toml: unknown key\(s\) six_sensors"):
+        study_config.load(bad)
+    bad.write_text("clusters = [2, 3\n")
+    with pytest.raises(SpindlebenchError, match=r"bad\.toml: not valid TOML"):
+        study_config.load(bad)
+    with pytest.raises(SpindlebenchError, match="six: T99 not among sensors_all"):
+        study_config.load(None, {"six": "T1,T99"})
+    with pytest.raises(SpindlebenchError, match="also the training run"):
+        study_config.load(None, {"tests": "exp1,exp2"})
+    with pytest.raises(SpindlebenchError, match="clusters: expected integers"):
+        study_config.load(None, {"clusters": "2,x"})
+    config = study_config.load(None, {"tests": "exp2,exp9"})
+    with pytest.raises(SpindlebenchError, match=r"exp9.csv: experiment 'exp9' not found"):
+        run_study(folder, config)
+    config = study_config.load(None, {"target": "no_such_um"})
+    with pytest.raises(SpindlebenchError, match=r"missing column.*no_such_um"):
+        run_study(folder, config)
+    assert cli.main(["paper", "--recordings", str(tmp_path / "nowhere")]) == 2
