@@ -1,0 +1,165 @@
+"""``evaluate`` and ``spindlebench evaluate``: the JSON contract, numbers recomputed
+independently, the real recording, and one-line errors for bad input."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from selection_data import REAL_RECORDING, synthetic_experiment
+from spindlebench import cli
+from spindlebench.selection import SelectionWarning, evaluate
+
+KEYS = ["selected", "psi", "eta", "clusters", "coefficients", "r2", "rmse_um", "mean_rmse_um",
+        "provenance"]
+
+
+@pytest.fixture
+def recordings(tmp_path):
+    paths = []
+    for seed in range(3):
+        path = tmp_path / f"exp{seed + 1}.csv"
+        synthetic_experiment(seed, speed=0.5 + 0.4 * seed).to_csv(path, index=False)
+        paths.append(path)
+    return paths
+
+
+def run_cli(capsys, *args):
+    status = cli.main(["evaluate", *map(str, args)])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_cli_json_contract_and_numbers(recordings, tmp_path, capsys):
+    out_json = tmp_path / "out" / "result.json"
+    train, *tests = recordings
+    status, out, err = run_cli(capsys, "--train", train, "--test", *tests, "--target", "drift_um",
+                               "--clusters", "2", "--differences", "--json", out_json)
+    assert status == 0, err
+    assert "training R2" in out and "mean" in out
+    record = json.loads(out_json.read_text())
+    assert list(record) == KEYS
+    assert list(record["rmse_um"]) == [str(path) for path in tests]
+    assert len(record["selected"]) == len(record["psi"]) == len(record["clusters"]) == 2
+    assert all(s in c for s, c in zip(record["selected"], record["clusters"], strict=True))
+    assert sum(len(c) for c in record["clusters"]) == 21  # 6 sensors + 15 differences
+    assert list(record["coefficients"]) == ["intercept", *record["selected"]]
+    assert record["provenance"]["train"]["sha256"] and len(record["provenance"]["tests"]) == 2
+    assert record["provenance"]["sensors"] == ["T1", "T6", "T8", "T10", "T13", "T16"]
+    assert sorted(p.name for p in out_json.parent.iterdir()) == ["result.json"]
+
+    # recompute everything from the CSVs with plain numpy
+    def candidates(frame):
+        values = {}
+        for name in record["selected"]:
+            a, _, b = name.partition("-")
+            column = frame[a] - frame[b] if b else frame[a]
+            values[name] = (column - column.iloc[0]).to_numpy()
+        return np.column_stack(list(values.values()))
+
+    train_frame = pd.read_csv(train)
+    X, y = candidates(train_frame), train_frame["drift_um"].to_numpy()
+    design = np.column_stack([np.ones(len(y)), X])
+    beta, *_ = np.linalg.lstsq(design, y, rcond=None)
+    np.testing.assert_allclose(list(record["coefficients"].values()), beta, rtol=1e-8)
+    assert record["r2"] == pytest.approx(1 - np.var(y - design @ beta) / np.var(y), rel=1e-9)
+    for path in tests:
+        frame = pd.read_csv(path)
+        predicted = beta[0] + candidates(frame) @ beta[1:]
+        expected = np.sqrt(np.mean((frame["drift_um"].to_numpy() - predicted) ** 2))
+        assert record["rmse_um"][str(path)] == pytest.approx(expected, rel=1e-9)
+    assert record["mean_rmse_um"] == pytest.approx(np.mean(list(record["rmse_um"].values())))
+    for name, psi in zip(record["selected"], record["psi"], strict=True):
+        column = candidates(train_frame)[:, record["selected"].index(name)]
+        assert psi == pytest.approx(np.corrcoef(column, y)[0, 1], abs=1e-12)
+    # the synthetic drift is 4 (T1 - T10) - 2 (T13 - T16): differences explain it
+    assert record["selected"][0] == "T1-T10" and record["r2"] > 0.99
+    assert record["mean_rmse_um"] < 1.0
+
+
+def test_differences_beat_raw_on_synthetic(recordings):
+    train, *tests = recordings
+    raw = evaluate(train, tests, "drift_um", k=2)
+    diff = evaluate(train, tests, "drift_um", k=2, differences=True)
+    assert diff.mean_rmse_um < raw.mean_rmse_um
+    assert [s for s in raw.selected if "-" in s] == []
+
+
+def test_real_recording_cycles(tmp_path):
+    data = pd.read_csv(REAL_RECORDING)
+    cycles = {"c1250": slice(31, 1951), "c2500": slice(1951, 3871), "c3750": slice(3871, 5791)}
+    paths = {}
+    for name, rows in cycles.items():
+        frame = data.iloc[rows].copy()
+        frame["time_s"] -= frame["time_s"].iloc[0]
+        frame["ch3_um"] -= frame["ch3_um"].iloc[0]
+        paths[name] = tmp_path / f"{name}.csv"
+        frame.to_csv(paths[name], index=False)
+    result = evaluate(paths["c1250"], [paths["c1250"], paths["c2500"], paths["c3750"]],
+                      "ch3_um", k=3, differences=True, similarity="literal")
+    assert result.sensors == [f"t{i}_C" for i in range(1, 17)]  # ch*_um, spindle_rpm excluded
+    assert len(result.candidates) == 136 and len(result.selected) == 3
+    assert result.fit.r2 > 0.9
+    psi = result.selection.psi
+    for members, chosen in zip(result.selection.clusters, result.selection.selected, strict=True):
+        assert abs(psi[chosen]) == np.abs(psi[members]).max()
+    # predicting the training run itself: RMSE^2 = (1 - R^2) var(y)
+    y = result.measured[str(paths["c1250"])]
+    assert result.rmse_um[str(paths["c1250"])] == pytest.approx(
+        np.sqrt((1 - result.fit.r2) * np.var(y)), rel=1e-9
+    )
+    assert all(np.isfinite(v) for v in result.rmse_um.values())
+
+
+def write_variant(tmp_path, source, name, change):
+    frame = pd.read_csv(source)
+    frame = change(frame)
+    path = tmp_path / name
+    frame.to_csv(path, index=False)
+    return path
+
+
+def test_constant_sensor_warned_and_dropped(recordings, tmp_path, capsys):
+    def flat(frame):
+        frame["T6"] = 21.0
+        return frame
+
+    train = write_variant(tmp_path, recordings[0], "flat.csv", flat)
+    status, out, err = run_cli(capsys, "--train", train, "--test", recordings[1], "--target",
+                               "drift_um", "--clusters", "3", "--differences")
+    assert status == 0
+    assert "warning: dropping 1 constant candidate(s) (zero variance): T6" in err
+    assert "(1 constant dropped)" in out
+    with pytest.warns(SelectionWarning):
+        result = evaluate(train, [recordings[1]], "drift_um", k=3)
+    assert all("T6" not in cluster for cluster in result.clusters)
+
+
+@pytest.mark.parametrize(("change", "extra", "message"), [
+    (None, ["--target", "nope_um"], "target column 'nope_um' not found"),
+    (None, ["--sensors", "T1,T99"], "sensor column(s) not found: T99"),
+    (None, ["--sensors", "T1,,T6"], "--sensors: empty name"),
+    (None, ["--sensors", "T1,drift_um"], "also listed as a sensor"),
+    (None, ["--clusters", "0"], "at least 1"),
+    (None, ["--clusters", "7"], "larger than the number of candidates"),
+    (lambda f: f.drop(columns="T16"), [], "sensor columns differ from the training file"),
+    (lambda f: f.assign(T99=f["T1"]), [], "extra: ['T99']"),
+    (lambda f: f.assign(T8=f["T8"].where(f.index != 9)), [], "line 11, column 'T8': missing"),
+    (lambda f: f.iloc[:1], [], "has 1 data row(s)"),
+])
+def test_bad_input_is_one_line_error(recordings, tmp_path, capsys, change, extra, message):
+    test = recordings[1]
+    if change is not None:
+        test = write_variant(tmp_path, test, "bad.csv", change)
+    args = ["--train", recordings[0], "--test", test, "--target", "drift_um", "--clusters", "2",
+            *extra]  # a repeated --clusters overrides the first
+    status, _, err = run_cli(capsys, *args)
+    assert status == 2
+    assert err.startswith("error: ") and err.count("\n") == 1
+    assert message in err
+
+
+def test_missing_file(recordings, tmp_path, capsys):
+    status, _, err = run_cli(capsys, "--train", tmp_path / "none.csv", "--test", recordings[1],
+                             "--target", "drift_um", "--clusters", "2")
+    assert status == 2 and "none.csv: file not found" in err

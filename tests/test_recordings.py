@@ -1,0 +1,69 @@
+"""Reading canonical recordings: real data, default sensors, and one-line errors naming the
+file, line and column for every kind of bad input."""
+
+import numpy as np
+import pytest
+from selection_data import REAL_RECORDING, synthetic_experiment
+from spindlebench.errors import SpindlebenchError
+from spindlebench.recordings import default_sensors, read_recording
+
+GOOD = "time_s,T1,T2,drift_um\n0,20.0,21.0,0.0\n15,20.5,21.1,1.5\n30,21.0,21.3,2.5\n"
+
+
+def write(tmp_path, text, name="rec.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_reads_real_recording():
+    frame = read_recording(REAL_RECORDING)
+    assert frame.shape == (11115, 23)
+    assert all(dtype == np.float64 for dtype in frame.dtypes)
+    assert frame["time_s"].iloc[-1] == 166710
+    assert frame.attrs["path"].endswith("data.csv")
+    assert default_sensors(frame, "ch3_um") == [f"t{i}_C" for i in range(1, 17)]
+
+
+def test_reads_good_file_and_trailing_blank_line(tmp_path):
+    frame = read_recording(write(tmp_path, GOOD + "\n"))
+    assert list(frame.columns) == ["time_s", "T1", "T2", "drift_um"]
+    assert frame["drift_um"].tolist() == [0.0, 1.5, 2.5]
+
+
+def test_default_sensors_exclude_truth_drivers_and_displacements():
+    frame = synthetic_experiment(0)
+    frame["ambient_C"] = 20.0
+    frame["feed_x_mm_per_min"] = 1500.0
+    frame["true_T1_C"] = frame["T1"]
+    frame["ch2_um"] = 0.0
+    assert default_sensors(frame, "drift_um") == ["T1", "T6", "T8", "T10", "T13", "T16"]
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("", "empty file"),
+    ("time_s,T1\n", "has 0 data row"),
+    ("time_s,T1\n0,20\n", "has 1 data row"),
+    ("time_s,T1,T1\n0,1,2\n1,1,2\n", "line 1: repeated column"),
+    (",T1\n0,1\n1,2\n", "line 1: column 1 has no name"),
+    ("time_s,T1\n0,20\n15,abc\n", "line 3, column 'T1': non-numeric value 'abc'"),
+    ("time_s,T1\n0,20\n15,\n30,21\n", "line 3, column 'T1': missing value"),
+    ("time_s,T1\n0,20\n15,21\n30\n", "line 4, column 'T1': missing value"),
+    ("time_s,T1\n0,NaN\n15,21\n", "line 2, column 'T1': NaN value 'NaN'"),
+    ("time_s,T1\n0,20\n15,inf\n", "line 3, column 'T1': infinite value"),
+    ("time_s,T1\n0,20\n15,21,99\n", "cannot parse CSV"),
+    ("time_s,T1\n0,20\n15,21\n15,22\n", "line 4: 'time_s' does not increase"),
+])
+def test_bad_input_one_line_errors(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(SpindlebenchError, match=message) as info:
+        read_recording(path)
+    assert str(path) in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(SpindlebenchError, match=r"nope\.csv: file not found"):
+        read_recording(tmp_path / "nope.csv")
+    with pytest.raises(SpindlebenchError, match="not a file"):
+        read_recording(tmp_path)
