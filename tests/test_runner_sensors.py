@@ -57,7 +57,7 @@ def test_faults_dropout_stuck_offset():
     time_s, temperatures, drift = truth()
     faults = (
         SensorFault("T7", "dropout", 1000.0, 2000.0),
-        SensorFault("T13", "stuck", 3000.0, 6000.0),
+        SensorFault("T13", "stuck", 3000.0, None),
         SensorFault("T2", "stuck", 0.0, 500.0, value_C=18.0),
         SensorFault("T16", "offset", 100.0, 6000.0, offset_C=1.5),
     )

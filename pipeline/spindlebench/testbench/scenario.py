@@ -162,7 +162,7 @@ class Cooling:
 
 @dataclass(frozen=True)
 class SensorFault:
-    """One misbehaving sensor over ``[start_s, end_s)``.
+    """One misbehaving sensor over ``[start_s, end_s)``, or from ``start_s`` to the end.
 
     ``dropout`` records missing values (NaN, an empty CSV field); ``stuck`` repeats one value
     (``value_C``, or the last good reading before the fault); ``offset`` adds ``offset_C``.
@@ -171,7 +171,7 @@ class SensorFault:
     sensor: str
     kind: Literal["dropout", "stuck", "offset"]
     start_s: float
-    end_s: float
+    end_s: float | None
     value_C: float | None = None  # noqa: N815
     offset_C: float | None = None  # noqa: N815
 
@@ -557,8 +557,8 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
         if start_s >= duration_s:
             raise ft.fail("start_s", f"{start_s:g} s is not within the duration "
                           f"({duration_s:g} s)")
-        end_s = ft.number("end_s", duration_s, minimum=0.0)
-        if end_s <= start_s:
+        end_s = ft.number("end_s", None, minimum=0.0)  # None: until the end of the run
+        if end_s is not None and end_s <= start_s:
             raise ft.fail("end_s", f"must be after start_s ({start_s:g} s), got {end_s:g}")
         value = ft.temperature("value_C", None) if kind == "stuck" else None
         offset = ft.number("offset_C", minimum=-50.0, maximum=50.0) if kind == "offset" else None

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spindlebench.testbench.scenario import SensorModel
+from spindlebench.testbench.scenario import SensorFault, SensorModel
 
 
 def quantise(values: np.ndarray, quantum: float) -> np.ndarray:
@@ -31,6 +31,14 @@ def quantise(values: np.ndarray, quantum: float) -> np.ndarray:
     if quantum <= 0:
         return values
     return np.round(np.round(values / quantum) * quantum, 10)
+
+
+def _window(fault: SensorFault, time_s: np.ndarray) -> np.ndarray:
+    """Samples a fault affects: from ``start_s`` up to (excluding) ``end_s``, or to the end."""
+    window = time_s >= fault.start_s
+    if fault.end_s is not None:
+        window &= time_s < fault.end_s
+    return window
 
 
 def measure(
@@ -51,12 +59,11 @@ def measure(
     for fault in model.faults:
         if fault.kind == "offset":
             column = sensor_names.index(fault.sensor)
-            window = (time_s >= fault.start_s) & (time_s < fault.end_s)
-            raw[window, column] += fault.offset_C
+            raw[_window(fault, time_s), column] += fault.offset_C
     measured = quantise(raw, model.quantum_C)
     for fault in model.faults:
         column = sensor_names.index(fault.sensor)
-        window = (time_s >= fault.start_s) & (time_s < fault.end_s)
+        window = _window(fault, time_s)
         if not window.any():
             continue
         if fault.kind == "dropout":

@@ -104,6 +104,8 @@ def run(args: argparse.Namespace) -> int:
     if not single and out.suffix.lower() == ".csv":
         raise SpindlebenchError(f"{out}: several scenarios need an output directory, not a "
                                 ".csv file")
+    if not single and (out.is_file() or out.suffix.lower() in (".json", ".toml")):
+        raise SpindlebenchError(f"{out}: -o must be a .csv file (one scenario) or a directory")
     for scenario in files:  # validate all first: a typo in the last file should cost nothing
         load_scenario(scenario)
     show_progress = not args.quiet and sys.stderr.isatty()

@@ -1,0 +1,249 @@
+"""Co-simulation runner on the committed FMU: recordings, reproducibility, state hand-over.
+
+Short scenarios (10-30 simulated minutes) keep this fast; the model's physics is tested in
+depth by the model's own tests, here only what the recording must show.
+"""
+
+import json
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pandas as pd
+import pytest
+from spindlebench.errors import SpindlebenchError
+from spindlebench.testbench import simulate_scenario
+from spindlebench.testbench.runner import DEFAULT_FMU, co_simulate, inspect_fmu
+from spindlebench.testbench.scenario import load_scenario
+
+FMU = DEFAULT_FMU
+SENSORS = [f"T{i}" for i in range(1, 21)]
+DRIVERS = ["spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C"]
+
+
+def scenario_text(minutes=20, rpm=4000, ambient='kind = "constant"\ntemperature_C = 20.0',
+                  sample_s=60, seed=5, extra=""):
+    return f"""\
+duration_s = {minutes * 60}
+step_s = 1.0
+sample_interval_s = {sample_s}
+seed = {seed}
+
+[speed]
+kind = "constant"
+rpm = {rpm}
+
+[feed]
+kind = "constant"
+x_mm_per_min = 1500
+y_mm_per_min = 1500
+
+[ambient]
+{ambient}
+{extra}
+"""
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    """One 20-minute run at 4000 rpm, shared by the read-only checks."""
+    tmp = tmp_path_factory.mktemp("quick")
+    scenario = write(tmp, "quick.toml", scenario_text())
+    csv = simulate_scenario(scenario, tmp / "quick.csv", fmu_path=FMU)
+    return scenario, csv, pd.read_csv(csv), json.loads(csv.with_suffix(".json").read_text())
+
+
+def test_recording_has_the_contract_columns(quick_run):
+    _, _, frame, _ = quick_run
+    columns = list(frame.columns)
+    assert columns[:22] == ["time_s", *SENSORS, "drift_um"]
+    assert columns[22:26] == DRIVERS
+    assert [f"true_T{i}_C" for i in range(1, 21)] == columns[26:46]
+    assert "true_drift_um" in columns
+    nodes = [c for c in columns if c.startswith("true_node_") and c.endswith("_C")]
+    flows = [c for c in columns if c.startswith("true_Q_") and c.endswith("_W")]
+    assert len(nodes) >= 30
+    assert flows
+    assert all(c.startswith("true_") for c in columns[26:])
+    np.testing.assert_array_equal(frame.time_s, np.arange(0.0, 1201.0, 60.0))
+    assert not frame.isna().any().any()
+
+
+def test_recording_measures_the_truth(quick_run):
+    _, _, frame, _ = quick_run
+    assert frame.drift_um.iloc[0] == 0.0  # probe zeroed at the first sample
+    for sensor in SENSORS:
+        error = frame[sensor] - frame[f"true_{sensor}_C"]
+        assert error.abs().max() < 0.5  # noise 0.05 °C plus 0.1 °C quantisation
+        np.testing.assert_allclose(frame[sensor] * 10, np.round(frame[sensor] * 10), atol=1e-9)
+    drift_change = frame.true_drift_um - frame.true_drift_um.iloc[0]
+    assert (frame.drift_um - drift_change).abs().max() < 2.0
+    assert (frame.spindle_speed_rpm == 4000).all()
+    assert (frame.ambient_C == 20.0).all()
+
+
+def test_cold_start_puts_every_node_at_the_ambient(quick_run):
+    _, _, frame, sidecar = quick_run
+    first = frame.iloc[0]
+    nodes = [c for c in frame.columns if c.startswith("true_node_")]
+    np.testing.assert_allclose(first[nodes].to_numpy(dtype=float), 20.0, atol=1e-9)
+    states = sidecar["initial_state"]["states_K"]
+    assert states and all(v == pytest.approx(293.15) for v in states.values())
+
+
+def test_sidecar_carries_provenance_and_end_state(quick_run):
+    scenario, _, frame, sidecar = quick_run
+    assert sidecar["scenario"]["path"] == str(scenario)
+    assert len(sidecar["scenario"]["sha256"]) == 64
+    assert sidecar["fmu"]["sha256"] == fmpy_sha(FMU)
+    assert sidecar["seed"] == 5
+    assert sidecar["package_versions"]["fmpy"] != "not installed"
+    assert sidecar["scenario_parsed"]["speed"] == {"rpm": 4000.0, "kind": "constant"}
+    end = sidecar["end_state"]
+    assert end["time_s"] == 1200.0
+    assert set(end["states_K"]) == set(inspect_fmu(FMU).state_names)
+    # the spindle warmed up: the end state is above the start for some node
+    assert max(end["states_K"].values()) > 293.15 + 0.5
+    assert frame.true_T1_C.iloc[-1] > frame.true_T1_C.iloc[0] + 0.5
+
+
+def fmpy_sha(path):
+    from spindlebench.provenance import sha256_file
+
+    return sha256_file(path)
+
+
+def test_same_seed_gives_the_same_bytes_other_seed_other_noise(tmp_path, quick_run):
+    scenario, first_csv, first, _ = quick_run
+    again = simulate_scenario(scenario, tmp_path / "again.csv", fmu_path=FMU)
+    assert again.read_bytes() == first_csv.read_bytes()
+    other = pd.read_csv(simulate_scenario(scenario, tmp_path / "seed9.csv", fmu_path=FMU,
+                                          seed=9))
+    assert not np.array_equal(other[SENSORS].to_numpy(), first[SENSORS].to_numpy())
+    truth = [c for c in first.columns if c.startswith("true_")]
+    np.testing.assert_array_equal(other[truth].to_numpy(), first[truth].to_numpy())
+    assert json.loads((tmp_path / "seed9.json").read_text())["seed"] == 9
+
+
+def test_truth_agrees_with_fmpy_simulate_fmu(quick_run):
+    """The co-simulation loop against FMPy's own simulateME (CVode) with the same inputs."""
+    _, _, frame, _ = quick_run
+    info = inspect_fmu(FMU)
+    inputs = np.array([(0.0, 4000.0, 1500.0, 1500.0, 20.0)],
+                      dtype=[("time", float)] + [(n, float) for n in DRIVERS])
+    result = fmpy.simulate_fmu(
+        str(FMU), stop_time=1200.0, output_interval=60.0, input=inputs,
+        start_values=dict.fromkeys(info.state_names, 293.15), relative_tolerance=1e-8,
+        output=["T1_C", "T8_C", "T16_C", "drift_um"],
+    )
+    for name in ("T1_C", "T8_C", "T16_C"):
+        np.testing.assert_allclose(frame[f"true_{name}"], result[name], atol=2e-3)
+    scale = max(1.0, np.abs(result["drift_um"]).max())
+    np.testing.assert_allclose(frame.true_drift_um, result["drift_um"], atol=2e-3 * scale)
+
+
+def test_continue_from_end_state_equals_one_long_run(tmp_path):
+    long = write(tmp_path, "long.toml", scenario_text(minutes=30))
+    part1 = write(tmp_path, "part1.toml", scenario_text(minutes=20))
+    part2 = write(tmp_path, "part2.toml", scenario_text(
+        minutes=10, extra='[initial]\nkind = "continue"\nfrom = "part1.csv"\n'))
+    whole = pd.read_csv(simulate_scenario(long, tmp_path / "long.csv", fmu_path=FMU))
+    simulate_scenario(part1, tmp_path / "part1.csv", fmu_path=FMU)
+    second = pd.read_csv(simulate_scenario(part2, tmp_path / "part2.csv", fmu_path=FMU))
+    truth = [c for c in whole.columns if c.startswith("true_")]
+    tail = whole[whole.time_s >= 1200][truth].to_numpy()
+    np.testing.assert_allclose(second[truth].to_numpy(), tail, atol=1e-3, rtol=1e-5)
+    sidecar = json.loads((tmp_path / "part2.json").read_text())
+    assert sidecar["initial_state_from"]["path"].endswith("part1.json")
+
+
+def test_continue_from_a_missing_run_fails_cleanly(tmp_path):
+    path = write(tmp_path, "c.toml", scenario_text(
+        minutes=10, extra='[initial]\nkind = "continue"\nfrom = "never_ran.json"\n'))
+    with pytest.raises(SpindlebenchError, match=r"c\.toml: key 'initial\.from': no such file"):
+        simulate_scenario(path, tmp_path / "c.csv", fmu_path=FMU)
+    assert not (tmp_path / "c.csv").exists()
+
+
+def test_unknown_parameter_is_one_line_and_writes_nothing(tmp_path):
+    path = write(tmp_path, "p.toml", scenario_text(
+        minutes=10, extra="[parameters]\nno_such_parameter_xyz = 1.0\n"))
+    with pytest.raises(SpindlebenchError) as info:
+        simulate_scenario(path, tmp_path / "p.csv", fmu_path=FMU)
+    message = str(info.value)
+    assert "'parameters.no_such_parameter_xyz'" in message and "p.toml" in message
+    assert "\n" not in message
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_tunable_parameter_from_the_scenario_reaches_the_fmu(tmp_path):
+    info = inspect_fmu(FMU)
+    T_ref = info.parameters["T_ref"]
+    scenario = load_scenario(write(tmp_path, "t.toml", scenario_text(
+        minutes=10, extra=f"[parameters]\nT_ref = {float(T_ref.start) + 5.0}\n")))
+    base = load_scenario(write(tmp_path, "b.toml", scenario_text(minutes=10)))
+    shifted = co_simulate(scenario, FMU).outputs["drift_um"]
+    reference = co_simulate(base, FMU).outputs["drift_um"]
+    # a hotter reference temperature means the cold machine sits "shrunk" relative to it
+    assert np.abs(shifted - reference).min() > 1.0
+    assert co_simulate(scenario, FMU).parameters["T_ref"] == float(T_ref.start) + 5.0
+
+
+def test_faster_spindle_warms_more_and_drifts_more(tmp_path):
+    runs = {}
+    for rpm in (2000, 4000):
+        scenario = load_scenario(write(tmp_path, f"r{rpm}.toml",
+                                       scenario_text(minutes=30, rpm=rpm)))
+        runs[rpm] = co_simulate(scenario, FMU).outputs
+    rise = {rpm: out["T1_C"][-1] - out["T1_C"][0] for rpm, out in runs.items()}
+    drift = {rpm: abs(out["drift_um"][-1] - out["drift_um"][0]) for rpm, out in runs.items()}
+    assert rise[4000] > rise[2000] > 0.0
+    assert drift[4000] > drift[2000]
+
+
+def test_speed_steps_and_ambient_series_drive_the_fmu(tmp_path):
+    (tmp_path / "amb.csv").write_text("time_s,ambient_C\n0,15\n900,18\n1800,16\n")
+    text = scenario_text(minutes=30, sample_s=30,
+                         ambient='kind = "csv"\nfile = "amb.csv"').replace(
+        'kind = "constant"\nrpm = 4000',
+        'kind = "steps"\nsteps = [{at_s = 0, rpm = 0}, {at_s = 600, rpm = 3000}]')
+    frame = pd.read_csv(simulate_scenario(write(tmp_path, "s.toml", text), tmp_path / "s.csv",
+                                          fmu_path=FMU))
+    np.testing.assert_allclose(frame.ambient_C, np.interp(frame.time_s, [0, 900, 1800],
+                                                          [15, 18, 16]))
+    assert (frame.spindle_speed_rpm == np.where(frame.time_s >= 600, 3000, 0)).all()
+    bearing = [c for c in frame.columns if c.startswith("true_Q_") and "bearing" in c]
+    assert bearing
+    q = frame[bearing].sum(axis=1)
+    assert q[frame.time_s < 600].max() < 0.5 * q[frame.time_s >= 600].min()
+    # the ambient sensor T10 follows the air, with some lag
+    assert abs(frame.true_T10_C.iloc[-1] - 16.0) < 1.5
+    assert frame.true_T10_C.max() > 16.5
+
+
+def test_sensor_faults_show_in_the_recording(tmp_path):
+    extra = ('[[sensors.faults]]\nsensor = "T7"\nkind = "dropout"\nstart_s = 300\nend_s = 600\n'
+             '[[sensors.faults]]\nsensor = "T1"\nkind = "stuck"\nstart_s = 600\n')
+    frame = pd.read_csv(simulate_scenario(
+        write(tmp_path, "f.toml", scenario_text(minutes=15, extra=extra)), tmp_path / "f.csv",
+        fmu_path=FMU))
+    assert frame.T7.isna().sum() == 5  # samples at 300, 360, ..., 540 s
+    assert frame.T1[frame.time_s >= 600].nunique() == 1
+    assert frame.T1.iloc[-1] < frame.true_T1_C.iloc[-1] - 0.3  # it stopped following
+
+
+def test_bad_fmu_path_is_one_line(tmp_path):
+    scenario = write(tmp_path, "q.toml", scenario_text(minutes=10))
+    with pytest.raises(SpindlebenchError, match=r"nothing\.fmu: no such FMU"):
+        simulate_scenario(scenario, tmp_path / "q.csv", fmu_path=tmp_path / "nothing.fmu")
+    junk = tmp_path / "junk.fmu"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(SpindlebenchError, match=r"junk\.fmu: not a readable FMU"):
+        simulate_scenario(scenario, tmp_path / "q.csv", fmu_path=junk)
+    assert not (tmp_path / "q.csv").exists()
