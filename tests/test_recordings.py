@@ -51,6 +51,7 @@ def test_default_sensors_exclude_truth_drivers_and_displacements():
     ("time_s,T1\n0,20\n15,21\n30\n", "line 4, column 'T1': missing value"),
     ("time_s,T1\n0,NaN\n15,21\n", "line 2, column 'T1': NaN value 'NaN'"),
     ("time_s,T1\n0,20\n15,inf\n", "line 3, column 'T1': infinite value"),
+    ("time_s,T1\n0,True\n15,False\n", "line 2, column 'T1': non-numeric value 'True'"),
     ("time_s,T1\n0,20\n15,21,99\n", "cannot parse CSV"),
     ("time_s,T1\n0,20\n15,21\n15,22\n", "line 4: 'time_s' does not increase"),
 ])

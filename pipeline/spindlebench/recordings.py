@@ -42,20 +42,9 @@ def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
     header = _read_header(path)
-    try:
-        raw = pd.read_csv(
-            path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c"
-        )
-    except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
-        detail = " ".join(str(exc).split())
-        raise SpindlebenchError(f"recording {path}: cannot parse CSV: {detail}") from exc
-    if raw.shape[1] != len(header):
-        raise SpindlebenchError(f"recording {path}: header and data have different widths")
-    raw.columns = header  # names stripped of surrounding spaces
-    raw = _drop_trailing_blank_rows(raw)
-    frame = pd.DataFrame(
-        {name: _numeric_column(path, name, raw[name]) for name in header}, index=raw.index
-    )
+    frame = _read_clean(path, header)
+    if frame is None:  # something is wrong: read as text to say exactly what and where
+        frame = _read_diagnosing(path, header)
     if len(frame) < 2:
         raise SpindlebenchError(
             f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
@@ -70,6 +59,42 @@ def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
             )
     frame.attrs["path"] = str(path)
     return frame
+
+
+def _read_clean(path: Path, header: list[str]) -> pd.DataFrame | None:
+    """Fast path: the file parses as finite floats throughout, or None."""
+    try:
+        frame = pd.read_csv(path, skip_blank_lines=False, engine="c")
+    except (pd.errors.ParserError, UnicodeDecodeError, ValueError):
+        return None
+    if frame.shape[1] != len(header):
+        return None
+    numeric = all(
+        pd.api.types.is_float_dtype(dtype) or pd.api.types.is_integer_dtype(dtype)
+        for dtype in frame.dtypes
+    )
+    if not numeric or not np.all(np.isfinite(frame.to_numpy(dtype=float))):
+        return None
+    frame.columns = header
+    return frame.astype(float)
+
+
+def _read_diagnosing(path: Path, header: list[str]) -> pd.DataFrame:
+    """Slow path: read every cell as text, raise naming the first bad cell."""
+    try:
+        raw = pd.read_csv(
+            path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c"
+        )
+    except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
+        detail = " ".join(str(exc).split())
+        raise SpindlebenchError(f"recording {path}: cannot parse CSV: {detail}") from exc
+    if raw.shape[1] != len(header):
+        raise SpindlebenchError(f"recording {path}: header and data have different widths")
+    raw.columns = header  # names stripped of surrounding spaces
+    raw = _drop_trailing_blank_rows(raw)
+    return pd.DataFrame(
+        {name: _numeric_column(path, name, raw[name]) for name in header}, index=raw.index
+    )
 
 
 def _read_header(path: Path) -> list[str]:
