@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pandas as pd
 
 from spindlebench.paper_study import reference
@@ -139,4 +140,19 @@ def table6_markdown(result: StudyResult) -> str:
             *(_fmt(row[f"paper_{t}"], 1) for t in reference.TEST_EXPERIMENTS),
             f"**{_fmt(row['paper_mean'], 1)}**",
         ])
+    scale = measured_rms(result)
+    body.append([
+        "", "*scale: RMS of the measured error (= RMSE of predicting 0)*",
+        *(_fmt(scale[t], 1) for t in tests), f"*{_fmt(float(np.mean(list(scale.values()))), 1)}*",
+        *([""] * (len(reference.TEST_EXPERIMENTS) + 1)),
+    ])
     return _markdown(pd.DataFrame(body, columns=header))
+
+
+def measured_rms(result: StudyResult) -> dict[str, float]:
+    """RMS of the measured error of each predicted experiment: the RMSE a model that always
+    predicts zero drift would get, for scale."""
+    return {
+        test: float(np.sqrt(np.mean(result.frames[test][result.config.target].to_numpy() ** 2)))
+        for test in result.config.tests
+    }
