@@ -4,8 +4,11 @@ constant candidates dropped with a warning."""
 import numpy as np
 import pytest
 from spindlebench.selection import (
+    PairwiseDifferences,
     SelectionError,
     SelectionWarning,
+    constant_columns,
+    rises,
     select_sensitive_points,
 )
 
@@ -83,3 +86,19 @@ def test_bad_samples(data):
     X[5, 1] = np.nan
     with pytest.raises(SelectionError, match="NaN"):
         select_sensitive_points(X, y, 2)
+
+
+def test_offset_pair_difference_is_constant_also_as_rises():
+    """B = A + 0.1: the rise of A-B is rounding noise (~1e-15), which must count as constant
+    rather than be correlated with anything."""
+    rng = np.random.default_rng(5)
+    a = 25 + np.cumsum(rng.normal(0, 0.1, 300))
+    c = 22 + np.cumsum(rng.normal(0, 0.1, 300))
+    raw = np.column_stack([a, a + 0.1, c])
+    for candidates in (PairwiseDifferences().fit_transform(raw),
+                       PairwiseDifferences().fit_transform(rises(raw))):
+        assert constant_columns(candidates).tolist() == [False] * 3 + [True, False, False]
+    with pytest.warns(SelectionWarning, match=r"constant candidate\(s\) \(zero variance\): A-B$"):
+        result = select_sensitive_points(PairwiseDifferences().fit_transform(rises(raw)), a - c,
+                                         2, names=["A", "B", "C", "A-B", "A-C", "B-C"])
+    assert result.dropped.tolist() == [3]

@@ -21,16 +21,23 @@ from spindlebench.selection.errors import SelectionError
 
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 
-#: A column whose peak-to-peak range is below this fraction of its magnitude is constant:
-#: differences of two sensors offset by a constant vary only by rounding.
+#: A column is constant when its peak-to-peak range is below this fraction of the data's
+#: scale: differences of two sensors with a constant offset vary only by rounding.
 CONSTANT_RTOL = 1e-12
 
 
 def constant_columns(X: np.ndarray) -> np.ndarray:
-    """Boolean mask of columns that are constant up to floating-point rounding."""
+    """Boolean mask of columns that are constant up to floating-point rounding.
+
+    The scale of a column is the larger of its own magnitude and the largest range of any
+    column, so a rounding-noise column of rises (values ~1e-15 around 0, from two sensors with
+    a constant offset) counts as constant next to rises of a few kelvin.
+    """
     X = np.asarray(X, dtype=float)
+    if X.shape[0] == 0:
+        return np.ones(X.shape[1], dtype=bool)
     spread = np.ptp(X, axis=0)
-    scale = np.max(np.abs(X), axis=0)
+    scale = np.maximum(np.max(np.abs(X), axis=0), spread.max(initial=0.0))
     return spread <= CONSTANT_RTOL * scale
 
 
