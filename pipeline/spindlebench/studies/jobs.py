@@ -1,0 +1,130 @@
+"""The two kinds of work a sweep sends to its workers, as plain picklable functions.
+
+``simulate_job``: one experiment on one replica's day through the FMU → a canonical recording
+(frame + sidecar), returned to the coordinating process, which writes it. Returning data
+instead of writing in the worker keeps Dask workers on other machines free of any shared
+file system.
+
+``evaluate_job``: one (replica, condition, training experiment): re-measure every experiment's
+noise-free truth with the condition's instruments, train every method on the training run
+and score it on all the others → tidy result rows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from spindlebench.studies.experiments import Condition, Experiment, sensor_model
+from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, score_all
+from spindlebench.studies.study import SENSORS
+from spindlebench.testbench.drivers import INPUT_NAMES
+from spindlebench.testbench.recording import recording_frame
+from spindlebench.testbench.runner import SENSOR_OUTPUTS, co_simulate
+from spindlebench.testbench.scenario import Scenario
+from spindlebench.testbench.sensors import measure
+from spindlebench.testbench.simulate import sidecar_record
+
+#: Truth columns an evaluation needs from a recording.
+TRUTH_COLUMNS = ("time_s", *(f"true_{s}_C" for s in SENSORS), "true_drift_um")
+#: Pseudo-condition of the ground-truth rows.
+NOISE_FREE = "noise-free"
+
+
+def simulate_job(scenario: Scenario, fmu_path: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Co-simulate ``scenario``; return its recording frame and sidecar (not yet written)."""
+    simulation = co_simulate(scenario, fmu_path)
+    truth = simulation.outputs
+    measured_C, measured_drift = measure(
+        scenario.sensors, simulation.time_s,
+        np.column_stack([truth[name] for name in SENSOR_OUTPUTS]), truth["drift_um"],
+        SENSORS, scenario.seed)
+    drivers = {name: getattr(simulation.drivers, name) for name in INPUT_NAMES}
+    frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth)
+    return frame, sidecar_record(scenario, fmu_path, scenario.seed, simulation)
+
+
+@dataclass(frozen=True)
+class EvaluationJob:
+    """Everything one evaluation needs, shipped to the worker (no file access there).
+
+    ``condition`` None means the noise-free ground truth. ``truths`` maps experiment ids to
+    their truth columns (``TRUTH_COLUMNS``); ``failures`` maps the ids of experiments whose
+    simulation failed to its error.
+    """
+
+    replica: int
+    condition: Condition | None
+    train: Experiment
+    experiments: tuple[Experiment, ...]
+    truths: dict[str, pd.DataFrame]
+    failures: dict[str, str]
+    seeds: dict[str, int]
+    duration_s: float
+    specs: tuple[MethodSpec, ...]
+    similarity: str
+
+
+def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
+    """The run as the condition's instruments see it (faults only on held-out runs).
+
+    A sensor that drops out is held at its last good reading, as a compensation controller
+    would; the columns are T1..T20 (degC), ``drift_um`` (probe, zeroed at the first sample)
+    and the true drift rise for scoring.
+    """
+    truth = job.truths[experiment.id]
+    temperatures = truth[[f"true_{s}_C" for s in SENSORS]].to_numpy(float)
+    drift = truth["true_drift_um"].to_numpy(float)
+    time_s = truth["time_s"].to_numpy(float)
+    frame = pd.DataFrame({"time_s": time_s})
+    if job.condition is None:
+        frame[list(SENSORS)] = temperatures
+        frame[TARGET] = drift - drift[0]
+    else:
+        fault = job.condition.fault if experiment != job.train else None
+        model = sensor_model(job.condition.noise, fault)
+        measured_C, measured_drift = measure(model, time_s, temperatures, drift, SENSORS,
+                                             job.seeds[experiment.id])
+        frame[list(SENSORS)] = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
+        frame[TARGET] = measured_drift
+    frame[TRUTH] = drift - drift[0]
+    return frame
+
+
+def evaluate_job(job: EvaluationJob) -> pd.DataFrame:
+    """Tidy rows: one per method × k × held-out experiment (failed ones carry the error)."""
+    tests = [e for e in job.experiments if e != job.train]
+    rows: list[dict[str, Any]] = []
+    if job.train.id in job.failures:
+        message = f"training experiment failed: {job.failures[job.train.id]}"
+        rows = [{"method": s.name, "k": s.k, "test_experiment": e.id, "rmse_um": np.nan,
+                 "rmse_true_um": np.nan, "selected": "", "error": message}
+                for s in job.specs for e in tests]
+    else:
+        train = measured_frame(job, job.train)
+        available = {e.id: measured_frame(job, e) for e in tests if e.id not in job.failures}
+        if available:
+            rows = score_all(list(job.specs), train, available, job.similarity)
+        rows += [{"method": s.name, "k": s.k, "test_experiment": e.id, "rmse_um": np.nan,
+                  "rmse_true_um": np.nan, "selected": "",
+                  "error": f"simulation failed: {job.failures[e.id]}"}
+                 for s in job.specs for e in tests if e.id in job.failures]
+    by_id = {e.id: e for e in tests}
+    frame = pd.DataFrame(rows)
+    frame.insert(0, "replica", job.replica)
+    frame.insert(1, "data", "measured" if job.condition else NOISE_FREE)
+    frame.insert(2, "noise", job.condition.noise.name if job.condition else NOISE_FREE)
+    frame.insert(3, "fault", job.condition.fault_name if job.condition else "none")
+    frame.insert(4, "train_experiment", job.train.id)
+    tested = [by_id[name] for name in frame["test_experiment"]]
+    frame["test_month"] = [e.month for e in tested]
+    frame["test_season"] = [e.season for e in tested]
+    frame["test_speed_rpm"] = [e.speed_rpm for e in tested]
+    frame["test_programme"] = [e.programme for e in tested]
+    frame["test_cooling"] = [e.cooling for e in tested]
+    frame["k"] = frame["k"].astype("Int64")
+    return frame

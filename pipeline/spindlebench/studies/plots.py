@@ -1,0 +1,117 @@
+"""Box plots of a sweep's held-out RMSE: by method and k, by held-out month, by condition."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import pandas as pd
+
+from spindlebench.atomic import atomic_path
+from spindlebench.studies.seasons import MONTHS
+
+METHOD_ORDER = ("raw20", "raw6", "raw6+diff", "top-k-correlated", "ridge")
+COLOURS = {"raw20": "#8c8c8c", "raw6": "#5b8fc9", "raw6+diff": "#d9622b",
+           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6",
+           "measured": "#4c72b0", "noise-free": "#d0d0d0"}
+
+
+def _save(fig: plt.Figure, path: Path) -> Path:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    plt.close(fig)
+    return path
+
+
+def _methods(frame: pd.DataFrame) -> list[str]:
+    present = set(frame["method"])
+    return [m for m in METHOD_ORDER if m in present]
+
+
+def _grouped_boxes(ax: plt.Axes, frame: pd.DataFrame, categories: list, category: str,
+                   methods: list[str]) -> None:
+    width = 0.8 / max(1, len(methods))
+    for j, method in enumerate(methods):
+        data, positions = [], []
+        for i, value in enumerate(categories):
+            values = frame[(frame["method"] == method) & (frame[category] == value)]["rmse_um"]
+            values = values.dropna()
+            if len(values):
+                data.append(values.to_numpy())
+                positions.append(i - 0.4 + width * (j + 0.5))
+        if not data:
+            continue
+        parts = ax.boxplot(data, positions=positions, widths=width * 0.85, patch_artist=True,
+                           showfliers=True, flierprops={"markersize": 2})
+        for box in parts["boxes"]:
+            box.set_facecolor(COLOURS.get(method, "white"))
+            box.set_alpha(0.85)
+        ax.plot([], [], "s", color=COLOURS.get(method, "black"), label=method)
+    ax.set_xticks(range(len(categories)))
+    ax.set_xticklabels([str(c) for c in categories], rotation=30, ha="right")
+    ax.set_ylabel("held-out RMSE (µm)")
+    ax.grid(axis="y", alpha=0.3)
+
+
+def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
+    """One panel per k: every method's RMSE, measured next to noise-free truth."""
+    ok = results[results["rmse_um"].notna()]
+    ks = sorted(int(k) for k in ok["k"].dropna().unique())
+    if not ks:
+        return None
+    fig, axes = plt.subplots(1, len(ks), figsize=(4.2 * len(ks), 4.2), sharey=True,
+                             squeeze=False)
+    for ax, k in zip(axes[0], ks, strict=True):
+        at = ok[(ok["k"] == k) | ok["k"].isna()].copy()
+        at["series"] = at["data"]
+        methods = _methods(at)
+        series = [s for s in ("measured", "noise-free") if s in set(at["series"])]
+        _grouped_boxes(ax, at.rename(columns={"method": "m", "series": "method"})
+                       .rename(columns={"m": "category"}), methods, "category", series)
+        ax.set_title(f"k = {k} (ridge: all candidates)")
+    for ax in axes[0][1:]:
+        ax.set_ylabel("")
+    axes[0][0].legend(loc="upper left", fontsize=8)
+    fig.suptitle("Held-out RMSE per method: measured vs noise-free truth")
+    return _save(fig, path)
+
+
+def by_month(results: pd.DataFrame, path: Path, k: int) -> Path | None:
+    ok = results[results["rmse_um"].notna() & (results["data"] == "measured")]
+    at = ok[(ok["k"] == k) | ok["k"].isna()]
+    if at.empty:
+        return None
+    months = [m for m in MONTHS if m in set(at["test_month"])]
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(months)), 4.2))
+    _grouped_boxes(ax, at, months, "test_month", _methods(at))
+    ax.set_title(f"Held-out RMSE by month of the held-out run (measured, k = {k})")
+    ax.legend(fontsize=8, ncols=3)
+    return _save(fig, path)
+
+
+def by_condition(results: pd.DataFrame, path: Path, k: int) -> Path | None:
+    ok = results[results["rmse_um"].notna() & (results["data"] == "measured")].copy()
+    at = ok[(ok["k"] == k) | ok["k"].isna()].copy()
+    if at.empty:
+        return None
+    at["condition"] = at["noise"] + " / " + at["fault"]
+    conditions = list(dict.fromkeys(at["condition"]))
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.8 * len(conditions)), 4.2))
+    _grouped_boxes(ax, at, conditions, "condition", _methods(at))
+    ax.set_title(f"Held-out RMSE by measurement condition (noise / fault, k = {k})")
+    ax.legend(fontsize=8, ncols=3)
+    return _save(fig, path)
+
+
+def box_plots(results: pd.DataFrame, folder: Path) -> dict[str, Path]:
+    """Write every figure into ``folder``; return name → path of those that have data."""
+    figures: dict[str, Path | None] = {}
+    ks = sorted(int(k) for k in results["k"].dropna().unique())
+    figures["by_method"] = by_method_and_k(results, folder / "rmse_by_method.png")
+    if ks:
+        figures["by_month"] = by_month(results, folder / "rmse_by_month.png", ks[0])
+        figures["by_condition"] = by_condition(results, folder / "rmse_by_condition.png", ks[0])
+    return {name: path for name, path in figures.items() if path is not None}

@@ -1,0 +1,303 @@
+"""``spindlebench sweep STUDY.toml``: the season stress test of the selection methods.
+
+Simulates every experiment of the study on every replica's day (through the FMU, in worker
+processes or on a Dask cluster), then, per replica, measurement condition and training
+experiment, trains every method and scores it on all held-out experiments. Each finished
+simulation and evaluation is on disk at once, so an interrupted sweep resumes where it
+stopped; a failed simulation is recorded with its error and the sweep carries on.
+
+The results folder holds ``results.csv`` (tidy: one row per replica × condition × method × k
+× held-out experiment), ``summary.csv``, box plots, ``README.md`` (the findings, computed from
+the data) and ``provenance.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from spindlebench.atomic import write_text
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import file_entry, provenance, sha256_file
+from spindlebench.recordings import read_recording
+from spindlebench.studies.executor import Outcome, RunStats, Task, TaskRunner
+from spindlebench.studies.experiments import (
+    Condition,
+    Experiment,
+    conditions,
+    experiments,
+    replicas,
+    scenario_for,
+    sensor_seed,
+    training_experiments,
+)
+from spindlebench.studies.jobs import (
+    NOISE_FREE,
+    TRUTH_COLUMNS,
+    EvaluationJob,
+    evaluate_job,
+    simulate_job,
+)
+from spindlebench.studies.methods import method_specs
+from spindlebench.studies.store import ResultStore
+from spindlebench.studies.study import SweepStudy, check_fmu, describe, load_study
+from spindlebench.testbench.recording import write_recording
+
+RESULT_COLUMNS = (
+    "replica", "data", "noise", "fault", "train_experiment", "test_experiment", "test_month",
+    "test_season", "test_speed_rpm", "test_programme", "test_cooling", "method", "k",
+    "rmse_um", "rmse_true_um", "selected", "error",
+)
+
+
+@dataclass
+class SweepOutcome:
+    """What a sweep did: counts of work done now, the results table and the output folder."""
+
+    out_dir: Path
+    results: pd.DataFrame
+    stats: RunStats
+    resumed: bool
+    skipped: dict[str, int] = field(default_factory=dict)
+
+
+def run_dir(replica: int) -> str:
+    return f"runs/r{replica:03d}"
+
+
+def recording_path(replica: int, experiment: Experiment) -> str:
+    return f"{run_dir(replica)}/{experiment.id}.csv"
+
+
+def failure_path(replica: int, experiment: Experiment) -> str:
+    return f"{run_dir(replica)}/{experiment.id}.error.json"
+
+
+def condition_id(condition: Condition | None) -> str:
+    return condition.id if condition is not None else NOISE_FREE
+
+
+def evaluation_path(replica: int, condition: Condition | None, train: Experiment) -> str:
+    return f"evals/r{replica:03d}/{condition_id(condition)}/{train.id}.csv"
+
+
+class Sweep:
+    """One sweep of one study into one results folder (plans, runs and collects)."""
+
+    def __init__(self, study: SweepStudy, out_dir: Path) -> None:
+        self.study = study
+        self.store = ResultStore(out_dir)
+        self.family = experiments(study)
+        self.trains = training_experiments(study, self.family)
+        self.conditions: list[Condition | None] = list(conditions(study))
+        if study.methods.ground_truth:
+            self.conditions.append(None)
+        self.specs = tuple(method_specs(study.methods))
+        self.fmu = check_fmu(study)
+        self._truths: dict[tuple[int, str], pd.DataFrame] = {}
+        self._simulations: dict[str, tuple[int, Experiment]] = {}
+
+    # ----------------------------------------------------------------- planning
+
+    def pending_simulations(self) -> dict[int, list[Experiment]]:
+        return {r: [e for e in self.family if not self.store.exists(recording_path(r, e))]
+                for r in replicas(self.study)}
+
+    def evaluation_keys(self, replica: int) -> list[tuple[Condition | None, Experiment]]:
+        return [(c, t) for c in self.conditions for t in self.trains]
+
+    def simulation_task(self, replica: int, experiment: Experiment) -> Task:
+        scenario = scenario_for(self.study, replica, experiment)
+        key = f"simulate r{replica} {experiment.id}"
+        self._simulations[key] = (replica, experiment)
+        return Task(key, simulate_job, (scenario, self.fmu), kind="simulation")
+
+    def evaluation_task(self, replica: int, condition: Condition | None,
+                        train: Experiment) -> Task:
+        truths: dict[str, pd.DataFrame] = {}
+        failures: dict[str, str] = {}
+        for experiment in self.family:
+            if self.store.exists(failure_path(replica, experiment)):
+                failures[experiment.id] = self.store.read_json(
+                    failure_path(replica, experiment))["error"]
+            else:
+                truths[experiment.id] = self.truth(replica, experiment)
+        job = EvaluationJob(
+            replica=replica, condition=condition, train=train,
+            experiments=tuple(self.family), truths=truths, failures=failures,
+            seeds={e.id: sensor_seed(self.study, replica, e) for e in self.family},
+            duration_s=self.study.duration_s, specs=self.specs,
+            similarity=self.study.methods.similarity)
+        return Task(f"evaluate r{replica} {condition_id(condition)} {train.id}", evaluate_job,
+                    (job,), kind="evaluation")
+
+    def truth(self, replica: int, experiment: Experiment) -> pd.DataFrame:
+        key = (replica, experiment.id)
+        if key not in self._truths:
+            frame = read_recording(self.store.path(recording_path(replica, experiment)))
+            self._truths[key] = frame.loc[:, list(TRUTH_COLUMNS)].copy()
+        return self._truths[key]
+
+    # ----------------------------------------------------------------- running
+
+    def run(self, runner: TaskRunner) -> SweepOutcome:
+        inputs = {"study_sha256": self.study.sha256, "fmu_sha256": sha256_file(self.fmu)}
+        resumed = self.store.claim(inputs)
+        pending = self.pending_simulations()
+        waiting = {r: {e.id for e in exps} for r, exps in pending.items()}
+        tasks: list[Task] = []
+        skipped = {"simulation": 0, "evaluation": 0}
+        for replica, exps in pending.items():
+            skipped["simulation"] += len(self.family) - len(exps)
+            if exps:
+                # Its recordings change: evaluations made from the old set are stale.
+                for condition, train in self.evaluation_keys(replica):
+                    self.store.remove(evaluation_path(replica, condition, train))
+                tasks.extend(self.simulation_task(replica, e) for e in exps)
+            else:
+                todo = self._evaluations_to_do(replica)
+                skipped["evaluation"] += len(self.evaluation_keys(replica)) - len(todo)
+                tasks.extend(todo)
+
+        def on_outcome(outcome: Outcome) -> Iterable[Task]:
+            if outcome.task.kind == "simulation":
+                return self._record_simulation(outcome, waiting)
+            job: EvaluationJob = outcome.task.args[0]
+            replica = job.replica
+            if outcome.ok:
+                frame = outcome.value
+            else:
+                frame = pd.DataFrame([{"replica": replica,
+                                       "data": "measured" if job.condition else NOISE_FREE,
+                                       "noise": condition_id(job.condition),
+                                       "train_experiment": job.train.id,
+                                       "error": f"evaluation failed: {outcome.error}"}])
+            self.store.write_frame(evaluation_path(replica, job.condition, job.train), frame)
+            return ()
+
+        stats = runner.run(tasks, on_outcome)
+        results = self.collect()
+        return SweepOutcome(self.store.root, results, stats, resumed, skipped)
+
+    def _evaluations_to_do(self, replica: int) -> list[Task]:
+        return [self.evaluation_task(replica, c, t) for c, t in self.evaluation_keys(replica)
+                if not self.store.exists(evaluation_path(replica, c, t))]
+
+    def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
+        replica, experiment = self._simulations[outcome.task.key]
+        if outcome.ok:
+            frame, sidecar = outcome.value
+            write_recording(self.store.path(recording_path(replica, experiment)), frame, sidecar)
+            self.store.remove(failure_path(replica, experiment))
+        else:
+            self.store.write_json(failure_path(replica, experiment),
+                                  {"error": outcome.error, "detail": outcome.detail})
+        waiting[replica].discard(experiment.id)
+        return self._evaluations_to_do(replica) if not waiting[replica] else []
+
+    # ----------------------------------------------------------------- collecting
+
+    def collect(self) -> pd.DataFrame:
+        """All evaluation files as one tidy table, in a stable order."""
+        frames = []
+        for replica in replicas(self.study):
+            for condition, train in self.evaluation_keys(replica):
+                relative = evaluation_path(replica, condition, train)
+                if self.store.exists(relative):
+                    frames.append(self.store.read_frame(relative))
+        if not frames:
+            return pd.DataFrame(columns=list(RESULT_COLUMNS))
+        results = pd.concat(frames, ignore_index=True)
+        for column in RESULT_COLUMNS:
+            if column not in results:
+                results[column] = pd.NA
+        results = results.loc[:, list(RESULT_COLUMNS)]
+        results["k"] = results["k"].astype("Int64")
+        results["error"] = results["error"].fillna("")
+        results["selected"] = results["selected"].fillna("")
+        return results.reset_index(drop=True)
+
+
+def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None = None,
+              dask_address: str | None = None, progress: bool = True) -> SweepOutcome:
+    """Run (or resume) a sweep and write every output; return what was done."""
+    study = load_study(study_path)
+    sweep = Sweep(study, Path(out_dir))
+    runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
+                        desc=study.name, unit="job")
+    outcome = sweep.run(runner)
+    write_outputs(sweep, outcome, runner)
+    return outcome
+
+
+def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> None:
+    """results.csv, summary, plots, README and provenance (all atomic)."""
+    from spindlebench.studies import plots, report, summary
+
+    store, study = sweep.store, sweep.study
+    results = outcome.results
+    store.write_frame("results.csv", results)
+    tables = summary.summarise(results)
+    for name, table in tables.items():
+        store.write_frame(f"summary/{name}.csv", table)
+    figures = plots.box_plots(results, store.path("plots"))
+    seeds = {f"r{r}": {e.id: sensor_seed(study, r, e) for e in sweep.family}
+             for r in replicas(study)}
+    record = provenance(
+        kind="spindlebench season sweep",
+        study=file_entry(study.path),
+        climate=file_entry(study.climate.path),
+        fmu=file_entry(sweep.fmu),
+        study_seed=study.seed,
+        seeds=seeds,
+        axes=describe(study),
+        executor=runner.describe(),
+    )
+    store.write_json("provenance.json", record)
+    write_text(store.path("README.md"),
+               report.readme(study, results, tables, figures, record, sweep.trains))
+
+
+# --------------------------------------------------------------------- command line
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "sweep", help="season stress test: run a study of experiments and score the methods",
+        description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
+        "on every replica, train each selection method on the training experiment(s), score "
+        "it on the others, and write results.csv, a summary, box plots and README.md.")
+    parser.add_argument("study", type=Path, help="study file (e.g. "
+                        "scenarios/studies/season_sweep.toml)")
+    parser.add_argument("-o", "--out", type=Path, default=None,
+                        help="results folder (default: results/<study name>)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; 0 = in-process)")
+    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
+                        help="run on an existing Dask distributed cluster instead")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    if args.workers is not None and args.dask_address:
+        raise SpindlebenchError("give either --workers or --dask-address, not both")
+    out = args.out
+    if out is None:
+        out = Path("results") / load_study(args.study).name
+    outcome = run_sweep(args.study, out, workers=args.workers,
+                        dask_address=args.dask_address, progress=not args.no_progress)
+    results = outcome.results
+    failed = int((results["error"] != "").sum()) if len(results) else 0
+    stats = outcome.stats
+    print(f"{'resumed' if outcome.resumed else 'ran'} {stats.total('simulation')} "
+          f"simulation(s) and {stats.total('evaluation')} evaluation(s) in "
+          f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
+          f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
+          f"{failed} with errors")
+    print(f"results: {outcome.out_dir / 'README.md'}")
+    return 0
