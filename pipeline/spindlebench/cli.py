@@ -19,6 +19,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.adapters.command",
     "spindlebench.paper_study.command",
     "spindlebench.selection.command",
+    "spindlebench.studies.sweep",
     "spindlebench.testbench.simulate",
 )
 
