@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance
@@ -47,17 +48,13 @@ def sidecar_record(scenario: Scenario, fmu_path: Path, seed: int,
     )
 
 
-def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
-                      fmu_path: str | Path | None = None, seed: int | None = None,
-                      progress: bool = False) -> Path:
-    """Simulate one scenario file into ``out_csv`` (+ ``.json`` sidecar); return the CSV path.
+def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | None = None,
+           progress: bool = False) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Co-simulate a loaded scenario and measure it: the recording frame and its sidecar.
 
     ``seed`` overrides the scenario's seed; ``fmu_path`` defaults to ``fmus/SpindleBench.fmu``.
+    Nothing is written, so a study can keep recordings in memory.
     """
-    out_csv = Path(out_csv)
-    if out_csv.suffix.lower() != ".csv":
-        raise SpindlebenchError(f"{out_csv}: output must be a .csv file")
-    scenario = load_scenario(scenario_path)
     fmu = Path(DEFAULT_FMU if fmu_path is None else fmu_path)
     seed = scenario.seed if seed is None else seed
     simulation = co_simulate(scenario, fmu, progress=progress)
@@ -72,7 +69,22 @@ def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
     )
     drivers = {name: getattr(simulation.drivers, name) for name in INPUT_NAMES}
     frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth)
-    return write_recording(out_csv, frame, sidecar_record(scenario, fmu, seed, simulation))
+    return frame, sidecar_record(scenario, fmu, seed, simulation)
+
+
+def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
+                      fmu_path: str | Path | None = None, seed: int | None = None,
+                      progress: bool = False) -> Path:
+    """Simulate one scenario file into ``out_csv`` (+ ``.json`` sidecar); return the CSV path.
+
+    ``seed`` overrides the scenario's seed; ``fmu_path`` defaults to ``fmus/SpindleBench.fmu``.
+    """
+    out_csv = Path(out_csv)
+    if out_csv.suffix.lower() != ".csv":
+        raise SpindlebenchError(f"{out_csv}: output must be a .csv file")
+    scenario = load_scenario(scenario_path)
+    frame, sidecar = record(scenario, fmu_path, seed, progress)
+    return write_recording(out_csv, frame, sidecar)
 
 
 def _columns(truth: Mapping[str, np.ndarray], names: tuple[str, ...]) -> np.ndarray:
