@@ -33,7 +33,7 @@ RecordingLike = str | os.PathLike[str] | pd.DataFrame
 
 @dataclass(frozen=True)
 class CandidateSet:
-    """Raw sensors plus (optionally) their pairwise differences, computable column by column."""
+    """Raw sensors plus (optionally) their pairwise differences, as rises, any subset of columns."""
 
     sensors: tuple[str, ...]
     differences: bool
@@ -48,15 +48,15 @@ class CandidateSet:
         """Candidate values (rises) of ``frame``; only ``columns`` if given."""
         raw = rises(frame.loc[:, list(self.sensors)].to_numpy(dtype=float))
         n = raw.shape[1]
-        if columns is None:
-            columns = range(len(self.names))
+        wanted = np.arange(len(self.names)) if columns is None else np.asarray(columns, int)
+        if wanted.size and (wanted.min() < 0 or wanted.max() >= len(self.names)):
+            raise SelectionError(f"candidate index out of range 0..{len(self.names) - 1}")
+        is_raw = wanted < n
+        pair = wanted[~is_raw] - n  # index into the pair list
         first, second = pair_indices(n)
-        out = np.empty((raw.shape[0], len(columns)))
-        for position, column in enumerate(columns):
-            if column < n:
-                out[:, position] = raw[:, column]
-            else:
-                out[:, position] = raw[:, first[column - n]] - raw[:, second[column - n]]
+        out = np.empty((raw.shape[0], wanted.size))
+        out[:, is_raw] = raw[:, wanted[is_raw]]
+        out[:, ~is_raw] = raw[:, first[pair]] - raw[:, second[pair]]
         return out
 
 
@@ -220,7 +220,12 @@ def evaluate(
     """Select ``k`` points on ``train``, fit the rise model, and score it on every test.
 
     Recordings are paths (read with ``read_recording``) or DataFrames; ``tests`` may be a
-    mapping from display name to recording. ``sensors`` None means ``default_sensors``.
+    mapping from display name to recording (default names: the paths). ``sensors`` None means
+    ``default_sensors`` of the training file, and every test file must then have exactly the
+    same sensor columns; with explicit ``sensors`` the files only need to contain them.
+    Warnings (``SelectionWarning``): constant candidates dropped, ties in the cut.
+    Errors (``SelectionError``, one line naming the file): missing target or sensor columns,
+    differing sensor sets, non-finite values, fewer than 2 rows, k < 1 or k > candidates.
     """
     train_name, train_frame = _load(train, "train")
     items = tests.items() if isinstance(tests, Mapping) else enumerate(tests, start=1)
