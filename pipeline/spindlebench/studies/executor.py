@@ -116,14 +116,14 @@ def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
 
 
 @contextmanager
-def dask_executor(address: str) -> Iterator[cf.Executor]:
+def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor]:
     """The executor of a Dask client connected to the scheduler at ``address``."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - distributed is a pinned requirement
         raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
     try:
-        client = distributed.Client(address, timeout="10s", set_as_default=False)
+        client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
         raise SpindlebenchError(
             f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
@@ -138,7 +138,8 @@ class TaskRunner:
     """Runs tasks with failure isolation, follow-up tasks and a done/total progress bar."""
 
     def __init__(self, workers: int | None = None, dask_address: str | None = None,
-                 progress: bool = True, desc: str = "tasks", unit: str = "task") -> None:
+                 progress: bool = True, desc: str = "tasks", unit: str = "task",
+                 connect_timeout_s: float = 10.0) -> None:
         if workers is not None and workers < 0:
             raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
         self.workers = default_workers() if workers is None else workers
@@ -146,6 +147,7 @@ class TaskRunner:
         self.progress = progress
         self.desc = desc
         self.unit = unit
+        self.connect_timeout_s = connect_timeout_s
 
     def describe(self) -> str:
         if self.dask_address:
@@ -173,7 +175,7 @@ class TaskRunner:
                    disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
         try:
             if self.dask_address:
-                with dask_executor(self.dask_address) as executor:
+                with dask_executor(self.dask_address, self.connect_timeout_s) as executor:
                     self._drain(lambda: executor, queue, on_outcome, stats, bar)
             else:
                 self._drain(self._open, queue, on_outcome, stats, bar)

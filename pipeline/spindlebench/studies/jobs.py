@@ -22,12 +22,9 @@ import pandas as pd
 from spindlebench.studies.experiments import Condition, Experiment, sensor_model
 from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, score_all
 from spindlebench.studies.study import SENSORS
-from spindlebench.testbench.drivers import INPUT_NAMES
-from spindlebench.testbench.recording import recording_frame
-from spindlebench.testbench.runner import SENSOR_OUTPUTS, co_simulate
 from spindlebench.testbench.scenario import Scenario
 from spindlebench.testbench.sensors import measure
-from spindlebench.testbench.simulate import sidecar_record
+from spindlebench.testbench.simulate import record
 
 #: Truth columns an evaluation needs from a recording.
 TRUTH_COLUMNS = ("time_s", *(f"true_{s}_C" for s in SENSORS), "true_drift_um")
@@ -37,15 +34,7 @@ NOISE_FREE = "noise-free"
 
 def simulate_job(scenario: Scenario, fmu_path: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Co-simulate ``scenario``; return its recording frame and sidecar (not yet written)."""
-    simulation = co_simulate(scenario, fmu_path)
-    truth = simulation.outputs
-    measured_C, measured_drift = measure(
-        scenario.sensors, simulation.time_s,
-        np.column_stack([truth[name] for name in SENSOR_OUTPUTS]), truth["drift_um"],
-        SENSORS, scenario.seed)
-    drivers = {name: getattr(simulation.drivers, name) for name in INPUT_NAMES}
-    frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth)
-    return frame, sidecar_record(scenario, fmu_path, scenario.seed, simulation)
+    return record(scenario, fmu_path)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,87 @@
+"""The study task runner: failure isolation, crash quarantine, follow-ups, Dask backend."""
+
+from __future__ import annotations
+
+import os
+
+import distributed
+import pytest
+from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.executor import Task, TaskRunner, one_line_error
+
+
+def square(x: int) -> int:
+    if x == 3:
+        raise ValueError("three is\nnot allowed")
+    return x * x
+
+
+def crash_on(x: int, bad: int) -> int:
+    if x == bad:
+        os._exit(1)  # a segfault in native FMU code looks like this to the pool
+    return x + 100
+
+
+def run(runner: TaskRunner, tasks, follow=None):
+    outcomes = []
+
+    def on_outcome(outcome):
+        outcomes.append(outcome)
+        return follow(outcome) if follow else ()
+
+    stats = runner.run(tasks, on_outcome)
+    return stats, {o.task.key: o for o in outcomes}
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_a_failing_task_is_recorded_and_the_rest_complete(workers):
+    tasks = [Task(f"t{i}", square, (i,)) for i in range(6)]
+    stats, outcomes = run(TaskRunner(workers=workers, progress=False), tasks)
+    assert stats.done == {"task": 5} and stats.failed == {"task": 1}
+    assert outcomes["t3"].error == "ValueError: three is not allowed"
+    assert "Traceback" in outcomes["t3"].detail
+    assert [outcomes[f"t{i}"].value for i in (0, 1, 2, 4, 5)] == [0, 1, 4, 16, 25]
+
+
+def test_follow_up_tasks_run_after_their_trigger():
+    def follow(outcome):
+        if outcome.task.kind == "first" and outcome.ok:
+            return [Task(f"second-{outcome.task.key}", square, (outcome.value,), kind="second")]
+        return ()
+
+    tasks = [Task(f"{i}", square, (i,), kind="first") for i in (1, 2, 3)]
+    stats, outcomes = run(TaskRunner(workers=2, progress=False), tasks, follow)
+    assert stats.done == {"first": 2, "second": 2} and stats.failed == {"first": 1}
+    assert outcomes["second-2"].value == 16
+
+
+def test_a_crashing_worker_is_pinned_on_its_task_and_the_others_survive():
+    tasks = [Task(f"c{i}", crash_on, (i, 4)) for i in range(8)]
+    stats, outcomes = run(TaskRunner(workers=2, progress=False), tasks)
+    assert stats.failed == {"task": 1}
+    assert "worker process died" in outcomes["c4"].error
+    assert {k: o.value for k, o in outcomes.items() if o.ok} == {
+        f"c{i}": i + 100 for i in range(8) if i != 4}
+
+
+def test_dask_local_cluster_runs_the_same_tasks():
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  protocol="tcp://", dashboard_address=None) as cluster:
+        runner = TaskRunner(dask_address=cluster.scheduler_address, progress=False)
+        assert runner.describe().startswith("Dask cluster at tcp://")
+        stats, outcomes = run(runner, [Task(f"t{i}", square, (i,)) for i in range(5)])
+    assert stats.done == {"task": 4} and stats.failed == {"task": 1}
+    assert outcomes["t4"].value == 16
+    assert outcomes["t3"].error.startswith("ValueError")
+
+
+def test_unreachable_dask_scheduler_is_one_clear_line():
+    runner = TaskRunner(dask_address="tcp://127.0.0.1:9", progress=False, connect_timeout_s=1)
+    with pytest.raises(SpindlebenchError, match=r"--dask-address tcp://127.0.0.1:9: cannot "
+                                                r"connect to a Dask scheduler"):
+        runner.run([Task("t", square, (1,))])
+
+
+def test_one_line_error_is_short_and_single_line():
+    message = one_line_error(RuntimeError("a\nb " + "x" * 500))
+    assert "\n" not in message and len(message) < 330 and message.startswith("RuntimeError: a b")
