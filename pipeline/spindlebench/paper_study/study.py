@@ -137,15 +137,18 @@ def _cell(
     sensors: list[str],
     differences: bool,
 ) -> Cell:
-    result = evaluate(
-        frames[config.train],
-        {name: frames[name] for name in config.tests},
-        target=config.target,
-        sensors=sensors,
-        k=k,
-        differences=differences,
-        similarity=config.similarity,
-    )
+    try:
+        result = evaluate(
+            frames[config.train],
+            {name: frames[name] for name in config.tests},
+            target=config.target,
+            sensors=sensors,
+            k=k,
+            differences=differences,
+            similarity=config.similarity,
+        )
+    except SpindlebenchError as exc:
+        raise SpindlebenchError(f"group {group}, k = {k}: {exc}") from exc
     record = result.to_dict()
     return Cell(
         group=group,
@@ -157,7 +160,7 @@ def _cell(
         eta=float(record["eta"]),
         clusters=[list(c) for c in record["clusters"]],
         coefficients=dict(record["coefficients"]),
-        r2=float(record["r2"]),
+        r2=float(result.fit.r2),
         rmse_um={name: float(record["rmse_um"][name]) for name in config.tests},
         mean_rmse_um=float(record["mean_rmse_um"]),
         predictions_um=dict(result.predictions),
