@@ -134,8 +134,12 @@ class SweepStudy:
         return sha256_file(self.path)
 
 
-def load_study(path: str | Path) -> SweepStudy:
-    """Read and validate a sweep study file."""
+def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStudy:
+    """Read and validate a sweep study file.
+
+    ``extra_tables``: top-level tables another study kind reads itself (the placement study's
+    ``[placement]``); they are let through instead of rejected as unknown keys.
+    """
     path = Path(path)
     root = Table(load_toml(path), path)
     here = path.resolve().parent
@@ -218,6 +222,8 @@ def load_study(path: str | Path) -> SweepStudy:
     params = root.table("parameters", required=False)
     parameters = {name: params.get(name, float) for name in list(params.names())}
     params.finish()
+    for name in extra_tables:
+        root.raw(name, default=None)
     root.finish()
 
     n_experiments = len(months) * len(speeds) * len(programmes) * len(cooling)
