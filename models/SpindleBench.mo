@@ -1,0 +1,622 @@
+package SpindleBench "Lumped thermal network of a vertical machining centre's spindle system (thermal-error testbench)"
+  // Parameter sources are cited next to each value (short keys, full list in docs/model.md):
+  //   [VDI]  VDI Heat Atlas, 2nd ed. (2010): natural convection, material data.
+  //   [SKF]  SKF Rolling Bearings catalogue (2018) and Palmgren (1959), "Ball and Roller
+  //          Bearing Engineering": friction torque M0 = 1e-7 f0 (nu n)^(2/3) dm^3, M1 = f1 P1 dm.
+  //   [HK]   Harris & Kotzalas (2007), "Rolling Bearing Analysis", f0/f1 factors.
+  //   [BT]   Bossmanns & Tu (1999), "A thermal model for high speed motorized spindles",
+  //          Int. J. Mach. Tools Manuf. 39: bearing/housing resistances, rotating convection.
+  //   [KR]   Kreith (1968) / Becker (1963): rotating cylinder Nu = 0.133 Re^(2/3) Pr^(1/3).
+  //   [HOL]  Holkup et al. (2010), Int. J. Mach. Tools Manuf. 50: spindle thermal network.
+  //   [MAY]  Mayr et al. (2012), "Thermal issues in machine tools", CIRP Annals 61.
+  //   [ISO]  ISO 3448 viscosity grades; ISO 1 reference temperature 20 degC.
+  //   [EST]  engineering estimate for a VMC-850 class machine (masses from similar designs).
+
+  package HeatTransfer "Thermal components named and connected like Modelica.Thermal.HeatTransfer"
+
+    package Interfaces "Connectors and partial models"
+
+      connector HeatPort "Thermal port for 1-dim. heat transfer"
+        Real T(unit = "K") "Port temperature";
+        flow Real Q_flow(unit = "W") "Heat flow rate (positive if flowing from outside into the component)";
+      end HeatPort;
+
+      partial model Element1D "Partial heat transfer element with two HeatPorts that does not store energy"
+        HeatPort port_a "Heat port a";
+        HeatPort port_b "Heat port b";
+        Real Q_flow(unit = "W") "Heat flow rate from port_a to port_b";
+        Real dT(unit = "K") "port_a.T - port_b.T";
+      equation
+        dT = port_a.T - port_b.T;
+        port_a.Q_flow = Q_flow;
+        port_b.Q_flow = -Q_flow;
+      end Element1D;
+
+    end Interfaces;
+
+    package Components "Lumped thermal components"
+
+      model HeatCapacitor "Lumped thermal element storing heat"
+        parameter Real C(unit = "J/K") = 1000.0 "Heat capacity of element (= cp*m)";
+        Real T(unit = "K", start = 293.15, fixed = true) "Temperature of element";
+        Real der_T(unit = "K/s") "Time derivative of temperature (= der(T))";
+        Interfaces.HeatPort port "Heat port of the element";
+      equation
+        T = port.T;
+        der_T = der(T);
+        C * der(T) = port.Q_flow;
+      end HeatCapacitor;
+
+      model ThermalConductor "Lumped thermal element transporting heat without storing it"
+        extends Interfaces.Element1D;
+        parameter Real G(unit = "W/K") = 1.0 "Constant thermal conductance of material";
+      equation
+        Q_flow = G * dT;
+      end ThermalConductor;
+
+      model Convection "Lumped thermal element for heat convection (Q_flow = Gc*dT)"
+        input Real Gc(unit = "W/K") "Signal representing the convective thermal conductance";
+        Real Q_flow(unit = "W") "Heat flow rate from solid to fluid";
+        Real dT(unit = "K") "solid.T - fluid.T";
+        Interfaces.HeatPort solid "Solid surface";
+        Interfaces.HeatPort fluid "Fluid (air or coolant)";
+      equation
+        dT = solid.T - fluid.T;
+        solid.Q_flow = Q_flow;
+        fluid.Q_flow = -Q_flow;
+        Q_flow = Gc * dT;
+      end Convection;
+
+      model SegmentedSolid "Solid body discretised into n finite-volume segments along one axis"
+        // Segment i spans [(i-1)/n, i/n] of the axis (x = 0 at port_a, x = 1 at port_b). The
+        // positional ports port_1..port_3 sit at fractions x1..x3: their heat is shared between
+        // the two nearest segment centres and their temperature is interpolated linearly, so a
+        // connection keeps its physical position when n changes (coarse and fine builds agree).
+        parameter Integer n = 4 "Number of segments (structural)";
+        parameter Real C(unit = "J/K") = 1.0e5 "Total heat capacity";
+        parameter Real G(unit = "W/K") = 1.0 "End-to-end axial conductance k*A/L";
+        parameter Real L(unit = "m") = 1.0 "Length along the axis";
+        parameter Real alpha(unit = "1/K") = 1.05e-5 "Linear thermal expansion coefficient";
+        parameter Real T_nominal(unit = "K") = 293.15 "Temperature at which the body has its nominal length";
+        parameter Real x1(unit = "1") = 0.5 "Position of port_1 as a fraction of L";
+        parameter Real x2(unit = "1") = 0.5 "Position of port_2 as a fraction of L";
+        parameter Real x3(unit = "1") = 0.5 "Position of port_3 as a fraction of L";
+        parameter Real x_lo(unit = "1") = 0.0 "Start of the span whose elongation is reported in dL";
+        parameter Real x_hi(unit = "1") = 1.0 "End of the span whose elongation is reported in dL";
+        input Real G_side1(unit = "W/K") "Total conductance of the distributed surface side_1";
+        input Real G_side2(unit = "W/K") "Total conductance of the distributed surface side_2";
+        Real T[n](each unit = "K", each start = 293.15, each fixed = true) "Segment temperatures";
+        Real Q_axial[n - 1](each unit = "W") "Conduction from segment i to segment i+1";
+        Real Q_side1[n](each unit = "W") "Heat from segment i through side_1";
+        Real Q_side2[n](each unit = "W") "Heat from segment i through side_2";
+        Real w1[n](each unit = "1") "Share of segment i in port_1";
+        Real w2[n](each unit = "1") "Share of segment i in port_2";
+        Real w3[n](each unit = "1") "Share of segment i in port_3";
+        Real wT1[n](each unit = "K") "w1[i]*T[i]";
+        Real wT2[n](each unit = "K") "w2[i]*T[i]";
+        Real wT3[n](each unit = "K") "w3[i]*T[i]";
+        Real Q_ports[n](each unit = "W") "Heat into segment i from port_1..port_3";
+        Real dL_seg[n](each unit = "m") "Elongation of the part of segment i inside [x_lo, x_hi]";
+        Real dL(unit = "m") "Elongation of the span [x_lo, x_hi] relative to T_nominal";
+        Interfaces.HeatPort port_a "End at x = 0 (centre of segment 1)";
+        Interfaces.HeatPort port_b "End at x = 1 (centre of segment n)";
+        Interfaces.HeatPort port_1 "Connection at x = x1";
+        Interfaces.HeatPort port_2 "Connection at x = x2";
+        Interfaces.HeatPort port_3 "Connection at x = x3";
+        Interfaces.HeatPort side_1 "Distributed surface 1 (e.g. outer air), conductance G_side1";
+        Interfaces.HeatPort side_2 "Distributed surface 2 (e.g. inner air, floor), conductance G_side2";
+      equation
+        for i in 1:n loop
+          w1[i] = max(0.0, 1.0 - abs((i - 0.5) / n - min(max(x1, 0.5 / n), 1.0 - 0.5 / n)) * n);
+          w2[i] = max(0.0, 1.0 - abs((i - 0.5) / n - min(max(x2, 0.5 / n), 1.0 - 0.5 / n)) * n);
+          w3[i] = max(0.0, 1.0 - abs((i - 0.5) / n - min(max(x3, 0.5 / n), 1.0 - 0.5 / n)) * n);
+          wT1[i] = w1[i] * T[i];
+          wT2[i] = w2[i] * T[i];
+          wT3[i] = w3[i] * T[i];
+          Q_side1[i] = G_side1 / n * (T[i] - side_1.T);
+          Q_side2[i] = G_side2 / n * (T[i] - side_2.T);
+          Q_ports[i] = w1[i] * port_1.Q_flow + w2[i] * port_2.Q_flow + w3[i] * port_3.Q_flow;
+          dL_seg[i] = alpha * L * max(0.0, min(i / n, x_hi) - max((i - 1) / n, x_lo)) * (T[i] - T_nominal);
+        end for;
+        for i in 1:n - 1 loop
+          Q_axial[i] = G * n * (T[i] - T[i + 1]);
+        end for;
+        C / n * der(T[1]) = port_a.Q_flow - Q_axial[1] + Q_ports[1] - Q_side1[1] - Q_side2[1];
+        for i in 2:n - 1 loop
+          C / n * der(T[i]) = Q_axial[i - 1] - Q_axial[i] + Q_ports[i] - Q_side1[i] - Q_side2[i];
+        end for;
+        C / n * der(T[n]) = port_b.Q_flow + Q_axial[n - 1] + Q_ports[n] - Q_side1[n] - Q_side2[n];
+        port_a.T = T[1];
+        port_b.T = T[n];
+        port_1.T = sum(wT1);
+        port_2.T = sum(wT2);
+        port_3.T = sum(wT3);
+        side_1.Q_flow = -sum(Q_side1);
+        side_2.Q_flow = -sum(Q_side2);
+        dL = sum(dL_seg);
+      end SegmentedSolid;
+
+    end Components;
+
+    package Sources "Thermal boundary conditions"
+
+      model PrescribedTemperature "Variable temperature boundary condition in Kelvin"
+        input Real T(unit = "K") "Prescribed temperature";
+        Interfaces.HeatPort port "Boundary port";
+      equation
+        port.T = T;
+      end PrescribedTemperature;
+
+      model PrescribedHeatFlow "Prescribed heat flow boundary condition"
+        input Real Q_flow(unit = "W") "Heat flow released into the connected component";
+        Interfaces.HeatPort port "Port receiving the heat";
+      equation
+        port.Q_flow = -Q_flow;
+      end PrescribedHeatFlow;
+
+    end Sources;
+
+    package Sensors "Thermal sensors"
+
+      model TemperatureSensor "Absolute temperature sensor in Kelvin"
+        output Real T(unit = "K") "Absolute temperature";
+        Interfaces.HeatPort port "Measured port (draws no heat)";
+      equation
+        T = port.T;
+        port.Q_flow = 0.0;
+      end TemperatureSensor;
+
+    end Sensors;
+
+  end HeatTransfer;
+
+  package Machine "Machine-specific heat sources and sensor models"
+
+    model BearingFriction "Palmgren bearing friction heat with temperature-dependent lubricant viscosity"
+      // M0 = 1e-7 f0 (nu n)^(2/3) dm^3 [N mm] for nu*n >= 2000 (else the constant 160e-7 f0 dm^3),
+      // M1 = f1 P1 dm [N mm] with nu in mm2/s, n in rev/min, dm in mm [SKF, HK]. The viscosity
+      // follows nu = nu_40 exp(-b_nu (T - 313.15 K)), a local fit of ISO VG oils near 10-60 degC [ISO].
+      parameter Real f0(unit = "1") = 1.5 "Speed-dependent Palmgren factor of the bearing set [HK]";
+      parameter Real f1(unit = "1") = 4.0e-4 "Load-dependent friction factor [HK]";
+      parameter Real P1(unit = "N") = 1500.0 "Equivalent load (mainly preload)";
+      parameter Real dm(unit = "m") = 0.09 "Bearing pitch diameter";
+      parameter Real nu_40(unit = "mm2/s") = 22.0 "Base-oil kinematic viscosity at 40 degC";
+      parameter Real b_nu(unit = "1/K") = 0.03 "Viscosity-temperature coefficient";
+      input Real n_rpm(unit = "rev/min") "Shaft speed";
+      Real nu(unit = "mm2/s") "Lubricant viscosity at the bearing temperature";
+      Real M(unit = "N.m") "Friction torque";
+      Real Q_flow(unit = "W") "Friction heat released into the bearing region";
+      HeatTransfer.Interfaces.HeatPort port "Bearing region: receives the heat, sets the viscosity";
+    equation
+      nu = nu_40 * exp(-b_nu * (port.T - 313.15));
+      M = 1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm;
+      Q_flow = M * abs(n_rpm) * 2.0 * 3.14159265358979 / 60.0;
+      port.Q_flow = -Q_flow;
+    end BearingFriction;
+
+    model ContactSensor "Surface temperature probe: small mass with contact and environment conductances"
+      // A real probe is not the part: it has its own heat capacity (lag), a finite contact
+      // conductance to the part and a loss to its surroundings, so it reads between the two.
+      parameter Real C(unit = "J/K") = 10.0 "Heat capacity of the probe with its mount [EST]";
+      parameter Real G_contact(unit = "W/K") = 0.5 "Conductance probe-part (contact resistance)";
+      parameter Real G_env(unit = "W/K") = 0.02 "Conductance probe-surroundings";
+      output Real T(unit = "K") "Probe reading";
+      HeatTransfer.Components.HeatCapacitor body(C = C) "Probe body";
+      HeatTransfer.Components.ThermalConductor contact(G = G_contact) "Contact to the measured part";
+      HeatTransfer.Components.ThermalConductor env(G = G_env) "Loss to air or neighbouring part";
+      HeatTransfer.Sensors.TemperatureSensor sensor "Ideal sensing element";
+      HeatTransfer.Interfaces.HeatPort port "Measured part";
+      HeatTransfer.Interfaces.HeatPort port_env "Surroundings (air or neighbouring part)";
+    equation
+      connect(port, contact.port_a);
+      connect(contact.port_b, body.port);
+      connect(body.port, env.port_a);
+      connect(env.port_b, port_env);
+      connect(body.port, sensor.port);
+      T = sensor.T;
+    end ContactSensor;
+
+  end Machine;
+
+  model MachiningCentre "Vertical machining centre: spindle, headstock, column, bed, table, X/Y feed drives"
+    import SpindleBench.HeatTransfer.Components.HeatCapacitor;
+    import SpindleBench.HeatTransfer.Components.ThermalConductor;
+    import SpindleBench.HeatTransfer.Components.Convection;
+    import SpindleBench.HeatTransfer.Components.SegmentedSolid;
+    import SpindleBench.HeatTransfer.Sources.PrescribedTemperature;
+    import SpindleBench.HeatTransfer.Sources.PrescribedHeatFlow;
+    import SpindleBench.Machine.BearingFriction;
+    import SpindleBench.Machine.ContactSensor;
+
+    // ---- structure and operating inputs --------------------------------------------------
+    parameter Integer nSeg = 8 "Segments per large part (structural: set at build time)";
+    input Real spindle_speed_rpm(unit = "rev/min", start = 0.0) "Spindle speed";
+    input Real feed_x_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the X axis";
+    input Real feed_y_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the Y axis";
+    input Real ambient_C(unit = "degC", start = 20.0) "Ambient air temperature";
+
+    // ---- global physical parameters -------------------------------------------------------
+    parameter Real T_ref(unit = "K") = 293.15 "Reference temperature of the nominal geometry (20 degC) [ISO]";
+    parameter Real alpha_iron(unit = "1/K") = 1.05e-5 "Expansion coefficient of grey cast iron EN-GJL-250 [VDI]";
+    parameter Real alpha_steel(unit = "1/K") = 1.15e-5 "Expansion coefficient of spindle steel [VDI]";
+    parameter Real h_nat(unit = "W/(m2.K)") = 8.0 "Natural convection plus radiation, machine surfaces in still air [VDI]";
+    parameter Real n_ref(unit = "rev/min") = 4000.0 "Reference speed of the speed-dependent laws";
+    parameter Real h_rot_ref(unit = "W/(m2.K)") = 110.0 "Forced convection on the rotating shaft at n_ref, Nu = 0.133 Re^(2/3) Pr^(1/3) [KR, BT]";
+    parameter Real h_cavity_stir(unit = "W/(m2.K)") = 6.0 "Extra convection on cavity walls from air stirred at n_ref [EST]";
+
+    // ---- spindle cooling unit (oil chiller around the front bearing seat) -----------------
+    parameter Real cooling_enabled(unit = "1") = 0.0 "1: cooling unit on, 0: off";
+    parameter Real cooling_follows_ambient(unit = "1") = 1.0 "1: coolant at ambient + setpoint, 0: at absolute setpoint";
+    parameter Real cooling_setpoint_C(unit = "degC") = 0.0 "Coolant temperature (absolute) or offset from ambient (following)";
+    parameter Real G_cooling(unit = "W/K") = 25.0 "Conductance coolant jacket - front bearing seat [HOL]";
+
+    // ---- heat sources -----------------------------------------------------------------
+    parameter Real P_spindle_motor_ref(unit = "W") = 140.0 "Spindle motor no-load loss at n_ref (iron, friction, windage) [EST]";
+    parameter Real k_spindle_motor(unit = "1") = 1.6 "Exponent of the motor loss in speed [EST]";
+    parameter Real c_x_nut(unit = "W.min/mm") = 0.0045 "X ball-nut friction heat per feed rate (0.43 N.m preload torque, 10 mm lead) [EST]";
+    parameter Real c_y_nut(unit = "W.min/mm") = 0.0045 "Y ball-nut friction heat per feed rate [EST]";
+    parameter Real c_x_bearing(unit = "W.min/mm") = 0.003 "X screw support bearings heat per feed rate [EST]";
+    parameter Real c_y_bearing(unit = "W.min/mm") = 0.003 "Y screw support bearings heat per feed rate [EST]";
+    parameter Real P_x_motor_idle(unit = "W") = 4.0 "X servo motor loss at standstill (holding, position control) [EST]";
+    parameter Real P_y_motor_idle(unit = "W") = 4.0 "Y servo motor loss at standstill [EST]";
+    parameter Real c_x_motor(unit = "W.min/mm") = 0.006 "X servo motor loss per feed rate (reciprocating, acceleration currents) [EST]";
+    parameter Real c_y_motor(unit = "W.min/mm") = 0.007 "Y servo motor loss per feed rate (heavier axis) [EST]";
+
+    // ---- surfaces (m2) ----------------------------------------------------------------
+    parameter Real A_shaft(unit = "m2") = 0.077 "Shaft surface in the cavity (d 70 mm x 0.35 m)";
+    parameter Real A_nose(unit = "m2") = 0.03 "Spindle nose and tool holder surface in open air";
+    parameter Real A_housing_out(unit = "m2") = 1.6 "Outer surface of the headstock";
+    parameter Real A_housing_in(unit = "m2") = 0.8 "Inner surface of the headstock cavity";
+    parameter Real A_column(unit = "m2") = 5.0 "Column surface";
+    parameter Real A_bed(unit = "m2") = 6.0 "Bed surface in air";
+    parameter Real A_table(unit = "m2") = 3.0 "Table and saddle surface";
+
+    // ---- geometry of the structural loop ----------------------------------------------
+    parameter Real H_bed(unit = "m") = 0.5 "Bed height (vertical growth under column and under table)";
+
+    // ---- large parts, discretised --------------------------------------------------------
+    SegmentedSolid spindle_shaft(n = nSeg, C = 8300.0, G = 0.27, L = 0.55, alpha = alpha_steel, T_nominal = T_ref,
+      x1 = 0.22, x2 = 0.85, x3 = 0.5, x_lo = 0.0, x_hi = 0.22)
+      "Spindle shaft, nose (x=0) to drawbar end (x=1): 18 kg steel, d 70/20 mm, k 42 W/(m.K); front bearing at x1, rear at x2";
+    SegmentedSolid housing(n = nSeg, C = 161000.0, G = 1.6, L = 0.6, alpha = alpha_iron, T_nominal = T_ref,
+      x1 = 0.5, x2 = 0.8, x3 = 0.2, x_lo = 0.0, x_hi = 0.5)
+      "Headstock housing, front bearing seat (x=0) to top (x=1): 350 kg cast iron; Z carriages at x1, rear bearing seat at x2";
+    SegmentedSolid column(n = nSeg, C = 736000.0, G = 3.8, L = 1.0, alpha = alpha_iron, T_nominal = T_ref,
+      x1 = 0.75, x2 = 0.5, x3 = 0.25, x_lo = 0.0, x_hi = 0.75)
+      "Column, bed face (x=0) to top (x=1): 1600 kg cast iron; headstock carriages at x1";
+    SegmentedSolid bed(n = nSeg, C = 1150000.0, G = 3.6, L = 2.0, alpha = alpha_iron, T_nominal = T_ref,
+      x1 = 0.45, x2 = 0.1, x3 = 0.7, x_lo = 0.0, x_hi = 1.0)
+      "Bed, front (x=0) to rear under the column (x=1): 2500 kg cast iron; saddle on the Y guides at x1";
+    SegmentedSolid table(n = nSeg, C = 414000.0, G = 32.0, L = 0.45, alpha = alpha_iron, T_nominal = T_ref,
+      x1 = 0.5, x2 = 0.2, x3 = 0.8, x_lo = 0.0, x_hi = 1.0)
+      "Saddle and table stacked vertically, saddle underside (x=0) to table top (x=1): 900 kg cast iron; X drive at x1";
+
+    // ---- lumped nodes ---------------------------------------------------------------------
+    HeatCapacitor front_bearing(C = 1850.0) "Front bearing region: 2x7014 angular contact set, spacers, seat sleeve (4 kg)";
+    HeatCapacitor rear_bearing(C = 920.0) "Rear bearing region: 7012 pair (2 kg)";
+    HeatCapacitor drawbar_cylinder(C = 4600.0) "Drawbar (tool unclamping) cylinder with its base (10 kg)";
+    HeatCapacitor spindle_motor(C = 28800.0) "Spindle motor, 11 kW class, belt drive (60 kg)";
+    HeatCapacitor inner_cavity(C = 3000.0) "Headstock inner cavity: air, belt, pulleys, fittings";
+    HeatCapacitor x_motor(C = 6900.0) "X servo motor with flange housing (15 kg)";
+    HeatCapacitor x_nut(C = 1850.0) "X ball-screw nut with bracket (4 kg)";
+    HeatCapacitor x_screw(C = 2800.0) "X ball screw d 32 mm x 1 m (6 kg)";
+    HeatCapacitor x_bearing_seat(C = 2300.0) "X screw support bearing seat (5 kg)";
+    HeatCapacitor y_motor(C = 6900.0) "Y servo motor with flange housing (15 kg)";
+    HeatCapacitor y_nut(C = 1850.0) "Y ball-screw nut with bracket (4 kg)";
+    HeatCapacitor y_screw(C = 2800.0) "Y ball screw d 32 mm x 1 m (6 kg)";
+    HeatCapacitor y_bearing_seat(C = 2300.0) "Y screw support bearing seat (5 kg)";
+    HeatCapacitor floor_slab(C = 2.6e6) "Concrete floor under the machine (3 t), lags the air by about a day";
+
+    // ---- boundaries and sources --------------------------------------------------------
+    PrescribedTemperature ambient "Workshop air";
+    PrescribedTemperature coolant "Coolant of the spindle cooling unit";
+    BearingFriction front_bearing_friction(f0 = 1.1, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, b_nu = 0.03)
+      "Front bearings 7014 set, grease with 22 mm2/s base oil [SKF, HK]";
+    BearingFriction rear_bearing_friction(f0 = 0.8, f1 = 4.0e-4, P1 = 600.0, dm = 0.0775, nu_40 = 22.0, b_nu = 0.03)
+      "Rear bearings 7012 pair [SKF, HK]";
+    PrescribedHeatFlow spindle_motor_loss "Spindle motor losses";
+    PrescribedHeatFlow x_nut_friction "X nut friction";
+    PrescribedHeatFlow y_nut_friction "Y nut friction";
+    PrescribedHeatFlow x_bearing_friction "X screw support bearing friction";
+    PrescribedHeatFlow y_bearing_friction "Y screw support bearing friction";
+    PrescribedHeatFlow x_motor_loss "X servo motor losses";
+    PrescribedHeatFlow y_motor_loss "Y servo motor losses";
+
+    // ---- couplings ----------------------------------------------------------------------
+    ThermalConductor fb_housing(G = 15.0) "Front bearing outer rings - housing seat [BT, HOL]";
+    ThermalConductor fb_shaft(G = 6.0) "Front bearing inner rings - shaft [BT, HOL]";
+    ThermalConductor fb_air(G = 0.6) "Front bearing cap and labyrinth - air";
+    ThermalConductor rb_housing(G = 8.0) "Rear bearing outer rings - housing seat [BT]";
+    ThermalConductor rb_shaft(G = 3.0) "Rear bearing inner rings - shaft [BT]";
+    ThermalConductor drawbar_shaft(G = 0.4) "Drawbar cylinder - shaft end (rotary union)";
+    ThermalConductor drawbar_housing(G = 1.5) "Drawbar cylinder base - housing top";
+    ThermalConductor drawbar_air(G = 2.4) "Drawbar cylinder - air (0.3 m2)";
+    ThermalConductor motor_housing(G = 2.0) "Spindle motor flange - headstock top";
+    ThermalConductor motor_air(G = 12.0) "Spindle motor fan-cooled surface - air";
+    ThermalConductor cavity_air(G = 1.0) "Cavity - workshop air through openings";
+    ThermalConductor headstock_column(G = 5.0) "Headstock - column through Z guides and nut bracket";
+    ThermalConductor column_bed(G = 20.0) "Column foot - bed (bolted joint)";
+    ThermalConductor bed_table(G = 15.0) "Bed - saddle through the Y guides";
+    ThermalConductor floor_air(G = 30.0) "Floor slab - workshop air";
+    ThermalConductor x_nut_table(G = 3.0) "X nut bracket - table";
+    ThermalConductor x_nut_screw(G = 2.0) "X nut - screw";
+    ThermalConductor x_screw_seat(G = 1.0) "X screw - support bearing seat";
+    ThermalConductor x_seat_table(G = 3.0) "X bearing seat - saddle";
+    ThermalConductor x_motor_seat(G = 2.0) "X motor flange - bearing seat";
+    ThermalConductor x_motor_air(G = 1.2) "X motor - air";
+    ThermalConductor x_nut_air(G = 0.3) "X nut - air";
+    ThermalConductor x_screw_air(G = 1.0) "X screw - air";
+    ThermalConductor y_nut_table(G = 3.0) "Y nut bracket - saddle";
+    ThermalConductor y_nut_screw(G = 2.0) "Y nut - screw";
+    ThermalConductor y_screw_seat(G = 1.0) "Y screw - support bearing seat";
+    ThermalConductor y_seat_bed(G = 3.0) "Y bearing seat - bed";
+    ThermalConductor y_motor_seat(G = 2.0) "Y motor flange - bearing seat";
+    ThermalConductor y_motor_air(G = 1.2) "Y motor - air";
+    ThermalConductor y_nut_air(G = 0.3) "Y nut - air";
+    ThermalConductor y_screw_air(G = 1.0) "Y screw - air";
+    Convection nose_convection "Spindle nose and tool holder - air (speed dependent)";
+    Convection cooling_bearing "Coolant jacket - front bearing seat";
+
+    // ---- the paper's 20 sensors (Xu et al. 2023, Table 1) ------------------------------------
+    ContactSensor sensor_T1(C = 10.0, G_contact = 0.5, G_env = 0.02) "T1 spindle front: front bearing cap";
+    ContactSensor sensor_T2(C = 10.0, G_contact = 0.5, G_env = 0.03) "T2 spindle front: housing flange at the bearing seat";
+    ContactSensor sensor_T3(C = 12.0, G_contact = 0.15, G_env = 0.04) "T3 spindle front: labyrinth ring (poor contact)";
+    ContactSensor sensor_T4(C = 10.0, G_contact = 0.4, G_env = 0.03) "T4 spindle front: housing side above the seat";
+    ContactSensor sensor_T5(C = 10.0, G_contact = 0.4, G_env = 0.05) "T5 spindle front: bearing seat, inside the cavity";
+    ContactSensor sensor_T6(C = 10.0, G_contact = 0.5, G_env = 0.03) "T6 headstock housing side";
+    ContactSensor sensor_T7(C = 10.0, G_contact = 0.5, G_env = 0.03) "T7 drawbar cylinder base";
+    ContactSensor sensor_T8(C = 10.0, G_contact = 0.5, G_env = 0.03) "T8 spindle motor housing";
+    ContactSensor sensor_T9(C = 8.0, G_contact = 0.3, G_env = 0.02) "T9 headstock inner cavity (air probe near the wall)";
+    ContactSensor sensor_T10(C = 10.0, G_contact = 0.3, G_env = 0.01) "T10 ambient air probe mounted on the column";
+    ContactSensor sensor_T11(C = 10.0, G_contact = 0.5, G_env = 0.03) "T11 X screw bearing seat";
+    ContactSensor sensor_T12(C = 10.0, G_contact = 0.5, G_env = 0.03) "T12 X nut flange";
+    ContactSensor sensor_T13(C = 10.0, G_contact = 0.5, G_env = 0.03) "T13 X motor housing";
+    ContactSensor sensor_T14(C = 10.0, G_contact = 0.3, G_env = 0.1) "T14 X nut bracket (between nut and table)";
+    ContactSensor sensor_T15(C = 10.0, G_contact = 0.3, G_env = 0.1) "T15 X motor flange (between motor and seat)";
+    ContactSensor sensor_T16(C = 10.0, G_contact = 0.5, G_env = 0.03) "T16 Y motor housing";
+    ContactSensor sensor_T17(C = 10.0, G_contact = 0.3, G_env = 0.1) "T17 Y motor flange (between motor and seat)";
+    ContactSensor sensor_T18(C = 10.0, G_contact = 0.5, G_env = 0.03) "T18 Y nut flange";
+    ContactSensor sensor_T19(C = 10.0, G_contact = 0.3, G_env = 0.1) "T19 Y nut bracket (between nut and saddle)";
+    ContactSensor sensor_T20(C = 10.0, G_contact = 0.5, G_env = 0.03) "T20 Y screw bearing seat";
+
+    // ---- outputs ------------------------------------------------------------------------
+    output Real T1_C(unit = "degC") "Sensor T1, spindle front";
+    output Real T2_C(unit = "degC") "Sensor T2, spindle front";
+    output Real T3_C(unit = "degC") "Sensor T3, spindle front";
+    output Real T4_C(unit = "degC") "Sensor T4, spindle front";
+    output Real T5_C(unit = "degC") "Sensor T5, spindle front";
+    output Real T6_C(unit = "degC") "Sensor T6, headstock";
+    output Real T7_C(unit = "degC") "Sensor T7, drawbar cylinder base";
+    output Real T8_C(unit = "degC") "Sensor T8, spindle motor";
+    output Real T9_C(unit = "degC") "Sensor T9, headstock inner cavity";
+    output Real T10_C(unit = "degC") "Sensor T10, ambient";
+    output Real T11_C(unit = "degC") "Sensor T11, X screw bearing seat";
+    output Real T12_C(unit = "degC") "Sensor T12, X nut";
+    output Real T13_C(unit = "degC") "Sensor T13, X motor";
+    output Real T14_C(unit = "degC") "Sensor T14, X nut";
+    output Real T15_C(unit = "degC") "Sensor T15, X motor";
+    output Real T16_C(unit = "degC") "Sensor T16, Y motor";
+    output Real T17_C(unit = "degC") "Sensor T17, Y motor";
+    output Real T18_C(unit = "degC") "Sensor T18, Y nut";
+    output Real T19_C(unit = "degC") "Sensor T19, Y nut";
+    output Real T20_C(unit = "degC") "Sensor T20, Y screw bearing seat";
+    output Real drift_um(unit = "um") "Axial thermal drift of the tool towards the table, relative to T_ref";
+    output Real Q_front_bearing_W(unit = "W") "Front bearing friction heat";
+    output Real Q_rear_bearing_W(unit = "W") "Rear bearing friction heat";
+    output Real Q_spindle_motor_W(unit = "W") "Spindle motor losses";
+    output Real Q_x_feed_W(unit = "W") "X drive heat (motor, nut, support bearings)";
+    output Real Q_y_feed_W(unit = "W") "Y drive heat (motor, nut, support bearings)";
+    output Real Q_shaft_convection_W(unit = "W") "Heat from the rotating shaft into the cavity air";
+    output Real Q_headstock_to_column_W(unit = "W") "Heat from the headstock into the column";
+    output Real Q_cooling_W(unit = "W") "Heat removed by the spindle cooling unit";
+    output Real Q_to_ambient_W(unit = "W") "Total heat released to the workshop air";
+    output Real spindle_growth_um(unit = "um") "Shaft growth between front bearing and nose (towards the table)";
+    output Real headstock_growth_um(unit = "um") "Headstock growth between Z carriages and front bearing seat (towards the table)";
+    output Real column_growth_um(unit = "um") "Column growth between bed and Z carriages (head away from the table)";
+    output Real bed_tilt_um(unit = "um") "Bed growth under the column minus under the table (head away)";
+    output Real table_growth_um(unit = "um") "Saddle and table growth (towards the tool)";
+  equation
+    // boundaries
+    ambient.T = ambient_C + 273.15;
+    coolant.T = cooling_follows_ambient * (ambient_C + cooling_setpoint_C)
+      + (1.0 - cooling_follows_ambient) * cooling_setpoint_C + 273.15;
+
+    // speed-dependent convection: rotating shaft and nose [KR, BT]; natural convection elsewhere [VDI]
+    spindle_shaft.G_side1 = A_shaft * (h_nat + h_rot_ref * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
+    spindle_shaft.G_side2 = 0.0;
+    nose_convection.Gc = A_nose * (h_nat + h_rot_ref * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
+    housing.G_side1 = A_housing_out * h_nat;
+    housing.G_side2 = A_housing_in * (h_nat + h_cavity_stir * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
+    column.G_side1 = A_column * h_nat;
+    column.G_side2 = 0.0;
+    bed.G_side1 = A_bed * h_nat;
+    bed.G_side2 = 10.0;
+    table.G_side1 = A_table * h_nat;
+    table.G_side2 = 0.0;
+    cooling_bearing.Gc = cooling_enabled * G_cooling;
+
+    // heat sources
+    front_bearing_friction.n_rpm = spindle_speed_rpm;
+    rear_bearing_friction.n_rpm = spindle_speed_rpm;
+    spindle_motor_loss.Q_flow = P_spindle_motor_ref * (abs(spindle_speed_rpm) / n_ref) ^ k_spindle_motor;
+    x_nut_friction.Q_flow = c_x_nut * abs(feed_x_mm_per_min);
+    y_nut_friction.Q_flow = c_y_nut * abs(feed_y_mm_per_min);
+    x_bearing_friction.Q_flow = c_x_bearing * abs(feed_x_mm_per_min);
+    y_bearing_friction.Q_flow = c_y_bearing * abs(feed_y_mm_per_min);
+    x_motor_loss.Q_flow = P_x_motor_idle + c_x_motor * abs(feed_x_mm_per_min);
+    y_motor_loss.Q_flow = P_y_motor_idle + c_y_motor * abs(feed_y_mm_per_min);
+
+    // spindle and headstock
+    connect(front_bearing_friction.port, front_bearing.port);
+    connect(rear_bearing_friction.port, rear_bearing.port);
+    connect(front_bearing.port, fb_housing.port_a);
+    connect(fb_housing.port_b, housing.port_a);
+    connect(front_bearing.port, fb_shaft.port_a);
+    connect(fb_shaft.port_b, spindle_shaft.port_1);
+    connect(front_bearing.port, fb_air.port_a);
+    connect(fb_air.port_b, ambient.port);
+    connect(rear_bearing.port, rb_housing.port_a);
+    connect(rb_housing.port_b, housing.port_2);
+    connect(rear_bearing.port, rb_shaft.port_a);
+    connect(rb_shaft.port_b, spindle_shaft.port_2);
+    connect(spindle_shaft.side_1, inner_cavity.port);
+    connect(spindle_shaft.side_2, inner_cavity.port);
+    connect(spindle_shaft.port_a, nose_convection.solid);
+    connect(nose_convection.fluid, ambient.port);
+    connect(drawbar_cylinder.port, drawbar_shaft.port_a);
+    connect(drawbar_shaft.port_b, spindle_shaft.port_b);
+    connect(drawbar_cylinder.port, drawbar_housing.port_a);
+    connect(drawbar_housing.port_b, housing.port_b);
+    connect(drawbar_cylinder.port, drawbar_air.port_a);
+    connect(drawbar_air.port_b, ambient.port);
+    connect(spindle_motor_loss.port, spindle_motor.port);
+    connect(spindle_motor.port, motor_housing.port_a);
+    connect(motor_housing.port_b, housing.port_b);
+    connect(spindle_motor.port, motor_air.port_a);
+    connect(motor_air.port_b, ambient.port);
+    connect(housing.side_1, ambient.port);
+    connect(housing.side_2, inner_cavity.port);
+    connect(inner_cavity.port, cavity_air.port_a);
+    connect(cavity_air.port_b, ambient.port);
+    connect(coolant.port, cooling_bearing.fluid);
+    connect(cooling_bearing.solid, housing.port_a);
+
+    // structure
+    connect(housing.port_1, headstock_column.port_a);
+    connect(headstock_column.port_b, column.port_1);
+    connect(column.side_1, ambient.port);
+    connect(column.side_2, ambient.port);
+    connect(column.port_a, column_bed.port_a);
+    connect(column_bed.port_b, bed.port_b);
+    connect(bed.side_1, ambient.port);
+    connect(bed.side_2, floor_slab.port);
+    connect(floor_slab.port, floor_air.port_a);
+    connect(floor_air.port_b, ambient.port);
+    connect(bed.port_1, bed_table.port_a);
+    connect(bed_table.port_b, table.port_a);
+    connect(table.side_1, ambient.port);
+    connect(table.side_2, ambient.port);
+
+    // X drive (on the saddle, moves the table)
+    connect(x_nut_friction.port, x_nut.port);
+    connect(x_bearing_friction.port, x_bearing_seat.port);
+    connect(x_motor_loss.port, x_motor.port);
+    connect(x_nut.port, x_nut_table.port_a);
+    connect(x_nut_table.port_b, table.port_1);
+    connect(x_nut.port, x_nut_screw.port_a);
+    connect(x_nut_screw.port_b, x_screw.port);
+    connect(x_screw.port, x_screw_seat.port_a);
+    connect(x_screw_seat.port_b, x_bearing_seat.port);
+    connect(x_bearing_seat.port, x_seat_table.port_a);
+    connect(x_seat_table.port_b, table.port_1);
+    connect(x_motor.port, x_motor_seat.port_a);
+    connect(x_motor_seat.port_b, x_bearing_seat.port);
+    connect(x_motor.port, x_motor_air.port_a);
+    connect(x_motor_air.port_b, ambient.port);
+    connect(x_nut.port, x_nut_air.port_a);
+    connect(x_nut_air.port_b, ambient.port);
+    connect(x_screw.port, x_screw_air.port_a);
+    connect(x_screw_air.port_b, ambient.port);
+
+    // Y drive (on the bed, moves the saddle)
+    connect(y_nut_friction.port, y_nut.port);
+    connect(y_bearing_friction.port, y_bearing_seat.port);
+    connect(y_motor_loss.port, y_motor.port);
+    connect(y_nut.port, y_nut_table.port_a);
+    connect(y_nut_table.port_b, table.port_a);
+    connect(y_nut.port, y_nut_screw.port_a);
+    connect(y_nut_screw.port_b, y_screw.port);
+    connect(y_screw.port, y_screw_seat.port_a);
+    connect(y_screw_seat.port_b, y_bearing_seat.port);
+    connect(y_bearing_seat.port, y_seat_bed.port_a);
+    connect(y_seat_bed.port_b, bed.port_a);
+    connect(y_motor.port, y_motor_seat.port_a);
+    connect(y_motor_seat.port_b, y_bearing_seat.port);
+    connect(y_motor.port, y_motor_air.port_a);
+    connect(y_motor_air.port_b, ambient.port);
+    connect(y_nut.port, y_nut_air.port_a);
+    connect(y_nut_air.port_b, ambient.port);
+    connect(y_screw.port, y_screw_air.port_a);
+    connect(y_screw_air.port_b, ambient.port);
+
+    // sensors
+    connect(sensor_T1.port, front_bearing.port);
+    connect(sensor_T1.port_env, ambient.port);
+    connect(sensor_T2.port, housing.port_a);
+    connect(sensor_T2.port_env, ambient.port);
+    connect(sensor_T3.port, front_bearing.port);
+    connect(sensor_T3.port_env, ambient.port);
+    connect(sensor_T4.port, housing.port_3);
+    connect(sensor_T4.port_env, ambient.port);
+    connect(sensor_T5.port, front_bearing.port);
+    connect(sensor_T5.port_env, inner_cavity.port);
+    connect(sensor_T6.port, housing.port_1);
+    connect(sensor_T6.port_env, ambient.port);
+    connect(sensor_T7.port, drawbar_cylinder.port);
+    connect(sensor_T7.port_env, ambient.port);
+    connect(sensor_T8.port, spindle_motor.port);
+    connect(sensor_T8.port_env, ambient.port);
+    connect(sensor_T9.port, inner_cavity.port);
+    connect(sensor_T9.port_env, housing.port_2);
+    connect(sensor_T10.port, ambient.port);
+    connect(sensor_T10.port_env, column.port_2);
+    connect(sensor_T11.port, x_bearing_seat.port);
+    connect(sensor_T11.port_env, ambient.port);
+    connect(sensor_T12.port, x_nut.port);
+    connect(sensor_T12.port_env, ambient.port);
+    connect(sensor_T13.port, x_motor.port);
+    connect(sensor_T13.port_env, ambient.port);
+    connect(sensor_T14.port, x_nut.port);
+    connect(sensor_T14.port_env, table.port_1);
+    connect(sensor_T15.port, x_motor.port);
+    connect(sensor_T15.port_env, x_bearing_seat.port);
+    connect(sensor_T16.port, y_motor.port);
+    connect(sensor_T16.port_env, ambient.port);
+    connect(sensor_T17.port, y_motor.port);
+    connect(sensor_T17.port_env, y_bearing_seat.port);
+    connect(sensor_T18.port, y_nut.port);
+    connect(sensor_T18.port_env, ambient.port);
+    connect(sensor_T19.port, y_nut.port);
+    connect(sensor_T19.port_env, table.port_a);
+    connect(sensor_T20.port, y_bearing_seat.port);
+    connect(sensor_T20.port_env, ambient.port);
+
+    // outputs
+    T1_C = sensor_T1.T - 273.15;
+    T2_C = sensor_T2.T - 273.15;
+    T3_C = sensor_T3.T - 273.15;
+    T4_C = sensor_T4.T - 273.15;
+    T5_C = sensor_T5.T - 273.15;
+    T6_C = sensor_T6.T - 273.15;
+    T7_C = sensor_T7.T - 273.15;
+    T8_C = sensor_T8.T - 273.15;
+    T9_C = sensor_T9.T - 273.15;
+    T10_C = sensor_T10.T - 273.15;
+    T11_C = sensor_T11.T - 273.15;
+    T12_C = sensor_T12.T - 273.15;
+    T13_C = sensor_T13.T - 273.15;
+    T14_C = sensor_T14.T - 273.15;
+    T15_C = sensor_T15.T - 273.15;
+    T16_C = sensor_T16.T - 273.15;
+    T17_C = sensor_T17.T - 273.15;
+    T18_C = sensor_T18.T - 273.15;
+    T19_C = sensor_T19.T - 273.15;
+    T20_C = sensor_T20.T - 273.15;
+    spindle_growth_um = 1.0e6 * spindle_shaft.dL;
+    headstock_growth_um = 1.0e6 * housing.dL;
+    column_growth_um = 1.0e6 * column.dL;
+    bed_tilt_um = 1.0e6 * alpha_iron * H_bed * (bed.port_b.T - bed.port_1.T);
+    table_growth_um = 1.0e6 * table.dL;
+    drift_um = spindle_growth_um + headstock_growth_um - column_growth_um - bed_tilt_um + table_growth_um;
+    Q_front_bearing_W = front_bearing_friction.Q_flow;
+    Q_rear_bearing_W = rear_bearing_friction.Q_flow;
+    Q_spindle_motor_W = spindle_motor_loss.Q_flow;
+    Q_x_feed_W = x_nut_friction.Q_flow + x_bearing_friction.Q_flow + x_motor_loss.Q_flow;
+    Q_y_feed_W = y_nut_friction.Q_flow + y_bearing_friction.Q_flow + y_motor_loss.Q_flow;
+    Q_shaft_convection_W = -spindle_shaft.side_1.Q_flow;
+    Q_headstock_to_column_W = headstock_column.Q_flow;
+    Q_cooling_W = coolant.port.Q_flow;
+    Q_to_ambient_W = ambient.port.Q_flow;
+  end MachiningCentre;
+
+end SpindleBench;

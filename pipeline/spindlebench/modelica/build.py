@@ -1,0 +1,65 @@
+"""``spindlebench build``: Modelica package in ``models/`` → ``fmus/SpindleBench.fmu``."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.modelica import DEFAULT_SEGMENTS, FMU_NAME
+from spindlebench.modelica.equations import build_explicit_ode
+from spindlebench.modelica.fmu_export import export_fmu, find_compiler
+from spindlebench.modelica.frontend import translate
+from spindlebench.provenance import sha256_file
+
+
+def build_fmu(
+    model_dir: str | Path = "models",
+    out_path: str | Path = f"fmus/{FMU_NAME}.fmu",
+    segments: int = DEFAULT_SEGMENTS,
+) -> Path:
+    """Translate, causalise, export and compile the machine model into one FMU file."""
+    find_compiler()
+    ode = build_explicit_ode(translate(model_dir, segments))
+    return export_fmu(ode, out_path)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``build`` sub-command."""
+    parser = subparsers.add_parser(
+        "build",
+        help="build the FMU from the Modelica model (models/ -> fmus/)",
+        description="Translate models/SpindleBench.mo with pymoca, causalise it, export an "
+        "FMI 3.0 model-exchange FMU with CasADi and compile it with gcc (or $CC).",
+    )
+    parser.add_argument(
+        "--models", default="models", help="Modelica source folder (default: models)"
+    )
+    parser.add_argument(
+        "--segments",
+        type=int,
+        default=DEFAULT_SEGMENTS,
+        help=f"segments per large part (default: {DEFAULT_SEGMENTS})",
+    )
+    parser.add_argument(
+        "--out",
+        default="fmus",
+        help="output folder, or a path ending in .fmu (default: fmus)",
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the FMU and print where it went."""
+    if args.segments < 2:
+        raise SpindlebenchError(f"--segments: must be at least 2, got {args.segments}")
+    out = Path(args.out)
+    target = out if out.suffix == ".fmu" else out / f"{FMU_NAME}.fmu"
+    started = time.perf_counter()
+    path = build_fmu(args.models, target, segments=args.segments)
+    elapsed = time.perf_counter() - started
+    print(
+        f"built {path} ({args.segments} segments, {elapsed:.1f} s, sha256 {sha256_file(path)[:12]})"
+    )
+    return 0
