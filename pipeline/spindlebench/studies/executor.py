@@ -156,6 +156,13 @@ class TaskRunner:
             return "in-process"
         return f"{self.workers} local worker process(es)"
 
+    def _max_in_flight(self) -> int:
+        """Tasks handed to the executor at once: enough to keep every worker busy, few
+        enough that follow-ups start early and results stream to disk in order."""
+        if self.dask_address:
+            return 1 << 30  # the scheduler balances its workers itself
+        return max(1, 2 * self.workers)
+
     def _open(self) -> cf.Executor:
         if self.workers == 0:
             return InlineExecutor()
@@ -209,7 +216,7 @@ class TaskRunner:
             victims: list[Task] = []
             try:
                 while queue or running:
-                    while queue and not victims:
+                    while queue and not victims and len(running) < self._max_in_flight():
                         task = queue.pop(0)
                         try:
                             future = executor.submit(call_isolated, task.fn, task.args)

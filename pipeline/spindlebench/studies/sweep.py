@@ -217,8 +217,9 @@ class Sweep:
                 results[column] = pd.NA
         results = results.loc[:, list(RESULT_COLUMNS)]
         results["k"] = results["k"].astype("Int64")
-        results["error"] = results["error"].fillna("")
-        results["selected"] = results["selected"].fillna("")
+        for column in ("error", "selected"):  # an all-empty column reads back as float NaN
+            results[column] = results[column].astype(object).where(results[column].notna(), "")
+            results[column] = results[column].astype(str)
         return results.reset_index(drop=True)
 
 
