@@ -1,0 +1,163 @@
+"""Benchmark: the FMU co-simulation runner against solve_ivp on a Python right-hand side.
+
+Simulates the paper's experiment 1 (6 h at a 1 s communication step, inputs held over each
+step) in this process, three ways:
+
+1. the runner: FMPy, the compiled FMU, CVode stopped at every communication point;
+2. the same co-simulation done with SciPy: ``solve_ivp`` called for every communication step,
+   on a Python function that evaluates the same equations
+   (``spindlebench.modelica.equations.explicit_ode``, a CasADi function);
+3. for scale, not a co-simulation: one ``solve_ivp`` call over the whole run with the held
+   inputs looked up inside the right-hand side; it strides over the communication points, so it
+   only shows what the 21 600 input exchanges cost.
+
+Prints wall time per simulated hour and the ratios, plus the largest difference in drift and
+sensor temperatures against the runner, so a fast but wrong variant cannot look good.
+
+    .venv/bin/python bench/bench_simulation.py [--scenario FILE] [--fmu FILE] [--method LSODA]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from spindlebench.testbench.drivers import INPUT_NAMES, drive
+from spindlebench.testbench.runner import (
+    DEFAULT_FMU,
+    RELATIVE_TOLERANCE,
+    FmuInterface,
+    co_simulate,
+    inspect_fmu,
+)
+from spindlebench.testbench.scenario import Scenario, load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+ABSOLUTE_TOLERANCE_K = 1e-6
+
+
+def fmu_segments(info: FmuInterface) -> int | None:
+    """Segments per large part the FMU was built with (its build writes them in the description)."""
+    found = re.search(r"(\d+) segments per large part", info.model_description.description or "")
+    return int(found.group(1)) if found else None
+
+
+class Equations:
+    """The model's explicit ODE as Python callables, with the run's inputs and parameters."""
+
+    def __init__(self, scenario: Scenario, info: FmuInterface, parameters: Mapping[str, float]):
+        from spindlebench.modelica.equations import explicit_ode
+
+        segments = fmu_segments(info)
+        model = (explicit_ode(ROOT / "models") if segments is None
+                 else explicit_ode(ROOT / "models", segments=segments))
+        if set(model.states) != set(info.state_names):
+            raise SystemExit(f"models/ (segments={model.segments}) and {info.path.name} have "
+                             "different states: rebuild the FMU (spindlebench build) first")
+        self.model = model
+        self.p = model.parameter_vector(**parameters)  # the same values the FMU was given
+        signals = drive(scenario)
+        columns = [INPUT_NAMES.index(name) for name in model.inputs]
+        self.held = np.ascontiguousarray(signals.matrix[:, columns])
+        self.sample_rows = np.arange(0, scenario.n_steps + 1, scenario.steps_per_sample)
+        self.scenario = scenario
+
+    def rhs_with(self, u: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
+        ode, p = self.model.ode, self.p
+        return lambda _t, x: np.asarray(ode(x, u, p)[0]).ravel()
+
+    def outputs(self, states: np.ndarray) -> dict[str, np.ndarray]:
+        """Model outputs at the sample times, from states sampled there (one row each)."""
+        ode, p = self.model.ode, self.p
+        y = np.column_stack([np.asarray(ode(x, self.held[row], p)[1]).ravel()
+                             for x, row in zip(states, self.sample_rows, strict=True)])
+        return {name: y[j] for j, name in enumerate(self.model.outputs)}
+
+
+def stepped_solve_ivp(eq: Equations, x0: np.ndarray, method: str) -> np.ndarray:
+    """The co-simulation loop in SciPy: one solve_ivp call per communication step."""
+    scenario = eq.scenario
+    h, every = scenario.step_s, scenario.steps_per_sample
+    states = [x0]
+    x = x0
+    for k in range(scenario.n_steps):
+        solution = solve_ivp(eq.rhs_with(eq.held[k]), (k * h, (k + 1) * h), x, method=method,
+                             rtol=RELATIVE_TOLERANCE, atol=ABSOLUTE_TOLERANCE_K)
+        if not solution.success:
+            raise RuntimeError(f"solve_ivp failed at t={k * h:g} s: {solution.message}")
+        x = solution.y[:, -1]
+        if (k + 1) % every == 0:
+            states.append(x)
+    return np.array(states)
+
+
+def one_call_solve_ivp(eq: Equations, x0: np.ndarray, method: str) -> np.ndarray:
+    """One solve_ivp call over the whole run, held inputs looked up by time in the RHS."""
+    scenario = eq.scenario
+    ode, p, held = eq.model.ode, eq.p, eq.held
+    h, last = scenario.step_s, len(held) - 1
+
+    def rhs(t: float, x: np.ndarray) -> np.ndarray:
+        return np.asarray(ode(x, held[min(int(t / h + 1e-9), last)], p)[0]).ravel()
+
+    solution = solve_ivp(rhs, (0.0, scenario.duration_s), x0, method=method,
+                         t_eval=eq.sample_rows * h, rtol=RELATIVE_TOLERANCE,
+                         atol=ABSOLUTE_TOLERANCE_K)
+    if not solution.success:
+        raise RuntimeError(f"solve_ivp failed: {solution.message}")
+    return solution.y.T
+
+
+def timed(function: Callable[..., Any], *args: Any) -> tuple[float, Any]:
+    started = time.perf_counter()
+    result = function(*args)
+    return time.perf_counter() - started, result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenario", type=Path, default=ROOT / "scenarios/paper/exp1.toml")
+    parser.add_argument("--fmu", type=Path, default=DEFAULT_FMU)
+    parser.add_argument("--method", default="LSODA",
+                        help="solve_ivp method (LSODA was the fastest on this model; BDF, RK45 …)")
+    args = parser.parse_args()
+    scenario = load_scenario(args.scenario)
+    hours = scenario.duration_s / 3600.0
+    info = inspect_fmu(args.fmu)
+    print(f"{scenario.path.name}: {hours:g} h at a {scenario.step_s:g} s communication step "
+          f"({scenario.n_steps} steps); {args.fmu.name}: {len(info.state_names)} states, "
+          f"{len(info.output_names)} outputs; solve_ivp method {args.method}, rtol "
+          f"{RELATIVE_TOLERANCE:g}")
+
+    runner_s, simulation = timed(co_simulate, scenario, args.fmu)
+    eq = Equations(scenario, info, simulation.parameters)
+    x0 = np.array([simulation.initial_state_K[name] for name in eq.model.states])
+    stepped_s, stepped = timed(stepped_solve_ivp, eq, x0, args.method)
+    single_s, single = timed(one_call_solve_ivp, eq, x0, args.method)
+
+    def report(label: str, seconds: float, states: np.ndarray | None) -> None:
+        line = f"{label:<46} {seconds:8.3f} s = {seconds / hours:7.3f} s/sim h"
+        if states is not None:
+            other = eq.outputs(states)
+            drift = np.abs(simulation.outputs["drift_um"] - other["drift_um"]).max()
+            temps = max(np.abs(simulation.outputs[f"T{i}_C"] - other[f"T{i}_C"]).max()
+                        for i in range(1, 21))
+            line += (f"  {seconds / runner_s:6.2f}x the runner's time, "
+                     f"max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K")
+        print(line)
+
+    report("runner: FMPy + CVode on the FMU", runner_s, None)
+    report("solve_ivp per communication step (same job)", stepped_s, stepped)
+    report("solve_ivp in one call (not a co-simulation)", single_s, single)
+    print(f"speed-up of the runner over solve_ivp doing the same co-simulation: "
+          f"{stepped_s / runner_s:.1f}x")
+
+
+if __name__ == "__main__":
+    main()
