@@ -1,0 +1,110 @@
+"""From simulated recordings to candidate rises: the virtual sensors a placement can use.
+
+A candidate is a node of the model's temperature field (recording column
+``true_node_<node>_C``) or, with differences, ``A-B`` of two nodes, exactly as the selection
+pipeline builds them (``selection.CandidateSet``: raw columns, then every pair in order).
+
+Virtual sensors are measured like real ones: with ``measured = true`` the node temperatures go
+through the study's noise level (white noise and the logger's quantisation, the testbench's
+``measure``), seeded per replica and run; the drift is the recording's probe reading. A
+placement chosen on noise-free temperatures would trust differences of nodes a few
+millikelvin apart, which no real sensor resolves.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.selection import CandidateSet
+from spindlebench.selection.differences import pair_indices
+from spindlebench.studies.experiments import Experiment, sensor_model
+from spindlebench.studies.placement.search import Block
+from spindlebench.studies.placement.study import PlacementStudy
+from spindlebench.studies.seeds import derive_seed
+from spindlebench.testbench.sensors import measure
+
+TARGET = "drift_um"
+
+
+def node_column(node: str) -> str:
+    """Recording column of a node's true temperature."""
+    return f"true_node_{node}_C"
+
+
+@dataclass(frozen=True)
+class Run:
+    """One experiment on one replica's day, as the placement's instruments see it."""
+
+    replica: int
+    experiment: Experiment
+    nodes: pd.DataFrame  # node temperatures (degC), one column per node id
+    drift_um: np.ndarray  # probe reading, zeroed at the first sample
+    true_drift_um: np.ndarray  # true drift rise
+
+    @property
+    def key(self) -> tuple[int, str]:
+        return (self.replica, self.experiment.id)
+
+
+def node_seed(study: PlacementStudy, replica: int, experiment: Experiment) -> int:
+    return derive_seed(study.family.seed, "placement-nodes", replica, experiment.id)
+
+
+def prepare_run(study: PlacementStudy, replica: int, experiment: Experiment,
+                frame: pd.DataFrame) -> Run:
+    """The run's candidate nodes (measured or true), probe drift and true drift rise."""
+    columns = [node_column(node) for node in study.nodes]
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        raise SpindlebenchError(f"recording of {experiment.id} (replica {replica}) lacks "
+                                f"{missing[0]}: was it made by another FMU?")
+    true_C = frame.loc[:, columns].to_numpy(dtype=float)
+    true_drift = frame["true_drift_um"].to_numpy(dtype=float)
+    if study.measured:
+        model = sensor_model(study.family.noise[0], None)
+        values, _ = measure(model, frame["time_s"].to_numpy(float), true_C, true_drift,
+                            tuple(study.nodes), node_seed(study, replica, experiment))
+    else:
+        values = true_C
+    nodes = pd.DataFrame(values, columns=list(study.nodes))
+    return Run(replica, experiment, nodes, frame[TARGET].to_numpy(dtype=float),
+               true_drift - true_drift[0])
+
+
+def candidate_set(study: PlacementStudy, differences: bool) -> CandidateSet:
+    return CandidateSet(tuple(study.nodes), differences)
+
+
+def block(runs: Sequence[Run], candidates: CandidateSet,
+          columns: Sequence[int] | None = None, truth: bool = False) -> Block:
+    """Rises of ``columns`` (default: every candidate) of ``runs``, stacked run by run.
+
+    ``truth`` puts the true drift rise into ``y`` instead of the probe reading.
+    """
+    if not runs:
+        raise SpindlebenchError("no runs to build candidates from")
+    X = np.vstack([candidates.matrix(run.nodes, columns) for run in runs])
+    y = np.concatenate([run.true_drift_um if truth else run.drift_um for run in runs])
+    lengths = np.array([len(run.nodes) for run in runs])
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.intp)
+    return Block(X, y, starts)
+
+
+def physical_nodes(candidates: CandidateSet, columns: Sequence[int]) -> list[str]:
+    """The nodes that carry a sensor for ``columns`` (a difference needs both of its nodes)."""
+    n = len(candidates.sensors)
+    first, second = pair_indices(n)
+    out: list[str] = []
+    for column in map(int, columns):
+        if column < n:
+            parts = [candidates.sensors[column]]
+        else:
+            pair = column - n
+            parts = [candidates.sensors[first[pair]], candidates.sensors[second[pair]]]
+        out.extend(part for part in parts if part not in out)
+    return out

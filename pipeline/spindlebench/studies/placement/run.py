@@ -1,0 +1,239 @@
+"""``spindlebench place STUDY.toml``: virtual sensor placement over a season study.
+
+1. Simulate every experiment of the study on every replica's day through the FMU (the
+   sweep's executor: worker processes or a Dask cluster; each recording is stored as soon as
+   it is done, so an interrupted study resumes).
+2. On the design replica, find placements for every budget m with each method (fuzzy
+   clustering on the training run, greedy forward selection, exhaustive search).
+3. Score every placement on every replica (refit on its training run, predict the others)
+   and write the results folder: ``placements.csv``, ``scores.csv``, plots, schematic
+   drawings, ``README.md`` and ``provenance.json``, all atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from spindlebench.atomic import write_text
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import file_entry, provenance, sha256_file
+from spindlebench.recordings import read_recording
+from spindlebench.studies.executor import Outcome, RunStats, Task, TaskRunner
+from spindlebench.studies.experiments import (
+    Experiment,
+    experiments,
+    replicas,
+    scenario_for,
+    sensor_seed,
+    training_experiments,
+)
+from spindlebench.studies.placement.candidates import Run, node_seed, prepare_run
+from spindlebench.studies.placement.placements import (
+    Placement,
+    find_placements,
+    placements_table,
+    score_all,
+)
+from spindlebench.studies.placement.study import PlacementStudy, describe, load_placement_study
+from spindlebench.studies.store import ResultStore
+from spindlebench.studies.study import check_fmu
+from spindlebench.studies.sweep import failure_path, recording_path
+from spindlebench.testbench.recording import write_recording
+from spindlebench.testbench.simulate import record
+
+
+@dataclass
+class PlacementOutcome:
+    """What ``place`` did: the tables, the output folder and the work counts."""
+
+    out_dir: Path
+    placements: list[Placement]
+    table: pd.DataFrame
+    scores: pd.DataFrame
+    stats: RunStats
+    resumed: bool
+    failures: dict[str, str]
+    search_seconds: float
+
+
+class PlacementStudyRun:
+    """Simulations (resumable, through the sweep's store and executor) and their runs."""
+
+    def __init__(self, study: PlacementStudy, out_dir: Path) -> None:
+        self.study = study
+        self.store = ResultStore(out_dir)
+        self.family = experiments(study.family)
+        self.trains = training_experiments(study.family, self.family)
+        self.fmu = check_fmu(study.family)
+        self._keys: dict[str, tuple[int, Experiment]] = {}
+
+    def pending(self) -> list[tuple[int, Experiment]]:
+        return [(r, e) for r in replicas(self.study.family) for e in self.family
+                if not self.store.exists(recording_path(r, e))]
+
+    def simulate(self, runner: TaskRunner) -> tuple[RunStats, bool]:
+        inputs = {"study_sha256": sha256_file(self.study.path),
+                  "fmu_sha256": sha256_file(self.fmu)}
+        resumed = self.store.claim(inputs)
+        tasks = []
+        for replica, experiment in self.pending():
+            key = f"simulate r{replica} {experiment.id}"
+            self._keys[key] = (replica, experiment)
+            scenario = scenario_for(self.study.family, replica, experiment)
+            tasks.append(Task(key, record, (scenario, self.fmu), kind="simulation"))
+
+        def on_outcome(outcome: Outcome) -> Iterable[Task]:
+            replica, experiment = self._keys[outcome.task.key]
+            if outcome.ok:
+                frame, sidecar = outcome.value
+                write_recording(self.store.path(recording_path(replica, experiment)), frame,
+                                sidecar)
+                self.store.remove(failure_path(replica, experiment))
+            else:
+                self.store.write_json(failure_path(replica, experiment),
+                                      {"error": outcome.error, "detail": outcome.detail})
+            return ()
+
+        return runner.run(tasks, on_outcome), resumed
+
+    def failures(self) -> dict[str, str]:
+        """``r<replica> <experiment>`` → error of every simulation that failed."""
+        out = {}
+        for replica in replicas(self.study.family):
+            for experiment in self.family:
+                if self.store.exists(failure_path(replica, experiment)):
+                    error = self.store.read_json(failure_path(replica, experiment))["error"]
+                    out[f"r{replica} {experiment.id}"] = error
+        return out
+
+    def runs(self, replica: int) -> tuple[list[Run], list[Run]] | None:
+        """(training runs, held-out runs) of a replica; None if a training run is missing."""
+        loaded: dict[str, Run] = {}
+        for experiment in self.family:
+            if self.store.exists(recording_path(replica, experiment)):
+                frame = read_recording(self.store.path(recording_path(replica, experiment)))
+                loaded[experiment.id] = prepare_run(self.study, replica, experiment, frame)
+        if any(train.id not in loaded for train in self.trains):
+            return None
+        train_ids = {train.id for train in self.trains}
+        return ([loaded[t.id] for t in self.trains],
+                [run for key, run in loaded.items() if key not in train_ids])
+
+
+def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | None = None,
+                  dask_address: str | None = None, progress: bool = True) -> PlacementOutcome:
+    """Run (or resume) a placement study and write every output; return what was done."""
+    study = load_placement_study(study_path)
+    work = PlacementStudyRun(study, Path(out_dir))
+    runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
+                        desc=study.name, unit="run")
+    stats, resumed = work.simulate(runner)
+    failures = work.failures()
+    runs: dict[int, tuple[list[Run], list[Run]]] = {}
+    for replica in replicas(study.family):
+        split = work.runs(replica)
+        if split is not None and split[1]:
+            runs[replica] = split
+    if study.design_replica not in runs:
+        raise SpindlebenchError(
+            f"{study.path}: the design replica's training or held-out runs failed to simulate "
+            f"({'; '.join(f'{k}: {v}' for k, v in failures.items()) or 'no runs'})")
+    start = time.perf_counter()
+    train_runs, valid_runs = runs[study.design_replica]
+    placements = find_placements(study, train_runs, valid_runs)
+    search_seconds = time.perf_counter() - start
+    scores = score_all(study, placements, runs)
+    table = placements_table(study, placements, scores)
+    outcome = PlacementOutcome(work.store.root, placements, table, scores, stats, resumed,
+                               failures, search_seconds)
+    write_outputs(work, outcome, runner, sorted(runs))
+    return outcome
+
+
+def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: TaskRunner,
+                  scored_replicas: list[int]) -> None:
+    """Tables, figures, README and provenance (each written atomically)."""
+    from spindlebench.studies.placement import plots, report, schematic
+
+    store, study = work.store, work.study
+    store.write_frame("placements.csv", outcome.table)
+    store.write_frame("scores.csv", outcome.scores)
+    figures = {"comparison": plots.comparison(outcome.table, store.path("comparison.png"))}
+    figures.update(schematic.placement_figures(study, outcome.placements, outcome.table,
+                                               store.path("schematic")))
+    seeds = {f"r{r}": {e.id: {"sensors": sensor_seed(study.family, r, e),
+                              "nodes": node_seed(study, r, e)} for e in work.family}
+             for r in replicas(study.family)}
+    record_ = provenance(
+        kind="spindlebench sensor placement",
+        study=file_entry(study.path),
+        climate=file_entry(study.family.climate.path),
+        fmu=file_entry(work.fmu),
+        study_seed=study.family.seed,
+        seeds=seeds,
+        settings=describe(study),
+        training=[e.id for e in work.trains],
+        scored_replicas=scored_replicas,
+        executor=runner.describe(),
+        search_seconds=round(outcome.search_seconds, 3),
+    )
+    store.write_json("provenance.json", record_)
+    write_text(store.path("README.md"),
+               report.readme(study, outcome, figures, record_, work.trains, scored_replicas))
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``place`` sub-command."""
+    parser = subparsers.add_parser(
+        "place", help="virtual sensor placement: choose m of the model's nodes per method",
+        description="Run (or resume) a virtual sensor-placement study: simulate the study's "
+        "experiments, choose sensor sets among the temperature-field nodes with the paper's "
+        "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
+        "seasons and write placements.csv, plots, schematic drawings and README.md.")
+    parser.add_argument("study", type=Path,
+                        help="study file (e.g. scenarios/studies/placement.toml)")
+    parser.add_argument("-o", "--out", type=Path, default=None,
+                        help="results folder (default: results/<study name>)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; 0 = in-process)")
+    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
+                        help="simulate on an existing Dask distributed cluster instead")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    if args.workers is not None and args.dask_address:
+        raise SpindlebenchError("give either --workers or --dask-address, not both")
+    out = args.out if args.out is not None else \
+        Path("results") / load_placement_study(args.study).name
+    outcome = run_placement(args.study, out, workers=args.workers,
+                            dask_address=args.dask_address, progress=not args.no_progress)
+    found = [p for p in outcome.placements if p.found]
+    print(f"{'resumed' if outcome.resumed else 'ran'}: {outcome.stats.total('simulation')} "
+          f"simulation(s) in {outcome.stats.seconds:.1f} s; {len(found)} placement(s) found "
+          f"in {outcome.search_seconds:.1f} s ({len(outcome.placements) - len(found)} "
+          f"skipped); {len(outcome.failures)} failed simulation(s)")
+    print(report_best(outcome.table))
+    print(f"results: {outcome.out_dir / 'README.md'}")
+    return 0
+
+
+def report_best(table: pd.DataFrame) -> str:
+    """One line per budget: the placement with the lowest mean test RMSE."""
+    lines = []
+    ok = table[table["test_mean_rmse_um"].notna()]
+    for m, at in ok.groupby("m"):
+        best = at.loc[at["test_mean_rmse_um"].idxmin()]
+        lines.append(f"  m = {m}: best {best['label']} ({best['test_mean_rmse_um']:.2f} um): "
+                     f"{best['variables']}")
+    return "\n".join(lines)

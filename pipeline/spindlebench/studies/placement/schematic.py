@@ -1,0 +1,209 @@
+"""A side view of the vertical machining centre with its temperature-field nodes.
+
+The drawing is a schematic, not to scale: Y runs horizontally (operator at the left, column at
+the rear), Z vertically, X points out of the page. Each node of the model is put on the part
+its name says (``docs/contracts.md``: ``node_<part>_C``; a discretised part's nodes are
+``<part>_1`` … ``<part>_n`` along the axis the model documents, e.g. ``spindle_shaft_1`` at the
+nose, ``column_1`` at the bed face). Nodes the drawing does not know are listed in a strip
+beneath it, so a model with new parts still gets a complete drawing.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.patches import FancyArrowPatch, Rectangle
+
+from spindlebench.atomic import atomic_path
+from spindlebench.studies.placement.placements import Placement
+from spindlebench.studies.placement.study import PlacementStudy
+
+#: Outline of each part: (y0, z0, width, height, colour, label, label above the box?).
+PARTS = {
+    "floor_slab": (-0.35, -0.40, 2.90, 0.30, "#d9d4c7", "floor slab", False),
+    "bed": (-0.05, 0.0, 2.25, 0.50, "#b8c4d6", "bed", False),
+    "column": (1.62, 0.50, 0.55, 2.15, "#b8c4d6", "column", False),
+    "housing": (0.58, 1.40, 1.04, 1.00, "#c9d6b8", "headstock", False),
+    "table": (0.20, 0.50, 1.20, 0.55, "#d6c4b8", "saddle + table", False),
+    "spindle_motor": (1.18, 2.40, 0.36, 0.30, "#e3c08f", "spindle motor", True),
+    "drawbar_cylinder": (0.75, 2.40, 0.20, 0.18, "#e3c08f", "drawbar cyl.", True),
+    "x_motor": (-0.02, 0.62, 0.20, 0.20, "#e3c08f", "X motor", True),
+    "y_motor": (-0.32, 0.30, 0.22, 0.20, "#e3c08f", "Y motor", True),
+}
+
+#: Axis of each discretised part: node 1 at ``start``, node n at ``end`` (y, z).
+SEGMENTED = {
+    "spindle_shaft": ((0.85, 1.22), (0.85, 2.34)),  # nose -> drawbar end
+    "housing": ((1.50, 1.47), (1.50, 2.33)),  # front bearing seat -> top
+    "column": ((1.90, 0.62), (1.90, 2.55)),  # bed face -> top
+    "bed": ((0.05, 0.22), (2.08, 0.22)),  # front -> rear under the column
+    "table": ((0.98, 0.55), (1.34, 1.00)),  # saddle underside -> table top (drawn slanted)
+}
+
+#: Lumped nodes: (y, z).
+LUMPED = {
+    "front_bearing": (0.98, 1.50),
+    "rear_bearing": (0.98, 2.15),
+    "inner_cavity": (1.15, 1.85),
+    "drawbar_cylinder": (0.85, 2.49),
+    "spindle_motor": (1.36, 2.55),
+    "x_motor": (0.08, 0.72),
+    "x_bearing_seat": (0.32, 0.72),
+    "x_screw": (0.62, 0.72),
+    "x_nut": (0.92, 0.72),
+    "y_motor": (-0.21, 0.40),
+    "y_screw": (0.55, 0.42),
+    "y_nut": (0.90, 0.45),
+    "y_bearing_seat": (1.45, 0.42),
+    "floor_slab": (1.10, -0.25),
+}
+
+#: Parts whose node labels go to the left of the dot (the right side is crowded).
+LABEL_LEFT = ("spindle_shaft",)
+
+_INDEXED = re.compile(r"^(?P<part>.+)_(?P<index>\d+)$")
+METHOD_COLOURS = {"fuzzy": "#d9622b", "greedy": "#2b7bd9", "exhaustive": "#2a9d52"}
+
+
+def node_positions(nodes: Sequence[str]) -> tuple[dict[str, tuple[float, float]], list[str]]:
+    """Drawing position of every known node, and the nodes the drawing does not know."""
+    counts: dict[str, int] = {}
+    for node in nodes:
+        match = _INDEXED.match(node)
+        if match and match["part"] in SEGMENTED:
+            counts[match["part"]] = max(counts.get(match["part"], 0), int(match["index"]))
+    positions: dict[str, tuple[float, float]] = {}
+    unknown: list[str] = []
+    for node in nodes:
+        match = _INDEXED.match(node)
+        if match and match["part"] in SEGMENTED:
+            (y0, z0), (y1, z1) = SEGMENTED[match["part"]]
+            n = counts[match["part"]]
+            f = (int(match["index"]) - 1) / (n - 1) if n > 1 else 0.5
+            positions[node] = (y0 + f * (y1 - y0), z0 + f * (z1 - z0))
+        elif node in LUMPED:
+            positions[node] = LUMPED[node]
+        else:
+            unknown.append(node)
+    for i, node in enumerate(unknown):  # a strip beneath the floor
+        positions[node] = (-0.2 + 0.35 * (i % 8), -0.65 - 0.18 * (i // 8))
+    return positions, unknown
+
+
+def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> dict[str, tuple]:
+    """The machine outline, axes and every node as a grey dot; returns the node positions."""
+    for _part, (y, z, w, h, colour, label, above) in PARTS.items():
+        ax.add_patch(Rectangle((y, z), w, h, facecolor=colour, edgecolor="#555555", lw=0.8,
+                               alpha=0.7, zorder=1))
+        if above:
+            ax.text(y, z + h + 0.02, label, fontsize=6, va="bottom", color="#333333", zorder=2)
+        else:
+            ax.text(y + 0.02, z + h - 0.02, label, fontsize=6, va="top", color="#333333",
+                    zorder=2)
+    ax.add_patch(Rectangle((0.75, 1.22), 0.20, 1.18, facecolor="#9fb0c0", edgecolor="#555555",
+                           lw=0.6, zorder=1.5))  # spindle in the headstock
+    ax.plot([0.85, 0.85], [1.22, 1.10], color="#333333", lw=2.5, zorder=2)  # tool
+    ax.add_patch(Rectangle((0.60, 1.05), 0.50, 0.05, facecolor="#8f8f8f", zorder=1.5))
+    ax.plot([-0.05, 1.45], [0.42, 0.42], color="#777777", lw=1.0, ls="--", zorder=1.5)
+    ax.plot([0.08, 0.92], [0.72, 0.72], color="#777777", lw=1.0, ls="--", zorder=1.5)
+    for start, end, text in (((-0.25, 1.55), (0.15, 1.55), "Y"), ((-0.25, 1.55),
+                                                                   (-0.25, 1.95), "Z")):
+        ax.add_patch(FancyArrowPatch(start, end, arrowstyle="-|>", mutation_scale=10,
+                                     color="black", zorder=3))
+        ax.text(end[0] + 0.03, end[1] + 0.03, text, fontsize=8, zorder=3)
+    ax.plot([-0.25], [1.55], marker="o", mfc="white", mec="black", ms=7, zorder=4)
+    ax.plot([-0.25], [1.55], marker=".", color="black", ms=4, zorder=5)
+    ax.text(-0.21, 1.45, "X (out of page)", fontsize=6, zorder=3)
+    ax.annotate("drift", xy=(0.85, 1.10), xytext=(0.35, 1.25), fontsize=6,
+                arrowprops={"arrowstyle": "->", "lw": 0.6}, zorder=3)
+    positions, _ = node_positions(nodes)
+    pts = np.array([positions[n] for n in nodes])
+    ax.scatter(pts[:, 0], pts[:, 1], s=7, color="#555555", zorder=4, lw=0)
+    if labels:
+        for node in nodes:
+            y, z = positions[node]
+            left = any(node.startswith(f"{part}_") for part in LABEL_LEFT)
+            ax.text(y - 0.025 if left else y + 0.025, z, node, fontsize=4.5, va="center",
+                    ha="right" if left else "left", zorder=5)
+    low = min(-0.45, float(pts[:, 1].min()) - 0.1)
+    ax.set_xlim(-0.45, 2.65)
+    ax.set_ylim(low, 2.85)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    return positions
+
+
+def draw_placement(ax: plt.Axes, nodes: Sequence[str], placement: Placement,
+                   colour: str) -> None:
+    """Chosen sensors as numbered markers; a difference as a line between its two nodes."""
+    positions = draw_machine(ax, nodes)
+    for number, variable in enumerate(placement.variables, start=1):
+        ends = variable.split("-") if variable not in positions else [variable]
+        pts = np.array([positions[e] for e in ends])
+        if len(ends) == 2:
+            ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1.2, ls=":", zorder=5)
+        ax.scatter(pts[:, 0], pts[:, 1], s=70, color=colour, edgecolor="black", lw=0.6,
+                   zorder=6)
+        for y, z in pts:
+            ax.text(y, z, str(number), fontsize=6, ha="center", va="center", color="white",
+                    fontweight="bold", zorder=7)
+
+
+def _save(fig: plt.Figure, path: Path) -> Path:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=130, bbox_inches="tight", format="png")
+    plt.close(fig)
+    return path
+
+
+def nodes_figure(nodes: Sequence[str], path: Path) -> Path:
+    """Every candidate node, labelled: the map the placement figures refer to."""
+    fig, ax = plt.subplots(figsize=(9, 7.5))
+    draw_machine(ax, nodes, labels=True)
+    ax.set_title(f"Candidate sensor locations: the model's {len(nodes)} temperature nodes "
+                 "(side view, schematic)", fontsize=9)
+    return _save(fig, path)
+
+
+def budget_figure(nodes: Sequence[str], placements: Sequence[Placement], table: pd.DataFrame,
+                  budget: int, path: Path) -> Path | None:
+    """One panel per method (and candidate set) for budget ``budget``."""
+    chosen = [p for p in placements if p.budget == budget and p.found]
+    if not chosen:
+        return None
+    cols = min(3, len(chosen))
+    rows = -(-len(chosen) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.9 * rows), squeeze=False)
+    for ax, placement in zip(axes.flat, chosen, strict=False):
+        draw_placement(ax, nodes, placement, METHOD_COLOURS.get(placement.method, "purple"))
+        row = table[(table["label"] == placement.label) & (table["m"] == budget)]
+        rmse = row["test_mean_rmse_um"].iloc[0] if len(row) else float("nan")
+        listing = "\n".join(f"{i}: {v}" for i, v in enumerate(placement.variables, start=1))
+        ax.set_title(f"{placement.label}, m = {budget}: test RMSE {rmse:.2f} µm", fontsize=8)
+        ax.text(0.0, 0.0, listing, fontsize=6, ha="left", va="top", family="monospace",
+                transform=ax.transAxes)
+    for ax in list(axes.flat)[len(chosen):]:
+        ax.axis("off")
+    fig.suptitle(f"Sensor placements for a budget of m = {budget} (numbers: order in the "
+                 "model; dotted line: a difference of two nodes)", fontsize=9)
+    return _save(fig, path)
+
+
+def placement_figures(study: PlacementStudy, placements: Sequence[Placement],
+                      table: pd.DataFrame, folder: Path) -> dict[str, Path]:
+    """The node map and one figure per budget; name → path of each written figure."""
+    figures = {"nodes": nodes_figure(study.nodes, folder / "nodes.png")}
+    for budget in study.budgets:
+        path = budget_figure(study.nodes, placements, table, budget,
+                             folder / f"placement_m{budget}.png")
+        if path is not None:
+            figures[f"m{budget}"] = path
+    return figures

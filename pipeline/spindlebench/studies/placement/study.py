@@ -1,0 +1,163 @@
+"""The placement study file: a sweep's experiment family plus a ``[placement]`` table.
+
+The experiments (climate, months, speeds, programmes, cooling, the run length, the training
+rule, the instruments' noise level) are read by the season sweep's own loader, so both
+studies describe their machine days in the same words. ``[placement]`` adds what is
+specific to placement:
+
+- ``budgets``: numbers m of model variables (sensors, or differences of two sensors) to place.
+- ``methods``: ``fuzzy`` (the paper's selection on the training run, k = m clusters),
+  ``greedy`` (forward selection by validation RMSE), ``exhaustive`` (every m-subset, when
+  C(n, m) <= ``exhaustive_limit``).
+- ``with_differences``: false, true, or [false, true] for both candidate sets (nodes alone;
+  nodes and every pairwise node difference).
+- ``measured``: read the node temperatures through the study's noise level (default) or use
+  the noise-free field.
+- ``exclude_nodes``: nodes where no sensor can go (names as in the FMU, without ``node_``).
+- ``similarity``: the fuzzy similarity, as for the sweep.
+
+Replica 1 is the *design* day set (placements are chosen on it); every further replica is a
+*test* day set (fresh weather and noise) on which each placement is refit and scored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fmpy import read_model_description
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.schema import Table, load_toml
+from spindlebench.studies.study import NO_FAULT, SweepStudy, check_fmu, load_study
+
+METHODS = ("fuzzy", "greedy", "exhaustive")
+SIMILARITIES = ("abs-pearson", "literal")
+#: FMU outputs of the temperature field: ``node_<part>_C``.
+NODE_PREFIX, NODE_SUFFIX = "node_", "_C"
+DEFAULT_EXHAUSTIVE_LIMIT = 500_000
+MAX_BUDGET = 10
+
+
+@dataclass(frozen=True)
+class PlacementStudy:
+    """A validated placement study: its experiment family and the placement settings."""
+
+    family: SweepStudy
+    budgets: tuple[int, ...]
+    methods: tuple[str, ...]
+    with_differences: tuple[bool, ...]
+    measured: bool
+    exhaustive_limit: int
+    similarity: str
+    nodes: tuple[str, ...]  # candidate nodes (FMU order, exclusions removed)
+    excluded: tuple[str, ...]
+
+    @property
+    def path(self) -> Path:
+        return self.family.path
+
+    @property
+    def name(self) -> str:
+        return self.family.name
+
+    @property
+    def design_replica(self) -> int:
+        return 1
+
+    @property
+    def test_replicas(self) -> tuple[int, ...]:
+        """Replicas that test the placements; the design replica if there is no other."""
+        return tuple(range(2, self.family.replicas + 1)) or (1,)
+
+
+def fmu_nodes(fmu: Path) -> list[str]:
+    """Node names of the FMU's temperature field (``node_housing_3_C`` → ``housing_3``)."""
+    try:
+        description = read_model_description(str(fmu), validate=False)
+    except Exception as exc:
+        raise SpindlebenchError(f"{fmu}: not a readable FMU: {exc}") from None
+    return [v.name[len(NODE_PREFIX):-len(NODE_SUFFIX)] for v in description.modelVariables
+            if v.causality == "output" and v.name.startswith(NODE_PREFIX)
+            and v.name.endswith(NODE_SUFFIX)]
+
+
+def _bool_or_list(table: Table, name: str) -> tuple[bool, ...]:
+    raw = table.raw(name, default=False)
+    values = raw if isinstance(raw, list) else [raw]
+    if not values or not all(isinstance(v, bool) for v in values):
+        raise table.error(name, f"must be true, false or a list of them, got {raw!r}")
+    if len(set(values)) != len(values):
+        raise table.error(name, "lists a value twice")
+    return tuple(values)
+
+
+def _reject_sweep_only(data: dict[str, Any], family: SweepStudy) -> None:
+    source = family.path
+    if "methods" in data:
+        raise SpindlebenchError(f"{source}: key 'methods': a placement study sets its methods "
+                                "in [placement] (the sweep's [methods] table does not apply)")
+    if len(family.noise) != 1:
+        raise SpindlebenchError(f"{source}: key 'axes.noise': a placement study measures with "
+                                f"one noise level, got {len(family.noise)}")
+    if any(fault is not None for fault in family.faults):
+        raise SpindlebenchError(f"{source}: key 'axes.faults': a placement study has no fault "
+                                f"conditions; leave faults out or set [\"{NO_FAULT}\"]")
+
+
+def load_placement_study(path: str | Path) -> PlacementStudy:
+    """Read and validate a placement study; every error names the file and the key."""
+    path = Path(path)
+    family = load_study(path, extra_tables=("placement",))
+    data = load_toml(path)
+    _reject_sweep_only(data, family)
+    if not isinstance(data.get("placement"), dict):
+        raise SpindlebenchError(f"{path}: key 'placement': missing table (required)")
+    table = Table(data["placement"], path, "placement")
+    budgets = tuple(sorted(table.get_list(
+        "budgets", int, default=[2, 3, 4, 5, 6],
+        check=lambda v: None if 1 <= v <= MAX_BUDGET else f"must be between 1 and {MAX_BUDGET}")))
+    methods = tuple(table.get_list(
+        "methods", str, default=list(METHODS),
+        check=lambda v: None if v in METHODS else f"must be one of {', '.join(METHODS)}"))
+    with_differences = _bool_or_list(table, "with_differences")
+    measured = table.get("measured", bool, default=True)
+    limit = table.get("exhaustive_limit", int, default=DEFAULT_EXHAUSTIVE_LIMIT,
+                      check=lambda v: None if 0 <= v <= 10**9 else "must be in [0, 1e9]")
+    similarity = table.get("similarity", str, default="abs-pearson",
+                           check=lambda v: None if v in SIMILARITIES
+                           else f"must be one of {', '.join(SIMILARITIES)}")
+    excluded = table.get_list("exclude_nodes", str, default=[], allow_empty=True)
+    table.finish()
+
+    nodes = fmu_nodes(check_fmu(family))
+    if not nodes:
+        raise SpindlebenchError(f"{family.fmu}: the FMU has no node_*_C outputs (no "
+                                "temperature field to place sensors in)")
+    unknown = [name for name in excluded if name not in nodes]
+    if unknown:
+        raise table.error("exclude_nodes", f"no node named '{unknown[0]}' in the FMU (nodes: "
+                                           f"{', '.join(nodes[:6])}, ...)")
+    candidates = tuple(name for name in nodes if name not in excluded)
+    if len(candidates) < max(budgets):
+        raise table.error("budgets", f"budget {max(budgets)} exceeds the {len(candidates)} "
+                                     "candidate nodes")
+    return PlacementStudy(family=family, budgets=budgets, methods=methods,
+                          with_differences=with_differences, measured=measured,
+                          exhaustive_limit=limit, similarity=similarity, nodes=candidates,
+                          excluded=tuple(excluded))
+
+
+def describe(study: PlacementStudy) -> dict[str, Any]:
+    """JSON-ready settings of the study (for provenance and the README)."""
+    from spindlebench.studies.study import describe as describe_family
+
+    out = describe_family(study.family)
+    out.pop("faults", None)
+    out.update(budgets=list(study.budgets), methods=list(study.methods),
+               with_differences=list(study.with_differences), measured=study.measured,
+               exhaustive_limit=study.exhaustive_limit, similarity=study.similarity,
+               candidate_nodes=len(study.nodes), excluded_nodes=list(study.excluded),
+               design_replica=study.design_replica, test_replicas=list(study.test_replicas))
+    return out
