@@ -20,6 +20,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.modelica.build",
     "spindlebench.paper_study.command",
     "spindlebench.selection.command",
+    "spindlebench.studies.placement.run",
     "spindlebench.studies.sweep",
     "spindlebench.testbench.simulate",
 )
