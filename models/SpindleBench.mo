@@ -86,7 +86,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
         input Real G_side1(unit = "W/K") "Total conductance of the distributed surface side_1";
         input Real G_side2(unit = "W/K") "Total conductance of the distributed surface side_2";
         Real T[n](each unit = "K", each start = 293.15, each fixed = true) "Segment temperatures";
-        Real Q_axial[n - 1](each unit = "W") "Conduction from segment i to segment i+1";
+        Real Q_face[n + 1](each unit = "W") "Heat crossing face i into segment i (face 1: port_a, face n+1: port_b)";
         Real Q_side1[n](each unit = "W") "Heat from segment i through side_1";
         Real Q_side2[n](each unit = "W") "Heat from segment i through side_2";
         Real w1[n](each unit = "1") "Share of segment i in port_1";
@@ -98,8 +98,8 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
         Real Q_ports[n](each unit = "W") "Heat into segment i from port_1..port_3";
         Real dL_seg[n](each unit = "m") "Elongation of the part of segment i inside [x_lo, x_hi]";
         Real dL(unit = "m") "Elongation of the span [x_lo, x_hi] relative to T_nominal";
-        Interfaces.HeatPort port_a "End at x = 0 (centre of segment 1)";
-        Interfaces.HeatPort port_b "End at x = 1 (centre of segment n)";
+        Interfaces.HeatPort port_a "End face at x = 0";
+        Interfaces.HeatPort port_b "End face at x = 1";
         Interfaces.HeatPort port_1 "Connection at x = x1";
         Interfaces.HeatPort port_2 "Connection at x = x2";
         Interfaces.HeatPort port_3 "Connection at x = x3";
@@ -118,16 +118,17 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
           Q_ports[i] = w1[i] * port_1.Q_flow + w2[i] * port_2.Q_flow + w3[i] * port_3.Q_flow;
           dL_seg[i] = alpha * L * max(0.0, min(i / n, x_hi) - max((i - 1) / n, x_lo)) * (T[i] - T_nominal);
         end for;
-        for i in 1:n - 1 loop
-          Q_axial[i] = G * n * (T[i] - T[i + 1]);
+        Q_face[1] = port_a.Q_flow;
+        for i in 2:n loop
+          Q_face[i] = G * n * (T[i - 1] - T[i]);
         end for;
-        C / n * der(T[1]) = port_a.Q_flow - Q_axial[1] + Q_ports[1] - Q_side1[1] - Q_side2[1];
-        for i in 2:n - 1 loop
-          C / n * der(T[i]) = Q_axial[i - 1] - Q_axial[i] + Q_ports[i] - Q_side1[i] - Q_side2[i];
+        Q_face[n + 1] = -port_b.Q_flow;
+        for i in 1:n loop
+          C / n * der(T[i]) = Q_face[i] - Q_face[i + 1] + Q_ports[i] - Q_side1[i] - Q_side2[i];
         end for;
-        C / n * der(T[n]) = port_b.Q_flow + Q_axial[n - 1] + Q_ports[n] - Q_side1[n] - Q_side2[n];
-        port_a.T = T[1];
-        port_b.T = T[n];
+        // the end ports sit on the end faces, half a segment from the first/last centre
+        port_a.Q_flow = 2.0 * G * n * (port_a.T - T[1]);
+        port_b.Q_flow = 2.0 * G * n * (port_b.T - T[n]);
         port_1.T = sum(wT1);
         port_2.T = sum(wT2);
         port_3.T = sum(wT3);
@@ -229,7 +230,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     import SpindleBench.Machine.ContactSensor;
 
     // ---- structure and operating inputs --------------------------------------------------
-    parameter Integer nSeg = 8 "Segments per large part (structural: set at build time)";
+    parameter Integer nSeg = 12 "Segments per large part (structural: set at build time)";
     input Real spindle_speed_rpm(unit = "rev/min", start = 0.0) "Spindle speed";
     input Real feed_x_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the X axis";
     input Real feed_y_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the Y axis";
@@ -276,7 +277,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 
     // ---- large parts, discretised --------------------------------------------------------
     SegmentedSolid spindle_shaft(n = nSeg, C = 8300.0, G = 0.27, L = 0.55, alpha = alpha_steel, T_nominal = T_ref,
-      x1 = 0.22, x2 = 0.85, x3 = 0.5, x_lo = 0.0, x_hi = 0.22)
+      x1 = 0.22, x2 = 0.85, x3 = 0.08, x_lo = 0.0, x_hi = 0.22)
       "Spindle shaft, nose (x=0) to drawbar end (x=1): 18 kg steel, d 70/20 mm, k 42 W/(m.K); front bearing at x1, rear at x2";
     SegmentedSolid housing(n = nSeg, C = 161000.0, G = 1.6, L = 0.6, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.5, x2 = 0.8, x3 = 0.2, x_lo = 0.0, x_hi = 0.5)
@@ -297,11 +298,11 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     HeatCapacitor drawbar_cylinder(C = 4600.0) "Drawbar (tool unclamping) cylinder with its base (10 kg)";
     HeatCapacitor spindle_motor(C = 28800.0) "Spindle motor, 11 kW class, belt drive (60 kg)";
     HeatCapacitor inner_cavity(C = 3000.0) "Headstock inner cavity: air, belt, pulleys, fittings";
-    HeatCapacitor x_motor(C = 6900.0) "X servo motor with flange housing (15 kg)";
+    HeatCapacitor x_motor(C = 15000.0) "X servo motor with flange housing and mounting bracket (32 kg)";
     HeatCapacitor x_nut(C = 1850.0) "X ball-screw nut with bracket (4 kg)";
     HeatCapacitor x_screw(C = 2800.0) "X ball screw d 32 mm x 1 m (6 kg)";
     HeatCapacitor x_bearing_seat(C = 2300.0) "X screw support bearing seat (5 kg)";
-    HeatCapacitor y_motor(C = 6900.0) "Y servo motor with flange housing (15 kg)";
+    HeatCapacitor y_motor(C = 15000.0) "Y servo motor with flange housing and mounting bracket (32 kg)";
     HeatCapacitor y_nut(C = 1850.0) "Y ball-screw nut with bracket (4 kg)";
     HeatCapacitor y_screw(C = 2800.0) "Y ball screw d 32 mm x 1 m (6 kg)";
     HeatCapacitor y_bearing_seat(C = 2300.0) "Y screw support bearing seat (5 kg)";
@@ -343,7 +344,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ThermalConductor x_screw_seat(G = 1.0) "X screw - support bearing seat";
     ThermalConductor x_seat_table(G = 3.0) "X bearing seat - saddle";
     ThermalConductor x_motor_seat(G = 2.0) "X motor flange - bearing seat";
-    ThermalConductor x_motor_air(G = 1.2) "X motor - air";
+    ThermalConductor x_motor_air(G = 0.8) "X motor - air (0.1 m2)";
     ThermalConductor x_nut_air(G = 0.3) "X nut - air";
     ThermalConductor x_screw_air(G = 1.0) "X screw - air";
     ThermalConductor y_nut_table(G = 3.0) "Y nut bracket - saddle";
@@ -351,7 +352,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ThermalConductor y_screw_seat(G = 1.0) "Y screw - support bearing seat";
     ThermalConductor y_seat_bed(G = 3.0) "Y bearing seat - bed";
     ThermalConductor y_motor_seat(G = 2.0) "Y motor flange - bearing seat";
-    ThermalConductor y_motor_air(G = 1.2) "Y motor - air";
+    ThermalConductor y_motor_air(G = 0.8) "Y motor - air (0.1 m2)";
     ThermalConductor y_nut_air(G = 0.3) "Y nut - air";
     ThermalConductor y_screw_air(G = 1.0) "Y screw - air";
     Convection nose_convection "Spindle nose and tool holder - air (speed dependent)";
@@ -461,7 +462,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(rb_shaft.port_b, spindle_shaft.port_2);
     connect(spindle_shaft.side_1, inner_cavity.port);
     connect(spindle_shaft.side_2, inner_cavity.port);
-    connect(spindle_shaft.port_a, nose_convection.solid);
+    connect(spindle_shaft.port_3, nose_convection.solid);
     connect(nose_convection.fluid, ambient.port);
     connect(drawbar_cylinder.port, drawbar_shaft.port_a);
     connect(drawbar_shaft.port_b, spindle_shaft.port_b);

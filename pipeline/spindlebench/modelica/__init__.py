@@ -3,4 +3,4 @@
 MODEL_FILE = "SpindleBench.mo"
 MODEL_CLASS = "SpindleBench.MachiningCentre"
 FMU_NAME = "SpindleBench"
-DEFAULT_SEGMENTS = 8
+DEFAULT_SEGMENTS = 12
