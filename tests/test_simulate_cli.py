@@ -45,7 +45,7 @@ def test_simulate_writes_recording_and_sidecar(tmp_path, capsys):
     captured = capsys.readouterr()
     assert status == 0
     assert "quick.csv" in captured.out
-    assert "it/s" not in captured.err and "sim s" not in captured.err  # no bar: not a TTY
+    assert "it/s" not in captured.err and "sim-s" not in captured.err  # no bar: not a TTY
     frame = pd.read_csv(out)
     assert len(frame) == 11 and frame.time_s.iloc[-1] == 600.0
     sidecar = json.loads(out.with_suffix(".json").read_text())

@@ -183,7 +183,7 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
         return None
     from tqdm import tqdm
 
-    return tqdm(total=round(total_s), unit="sim s", desc=label, delay=2.0, file=sys.stderr,
+    return tqdm(total=round(total_s), unit=" sim-s", desc=label, delay=2.0, file=sys.stderr,
                 leave=False, dynamic_ncols=True)
 
 
