@@ -247,3 +247,20 @@ def test_bad_fmu_path_is_one_line(tmp_path):
     with pytest.raises(SpindlebenchError, match=r"junk\.fmu: not a readable FMU"):
         simulate_scenario(scenario, tmp_path / "q.csv", fmu_path=junk)
     assert not (tmp_path / "q.csv").exists()
+
+
+def test_cooling_that_follows_the_ambient_reaches_the_fmu_and_cools(tmp_path):
+    cooled = load_scenario(write(tmp_path, "c.toml", scenario_text(
+        minutes=30, extra='[cooling]\nmode = "follow_ambient"\nsetpoint_C = -1.0\n')))
+    plain = load_scenario(write(tmp_path, "p.toml", scenario_text(minutes=30)))
+    with_cooling = co_simulate(cooled, FMU)
+    without = co_simulate(plain, FMU)
+    assert with_cooling.parameters["cooling_enabled"] == 1.0
+    assert with_cooling.parameters["cooling_follows_ambient"] == 1.0
+    assert with_cooling.parameters["cooling_setpoint_C"] == -1.0
+    assert without.parameters["cooling_enabled"] == 0.0
+    rise = {name: run.outputs["T1_C"][-1] - run.outputs["T1_C"][0]
+            for name, run in (("cooled", with_cooling), ("plain", without))}
+    assert rise["cooled"] < rise["plain"]
+    assert np.abs(with_cooling.outputs["Q_cooling_W"]).max() > 1.0
+    assert np.abs(without.outputs["Q_cooling_W"]).max() < 1e-9
