@@ -63,10 +63,14 @@ class RunStats:
     done: dict[str, int] = field(default_factory=dict)
     failed: dict[str, int] = field(default_factory=dict)
     seconds: float = 0.0
+    #: Seconds spent inside the task functions, summed over workers, per kind.
+    busy_s: dict[str, float] = field(default_factory=dict)
 
     def count(self, outcome: Outcome) -> None:
+        kind = outcome.task.kind
         bucket = self.done if outcome.ok else self.failed
-        bucket[outcome.task.kind] = bucket.get(outcome.task.kind, 0) + 1
+        bucket[kind] = bucket.get(kind, 0) + 1
+        self.busy_s[kind] = self.busy_s.get(kind, 0.0) + outcome.seconds
 
     def total(self, kind: str | None = None) -> int:
         if kind is None:
@@ -109,10 +113,22 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
+def single_threaded_worker() -> None:
+    """Worker initializer: one BLAS thread per process.
+
+    The workers already fill the cores; a multi-threaded BLAS in each of them oversubscribes
+    the machine, and OpenBLAS's spinning threads then make two workers slower than one.
+    """
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1)
+
+
 def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
     # forkserver: forking a process that runs threads (tqdm, Dask) can deadlock the child.
     context = multiprocessing.get_context("forkserver")
-    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                  initializer=single_threaded_worker)
 
 
 @contextmanager

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from sklearn.linear_model import RidgeCV
+from sklearn.linear_model import Ridge
 from sklearn.model_selection import KFold
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
@@ -132,11 +132,34 @@ def _top_k_correlated(spec: MethodSpec, train: pd.DataFrame,
     return _scores(tests, predictions, ";".join(SENSORS[i] for i in chosen))
 
 
+def blocked_cv_alpha(X: np.ndarray, y: np.ndarray, alphas: np.ndarray = RIDGE_ALPHAS,
+                     n_folds: int = 5) -> float:
+    """The ridge penalty with the lowest K-fold error over contiguous time blocks.
+
+    Blocks, not shuffled rows: neighbouring samples of a heating curve are nearly equal, so a
+    shuffled split would reward fitting noise. One SVD per fold serves every alpha, which
+    makes this some fifty times faster than a grid search refitting per alpha.
+    """
+    X = np.asarray(X, dtype=float)
+    y = np.asarray(y, dtype=float)
+    errors = np.zeros(len(alphas))
+    for train, valid in KFold(n_folds).split(X):
+        scaler = StandardScaler().fit(X[train])
+        Xt, Xv = scaler.transform(X[train]), scaler.transform(X[valid])
+        y_mean = y[train].mean()
+        U, s, Vt = np.linalg.svd(Xt, full_matrices=False)
+        Uty = U.T @ (y[train] - y_mean)
+        for i, alpha in enumerate(alphas):
+            coef = Vt.T @ (s / (s**2 + alpha) * Uty)
+            errors[i] += np.sum((Xv @ coef + y_mean - y[valid]) ** 2)
+    return float(alphas[int(np.argmin(errors))])
+
+
 def _ridge(train: pd.DataFrame, tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
-    model = make_pipeline(PairwiseDifferences(), StandardScaler(),
-                          RidgeCV(alphas=RIDGE_ALPHAS, cv=KFold(5)))
-    model.fit(_raw_rises(train), train[TARGET].to_numpy(float))
-    alpha = float(model[-1].alpha_)
+    X, y = _raw_rises(train), train[TARGET].to_numpy(float)
+    candidates = PairwiseDifferences().fit(X)
+    alpha = blocked_cv_alpha(candidates.transform(X), y)
+    model = make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha=alpha)).fit(X, y)
     predictions = {name: model.predict(_raw_rises(frame)) for name, frame in tests.items()}
     return _scores(tests, predictions, f"all 210 candidates (alpha={alpha:.3g})")
 
