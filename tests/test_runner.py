@@ -264,3 +264,25 @@ def test_cooling_that_follows_the_ambient_reaches_the_fmu_and_cools(tmp_path):
     assert rise["cooled"] < rise["plain"]
     assert np.abs(with_cooling.outputs["Q_cooling_W"]).max() > 1.0
     assert np.abs(without.outputs["Q_cooling_W"]).max() < 1e-9
+
+
+def test_fmu_without_a_binary_for_this_platform_is_one_line(tmp_path):
+    import zipfile
+
+    stripped = tmp_path / "nobinary.fmu"
+    with zipfile.ZipFile(FMU) as source, zipfile.ZipFile(stripped, "w") as target:
+        for item in source.infolist():
+            if not item.filename.startswith("binaries/"):
+                target.writestr(item, source.read(item.filename))
+    scenario = load_scenario(write(tmp_path, "q.toml", scenario_text(minutes=10)))
+    with pytest.raises(SpindlebenchError, match=r"nobinary\.fmu: has no binary for .*build"):
+        co_simulate(scenario, stripped)
+
+
+def test_a_failing_integration_is_one_line_and_writes_nothing(tmp_path):
+    capacity = next(name for name in inspect_fmu(FMU).parameters if name.endswith("bearing_C"))
+    path = write(tmp_path, "neg.toml", scenario_text(
+        minutes=10, extra=f"[parameters]\n{capacity} = -1e-3\n"))  # negative heat capacity
+    with pytest.raises(SpindlebenchError, match=r"simulation failed in scenario .*neg\.toml"):
+        simulate_scenario(path, tmp_path / "neg.csv", fmu_path=FMU)
+    assert not (tmp_path / "neg.csv").exists()

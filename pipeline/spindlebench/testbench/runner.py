@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from fmpy import extract, read_model_description
+from fmpy import extract, platform_tuple, read_model_description, sharedLibraryExtension
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Model, fmi3Float64, fmi3ValueReference
 from fmpy.model_description import ModelDescription, ScalarVariable, ValidationError
 
@@ -210,9 +211,19 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     samples = np.empty((n_samples, n_out))
 
     unzip_dir = extract(str(fmu_info.path))
-    fmu = FMU3Model(guid=md.guid, unzipDirectory=unzip_dir,
-                    modelIdentifier=md.modelExchange.modelIdentifier,
-                    instanceName="spindlebench")
+    identifier = md.modelExchange.modelIdentifier
+    binary = Path(unzip_dir, "binaries", platform_tuple, identifier + sharedLibraryExtension)
+    if not binary.is_file():
+        shutil.rmtree(unzip_dir, ignore_errors=True)
+        raise SpindlebenchError(f"{fmu_info.path}: has no binary for {platform_tuple}; "
+                                "rebuild it here with `spindlebench build`")
+    try:
+        fmu = FMU3Model(guid=md.guid, unzipDirectory=unzip_dir,
+                        modelIdentifier=identifier, instanceName="spindlebench")
+    except OSError as exc:  # a binary that does not load here
+        shutil.rmtree(unzip_dir, ignore_errors=True)
+        raise SpindlebenchError(f"{fmu_info.path}: cannot load its binary for {platform_tuple} "
+                                f"({exc}); rebuild it here with `spindlebench build`") from None
     started = wallclock.perf_counter()
     bar = _progress_bar(scenario.duration_s, progress, scenario.name)
     instantiated = False
@@ -286,8 +297,8 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                 bar.update(round(t) - bar.n)
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
         fmu.terminate()
-    except RuntimeError as exc:  # CVode failure
-        raise SpindlebenchError(f"{fmu_info.path}: integration failed in scenario "
+    except (RuntimeError, FMICallException) as exc:  # CVode or the FMU gave up
+        raise SpindlebenchError(f"{fmu_info.path}: simulation failed in scenario "
                                 f"{scenario.path}: {exc}") from None
     finally:
         if bar is not None:
