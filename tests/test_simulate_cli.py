@@ -132,3 +132,13 @@ def test_console_script_runs_a_shipped_scenario(tmp_path):
     frame = pd.read_csv(tmp_path / "quick.csv")
     assert frame.time_s.iloc[-1] == 1800.0
     assert frame.T1.iloc[-1] > frame.T1.iloc[0]
+
+
+def test_progress_bar_path_runs_and_stays_quiet_for_short_runs(tmp_path, capsys):
+    from spindlebench.testbench import simulate_scenario
+
+    scenario = write(tmp_path, "quick.toml", QUICK)
+    first = simulate_scenario(scenario, tmp_path / "a.csv", progress=True)
+    second = simulate_scenario(scenario, tmp_path / "b.csv", progress=False)
+    assert first.read_bytes() == second.read_bytes()
+    assert "sim-s" not in capsys.readouterr().err  # shown only after 2 s of wall time
