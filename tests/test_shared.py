@@ -27,3 +27,15 @@ def test_provenance_has_versions_and_fields(tmp_path):
     assert record["seed"] == 3
     assert record["input"]["sha256"].startswith("ba7816bf")
     assert record["package_versions"]["numpy"] != "not installed"
+
+
+def test_atomic_write_has_default_permissions(tmp_path):
+    import os
+
+    mask = os.umask(0o022)
+    try:
+        target = tmp_path / "shared.txt"
+        atomic.write_text(target, "x")
+        assert target.stat().st_mode & 0o777 == 0o644
+    finally:
+        os.umask(mask)
