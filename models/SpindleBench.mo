@@ -300,11 +300,11 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     HeatCapacitor inner_cavity(C = 3000.0) "Headstock inner cavity: air, belt, pulleys, fittings";
     HeatCapacitor x_motor(C = 15000.0) "X servo motor with flange housing and mounting bracket (32 kg)";
     HeatCapacitor x_nut(C = 1850.0) "X ball-screw nut with bracket (4 kg)";
-    HeatCapacitor x_screw(C = 2800.0) "X ball screw d 32 mm x 1 m (6 kg)";
+    HeatCapacitor x_screw(C = 4000.0) "X ball screw d 32 mm x 1 m with coupling (8 kg)";
     HeatCapacitor x_bearing_seat(C = 2300.0) "X screw support bearing seat (5 kg)";
     HeatCapacitor y_motor(C = 15000.0) "Y servo motor with flange housing and mounting bracket (32 kg)";
     HeatCapacitor y_nut(C = 1850.0) "Y ball-screw nut with bracket (4 kg)";
-    HeatCapacitor y_screw(C = 2800.0) "Y ball screw d 32 mm x 1 m (6 kg)";
+    HeatCapacitor y_screw(C = 4000.0) "Y ball screw d 32 mm x 1 m with coupling (8 kg)";
     HeatCapacitor y_bearing_seat(C = 2300.0) "Y screw support bearing seat (5 kg)";
     HeatCapacitor floor_slab(C = 2.6e6) "Concrete floor under the machine (3 t), lags the air by about a day";
 
@@ -339,22 +339,22 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ThermalConductor column_bed(G = 20.0) "Column foot - bed (bolted joint)";
     ThermalConductor bed_table(G = 15.0) "Bed - saddle through the Y guides";
     ThermalConductor floor_air(G = 30.0) "Floor slab - workshop air";
-    ThermalConductor x_nut_table(G = 3.0) "X nut bracket - table";
-    ThermalConductor x_nut_screw(G = 2.0) "X nut - screw";
+    ThermalConductor x_nut_table(G = 1.5) "X nut bracket - table";
+    ThermalConductor x_nut_screw(G = 3.0) "X nut - screw";
     ThermalConductor x_screw_seat(G = 1.0) "X screw - support bearing seat";
     ThermalConductor x_seat_table(G = 3.0) "X bearing seat - saddle";
     ThermalConductor x_motor_seat(G = 2.0) "X motor flange - bearing seat";
     ThermalConductor x_motor_air(G = 0.8) "X motor - air (0.1 m2)";
     ThermalConductor x_nut_air(G = 0.3) "X nut - air";
-    ThermalConductor x_screw_air(G = 1.0) "X screw - air";
-    ThermalConductor y_nut_table(G = 3.0) "Y nut bracket - saddle";
-    ThermalConductor y_nut_screw(G = 2.0) "Y nut - screw";
+    ThermalConductor x_screw_air(G = 0.5) "X screw - air";
+    ThermalConductor y_nut_table(G = 1.5) "Y nut bracket - saddle";
+    ThermalConductor y_nut_screw(G = 3.0) "Y nut - screw";
     ThermalConductor y_screw_seat(G = 1.0) "Y screw - support bearing seat";
     ThermalConductor y_seat_bed(G = 3.0) "Y bearing seat - bed";
     ThermalConductor y_motor_seat(G = 2.0) "Y motor flange - bearing seat";
     ThermalConductor y_motor_air(G = 0.8) "Y motor - air (0.1 m2)";
     ThermalConductor y_nut_air(G = 0.3) "Y nut - air";
-    ThermalConductor y_screw_air(G = 1.0) "Y screw - air";
+    ThermalConductor y_screw_air(G = 0.5) "Y screw - air";
     Convection nose_convection "Spindle nose and tool holder - air (speed dependent)";
     Convection cooling_bearing "Coolant jacket - front bearing seat";
 

@@ -88,17 +88,19 @@ def solve_explicitly(
     blocks that needed a simultaneous solve (empty for a fully sequential system).
     """
     n_eq, n_unknown = residuals.numel(), unknowns.numel()
-    if n_eq != n_unknown:
-        raise SpindlebenchError(f"model is not balanced: {n_eq} equations for {n_unknown} unknowns")
     graph = incidence(residuals, unknowns)
     match = maximum_bipartite_matching(graph, perm_type="column")
-    unmatched = [int(k) for k in np.flatnonzero(match < 0)]
-    if unmatched:
-        matched_cols = set(int(c) for c in match[match >= 0])
-        free = [unknown_names[j] for j in range(n_unknown) if j not in matched_cols]
+    matched_cols = {int(c) for c in match[match >= 0]}
+    free = [unknown_names[j] for j in range(n_unknown) if j not in matched_cols]
+    if n_eq != n_unknown:
+        which = f"; no equation for: {', '.join(free[:8])}" if n_unknown > n_eq else ""
         raise SpindlebenchError(
-            f"model is structurally singular: {len(unmatched)} equation(s) without an unknown; "
-            f"undetermined: {', '.join(free[:8])}"
+            f"model is not balanced: {n_eq} equations for {n_unknown} unknowns{which}"
+        )
+    if free:
+        raise SpindlebenchError(
+            f"model is structurally singular: {len(free)} unknown(s) not determined by the "
+            f"equations: {', '.join(free[:8])}"
         )
     equation_of = np.empty(n_unknown, dtype=int)
     equation_of[match] = np.arange(n_eq)

@@ -187,7 +187,10 @@ def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
         states.sx, derivatives.sx, algebraics.sx, inputs.sx, parameter_values
     )
     unknowns = ca.vertcat(derivatives.sx, algebraics.sx)
-    solution, _ = solve_explicitly(residuals, unknowns, derivatives.names + algebraics.names)
+    try:
+        solution, _ = solve_explicitly(residuals, unknowns, derivatives.names + algebraics.names)
+    except SpindlebenchError as exc:
+        raise SpindlebenchError(f"{translated.source}: {exc}") from None
     n_x = states.sx.numel()
     xdot = solution[:n_x]
     algebraic_values = dict(

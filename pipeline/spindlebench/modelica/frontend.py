@@ -141,10 +141,22 @@ def _unit_of(symbol: Any) -> str:
 
 
 def _semantic_error(path: Path, exc: Exception) -> str:
-    """One line for a model pymoca cannot flatten, with a line number from rumoca if it has one."""
+    """One line for a model pymoca cannot flatten, located as well as we can.
+
+    rumoca's diagnostics carry a line; failing that, a name pymoca could not resolve (its
+    error quotes it) is looked up in the source, so the user gets ``file:line`` either way.
+    """
     detail = " ".join(str(exc).split()) or type(exc).__name__
     for diagnostic in validate(path):
         return f"{diagnostic} (pymoca: {detail})"
+    quoted = re.search(r"'([A-Za-z_][\w.\[\]]*)'", detail)
+    if quoted:
+        name = quoted.group(1).split(".")[-1].split("[")[0]
+        pattern = re.compile(rf"(?<![\w.\"]){re.escape(name)}(?![\w\"])")
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+            code = line.split("//", 1)[0]
+            if pattern.search(re.sub(r'"[^"]*"', '""', code)):
+                return f"{path}:{number}: Modelica error: cannot resolve '{quoted.group(1)}'"
     return f"{path}: Modelica model could not be translated: {detail}"
 
 

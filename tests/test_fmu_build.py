@@ -1,0 +1,136 @@
+"""Building the FMU from models/: same as the committed one, coarse ~ fine, clear failures.
+
+The rebuild is the slowest test of the suite (translation, code generation and a gcc compile).
+"""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi3 import FMU3Model
+from spindlebench.errors import SpindlebenchError
+from spindlebench.modelica.build import build_fmu
+from spindlebench.modelica.cold_start import cold_start, rise
+from spindlebench.modelica.equations import explicit_ode
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+COMMITTED = ROOT / "fmus" / "SpindleBench.fmu"
+
+
+@pytest.fixture(scope="module")
+def rebuilt(tmp_path_factory):
+    return build_fmu(MODELS, tmp_path_factory.mktemp("default") / "SpindleBench.fmu")
+
+
+@pytest.fixture(scope="module")
+def coarse(tmp_path_factory):
+    return build_fmu(MODELS, tmp_path_factory.mktemp("coarse") / "SpindleBench.fmu", segments=6)
+
+
+def archive_text(fmu, name):
+    with zipfile.ZipFile(fmu) as archive:
+        return archive.read(name).decode()
+
+
+@pytest.mark.parametrize(
+    "member",
+    ["modelDescription.xml", "sources/SpindleBench.c", "sources/SpindleBench_wrap.c"],
+)
+def test_rebuild_has_the_committed_description_and_sources(rebuilt, member):
+    assert archive_text(rebuilt, member) == archive_text(COMMITTED, member), (
+        f"fmus/SpindleBench.fmu is stale: run 'spindlebench build' ({member} differs)"
+    )
+
+
+def test_rebuild_gives_the_committed_outputs(rebuilt):
+    ours = cold_start(rebuilt, speed_rpm=4000.0, hours=2.0, ambient_C=10.0, output_interval_s=300.0)
+    committed = cold_start(
+        COMMITTED, speed_rpm=4000.0, hours=2.0, ambient_C=10.0, output_interval_s=300.0
+    )
+    assert list(ours.columns) == list(committed.columns)
+    np.testing.assert_allclose(ours.to_numpy(), committed.to_numpy(), rtol=1e-9, atol=1e-9)
+
+
+def test_coarse_and_default_builds_agree_on_drift(coarse):
+    fine = cold_start(
+        COMMITTED, speed_rpm=4000.0, hours=3.0, ambient_C=10.0, output_interval_s=300.0
+    )
+    rough = cold_start(coarse, speed_rpm=4000.0, hours=3.0, ambient_C=10.0, output_interval_s=300.0)
+    assert sum(c.startswith("node_") for c in rough.columns) < sum(
+        c.startswith("node_") for c in fine.columns
+    )
+    for minutes in (60, 180):
+        assert rise(rough, "drift_um", minutes) == pytest.approx(
+            rise(fine, "drift_um", minutes), rel=0.05
+        )
+
+
+def test_explicit_ode_is_what_the_fmu_computes():
+    ode = explicit_ode(MODELS)
+    rng = np.random.default_rng(7)
+    x = 283.15 + 15.0 * rng.random(len(ode.states))
+    u = np.array([3500.0, 1200.0, 800.0, 14.0])
+    p = ode.parameter_vector()
+    xdot, y = (np.array(v).ravel() for v in ode.ode(x, u, p))
+
+    description = read_model_description(str(COMMITTED))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
+    unzipped = extract(str(COMMITTED))
+    fmu = FMU3Model(
+        guid=description.guid,
+        unzipDirectory=unzipped,
+        modelIdentifier=description.modelExchange.modelIdentifier,
+        instanceName="check",
+    )
+    fmu.instantiate()
+    fmu.setFloat64([vr[n] for n in ode.states], list(x))
+    fmu.setFloat64([vr[n] for n in ode.inputs], list(u))
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu_y = np.array(fmu.getFloat64([vr[n] for n in ode.outputs], len(ode.outputs)))
+    derivative_vrs = [d.variable.valueReference for d in description.derivatives]
+    fmu_xdot = np.array(fmu.getFloat64(derivative_vrs, len(derivative_vrs)))
+    fmu.terminate()
+    fmu.freeInstance()
+    states_in_fmu_order = [d.variable.derivative.name for d in description.derivatives]
+    assert states_in_fmu_order == ode.states
+    np.testing.assert_allclose(fmu_y, y, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(fmu_xdot, xdot, rtol=1e-12, atol=1e-15)
+
+
+def test_missing_compiler_is_reported(tmp_path, monkeypatch):
+    monkeypatch.setenv("CC", "no-such-cc")
+    with pytest.raises(SpindlebenchError, match="no C compiler: 'no-such-cc' is not on PATH"):
+        build_fmu(MODELS, tmp_path / "x.fmu")
+    monkeypatch.delenv("CC")
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(SpindlebenchError, match="no C compiler: 'gcc'"):
+        build_fmu(MODELS, tmp_path / "x.fmu")
+    assert not (tmp_path / "x.fmu").exists()
+
+
+def test_build_command_rejects_bad_segments_in_one_line(tmp_path):
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "spindlebench.cli",
+            "build",
+            "--segments",
+            "1",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 2
+    assert result.stderr.strip().count("\n") == 0
+    assert "--segments" in result.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,88 @@
+"""The Modelica package: accepted by two independent front ends; errors point at file:line."""
+
+from pathlib import Path
+
+import pytest
+from spindlebench.errors import SpindlebenchError
+from spindlebench.modelica import MODEL_FILE
+from spindlebench.modelica.frontend import translate, validate
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+def broken_copy(tmp_path: Path, old: str, new: str) -> Path:
+    text = (MODELS / MODEL_FILE).read_text()
+    assert old in text
+    (tmp_path / MODEL_FILE).write_text(text.replace(old, new, 1))
+    return tmp_path
+
+
+def line_of(path: Path, fragment: str) -> int:
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if fragment in line:
+            return number
+    raise AssertionError(fragment)
+
+
+def test_rumoca_accepts_the_package():
+    assert validate(MODELS / MODEL_FILE) == []
+
+
+def test_rumoca_reports_a_syntax_error_with_its_line(tmp_path):
+    folder = broken_copy(
+        tmp_path, 'Real T(unit = "K") "Port temperature";', 'Real T(unit = "K") "Port temperature"'
+    )
+    problems = validate(folder / MODEL_FILE)
+    assert problems
+    assert problems[0].startswith(
+        f"{folder / MODEL_FILE}:{line_of(folder / MODEL_FILE, 'flow Real Q_flow')}:"
+    )
+
+
+def test_pymoca_translates_the_machine_with_the_requested_segments():
+    translated = translate(MODELS, segments=3)
+    shapes = {v.symbol.name(): v.symbol.shape for v in translated.model.states}
+    for part in ("spindle_shaft", "housing", "column", "bed", "table"):
+        assert shapes[f"{part}.T"] == (3, 1)
+    assert translated.symbols["drift_um"].unit == "um"
+    assert translated.symbols["h_nat"].description
+
+
+def test_syntax_error_is_one_line_with_file_and_line(tmp_path):
+    folder = broken_copy(tmp_path, "T1_C = sensor_T1.T - 273.15;", "T1_C = sensor_T1.T - 273.15 +;")
+    with pytest.raises(SpindlebenchError) as info:
+        translate(folder, segments=3)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(
+        f"{folder / MODEL_FILE}:{line_of(folder / MODEL_FILE, 'T1_C = sensor_T1.T')}:"
+    )
+    assert "syntax error" in message
+
+
+def test_unknown_name_is_located(tmp_path):
+    folder = broken_copy(tmp_path, "Q_flow = G * dT;", "Q_flow = G * dTT;")
+    with pytest.raises(SpindlebenchError) as info:
+        translate(folder, segments=3)
+    expected = f"{folder / MODEL_FILE}:{line_of(folder / MODEL_FILE, 'G * dTT')}:"
+    assert str(info.value).startswith(expected)
+    assert "dTT" in str(info.value)
+
+
+def test_missing_model_file_is_named(tmp_path):
+    with pytest.raises(SpindlebenchError, match=str(tmp_path / MODEL_FILE)):
+        translate(tmp_path, segments=3)
+
+
+@pytest.mark.parametrize("segments", [1, 0, 2.5, True])
+def test_segments_must_be_an_integer_of_at_least_two(segments):
+    with pytest.raises(SpindlebenchError, match="segments"):
+        translate(MODELS, segments=segments)
+
+
+def test_missing_equation_is_reported_with_the_file(tmp_path):
+    from spindlebench.modelica.equations import explicit_ode
+
+    folder = broken_copy(tmp_path, "    T2_C = sensor_T2.T - 273.15;\n", "")
+    with pytest.raises(SpindlebenchError, match=r"not balanced.*no equation for: T2_C"):
+        explicit_ode(folder, segments=2)

@@ -1,0 +1,45 @@
+"""Plausible magnitudes of the committed FMU on cold starts (the issue's expectations)."""
+
+from pathlib import Path
+
+import pytest
+from spindlebench.modelica.cold_start import cold_start, rise
+
+FMU = Path(__file__).resolve().parents[1] / "fmus" / "SpindleBench.fmu"
+SPINDLE_NEAR = ("T1_C", "T2_C", "T3_C", "T5_C", "T8_C")
+FEED_AND_STRUCTURE = ("T6_C", "T11_C", "T13_C", "T16_C", "T20_C")
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {rpm: cold_start(FMU, speed_rpm=rpm, hours=5.0, ambient_C=8.0) for rpm in (4000, 2000)}
+
+
+@pytest.mark.parametrize("sensor", SPINDLE_NEAR)
+def test_spindle_near_sensors_rise_several_degrees_in_50_min_then_level_off(runs, sensor):
+    run = runs[4000]
+    first_50_min = rise(run, sensor, 50)
+    assert 3.0 < first_50_min < 20.0
+    last_hour = rise(run, sensor, 300) - rise(run, sensor, 240)
+    assert last_hour < 0.1 * first_50_min
+    assert first_50_min > 0.6 * rise(run, sensor, 300)
+
+
+@pytest.mark.parametrize("sensor", FEED_AND_STRUCTURE)
+def test_feed_axis_and_structure_sensors_keep_rising_slowly(runs, sensor):
+    run = runs[4000]
+    total = rise(run, sensor, 300)
+    assert total > 1.0
+    assert rise(run, sensor, 50) < 0.5 * total  # most of the rise comes after 50 min
+    assert rise(run, sensor, 300) - rise(run, sensor, 240) > 0.1  # still rising after 4 h
+
+
+def test_drift_reaches_tens_of_micrometres_within_a_few_hours(runs):
+    assert 20.0 < rise(runs[4000], "drift_um", 180) < 100.0
+    assert rise(runs[4000], "drift_um", 300) > rise(runs[4000], "drift_um", 180)
+
+
+def test_2000_rpm_gives_less_than_4000_rpm(runs):
+    for column in ("drift_um", "T1_C", "T8_C"):
+        assert rise(runs[2000], column, 300) < 0.7 * rise(runs[4000], column, 300)
+    assert rise(runs[2000], "drift_um", 300) > 5.0
