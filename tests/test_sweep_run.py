@@ -74,6 +74,11 @@ def test_results_table_has_one_row_per_replica_condition_method_k_and_test(refer
     assert set(results["data"]) == {"measured", "noise-free"}
     assert not results.duplicated(["replica", "noise", "fault", "method", "k",
                                    "test_experiment"]).any()
+    # The oracle (OLS on all 20 sensors, fitted on the held-out run itself) is a floor.
+    case = ["replica", "data", "noise", "fault", "test_experiment"]
+    oracle = results[results["method"] == "oracle"].set_index(case)["rmse_um"]
+    others = results[results["method"] != "oracle"].join(oracle.rename("floor"), on=case)
+    assert (others["rmse_um"] >= others["floor"] - 1e-9).all()
     # The stuck T1 only harms models that read T1; on the others the fault changes nothing.
     measured = results[results["data"] == "measured"].set_index(
         ["replica", "method", "k", "test_experiment", "fault"])["rmse_um"].unstack("fault")

@@ -105,16 +105,20 @@ def test_climate_in_kelvin_is_refused(tmp_path):
 def test_experiment_family_and_training_rules(tmp_path):
     study = load_study(EXAMPLE)
     family = ex.experiments(study)
-    assert len(family) == 4 * 2 * 2 * 1
+    assert len(family) == 6 * 2 * 2 * 1
     assert len({e.id for e in family}) == len(family)
-    assert [e.id for e in ex.training_experiments(study, family)] == ["Jan-4000rpm-constant-off"]
-    assert len(ex.conditions(study)) == 4
-    per_season = load_study(write_study(tmp_path, EXAMPLE.read_text(encoding="utf-8").replace(
-        'rule = "one"                     # train on one experiment, predict all the others\n'
-        'month = "Jan"', 'rule = "each-season"')))
-    trains = ex.training_experiments(per_season, ex.experiments(per_season))
-    assert [e.month for e in trains] == ["Jan", "Apr", "Jul", "Oct"]
-    assert {e.season for e in trains} == {"winter", "spring", "summer", "autumn"}
+    assert len(ex.conditions(study)) == 2 * 3
+    trains = ex.training_experiments(study, family)
+    assert [e.id for e in trains] == [f"{m}-4000rpm-constant-off"
+                                      for m in ("Jan", "Mar", "Jun", "Oct")]
+    assert [e.season for e in trains] == ["winter", "spring", "summer", "autumn"]
+    one = load_study(write_study(tmp_path, EXAMPLE.read_text(encoding="utf-8").replace(
+        'rule = "each-season"', 'rule = "one"\nmonth = "Apr"')))
+    assert [e.id for e in ex.training_experiments(one, ex.experiments(one))] == [
+        "Apr-4000rpm-constant-off"]
+    with pytest.raises(SpindlebenchError, match=r"key 'training\.month': with rule 'each-season'"):
+        load_study(write_study(tmp_path, EXAMPLE.read_text(encoding="utf-8").replace(
+            'rule = "each-season"', 'rule = "each-season"\nmonth = "Apr"'), "bad.toml"))
 
 
 def test_seeds_depend_on_names_not_on_loop_order(tmp_path):
@@ -155,5 +159,6 @@ def test_scenario_objects_carry_the_experiment(tmp_path):
     low, high = ex.day_weather(study, 2, cycles)
     assert (scenario.ambient.low_C, scenario.ambient.high_C) == (low, high)
     assert scenario.seed == ex.sensor_seed(study, 2, cycles)
-    assert scenario.duration_s == 4 * 3600 and scenario.sensors.faults == ()
+    assert scenario.duration_s == study.duration_s == 6 * 3600
+    assert scenario.sensors.faults == ()
     assert scenario.n_steps * scenario.step_s == scenario.duration_s

@@ -13,9 +13,9 @@ import pandas as pd
 from spindlebench.atomic import atomic_path
 from spindlebench.studies.seasons import MONTHS
 
-METHOD_ORDER = ("raw20", "raw6", "raw6+diff", "top-k-correlated", "ridge")
+METHOD_ORDER = ("raw20", "raw6", "raw6+diff", "top-k-correlated", "ridge", "oracle")
 COLOURS = {"raw20": "#8c8c8c", "raw6": "#5b8fc9", "raw6+diff": "#d9622b",
-           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6",
+           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f2f2f2",
            "measured": "#4c72b0", "noise-free": "#d0d0d0"}
 
 
@@ -71,7 +71,7 @@ def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
         series = [s for s in ("measured", "noise-free") if s in set(at["series"])]
         _grouped_boxes(ax, at.rename(columns={"method": "m", "series": "method"})
                        .rename(columns={"m": "category"}), methods, "category", series)
-        ax.set_title(f"k = {k} (ridge: all candidates)")
+        ax.set_title(f"k = {k} (ridge, oracle: all candidates)")
     for ax in axes[0][1:]:
         ax.set_ylabel("")
     axes[0][0].legend(loc="upper left", fontsize=8)
