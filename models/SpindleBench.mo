@@ -7,7 +7,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
   //   [BT]   Bossmanns & Tu (1999), "A thermal model for high speed motorized spindles",
   //          Int. J. Mach. Tools Manuf. 39: bearing/housing resistances, rotating convection.
   //   [KR]   Kreith (1968) / Becker (1963): rotating cylinder Nu = 0.133 Re^(2/3) Pr^(1/3).
-  //   [HOL]  Holkup et al. (2010), Int. J. Mach. Tools Manuf. 50: spindle thermal network.
+  //   [HOL]  Holkup et al. (2010), "Thermo-mechanical model of spindles", CIRP Annals 59.
   //   [MAY]  Mayr et al. (2012), "Thermal issues in machine tools", CIRP Annals 61.
   //   [ISO]  ISO 3448 viscosity grades; ISO 1 reference temperature 20 degC.
   //   [EST]  engineering estimate for a VMC-850 class machine (masses from similar designs).
