@@ -2,7 +2,6 @@
 
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -32,8 +31,7 @@ def uniform(ode, celsius):
 
 
 def steady_state(ode, u, p):
-    x, uu, pp = ode.expressions["x"], ode.expressions["u"], ode.expressions["p"]
-    jac = ca.Function("xdot_jacobian", [x, uu, pp], [ca.jacobian(ode.expressions["xdot"], x)])
+    jac = ode.state_jacobian()
     solution = root(
         lambda s: evaluate(ode, s, u, p)[0],
         uniform(ode, u[3] + 10.0),

@@ -41,9 +41,17 @@ class ExplicitOde:
     parameters: dict[str, float]
     outputs: list[str]
     segments: int
+    symbols: tuple[ca.SX, ca.SX, ca.SX] = field(repr=False)  # x, u, p of ``ode``
     units: dict[str, str] = field(default_factory=dict)
     descriptions: dict[str, str] = field(default_factory=dict)
-    expressions: dict[str, ca.SX] = field(default_factory=dict, repr=False)
+
+    def state_jacobian(self) -> ca.Function:
+        """``jac(x, u, p) -> d xdot / d x`` (sparse), for implicit integrators."""
+        x, u, p = self.symbols
+        xdot = self.ode(x, u, p)[0]
+        return ca.Function(
+            "xdot_jacobian", [x, u, p], [ca.jacobian(xdot, x)], ["x", "u", "p"], ["J"]
+        )
 
     @property
     def node_states(self) -> list[str]:
@@ -224,7 +232,6 @@ def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
     units, descriptions = _annotations(
         translated, states, inputs, params, tunable_index, output_names
     )
-    expressions = {name: value for name, value in zip(output_names, output_values, strict=True)}
     return ExplicitOde(
         ode=ode,
         states=list(states.flat),
@@ -236,7 +243,7 @@ def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
         segments=translated.segments,
         units=units,
         descriptions=descriptions,
-        expressions=expressions | {"xdot": xdot, "x": states.sx, "u": inputs.sx, "p": tunable_sx},
+        symbols=(states.sx, inputs.sx, tunable_sx),
     )
 
 
@@ -251,43 +258,45 @@ def _starts(variables: list, group: _Group) -> np.ndarray:
 
 
 def _annotations(translated, states, inputs, params, tunable_index, output_names):
+    """Units and one-line descriptions of every exported name, from the Modelica declarations.
+
+    A component's own description (e.g. the housing's) is appended to its variables', so a
+    tunable ``housing_C`` reads "Total heat capacity (Headstock housing, ...)".
+    """
     symbols = translated.symbols
+    owners = translated.component_descriptions
     units: dict[str, str] = {}
     descriptions: dict[str, str] = {}
 
-    def describe(flat: str, base: str, element: str) -> None:
+    def owner_of(base: str) -> str:
+        return owners.get(base.split(".")[0], "") if "." in base else ""
+
+    def declared(flat: str, base: str) -> None:
         info = symbols.get(base)
         units[flat] = info.unit if info else ""
+        owner = owner_of(base)
         text = info.description if info else ""
-        if element != base:
-            component = base.rsplit(".", 1)[0]
-            owner = translated.component_descriptions.get(component, component)
-            text = f"{text} {element.removeprefix(base)}: {owner}".strip()
-        descriptions[flat] = text
+        descriptions[flat] = f"{text} ({owner})" if owner and text else text or owner
 
+    counts = {base: states.bases.count(base) for base in set(states.bases)}
     for flat, base, element in zip(states.flat, states.bases, states.names, strict=True):
-        describe(flat, base, element)
-        if not units[flat]:
-            units[flat] = "K"
-        if element == base:
-            component = base.rsplit(".", 1)[0].split(".")[0]
-            owner = translated.component_descriptions.get(component, "")
-            descriptions[flat] = f"Temperature: {owner}" if owner else descriptions[flat]
+        units[flat] = symbols[base].unit if base in symbols and symbols[base].unit else "K"
+        where = owner_of(base) or base
+        if element != base:
+            index = element[len(base) + 1 : -1]
+            where = f"segment {index} of {counts[base]} of {where}"
+        descriptions[flat] = f"Temperature of {where}"
     for flat, base in zip(inputs.flat, inputs.bases, strict=True):
-        describe(flat, base, base)
+        declared(flat, base)
     for i in tunable_index:
-        describe(params.flat[i], params.bases[i], params.names[i])
-        component = params.bases[i].rsplit(".", 1)[0] if "." in params.bases[i] else ""
-        owner = translated.component_descriptions.get(component.split(".")[0], "")
-        if owner:
-            descriptions[params.flat[i]] = f"{descriptions[params.flat[i]]} ({owner})"
+        declared(params.flat[i], params.bases[i])
     for name in output_names:
         if name.startswith(NODE_PREFIX):
             state = name.removeprefix(NODE_PREFIX).removesuffix("_C") + "_T"
             units[name] = "degC"
-            descriptions[name] = descriptions.get(state, "").replace("Segment temperatures", "Node")
+            descriptions[name] = descriptions[state]
         else:
-            describe(name, name, name)
+            declared(name, name)
     return units, descriptions
 
 
