@@ -134,3 +134,18 @@ def test_build_command_rejects_bad_segments_in_one_line(tmp_path):
     assert result.stderr.strip().count("\n") == 0
     assert "--segments" in result.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_build_stops_at_the_first_modelica_problem_with_its_line(tmp_path):
+    text = (MODELS / "SpindleBench.mo").read_text()
+    broken = text.replace(
+        'Real T(unit = "K") "Port temperature";', 'Real T(unit = "K") "Port temperature"', 1
+    )
+    assert broken != text
+    (tmp_path / "SpindleBench.mo").write_text(broken)
+    line = next(i for i, s in enumerate(broken.splitlines(), 1) if "flow Real Q_flow" in s)
+    with pytest.raises(
+        SpindlebenchError, match=rf"^{tmp_path / 'SpindleBench.mo'}:{line}:\d+: unexpected"
+    ):
+        build_fmu(tmp_path, tmp_path / "out.fmu")
+    assert not (tmp_path / "out.fmu").exists()

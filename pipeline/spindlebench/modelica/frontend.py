@@ -181,5 +181,9 @@ def _diagnostic_line(path: Path, diagnostic: Any) -> str:
     line, column = (
         (match.group(1), match.group(2)) if match else (diagnostic.line, diagnostic.column)
     )
-    message = " ".join(str(diagnostic.message).split())
-    return f"{path}:{line}:{column}: {message}"
+    message = str(diagnostic.message)
+    # keep the first complaint ("× unexpected `flow`"), not the rendered source snippet
+    complaint = re.search(r"×\s*(.*?)\s*(?:╭|$)", message, flags=re.S)
+    summary = " ".join((complaint.group(1) if complaint else message).split())
+    summary = re.sub(r"\s*│\s*", " ", summary)
+    return f"{path}:{line}:{column}: {summary}"
