@@ -90,7 +90,7 @@ class _Group:
     bases: list[str]  # declared variable of each element, e.g. ``housing.T``
 
 
-def _group(variables: list, prefix: str = "") -> _Group:
+def _group(variables: list) -> _Group:
     mx, names, flat, bases = [], [], [], []
     for variable in variables:
         symbol = variable.symbol
@@ -98,12 +98,12 @@ def _group(variables: list, prefix: str = "") -> _Group:
         base = symbol.name()
         mx.append(symbol)
         if size == 1 and symbol.shape == (1, 1):
-            names.append(prefix + base)
+            names.append(base)
             flat.append(flat_name(base))
             bases.append(base)
         else:
             for i in range(1, size + 1):
-                names.append(f"{prefix}{base}[{i}]")
+                names.append(f"{base}[{i}]")
                 flat.append(flat_name(base, i))
                 bases.append(base)
     sx = ca.vertcat(*[ca.SX.sym(name) for name in names]) if names else ca.SX(0, 1)
