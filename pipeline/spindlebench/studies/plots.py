@@ -54,6 +54,8 @@ def _grouped_boxes(ax: plt.Axes, frame: pd.DataFrame, categories: list, category
     ax.set_xticklabels([str(c) for c in categories], rotation=30, ha="right")
     ax.set_ylabel("held-out RMSE (µm)")
     ax.grid(axis="y", alpha=0.3)
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + 0.25 * (high - low))  # room for the legend above the boxes
 
 
 def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
@@ -74,8 +76,13 @@ def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
         ax.set_title(f"k = {k} (ridge, oracle: all candidates)")
     for ax in axes[0][1:]:
         ax.set_ylabel("")
+    # A few extreme cases would flatten every box: clip the axis, say so.
+    top = float(ok["rmse_um"].quantile(0.99)) * 1.15
+    clipped = int((ok["rmse_um"] > top).sum())
+    axes[0][0].set_ylim(0, top)
     axes[0][0].legend(loc="upper left", fontsize=8)
-    fig.suptitle("Held-out RMSE per method: measured vs noise-free truth")
+    note = f" ({clipped} of {len(ok)} values above {top:.0f} µm not shown)" if clipped else ""
+    fig.suptitle("Held-out RMSE per method: measured vs noise-free truth" + note)
     return _save(fig, path)
 
 
