@@ -185,16 +185,18 @@ class TaskRunner:
         return _local_pool(self.workers)
 
     def run(self, tasks: Iterable[Task],
-            on_outcome: Callable[[Outcome], Iterable[Task] | None] | None = None) -> RunStats:
+            on_outcome: Callable[[Outcome], Iterable[Task] | None] | None = None,
+            expected_follow_ups: int = 0) -> RunStats:
         """Run ``tasks`` (and any follow-ups ``on_outcome`` returns) to completion.
 
         ``on_outcome`` runs in this process, in completion order; it is where results are
         written to disk, so a sweep interrupted at any moment keeps every finished task.
+        ``expected_follow_ups`` lets the progress bar show the true total from the start.
         """
         stats = RunStats()
         start = time.perf_counter()
         queue = list(tasks)
-        bar = tqdm(total=len(queue), desc=self.desc, unit=self.unit,
+        bar = tqdm(total=len(queue) + expected_follow_ups, desc=self.desc, unit=self.unit,
                    disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
         try:
             if self.dask_address:
@@ -217,14 +219,19 @@ class TaskRunner:
         the task that causes it, then a fresh pool takes the rest.
         """
 
+        known = len(queue)  # tasks seen so far, follow-ups included
+
         def finish(outcome: Outcome) -> None:
+            nonlocal known
             stats.count(outcome)
-            bar.update(1)
             follow_ups = list(on_outcome(outcome) or ()) if on_outcome else []
-            if follow_ups:
-                bar.total += len(follow_ups)
-                bar.refresh()
-                queue.extend(follow_ups)
+            queue.extend(follow_ups)
+            known += len(follow_ups)
+            bar.total = max(bar.total, known)
+            done = ", ".join(f"{kind} {count}" for kind, count in stats.done.items())
+            failed = sum(stats.failed.values())
+            bar.set_postfix_str(done + (f", failed {failed}" if failed else ""), refresh=False)
+            bar.update(1)
 
         while queue:
             executor = open_executor()

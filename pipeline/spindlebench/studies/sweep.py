@@ -179,7 +179,8 @@ class Sweep:
             self.store.write_frame(evaluation_path(replica, job.condition, job.train), frame)
             return ()
 
-        stats = runner.run(tasks, on_outcome)
+        follow_ups = sum(len(self.evaluation_keys(r)) for r, exps in pending.items() if exps)
+        stats = runner.run(tasks, on_outcome, expected_follow_ups=follow_ups)
         results = self.collect()
         return SweepOutcome(self.store.root, results, stats, resumed, skipped)
 
