@@ -7,11 +7,18 @@ sensor temperatures, the measured thermal error, optionally drivers and ``true_*
 or empty column names, rows with the wrong number of fields, empty/NaN/non-numeric/infinite
 cells, fewer than 2 samples, or a ``time_s`` that does not strictly increase. Missing values
 are never interpolated: whoever made the file knows better how to fill them.
+
+``read_recording(path, allow_missing=True)`` is the one opt-in exception: empty and ``NaN``
+cells (the testbench's sensor dropout) are read as NaN so that a consumer can drop the
+incomplete samples, as ``selection.evaluate(..., missing="drop-rows")`` does, with a warning.
+Only those two spellings count as missing; text, ``inf``, booleans, rows with fewer fields than
+the header and a missing ``time_s`` stay errors. Nothing is filled in either way.
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import re
 from collections.abc import Iterable
@@ -31,10 +38,23 @@ TIME_COLUMN = "time_s"
 _NOT_SENSOR = re.compile(r"^(true_.*|.*_um|.*_rpm|feed_.*|.*_mm_per_min|.*_W|ambient_C)$")
 
 
-def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
+#: Cell spellings ``allow_missing`` reads as NaN (compared after stripping, case-insensitive).
+MISSING_SPELLINGS = ("", "nan")
+#: The exact strings the fast path hands to pandas as NaN; other casings take the slow path.
+_FAST_NA_VALUES = ["", "nan", "NaN", "NAN"]
+
+
+class MissingValueError(SpindlebenchError):
+    """An empty or NaN cell in a recording read without ``allow_missing``: the one bad-input
+    case a caller can opt out of, so callers can point to their option."""
+
+
+def read_recording(path: str | os.PathLike[str], *, allow_missing: bool = False) -> pd.DataFrame:
     """Read and validate one recording; all columns become float64.
 
-    ``frame.attrs["path"]`` keeps the file name for later messages.
+    ``allow_missing`` reads empty and NaN cells (not in ``time_s``) as NaN instead of raising
+    ``MissingValueError``; see the module docstring. ``frame.attrs["path"]`` keeps the file
+    name for later messages.
     """
     path = Path(path)
     if not path.exists():
@@ -42,9 +62,9 @@ def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
     header = _read_header(path)
-    frame = _read_clean(path, header)
+    frame = _read_clean(path, header, allow_missing)
     if frame is None:  # something is wrong: read as text to say exactly what and where
-        frame = _read_diagnosing(path, header)
+        frame = _read_diagnosing(path, header, allow_missing)
     if len(frame) < 2:
         raise SpindlebenchError(
             f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
@@ -61,10 +81,12 @@ def read_recording(path: str | os.PathLike[str]) -> pd.DataFrame:
     return frame
 
 
-def _read_clean(path: Path, header: list[str]) -> pd.DataFrame | None:
-    """Fast path: the file parses as finite floats throughout, or None."""
+def _read_clean(path: Path, header: list[str], allow_missing: bool) -> pd.DataFrame | None:
+    """Fast path: the file parses as finite floats throughout (or NaN where ``allow_missing``
+    permits it), or None."""
+    na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
-        frame = pd.read_csv(path, skip_blank_lines=False, engine="c")
+        frame = pd.read_csv(path, skip_blank_lines=False, engine="c", **na)
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError):
         return None
     if frame.shape[1] != len(header):
@@ -73,13 +95,25 @@ def _read_clean(path: Path, header: list[str]) -> pd.DataFrame | None:
         pd.api.types.is_float_dtype(dtype) or pd.api.types.is_integer_dtype(dtype)
         for dtype in frame.dtypes
     )
-    if not numeric or not np.all(np.isfinite(frame.to_numpy(dtype=float))):
+    if not numeric:
         return None
-    frame.columns = header
-    return frame.astype(float)
+    values = frame.to_numpy(dtype=float)
+    if not allow_missing:
+        return frame.set_axis(header, axis=1).astype(float) if np.isfinite(values).all() else None
+    nan = np.isnan(values)
+    if np.isinf(values).any():
+        return None
+    if nan.any():
+        # pandas pads short rows and blank lines with NaN too: every line must have all its
+        # fields (one comma fewer than columns), and time_s must be complete.
+        if path.read_bytes().count(b",") != (len(frame) + 1) * (len(header) - 1):
+            return None
+        if TIME_COLUMN in header and nan[:, header.index(TIME_COLUMN)].any():
+            return None
+    return frame.set_axis(header, axis=1).astype(float)
 
 
-def _read_diagnosing(path: Path, header: list[str]) -> pd.DataFrame:
+def _read_diagnosing(path: Path, header: list[str], allow_missing: bool) -> pd.DataFrame:
     """Slow path: read every cell as text, raise naming the first bad cell."""
     try:
         raw = pd.read_csv(
@@ -92,8 +126,14 @@ def _read_diagnosing(path: Path, header: list[str]) -> pd.DataFrame:
         raise SpindlebenchError(f"recording {path}: header and data have different widths")
     raw.columns = header  # names stripped of surrounding spaces
     raw = _drop_trailing_blank_rows(raw)
+    if allow_missing:  # pandas pads short rows with empty cells: those are not missing values
+        _check_field_counts(path, len(header), len(raw))
     return pd.DataFrame(
-        {name: _numeric_column(path, name, raw[name]) for name in header}, index=raw.index
+        {
+            name: _numeric_column(path, name, raw[name], allow_missing)
+            for name in header
+        },
+        index=raw.index,
     )
 
 
@@ -115,32 +155,60 @@ def _read_header(path: Path) -> list[str]:
     return names
 
 
+def _check_field_counts(path: Path, width: int, rows: int) -> None:
+    """Raise naming the first of the first ``rows`` data lines without ``width`` fields."""
+    with open(path, newline="", encoding="utf-8") as handle:
+        lines = csv.reader(handle)
+        next(lines, None)
+        for number, fields in enumerate(itertools.islice(lines, rows), start=2):
+            if len(fields) != width:
+                raise SpindlebenchError(
+                    f"recording {path}, line {number}: {len(fields)} field(s), the header has "
+                    f"{width} (a truncated or blank line is not a missing value)"
+                )
+
+
 def _drop_trailing_blank_rows(raw: pd.DataFrame) -> pd.DataFrame:
     blank = raw.isna() | (raw == "")
     filled = np.flatnonzero(~blank.all(axis=1).to_numpy())
     return raw.iloc[: filled[-1] + 1] if filled.size else raw.iloc[:0]
 
 
-def _numeric_column(path: Path, name: str, cells: pd.Series) -> pd.Series:
-    """One column as float64, or an error naming the first bad line (header = line 1)."""
-    values = pd.to_numeric(cells.str.strip(), errors="coerce").astype(float)
-    bad = np.flatnonzero(~np.isfinite(values.to_numpy()))
-    if bad.size:
-        row = int(bad[0])
-        cell = cells.iloc[row]
-        if pd.isna(cell) or not str(cell).strip():
-            what = "missing value"
-        elif str(cell).strip().lower() in {"nan", "na", "n/a", "null", "none"}:
-            what = f"NaN value {cell!r}"
-        elif np.isinf(values.iloc[row]):
-            what = f"infinite value {cell!r}"
+def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool) -> pd.Series:
+    """One column as float64, or an error naming the first bad line (header = line 1).
+
+    Empty and NaN cells raise ``MissingValueError`` (or pass as NaN with ``allow_missing``),
+    except in ``time_s``, which must be complete.
+    """
+    optional = name != TIME_COLUMN
+    stripped = cells.str.strip()
+    values = pd.to_numeric(stripped, errors="coerce").astype(float)
+    bad_mask = ~np.isfinite(values.to_numpy())
+    if allow_missing and optional:
+        bad_mask &= ~stripped.str.lower().isin(MISSING_SPELLINGS).to_numpy(dtype=bool)
+    bad = np.flatnonzero(bad_mask)
+    if not bad.size:
+        return values
+    row = int(bad[0])
+    cell = cells.iloc[row]
+    text = "" if pd.isna(cell) else str(cell).strip()
+    error: type[SpindlebenchError] = SpindlebenchError
+    if text.lower() in MISSING_SPELLINGS:
+        what = "missing value" if not text else f"NaN value {cell!r}"
+        if optional:
+            error = MissingValueError
         else:
-            what = f"non-numeric value {cell!r}"
-        raise SpindlebenchError(
-            f"recording {path}, line {row + 2}, column '{name}': {what} "
-            f"({bad.size} bad cell(s) in this column)"
-        )
-    return values
+            what += f" ('{TIME_COLUMN}' must be complete)"
+    elif text.lower() in {"na", "n/a", "null", "none"}:
+        what = f"NaN value {cell!r}"
+    elif np.isinf(values.iloc[row]):
+        what = f"infinite value {cell!r}"
+    else:
+        what = f"non-numeric value {cell!r}"
+    raise error(
+        f"recording {path}, line {row + 2}, column '{name}': {what} "
+        f"({bad.size} bad cell(s) in this column)"
+    )
 
 
 def recording_name(frame: pd.DataFrame, fallback: str = "<data frame>") -> str:

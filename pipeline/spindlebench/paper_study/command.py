@@ -38,6 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--clusters", default=None, help="comma-separated k values (default 2,3,4)")
     parser.add_argument("--similarity", default=None, choices=study_config.SIMILARITIES,
                         help="reading of eq. 1 (default abs-pearson)")
+    parser.add_argument("--missing", default=None, choices=study_config.MISSING_MODES,
+                        help="missing (empty/NaN) values: one-line error (default), or drop "
+                        "the samples where the target or a used sensor is missing (warned)")
     parser.set_defaults(func=_run)
 
 
@@ -45,7 +48,7 @@ def _run(args: argparse.Namespace) -> int:
     overrides = {
         "target": args.target, "train": args.train, "tests": args.tests,
         "sensors_all": args.sensors_all, "six": args.six, "clusters": args.clusters,
-        "similarity": args.similarity,
+        "similarity": args.similarity, "missing": args.missing,
     }
     config = study_config.load(args.config, overrides)
     out_dir = Path(args.out) if args.out else Path(args.recordings) / "paper_study"
@@ -56,6 +59,7 @@ def _run(args: argparse.Namespace) -> int:
             ("--config", args.config), ("--target", args.target), ("--train", args.train),
             ("--tests", args.tests), ("--sensors-all", args.sensors_all), ("--six", args.six),
             ("--clusters", args.clusters), ("--similarity", args.similarity),
+            ("--missing", args.missing),
         )
         if value is not None
     )

@@ -16,6 +16,8 @@ TOML keys (all optional)::
                                            # the difference group
     clusters = [2, 3, 4]
     similarity = "abs-pearson"             # or "literal"
+    missing = "error"                      # or "drop-rows": drop samples with a missing
+                                           # target/used sensor (sensor dropout), warned
 
 ``six = "auto"`` picks the subset by a rule that does not look at the thermal error (the paper
 chose its six by location, one per region of the machine): cut the fuzzy equivalence hierarchy
@@ -36,8 +38,11 @@ PAPER_SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
 PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
 AUTO_SIX = "auto"
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
+#: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
+MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
 
-_KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity")
+_KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
+         "missing")
 
 
 @dataclass(frozen=True)
@@ -52,6 +57,7 @@ class StudyConfig:
     six: tuple[str, ...] | str = PAPER_SIX
     clusters: tuple[int, ...] = (2, 3, 4)
     similarity: str = "abs-pearson"
+    missing: str = "error"
     source: str = field(default="defaults", compare=False)
 
     @property
@@ -87,6 +93,10 @@ class StudyConfig:
             raise SpindlebenchError(
                 f"{where}: similarity: {self.similarity!r} is not one of {', '.join(SIMILARITIES)}"
             )
+        if self.missing not in MISSING_MODES:
+            raise SpindlebenchError(
+                f"{where}: missing: {self.missing!r} is not one of {', '.join(MISSING_MODES)}"
+            )
         return self
 
     def to_dict(self) -> dict[str, Any]:
@@ -96,7 +106,7 @@ class StudyConfig:
             "tests": list(self.tests), "sensors_all": list(self.sensors_all),
             "six": self.six if isinstance(self.six, str) else list(self.six),
             "clusters": list(self.clusters), "similarity": self.similarity,
-            "source": self.source,
+            "missing": self.missing, "source": self.source,
         }
 
 
@@ -134,7 +144,7 @@ def updated(config: StudyConfig, values: dict[str, Any], where: str) -> StudyCon
     for key, value in values.items():
         if value is None:
             continue
-        if key in ("title", "target", "train", "similarity"):
+        if key in ("title", "target", "train", "similarity", "missing"):
             if not isinstance(value, str) or not value:
                 raise SpindlebenchError(f"{where}: {key}: expected a non-empty string")
             changes[key] = value

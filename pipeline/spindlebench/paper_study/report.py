@@ -71,6 +71,14 @@ def _groups_markdown(result: StudyResult) -> str:
     return "\n".join(lines)
 
 
+_MISSING_TEXT = {
+    "error": "`error` (a recording with an empty or NaN value is rejected).",
+    "drop-rows": "`drop-rows`: samples where the target or a sensor a model uses is missing "
+    "are dropped before rises are computed (rises start at the first complete sample; "
+    "nothing is filled in); the warnings say how many, where.",
+}
+
+
 def readme_text(result: StudyResult, figure_paths: dict[str, Path], command: str) -> str:
     """The results page: set-up, the three tables with the paper's beside ours, the figures."""
     config = result.config
@@ -101,6 +109,7 @@ Command:
 ## Set-up
 - Target: `{config.target}`; training experiment `{config.train}`; predicted: {tests}.
 - Numbers of clusters: {", ".join(str(k) for k in config.clusters)}.
+- Missing values: {_MISSING_TEXT[config.missing]}
 {_groups_markdown(result)}
 - Six-sensor subset: {result.six_rule}
 

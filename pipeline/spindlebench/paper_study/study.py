@@ -5,6 +5,11 @@ Groups, in the paper's words: reference group 1 = all raw sensors, reference gro
 sensors, reconstructed group = those six plus their pairwise differences. Every number comes
 from ``spindlebench.selection`` (the method lives there, not here); this module only arranges
 the runs and keeps what the tables and figures need.
+
+With ``missing = "drop-rows"`` the recordings are read with their gaps (NaN) and every cell's
+``evaluate`` drops the incomplete samples it would use (warned); a cell's predictions are put
+back on the recording's full time axis with NaN at the dropped samples, so figures show the
+gap. The ``six = "auto"`` rule uses the training samples where every raw sensor is present.
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.paper_study.config import AUTO_SIX, StudyConfig
-from spindlebench.recordings import read_recording
+from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import evaluate
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
@@ -104,7 +109,12 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
         if not path.is_file():
             found = ", ".join(sorted(p.stem for p in directory.glob("*.csv"))) or "none"
             raise SpindlebenchError(f"{path}: experiment {name!r} not found (have: {found})")
-        frame = read_recording(path)
+        try:
+            frame = read_recording(path, allow_missing=config.missing == "drop-rows")
+        except MissingValueError as exc:
+            raise SpindlebenchError(
+                f"{exc}; missing = \"drop-rows\" (--missing drop-rows) drops incomplete samples"
+            ) from exc
         missing = [column for column in needed if column not in frame.columns]
         if missing:
             raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
@@ -114,8 +124,13 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
 
 
 def choose_six(frame: pd.DataFrame, sensors: Sequence[str], similarity: str) -> tuple[str, ...]:
-    """The target-free six-sensor rule (``AUTO_SIX_RULE``), in ``sensors`` order."""
-    raw = frame.loc[:, list(sensors)].astype(float)
+    """The target-free six-sensor rule (``AUTO_SIX_RULE``), in ``sensors`` order, on the
+    samples where every one of ``sensors`` is present."""
+    raw = frame.loc[:, list(sensors)].astype(float).dropna()
+    if len(raw) < 2:
+        raise SpindlebenchError(
+            "six = auto: fewer than 2 training samples have every sensor of sensors_all"
+        )
     constant = constant_columns(raw.to_numpy())
     varying = [name for name, fixed in zip(sensors, constant, strict=True) if not fixed]
     if len(varying) < 6:
@@ -146,6 +161,7 @@ def _cell(
             k=k,
             differences=differences,
             similarity=config.similarity,
+            missing=config.missing,
         )
     except SpindlebenchError as exc:
         raise SpindlebenchError(f"group {group}, k = {k}: {exc}") from exc
@@ -163,11 +179,21 @@ def _cell(
         r2=float(result.fit.r2),
         rmse_um={name: float(record["rmse_um"][name]) for name in config.tests},
         mean_rmse_um=float(record["mean_rmse_um"]),
-        predictions_um=dict(result.predictions),
+        predictions_um={
+            name: _on_full_axis(len(frames[name]), result.test_rows[name], values)
+            for name, values in result.predictions.items()
+        },
         evaluation=record,
         closure_names=[result.candidates[i] for i in result.selection.kept],
         closure=result.selection.closure,
     )
+
+
+def _on_full_axis(length: int, rows: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` at sample positions ``rows`` of a ``length``-sample recording, NaN elsewhere."""
+    out = np.full(length, np.nan)
+    out[rows] = values
+    return out
 
 
 def run_study(directory: str | Path, config: StudyConfig) -> StudyResult:

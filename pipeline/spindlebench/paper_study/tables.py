@@ -151,8 +151,8 @@ def table6_markdown(result: StudyResult) -> str:
 
 def measured_rms(result: StudyResult) -> dict[str, float]:
     """RMS of the measured error of each predicted experiment: the RMSE a model that always
-    predicts zero drift would get, for scale."""
+    predicts zero drift would get, for scale (missing samples left out)."""
     return {
-        test: float(np.sqrt(np.mean(result.frames[test][result.config.target].to_numpy() ** 2)))
+        test: float(np.sqrt(np.nanmean(result.frames[test][result.config.target].to_numpy() ** 2)))
         for test in result.config.tests
     }

@@ -1,7 +1,8 @@
 """``spindlebench evaluate``: select points on one recording, predict the others.
 
-Warnings (dropped constant candidates, tied similarities) go to stderr as ``warning:`` lines
-and into the JSON's ``provenance.warnings``.
+Warnings (dropped constant candidates, tied similarities, samples dropped for missing values
+with ``--missing drop-rows``) go to stderr as ``warning:`` lines and into the JSON's
+``provenance.warnings``.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 from spindlebench import atomic, provenance
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
-from spindlebench.selection.evaluate import evaluate
+from spindlebench.selection.evaluate import MISSING_MODES, evaluate
 from spindlebench.selection.similarity import SIMILARITIES
 
 
@@ -46,6 +47,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--closure", choices=CLOSURES, default="fast", help="closure algorithm (same result)"
     )
+    parser.add_argument(
+        "--missing",
+        choices=MISSING_MODES,
+        default="error",
+        help="missing (empty/NaN) values: a one-line error (default), or drop the samples "
+        "where the target or a used sensor is missing, with a warning (rises then start at "
+        "the first complete sample; nothing is filled in)",
+    )
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="write the result here")
     parser.set_defaults(func=run)
 
@@ -74,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
             differences=args.differences,
             similarity=args.similarity,
             closure=args.closure,
+            missing=args.missing,
         )
     messages = [str(item.message) for item in caught]
     for message in messages:
@@ -91,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
             differences=args.differences,
             similarity=args.similarity,
             closure=args.closure,
+            missing=args.missing,
             warnings=messages,
         )
         atomic.write_text(args.json, json.dumps(record, indent=2, allow_nan=False) + "\n")

@@ -4,14 +4,26 @@
 the sensors (plus their pairwise differences), as rises relative to each experiment's first
 sample; the target (thermal error, um) is used as recorded (canonical recordings zero it at the
 first sample, like a displacement probe).
+
+Missing values (the testbench's sensor dropout, a logger gap) are an error by default.
+``missing="drop-rows"`` drops, with a ``SelectionWarning``, every sample where the target or a
+sensor the step uses is missing, *before* rises and differences are computed, so the rise
+reference is the first complete sample; nothing is ever filled in. The training recording is
+checked on all candidate sensors; a test recording only on the sensors the fitted model reads
+(a gap in an unselected sensor costs no test samples). The target is still used as recorded:
+a gap at the very start leaves the drift accumulated by the first complete sample in it, which
+the intercept absorbs when training but a test RMSE does not. A sensor missing in more than
+half of the training samples is left out as a candidate (warned) rather than costing most of
+the experiment; an experiment left with fewer than 2 complete samples is an error.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -19,16 +31,23 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.recordings import (
+    MissingValueError,
     default_sensors,
     read_recording,
     recording_name,
 )
 from spindlebench.selection.differences import difference_names, pair_indices
-from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.errors import SelectionError, SelectionWarning
 from spindlebench.selection.regression import LinearFit, fit_ols, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
 
 RecordingLike = str | os.PathLike[str] | pd.DataFrame
+
+#: How ``evaluate`` treats missing (NaN) values: one-line error, or drop incomplete samples.
+MISSING_MODES = ("error", "drop-rows")
+#: A sensor missing in more than this fraction of the training samples stops being a candidate.
+SPARSE_SENSOR_FRACTION = 0.5
+_DROP_HINT = "missing='drop-rows' (--missing drop-rows) drops incomplete samples"
 
 
 @dataclass(frozen=True)
@@ -59,6 +78,18 @@ class CandidateSet:
         out[:, ~is_raw] = raw[:, first[pair]] - raw[:, second[pair]]
         return out
 
+    def sensors_of(self, columns: Sequence[int]) -> list[str]:
+        """The raw sensors that candidates ``columns`` are made of, in sensor order."""
+        n = len(self.sensors)
+        first, second = pair_indices(n)
+        used: set[int] = set()
+        for column in columns:
+            if column < n:
+                used.add(int(column))
+            else:
+                used.update((int(first[column - n]), int(second[column - n])))
+        return [self.sensors[i] for i in sorted(used)]
+
 
 @dataclass(frozen=True)
 class Evaluation:
@@ -73,6 +104,11 @@ class Evaluation:
     predictions: dict[str, np.ndarray]
     measured: dict[str, np.ndarray]
     rmse_um: dict[str, float]
+    #: Positions (0-based) of the samples of each recording the result used: all of them
+    #: unless ``missing="drop-rows"`` dropped incomplete ones. ``predictions`` and ``measured``
+    #: hold those samples only.
+    train_rows: np.ndarray = field(default_factory=lambda: np.arange(0))
+    test_rows: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def selected(self) -> list[str]:
@@ -143,26 +179,102 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _load(recording: RecordingLike, fallback: str) -> tuple[str, pd.DataFrame]:
+def _load(recording: RecordingLike, fallback: str, missing: str) -> tuple[str, pd.DataFrame]:
     if isinstance(recording, pd.DataFrame):
         return recording_name(recording, fallback), recording
-    return str(recording), read_recording(Path(recording))
+    try:
+        return str(recording), read_recording(
+            Path(recording), allow_missing=missing == "drop-rows"
+        )
+    except MissingValueError as exc:
+        raise SelectionError(f"{exc}; {_DROP_HINT}") from exc
 
 
-def _check_finite(name: str, frame: pd.DataFrame, columns: Sequence[str]) -> None:
-    """Frames handed in directly skip ``read_recording``: check the columns used."""
+def _where(frame: pd.DataFrame, position: int) -> str:
+    """``line N`` of the file a frame was read from, else ``row <index label>``."""
+    index = frame.index
+    if "path" in frame.attrs and isinstance(index, pd.RangeIndex) and index.start == 0 \
+            and index.step == 1:
+        return f"line {position + 2}"
+    return f"row {index[position]}"
+
+
+def _check_values(name: str, frame: pd.DataFrame, columns: Sequence[str], missing: str) -> None:
+    """Frames handed in directly skip ``read_recording``: check the columns used. NaN passes
+    only with ``missing="drop-rows"``; text, booleans and infinities never do."""
     if len(frame) < 2:
         raise SelectionError(
             f"recording {name}: has {len(frame)} row(s); an experiment needs at least 2"
         )
     for column in columns:
-        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(values))
+        cells = frame[column]
+        numeric = pd.to_numeric(cells, errors="coerce")
+        values = numeric.to_numpy(dtype=float)
+        nan = np.isnan(values)
+        given = cells.notna().to_numpy(dtype=bool)
+        if pd.api.types.is_bool_dtype(cells):
+            raise SelectionError(f"recording {name}, column '{column}': boolean values")
+        bad = np.flatnonzero(np.isinf(values) | (nan & given))
         if bad.size:
+            first = int(bad[0])
+            what = "infinite value" if np.isinf(values[first]) else "non-numeric value"
             raise SelectionError(
-                f"recording {name}, row {bad[0]}, column '{column}': missing, NaN, infinite "
-                f"or non-numeric value"
+                f"recording {name}, {_where(frame, first)}, column '{column}': {what} "
+                f"{str(cells.iloc[first])!r}"
             )
+        if missing == "error" and nan.any():
+            first = int(np.flatnonzero(nan)[0])
+            raise SelectionError(
+                f"recording {name}, {_where(frame, first)}, column '{column}': missing value "
+                f"({int(nan.sum())} in this column); {_DROP_HINT}"
+            )
+
+
+def _sparse_sensors(name: str, frame: pd.DataFrame, sensors: list[str]) -> list[str]:
+    """``sensors`` without those missing in more than ``SPARSE_SENSOR_FRACTION`` of the
+    samples of ``frame`` (warned); an error if none is left."""
+    fractions = {s: float(frame[s].isna().mean()) for s in sensors}
+    sparse = [s for s in sensors if fractions[s] > SPARSE_SENSOR_FRACTION]
+    if not sparse:
+        return sensors
+    kept = [s for s in sensors if s not in sparse]
+    shown = ", ".join(f"{s} ({fractions[s]:.0%})" for s in sparse)
+    if not kept:
+        raise SelectionError(
+            f"recording {name}: every sensor is missing in more than half of the samples: {shown}"
+        )
+    warnings.warn(
+        f"recording {name}: left out sensor(s) missing in more than half of the samples: "
+        f"{shown}",
+        SelectionWarning,
+        stacklevel=3,
+    )
+    return kept
+
+
+def _complete_rows(name: str, frame: pd.DataFrame, columns: Sequence[str]) -> np.ndarray:
+    """Positions of the samples where every one of ``columns`` is present (warned when some
+    are not); an error if fewer than 2 are left."""
+    missing = frame.loc[:, list(columns)].isna().to_numpy()
+    incomplete = missing.any(axis=1)
+    rows = np.flatnonzero(~incomplete)
+    if not incomplete.any():
+        return rows
+    counts = missing.sum(axis=0)
+    shown = ", ".join(f"{c}: {int(n)}" for c, n in zip(columns, counts, strict=True) if n)
+    if rows.size < 2:
+        raise SelectionError(
+            f"recording {name}: {rows.size} complete sample(s) after dropping the incomplete "
+            f"ones ({shown}); an experiment needs at least 2"
+        )
+    warnings.warn(
+        f"recording {name}: dropped {int(incomplete.sum())} of {len(frame)} samples with "
+        f"missing values ({shown}); rises start at the first complete sample "
+        f"({_where(frame, int(rows[0]))})",
+        SelectionWarning,
+        stacklevel=3,
+    )
+    return rows
 
 
 def resolve_sensors(
@@ -216,6 +328,7 @@ def evaluate(
     differences: bool = False,
     similarity: str = "abs-pearson",
     closure: str = "fast",
+    missing: str = "error",
 ) -> Evaluation:
     """Select ``k`` points on ``train``, fit the rise model, and score it on every test.
 
@@ -223,15 +336,24 @@ def evaluate(
     mapping from display name to recording (default names: the paths). ``sensors`` None means
     ``default_sensors`` of the training file, and every test file must then have exactly the
     same sensor columns; with explicit ``sensors`` the files only need to contain them.
-    Warnings (``SelectionWarning``): constant candidates dropped, ties in the cut.
+    ``missing`` is ``"error"`` or ``"drop-rows"`` (see the module docstring).
+    Warnings (``SelectionWarning``): constant candidates dropped, ties in the cut, and with
+    ``"drop-rows"`` incomplete samples dropped and sparse sensors left out.
     Errors (``SelectionError``, one line naming the file): missing target or sensor columns,
-    differing sensor sets, non-finite values, fewer than 2 rows, k < 1 or k > candidates.
+    differing sensor sets, missing (unless dropped) or non-finite values, fewer than 2 (complete)
+    rows, k < 1 or k > candidates.
     """
-    train_name, train_frame = _load(train, "train")
+    if missing not in MISSING_MODES:
+        raise SelectionError(
+            f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
+        )
+    train_name, train_frame = _load(train, "train", missing)
     items = tests.items() if isinstance(tests, Mapping) else enumerate(tests, start=1)
     test_frames: dict[str, pd.DataFrame] = {}
     for key, recording in items:
-        name, frame = _load(recording, f"test{key}" if isinstance(key, int) else str(key))
+        name, frame = _load(
+            recording, f"test{key}" if isinstance(key, int) else str(key), missing
+        )
         name = str(key) if isinstance(tests, Mapping) else name
         if name in test_frames:
             raise SelectionError(f"test recording {name} given twice")
@@ -240,8 +362,13 @@ def evaluate(
         raise SelectionError("at least one test recording is needed")
     chosen = resolve_sensors(train_name, train_frame, test_frames, target, sensors)
     for name, frame in [(train_name, train_frame), *test_frames.items()]:
-        _check_finite(name, frame, [*chosen, target])
+        _check_values(name, frame, [*chosen, target], missing)
 
+    train_rows = np.arange(len(train_frame))
+    if missing == "drop-rows":
+        chosen = _sparse_sensors(train_name, train_frame, chosen)
+        train_rows = _complete_rows(train_name, train_frame, [*chosen, target])
+        train_frame = train_frame.iloc[train_rows]
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
     y_train = train_frame[target].to_numpy(dtype=float)
@@ -249,8 +376,13 @@ def evaluate(
         candidates.matrix(train_frame), y_train, k, similarity, closure, names=names
     )
     fit = fit_ols(candidates.matrix(train_frame, selection.selected), y_train)
-    predictions, measured, errors = {}, {}, {}
+    used = [*candidates.sensors_of(selection.selected), target]
+    predictions, measured, errors, test_rows = {}, {}, {}, {}
     for name, frame in test_frames.items():
+        test_rows[name] = np.arange(len(frame))
+        if missing == "drop-rows":
+            test_rows[name] = _complete_rows(name, frame, used)
+            frame = frame.iloc[test_rows[name]]
         measured[name] = frame[target].to_numpy(dtype=float)
         predictions[name] = fit.predict(candidates.matrix(frame, selection.selected))
         errors[name] = rmse(measured[name], predictions[name])
@@ -264,4 +396,6 @@ def evaluate(
         predictions=predictions,
         measured=measured,
         rmse_um=errors,
+        train_rows=train_rows,
+        test_rows=test_rows,
     )

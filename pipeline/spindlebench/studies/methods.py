@@ -119,12 +119,16 @@ def _scores(tests: Mapping[str, pd.DataFrame], predictions: Mapping[str, np.ndar
 
 def _paper_group(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
                  similarity: str) -> dict[str, Score]:
+    # A dropout reaches evaluate only as a whole-run NaN column (jobs.measured_frame holds a
+    # dropped sensor at its last good reading): with "drop-rows" a group whose model does not
+    # read that sensor is still scored; one that does fails with a one-line error.
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         result = evaluate(train, dict(tests), TARGET, sensors=list(GROUP_SENSORS[spec.name]),
                           k=spec.k or 2, differences=spec.name.endswith("+diff"),
-                          similarity=similarity)
-    return _scores(tests, result.predictions, ";".join(result.selected))
+                          similarity=similarity, missing="drop-rows")
+    kept = {name: frame.iloc[result.test_rows[name]] for name, frame in tests.items()}
+    return _scores(kept, result.predictions, ";".join(result.selected))
 
 
 def _raw_rises(frame: pd.DataFrame) -> np.ndarray:
