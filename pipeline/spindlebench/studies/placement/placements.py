@@ -53,6 +53,8 @@ class Placement:
     search_score_um: float  # the search's own objective value (NaN for fuzzy and skipped)
     seconds: float
     note: str = ""
+    cluster_sizes: tuple[int, ...] = ()  # fuzzy only: members of each cluster of the cut
+    psi: tuple[float, ...] = ()  # fuzzy only: correlation of each pick with the drift
 
     @property
     def label(self) -> str:
@@ -64,11 +66,11 @@ class Placement:
 
 
 def _placement(method: str, differences: bool, budget: int, candidates, columns,
-               score: float, seconds: float, note: str = "") -> Placement:
+               score: float, seconds: float, note: str = "", **fuzzy) -> Placement:
     names = candidates.names
     columns = tuple(int(c) for c in columns)
     return Placement(method, differences, budget, columns, tuple(names[c] for c in columns),
-                     tuple(physical_nodes(candidates, columns)), score, seconds, note)
+                     tuple(physical_nodes(candidates, columns)), score, seconds, note, **fuzzy)
 
 
 def _skipped(method: str, differences: bool, budget: int, note: str) -> Placement:
@@ -86,8 +88,11 @@ def fuzzy_placements(study: PlacementStudy, differences: bool, train) -> list[Pl
             selection = select_sensitive_points(train.X, train.y, m, study.similarity,
                                                 names=candidates.names)
         notes = [str(w.message) for w in caught if "tied similarities" in str(w.message)]
-        out.append(_placement("fuzzy", differences, m, candidates, selection.selected,
-                              math.nan, time.perf_counter() - start, "; ".join(notes)))
+        out.append(_placement(
+            "fuzzy", differences, m, candidates, selection.selected, math.nan,
+            time.perf_counter() - start, "; ".join(notes),
+            cluster_sizes=tuple(len(members) for members in selection.clusters),
+            psi=tuple(float(v) for v in selection.selected_psi)))
     return out
 
 

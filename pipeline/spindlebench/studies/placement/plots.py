@@ -2,20 +2,27 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import matplotlib.ticker as ticker
 import pandas as pd
 
 from spindlebench.atomic import atomic_path
 from spindlebench.studies.placement.schematic import METHOD_COLOURS
 
 
-def comparison(table: pd.DataFrame, path: Path) -> Path:
-    """Left: test RMSE vs m (bars: best and worst season); right: design RMSE vs m."""
+def comparison(table: pd.DataFrame, path: Path,
+               references: Mapping[str, float] | None = None, note: str = "") -> Path:
+    """Left: test RMSE vs m (bars: best and worst season); right: design RMSE vs m.
+
+    ``references`` are drawn as labelled horizontal lines (e.g. predicting no drift at all,
+    the probe's noise), so the reader sees the scale of the differences between methods.
+    """
     seasons = [c for c in table.columns
                if c.startswith("test_") and c.endswith("_rmse_um")
                and c not in ("test_mean_rmse_um", "test_worst_rmse_um")]
@@ -41,10 +48,20 @@ def comparison(table: pd.DataFrame, path: Path) -> Path:
     right.set_title("design day: held-out RMSE (what greedy and exhaustive optimise)",
                     fontsize=9)
     for ax in (left, right):
+        for (name, value), shade in zip((references or {}).items(), ("#777777", "#bbbbbb"),
+                                        strict=False):
+            ax.axhline(value, color=shade, lw=1.0, ls="-.", zorder=0)
+            ax.text(ax.get_xlim()[0], value * 1.04, f" {name}: {value:.2f} µm", fontsize=7,
+                    color="#555555", va="bottom")
         ax.set_xlabel("budget m (model variables)")
         ax.grid(alpha=0.3)
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
+        ax.xaxis.set_major_locator(ticker.MaxNLocator(integer=True))
     left.set_ylabel("RMSE (µm)")
+    if note:
+        fig.suptitle(f"Cross-season RMSE of each placement ({note})", fontsize=10)
     left.legend(fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=120, bbox_inches="tight", format="png")

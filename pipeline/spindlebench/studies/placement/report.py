@@ -7,12 +7,14 @@ disagree with the numbers.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from spindlebench.studies.experiments import Experiment
+from spindlebench.studies.placement.placements import Placement
 from spindlebench.studies.placement.study import PlacementStudy
 from spindlebench.studies.report import markdown_table
 
@@ -57,6 +59,44 @@ def findings(table: pd.DataFrame, honest: bool) -> list[str]:
             lines.append(f"- Test minus design RMSE (median over budgets; how much a method's "
                          f"choice was tuned to the design day): {parts}.")
     return lines
+
+
+def chaining(placements: Sequence[Placement]) -> list[str]:
+    """Bullets on fuzzy cuts dominated by one cluster (single-linkage chaining)."""
+    lines = []
+    fuzzy = [p for p in placements if p.method == "fuzzy" and p.cluster_sizes]
+    for label in dict.fromkeys(p.label for p in fuzzy):
+        largest = max((p for p in fuzzy if p.label == label), key=lambda p: p.budget)
+        sizes = largest.cluster_sizes
+        total = sum(sizes)
+        if max(sizes) < 0.9 * total or len(sizes) < 2:
+            continue
+        weakest = min(abs(v) for v in largest.psi)
+        lines.append(
+            f"- {label}: at m = {largest.budget} the cut leaves one cluster of {max(sizes)} "
+            f"of {total} candidates and {len(sizes) - 1} small one(s) (sizes "
+            f"{', '.join(map(str, sizes))}): the max-min closure is single linkage, which "
+            "chains similar candidates into one cluster and splits off outliers; the picks "
+            f"from the small clusters correlate weakly with the drift (|ψ| down to "
+            f"{weakest:.2f}).")
+    return lines
+
+
+def fuzzy_table(placements: Sequence[Placement]) -> list[str]:
+    """Markdown: per fuzzy placement, the cluster sizes of the cut and each pick's ψ."""
+    fuzzy = [p for p in placements if p.method == "fuzzy" and p.cluster_sizes]
+    if not fuzzy:
+        return []
+    lines = ["## How the fuzzy cut split the candidates", "",
+             "Cluster sizes of the λ-cut on the training run, and the candidate kept in each "
+             "cluster with its correlation ψ with the drift (eq. 4 of the paper):", "",
+             "| label | m | cluster sizes | kept (ψ) |", "|---|---|---|---|"]
+    for p in fuzzy:
+        kept = ", ".join(f"{v} ({psi:+.3f})" for v, psi in zip(p.variables, p.psi,
+                                                                  strict=True))
+        lines.append(f"| {p.label} | {p.budget} | {', '.join(map(str, p.cluster_sizes))} | "
+                     f"{kept} |")
+    return [*lines, ""]
 
 
 def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, Path],
@@ -117,7 +157,9 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
         f"{study.exhaustive_limit:,}; the true optimum on the design day.",
         "- `+diff`: the same method with node differences among the candidates.", "",
         "## Findings", "",
-        *findings(table, honest), "",
+        f"For scale: predicting no drift at all gives {_um(outcome.no_model_rmse_um)} on the "
+        f"test runs; the probe's own noise is σ = {noise.probe_noise_um:g} µm.", "",
+        *findings(table, honest), *chaining(outcome.placements), "",
         "## Placements", "",
         "RMSE in µm; `design` = held-out runs of the design replica, `test` = held-out runs "
         "of the test replica(s), mean over runs and per season.", "",
@@ -137,6 +179,7 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
         out += [f"- {row['label']} m = {row['m']}: {row['note']}" for _, row in
                 skipped.iterrows()]
         out.append("")
+    out += fuzzy_table(outcome.placements)
     timing = table[table["variables"] != ""].groupby("label", sort=False)["seconds"].agg(
         lambda s: s.iloc[0] if s.nunique() == 1 else s.sum())
     out += ["Search time on this machine: " + ", ".join(

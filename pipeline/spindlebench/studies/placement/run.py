@@ -18,12 +18,14 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance, sha256_file
 from spindlebench.recordings import read_recording
+from spindlebench.selection import rmse
 from spindlebench.studies.executor import Outcome, RunStats, Task, TaskRunner
 from spindlebench.studies.experiments import (
     Experiment,
@@ -60,6 +62,7 @@ class PlacementOutcome:
     resumed: bool
     failures: dict[str, str]
     search_seconds: float
+    no_model_rmse_um: float  # mean RMSE of predicting no drift at all, on the scored test runs
 
 
 class PlacementStudyRun:
@@ -150,8 +153,11 @@ def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | No
     search_seconds = time.perf_counter() - start
     scores = score_all(study, placements, runs)
     table = placements_table(study, placements, scores)
+    tested = [run for r in study.test_replicas if r in runs for run in runs[r][1]]
+    no_model = float(np.mean([rmse(run.drift_um, np.zeros_like(run.drift_um))
+                              for run in tested]))
     outcome = PlacementOutcome(work.store.root, placements, table, scores, stats, resumed,
-                               failures, search_seconds)
+                               failures, search_seconds, no_model)
     write_outputs(work, outcome, runner, sorted(runs))
     return outcome
 
@@ -164,7 +170,10 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
     store, study = work.store, work.study
     store.write_frame("placements.csv", outcome.table)
     store.write_frame("scores.csv", outcome.scores)
-    figures = {"comparison": plots.comparison(outcome.table, store.path("comparison.png"))}
+    references = {"probe noise σ": study.family.noise[0].probe_noise_um}
+    figures = {"comparison": plots.comparison(
+        outcome.table, store.path("comparison.png"), references,
+        note=f"predicting no drift at all: {outcome.no_model_rmse_um:.1f} µm")}
     figures.update(schematic.placement_figures(study, outcome.placements, outcome.table,
                                                store.path("schematic")))
     seeds = {f"r{r}": {e.id: {"sensors": sensor_seed(study.family, r, e),
@@ -182,6 +191,7 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
         scored_replicas=scored_replicas,
         executor=runner.describe(),
         search_seconds=round(outcome.search_seconds, 3),
+        no_model_rmse_um=outcome.no_model_rmse_um,
     )
     store.write_json("provenance.json", record_)
     write_text(store.path("README.md"),

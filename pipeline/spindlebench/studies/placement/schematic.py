@@ -45,7 +45,7 @@ SEGMENTED = {
     "housing": ((1.50, 1.47), (1.50, 2.33)),  # front bearing seat -> top
     "column": ((1.90, 0.62), (1.90, 2.55)),  # bed face -> top
     "bed": ((0.05, 0.22), (2.08, 0.22)),  # front -> rear under the column
-    "table": ((0.98, 0.55), (1.34, 1.00)),  # saddle underside -> table top (drawn slanted)
+    "table": ((0.80, 0.55), (1.36, 1.00)),  # saddle underside -> table top (drawn slanted)
 }
 
 #: Lumped nodes: (y, z).
@@ -56,9 +56,9 @@ LUMPED = {
     "drawbar_cylinder": (0.85, 2.49),
     "spindle_motor": (1.36, 2.55),
     "x_motor": (0.08, 0.72),
-    "x_bearing_seat": (0.32, 0.72),
-    "x_screw": (0.62, 0.72),
-    "x_nut": (0.92, 0.72),
+    "x_bearing_seat": (0.28, 0.72),
+    "x_screw": (0.48, 0.72),
+    "x_nut": (0.68, 0.72),
     "y_motor": (-0.21, 0.40),
     "y_screw": (0.55, 0.42),
     "y_nut": (0.90, 0.45),
@@ -113,7 +113,7 @@ def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> di
     ax.plot([0.85, 0.85], [1.22, 1.10], color="#333333", lw=2.5, zorder=2)  # tool
     ax.add_patch(Rectangle((0.60, 1.05), 0.50, 0.05, facecolor="#8f8f8f", zorder=1.5))
     ax.plot([-0.05, 1.45], [0.42, 0.42], color="#777777", lw=1.0, ls="--", zorder=1.5)
-    ax.plot([0.08, 0.92], [0.72, 0.72], color="#777777", lw=1.0, ls="--", zorder=1.5)
+    ax.plot([0.08, 0.68], [0.72, 0.72], color="#777777", lw=1.0, ls="--", zorder=1.5)
     for start, end, text in (((-0.25, 1.55), (0.15, 1.55), "Y"), ((-0.25, 1.55),
                                                                    (-0.25, 1.95), "Z")):
         ax.add_patch(FancyArrowPatch(start, end, arrowstyle="-|>", mutation_scale=10,

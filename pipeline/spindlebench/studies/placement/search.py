@@ -143,8 +143,41 @@ class ExhaustiveResult:
     evaluated: int
 
 
+def subset_batches(n: int, size: int, chunk: int = EXHAUSTIVE_CHUNK):
+    """Every ``size``-subset of ``range(n)`` in lexicographic order, as index arrays of about
+    ``chunk`` rows: all but the last two members come from ``itertools``, the last two from
+    ``numpy.triu_indices``, so Python loops once per prefix, not once per subset."""
+    if size == 1:
+        for start in range(0, n, chunk):
+            yield np.arange(start, min(n, start + chunk), dtype=np.intp)[:, None]
+        return
+    pending: list[np.ndarray] = []
+    count = 0
+    for prefix in itertools.combinations(range(n), size - 2):
+        low = prefix[-1] + 1 if prefix else 0
+        first, second = np.triu_indices(n - low, k=1)
+        if first.size == 0:
+            continue
+        tail = np.column_stack([first + low, second + low]).astype(np.intp)
+        head = np.broadcast_to(np.asarray(prefix, dtype=np.intp), (tail.shape[0], size - 2))
+        rows = np.hstack([head, tail])
+        for start in range(0, rows.shape[0], chunk):
+            part = rows[start:start + chunk]
+            pending.append(part)
+            count += part.shape[0]
+            if count >= chunk:
+                yield np.vstack(pending)
+                pending, count = [], 0
+    if pending:
+        yield np.vstack(pending)
+
+
 def _gram_data(train: Block, valid: Block, pool: np.ndarray):
-    """Training and per-run validation Gram matrices of the (scaled, centred) pool columns."""
+    """Training and per-run validation Gram matrices of the (scaled, centred) pool columns.
+
+    The per-run matrices are stored run-last (p x p x runs) so that gathering a subset's
+    entries reads contiguous vectors.
+    """
     x_mean = train.X[:, pool].mean(axis=0)
     Xc = train.X[:, pool] - x_mean
     scale = np.sqrt(np.einsum("ij,ij->j", Xc, Xc))
@@ -153,8 +186,8 @@ def _gram_data(train: Block, valid: Block, pool: np.ndarray):
     Xv = (valid.X[:, pool] - x_mean) / scale
     e0 = valid.y - train.y.mean()
     runs = np.split(np.arange(valid.X.shape[0]), valid.starts[1:])
-    H = np.stack([Xv[rows].T @ Xv[rows] for rows in runs])  # runs x p x p
-    u = np.stack([Xv[rows].T @ e0[rows] for rows in runs])  # runs x p
+    H = np.stack([Xv[rows].T @ Xv[rows] for rows in runs], axis=-1)  # p x p x runs
+    u = np.stack([Xv[rows].T @ e0[rows] for rows in runs], axis=-1)  # p x runs
     E = np.array([e0[rows] @ e0[rows] for rows in runs])
     return Xc.T @ Xc, Xc.T @ yc, H, u, E, valid.lengths.astype(float)
 
@@ -175,24 +208,19 @@ def exhaustive_search(train: Block, valid: Block, size: int,
         raise ValueError(f"cannot choose {size} of {pool.size} candidates")
     G, b, H, u, E, lengths = _gram_data(train, valid, pool)
     best_score, best_subset, evaluated = np.inf, None, 0
-    combos = itertools.combinations(range(pool.size), size)
-    while True:
-        batch = np.fromiter(itertools.chain.from_iterable(itertools.islice(combos, chunk)),
-                            dtype=np.intp)
-        if batch.size == 0:
-            break
-        idx = batch.reshape(-1, size)
+    for idx in subset_batches(pool.size, size, chunk):
+        c = idx.shape[0]
         rows, cols = idx[:, :, None], idx[:, None, :]
         beta = _solve_batch(G[rows, cols], b[idx])  # c x m
-        Hs = H[:, rows, cols]  # runs x c x m x m
-        quad = np.einsum("cm,rcmn,cn->rc", beta, Hs, beta)
-        cross = np.einsum("cm,rcm->rc", beta, u[:, idx])
-        sse = np.maximum(E[:, None] - 2.0 * cross + quad, 0.0)
-        score = np.sqrt(sse / lengths[:, None]).mean(axis=0)
+        outer = (beta[:, :, None] * beta[:, None, :]).reshape(c, 1, size * size)
+        quad = (outer @ H[rows, cols].reshape(c, size * size, -1))[:, 0, :]  # c x runs
+        cross = np.einsum("cmr,cm->cr", u[idx], beta)
+        sse = np.maximum(E - 2.0 * cross + quad, 0.0)
+        score = np.sqrt(sse / lengths).mean(axis=1)
         score[~np.isfinite(score)] = np.inf
         at = int(np.argmin(score))
         if score[at] < best_score:
             best_score, best_subset = float(score[at]), idx[at]
-        evaluated += idx.shape[0]
+        evaluated += c
     assert best_subset is not None
     return ExhaustiveResult([int(pool[i]) for i in best_subset], best_score, evaluated)
