@@ -1,0 +1,165 @@
+"""``spindlebench place`` end to end on the committed FMU (the tiny study: 40-minute runs),
+and one-line errors for bad placement study files."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from spindlebench.cli import main
+from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.placement.candidates import candidate_set
+from spindlebench.studies.placement.run import PlacementStudyRun
+from spindlebench.studies.placement.study import fmu_nodes, load_placement_study
+from spindlebench.testbench.runner import DEFAULT_FMU
+
+REPO = Path(__file__).resolve().parents[1]
+TINY = REPO / "scenarios" / "studies" / "tiny_placement.toml"
+SHIPPED = REPO / "scenarios" / "studies" / "placement.toml"
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("place") / "tiny"
+    status = main(["place", str(TINY), "-o", str(out), "--workers", "0", "--no-progress"])
+    assert status == 0
+    return out, pd.read_csv(out / "placements.csv", keep_default_na=False,
+                            na_values=[""])
+
+
+def test_shipped_studies_load():
+    for path in (TINY, SHIPPED):
+        study = load_placement_study(path)
+        assert study.nodes == tuple(fmu_nodes(DEFAULT_FMU))
+        assert study.test_replicas and study.design_replica not in study.test_replicas
+
+
+def test_place_writes_every_output(tiny_run):
+    out, table = tiny_run
+    for name in ("README.md", "placements.csv", "scores.csv", "comparison.png",
+                 "provenance.json", "schematic/nodes.png", "schematic/placement_m2.png",
+                 "schematic/placement_m3.png"):
+        assert (out / name).is_file(), name
+    assert not list(out.rglob("*.part"))  # atomic writes leave no temporary files
+    # 3 methods x 2 candidate sets x budgets 2, 3
+    assert len(table) == 12
+    assert set(table["label"]) == {"fuzzy", "greedy", "exhaustive", "fuzzy+diff",
+                                   "greedy+diff", "exhaustive+diff"}
+    skipped = table[table["variables"].isna()]
+    assert set(skipped["label"]) == {"exhaustive+diff"}
+    assert skipped["note"].str.contains("exhaustive_limit").all()
+    found = table[table["variables"].notna()]
+    assert (found["variables"].str.split(";").str.len() == found["m"]).all()
+    assert found[["design_rmse_um", "test_mean_rmse_um", "test_winter_rmse_um",
+                  "test_summer_rmse_um"]].notna().all().all()
+    provenance = json.loads((out / "provenance.json").read_text())
+    assert provenance["fmu"]["sha256"] and provenance["settings"]["budgets"] == [2, 3]
+    readme = (out / "README.md").read_text()
+    assert "## Findings" in readme and "exhaustive+diff m = 2: skipped" in readme
+    assert "![m2](schematic/placement_m2.png)" in readme
+
+
+def test_searches_rank_by_the_reported_design_score(tiny_run):
+    """The search objective is the design RMSE the table reports (refit independently), and
+    the exhaustive optimum is never beaten on it by greedy or fuzzy."""
+    _, table = tiny_run
+    searched = table[table["method"].isin(["greedy", "exhaustive"]) & table["variables"].notna()]
+    np.testing.assert_allclose(searched["search_score_um"], searched["design_rmse_um"],
+                               rtol=1e-6)
+    nodes_only = table[~table["differences"].astype(bool)].set_index(["method", "m"])
+    for m in (2, 3):
+        best = nodes_only.loc[("exhaustive", m), "design_rmse_um"]
+        assert best <= nodes_only.loc[("greedy", m), "design_rmse_um"] * (1 + 1e-6)
+        assert best <= nodes_only.loc[("fuzzy", m), "design_rmse_um"] * (1 + 1e-6)
+    greedy = nodes_only.loc["greedy"]["variables"]
+    assert greedy.loc[3].startswith(greedy.loc[2])  # one nested forward path
+
+
+def test_test_scores_are_a_refit_on_the_test_replica(tiny_run):
+    """Recompute one placement's test RMSE with numpy lstsq from the stored recordings."""
+    out, table = tiny_run
+    study = load_placement_study(TINY)
+    row = table[(table["label"] == "greedy+diff") & (table["m"] == 2)].iloc[0]
+    candidates = candidate_set(study, True)
+    columns = [candidates.names.index(v) for v in row["variables"].split(";")]
+    train_runs, held_out = PlacementStudyRun(study, out).runs(2)
+    X = candidates.matrix(train_runs[0].nodes, columns)
+    coef, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), train_runs[0].drift_um,
+                               rcond=None)
+    errors = []
+    for run in held_out:
+        predicted = coef[0] + candidates.matrix(run.nodes, columns) @ coef[1:]
+        errors.append(np.sqrt(np.mean((run.drift_um - predicted) ** 2)))
+    assert row["test_mean_rmse_um"] == pytest.approx(np.mean(errors), rel=1e-6)
+    scores = pd.read_csv(out / "scores.csv")
+    mine = scores[(scores["label"] == "greedy+diff") & (scores["m"] == 2)
+                  & (scores["role"] == "test")]
+    assert len(mine) == len(held_out) == 3
+
+
+def test_a_rerun_resumes_and_reproduces_the_placements(tiny_run, capsys):
+    out, table = tiny_run
+    assert main(["place", str(TINY), "-o", str(out), "--workers", "0", "--no-progress"]) == 0
+    assert "resumed: 0 simulation(s)" in capsys.readouterr().out
+    again = pd.read_csv(out / "placements.csv", keep_default_na=False, na_values=[""])
+    columns = ["label", "m", "variables", "design_rmse_um", "test_mean_rmse_um"]
+    pd.testing.assert_frame_equal(table[columns], again[columns])
+
+
+def study_text(**replace: str) -> str:
+    text = TINY.read_text(encoding="utf-8")
+    for old, new in replace.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    return text
+
+
+@pytest.mark.parametrize(
+    ("replace", "expected"),
+    [
+        ({"budgets = [2, 3]": "budgets = [0, 3]"},
+         "key 'placement.budgets': item 1 (0): must be between 1 and 10"),
+        ({"budgets = [2, 3]": "budgets = [2, 99]"}, "key 'placement.budgets': item 2 (99)"),
+        ({'methods = ["fuzzy", "greedy", "exhaustive"]': 'methods = ["fuzzy", "random"]'},
+         "key 'placement.methods': item 2 ('random'): must be one of fuzzy, greedy, "
+         "exhaustive"),
+        ({"with_differences = [false, true]": 'with_differences = "yes"'},
+         "key 'placement.with_differences': must be true, false or a list of them"),
+        ({"exhaustive_limit = 200000": "exhaustive_limit = -1"},
+         "key 'placement.exhaustive_limit': must be in [0, 1e9]"),
+        ({"exhaustive_limit = 200000": "exhaustive_limt = 200000"},
+         "key 'placement.exhaustive_limt': unknown key (did you mean 'exhaustive_limit'?)"),
+        ({"exhaustive_limit = 200000": 'exhaustive_limit = 1\nexclude_nodes = ["hub"]'},
+         "key 'placement.exclude_nodes': no node named 'hub' in the FMU"),
+        ({"[placement]": "[methods]\nclusters = [2]\n\n[placement]"},
+         "key 'methods': a placement study sets its methods in [placement]"),
+        ({'noise = ["lab"]': 'noise = ["lab", "shop"]\n[noise.shop]\nnoise_C = 0.3'},
+         "key 'axes.noise': a placement study measures with one noise level, got 2"),
+        ({"[placement]": "[placment]"}, "key 'placment': unknown key"),
+        ({"replicas = 2": "replicas = 0"}, "key 'study.replicas': must be between 1"),
+    ],
+)
+def test_bad_study_gets_one_line_naming_file_and_key(tmp_path, capsys, replace, expected):
+    path = tmp_path / "bad.toml"
+    path.write_text(study_text(**replace), encoding="utf-8")
+    with pytest.raises(SpindlebenchError) as info:
+        load_placement_study(path)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith(str(path)) and expected in message
+    out = tmp_path / "out"
+    assert main(["place", str(path), "-o", str(out), "--no-progress"]) == 2
+    assert capsys.readouterr().err.strip() == f"error: {message}"
+    assert not out.exists()  # nothing written for a bad study
+
+
+def test_missing_placement_table_and_file(tmp_path):
+    path = tmp_path / "sweep_only.toml"
+    text = study_text()
+    path.write_text(text[: text.index("[placement]")], encoding="utf-8")
+    with pytest.raises(SpindlebenchError, match=r"key 'placement': missing table"):
+        load_placement_study(path)
+    with pytest.raises(SpindlebenchError, match="file not found"):
+        load_placement_study(tmp_path / "nope.toml")
