@@ -144,7 +144,7 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
         "",
         study.description or "",
         "",
-        f"Made by `spindlebench sweep {study.path.name}` (study file SHA-256 "
+        f"Made by `spindlebench sweep {study.path}` (study file SHA-256 "
         f"`{record['study']['sha256'][:12]}…`, FMU `{record['fmu']['sha256'][:12]}…`, "
         f"{record['executor']}). Every number below is computed from `results.csv`.",
         "",
