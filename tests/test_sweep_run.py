@@ -201,6 +201,28 @@ def test_a_failed_training_run_fails_its_replica_only(tmp_path):
     assert results[results["replica"] == 2]["rmse_um"].notna().all()
 
 
+class BrokenEvaluation(Sweep):
+    """Hands one evaluation a job without its data, so the whole evaluation raises."""
+
+    def evaluation_task(self, replica, condition, train):
+        task = super().evaluation_task(replica, condition, train)
+        if replica == 2 and condition is None:
+            task = dataclasses.replace(task, args=(dataclasses.replace(task.args[0], truths={}),))
+        return task
+
+
+def test_a_failed_evaluation_is_reported_and_retried(tmp_path, reference):
+    out = tmp_path / "bad-evaluation"
+    _, outcome = sweep_into(out, BrokenEvaluation)
+    assert outcome.stats.failed == {"evaluation": 1}
+    failed = outcome.results[outcome.results["error"] != ""]
+    assert len(failed) == 1 and failed["error"].iloc[0].startswith("evaluation failed: KeyError")
+    assert failed["replica"].iloc[0] == 2 and failed["data"].iloc[0] == "noise-free"
+    _, fixed = sweep_into(out)
+    assert fixed.stats.done == {"evaluation": 1}
+    pd.testing.assert_frame_equal(ordered(fixed.results), ordered(reference[1].results))
+
+
 def test_dask_local_cluster_gives_the_same_numbers(tmp_path, reference):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   protocol="tcp://", dashboard_address=None) as cluster:

@@ -85,6 +85,11 @@ def evaluation_path(replica: int, condition: Condition | None, train: Experiment
     return f"evals/r{replica:03d}/{condition_id(condition)}/{train.id}.csv"
 
 
+def error_path(relative: str) -> str:
+    """Where a failed unit's error is kept (beside the file it did not produce)."""
+    return relative.removesuffix(".csv") + ".error.csv"
+
+
 class Sweep:
     """One sweep of one study into one results folder (plans, runs and collects)."""
 
@@ -157,6 +162,7 @@ class Sweep:
                 # Its recordings change: evaluations made from the old set are stale.
                 for condition, train in self.evaluation_keys(replica):
                     self.store.remove(evaluation_path(replica, condition, train))
+                    self.store.remove(error_path(evaluation_path(replica, condition, train)))
                 tasks.extend(self.simulation_task(replica, e) for e in exps)
             else:
                 todo = self._evaluations_to_do(replica)
@@ -167,16 +173,18 @@ class Sweep:
             if outcome.task.kind == "simulation":
                 return self._record_simulation(outcome, waiting)
             job: EvaluationJob = outcome.task.args[0]
-            replica = job.replica
+            path = evaluation_path(job.replica, job.condition, job.train)
             if outcome.ok:
-                frame = outcome.value
-            else:
-                frame = pd.DataFrame([{"replica": replica,
-                                       "data": "measured" if job.condition else NOISE_FREE,
-                                       "noise": condition_id(job.condition),
-                                       "train_experiment": job.train.id,
-                                       "error": f"evaluation failed: {outcome.error}"}])
-            self.store.write_frame(evaluation_path(replica, job.condition, job.train), frame)
+                self.store.write_frame(path, outcome.value)
+                self.store.remove(error_path(path))
+            else:  # kept apart so that the next run retries it
+                condition = job.condition
+                self.store.write_frame(error_path(path), pd.DataFrame([{
+                    "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                    "noise": condition.noise.name if condition else NOISE_FREE,
+                    "fault": condition.fault_name if condition else "none",
+                    "train_experiment": job.train.id,
+                    "error": f"evaluation failed: {outcome.error}"}]))
             return ()
 
         follow_ups = sum(len(self.evaluation_keys(r)) for r, exps in pending.items() if exps)
@@ -185,8 +193,11 @@ class Sweep:
         return SweepOutcome(self.store.root, results, stats, resumed, skipped)
 
     def _evaluations_to_do(self, replica: int) -> list[Task]:
-        return [self.evaluation_task(replica, c, t) for c, t in self.evaluation_keys(replica)
-                if not self.store.exists(evaluation_path(replica, c, t))]
+        tasks = [self.evaluation_task(replica, c, t) for c, t in self.evaluation_keys(replica)
+                 if not self.store.exists(evaluation_path(replica, c, t))]
+        for experiment in self.family:  # the jobs hold their data now: free the cache
+            self._truths.pop((replica, experiment.id), None)
+        return tasks
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self._simulations[outcome.task.key]
@@ -208,8 +219,10 @@ class Sweep:
         for replica in replicas(self.study):
             for condition, train in self.evaluation_keys(replica):
                 relative = evaluation_path(replica, condition, train)
-                if self.store.exists(relative):
-                    frames.append(self.store.read_frame(relative))
+                for candidate in (relative, error_path(relative)):
+                    if self.store.exists(candidate):
+                        frames.append(self.store.read_frame(candidate))
+                        break
         if not frames:
             return pd.DataFrame(columns=list(RESULT_COLUMNS))
         results = pd.concat(frames, ignore_index=True)
