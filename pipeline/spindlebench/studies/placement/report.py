@@ -55,10 +55,23 @@ def findings(table: pd.DataFrame, honest: bool) -> list[str]:
         gap = ok.assign(gap=ok["test_mean_rmse_um"] - ok["design_rmse_um"]) \
             .groupby("label", sort=False)["gap"].median()
         if len(gap):
-            parts = ", ".join(f"{label} {value:+.2f} µm" for label, value in gap.items())
+            parts = ", ".join(f"{label} {value + 0.0:+.2f} µm"  # + 0.0: no "-0.00"
+                              for label, value in gap.round(2).items())
             lines.append(f"- Test minus design RMSE (median over budgets; how much a method's "
                          f"choice was tuned to the design day): {parts}.")
     return lines
+
+
+def overview(table: pd.DataFrame, column: str) -> str:
+    """Markdown: ``column`` (an RMSE) as budget m × method label."""
+    ok = table[table[column].notna()]
+    if ok.empty:
+        return "(no placement was scored)"
+    wide = ok.pivot_table(index="m", columns="label", values=column, sort=False)
+    wide = wide.loc[:, [c for c in dict.fromkeys(table["label"]) if c in wide.columns]]
+    wide = wide.reset_index()
+    wide["m"] = wide["m"].astype(int).astype(str)
+    return markdown_table(wide)
 
 
 def chaining(placements: Sequence[Placement]) -> list[str]:
@@ -160,6 +173,11 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
         f"For scale: predicting no drift at all gives {_um(outcome.no_model_rmse_um)} on the "
         f"test runs; the probe's own noise is σ = {noise.probe_noise_um:g} µm.", "",
         *findings(table, honest), *chaining(outcome.placements), "",
+        f"Mean held-out RMSE (µm) on the {'test days' if honest else 'design day'}, by budget "
+        "and method (blank: not run):", "",
+        overview(table, "test_mean_rmse_um"), "",
+        "The same on the design day, the objective greedy and exhaustive minimise:", "",
+        overview(table, "design_rmse_um"), "",
         "## Placements", "",
         "RMSE in µm; `design` = held-out runs of the design replica, `test` = held-out runs "
         "of the test replica(s), mean over runs and per season.", "",
