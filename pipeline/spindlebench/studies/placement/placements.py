@@ -21,7 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from spindlebench.selection import SelectionWarning, fit_ols, rmse, select_sensitive_points
+from spindlebench.selection import (
+    CandidateSet,
+    SelectionWarning,
+    fit_ols,
+    rmse,
+    select_sensitive_points,
+)
 from spindlebench.studies.placement.candidates import (
     Run,
     block,
@@ -29,6 +35,7 @@ from spindlebench.studies.placement.candidates import (
     physical_nodes,
 )
 from spindlebench.studies.placement.search import (
+    Block,
     exhaustive_search,
     greedy_forward,
     n_subsets,
@@ -65,7 +72,8 @@ class Placement:
         return self.columns is not None
 
 
-def _placement(method: str, differences: bool, budget: int, candidates, columns,
+def _placement(method: str, differences: bool, budget: int, candidates: CandidateSet,
+               columns: Sequence[int],
                score: float, seconds: float, note: str = "", **fuzzy) -> Placement:
     names = candidates.names
     columns = tuple(int(c) for c in columns)
@@ -77,7 +85,8 @@ def _skipped(method: str, differences: bool, budget: int, note: str) -> Placemen
     return Placement(method, differences, budget, None, (), (), math.nan, 0.0, note)
 
 
-def fuzzy_placements(study: PlacementStudy, differences: bool, train) -> list[Placement]:
+def fuzzy_placements(study: PlacementStudy, differences: bool,
+                     train: Block) -> list[Placement]:
     """The paper's selection on the training run(s), k = m clusters."""
     candidates = candidate_set(study, differences)
     out = []
@@ -96,7 +105,8 @@ def fuzzy_placements(study: PlacementStudy, differences: bool, train) -> list[Pl
     return out
 
 
-def greedy_placements(study: PlacementStudy, differences: bool, train, valid) -> list[Placement]:
+def greedy_placements(study: PlacementStudy, differences: bool, train: Block,
+                      valid: Block) -> list[Placement]:
     """One forward path up to the largest budget; the set of size m is its first m steps."""
     candidates = candidate_set(study, differences)
     start = time.perf_counter()
@@ -113,8 +123,8 @@ def greedy_placements(study: PlacementStudy, differences: bool, train, valid) ->
     return out
 
 
-def exhaustive_placements(study: PlacementStudy, differences: bool, train,
-                          valid) -> list[Placement]:
+def exhaustive_placements(study: PlacementStudy, differences: bool, train: Block,
+                          valid: Block) -> list[Placement]:
     """Every m-subset where C(n, m) is within the study's limit; else skipped, saying why."""
     candidates = candidate_set(study, differences)
     pool = usable_candidates(train)
