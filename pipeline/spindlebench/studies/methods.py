@@ -122,10 +122,12 @@ def _paper_group(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.D
     # A dropout reaches evaluate only as a whole-run NaN column (jobs.measured_frame holds a
     # dropped sensor at its last good reading): with "drop-rows" a group whose model does not
     # read that sensor is still scored; one that does fails with a one-line error.
+    if spec.k is None:
+        raise ValueError(f"{spec.name} needs a number of clusters k")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         result = evaluate(train, dict(tests), TARGET, sensors=list(GROUP_SENSORS[spec.name]),
-                          k=spec.k or 2, differences=spec.name.endswith("+diff"),
+                          k=spec.k, differences=spec.name.endswith("+diff"),
                           similarity=similarity, missing="drop-rows")
     kept = {name: frame.iloc[result.test_rows[name]] for name, frame in tests.items()}
     return _scores(kept, result.predictions, ";".join(result.selected))
