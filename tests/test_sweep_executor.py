@@ -82,6 +82,12 @@ def test_unreachable_dask_scheduler_is_one_clear_line():
         runner.run([Task("t", square, (1,))])
 
 
+@pytest.mark.parametrize("address", ["foo", "tcp://host", "http://host:8786", "tcp://a b:1"])
+def test_malformed_dask_address_is_refused_before_connecting(address):
+    with pytest.raises(SpindlebenchError, match="expected a scheduler address like tcp://"):
+        TaskRunner(dask_address=address)
+
+
 def test_one_line_error_is_short_and_single_line():
     message = one_line_error(RuntimeError("a\nb " + "x" * 500))
     assert "\n" not in message and len(message) < 330 and message.startswith("RuntimeError: a b")

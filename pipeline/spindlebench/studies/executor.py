@@ -18,6 +18,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing
 import os
+import re
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
@@ -29,6 +30,9 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from spindlebench.errors import SpindlebenchError
+
+#: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
+DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$|^inproc://\S+$")
 
 
 @dataclass(frozen=True)
@@ -159,6 +163,9 @@ class TaskRunner:
         if workers is not None and workers < 0:
             raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
         self.workers = default_workers() if workers is None else workers
+        if dask_address is not None and not DASK_ADDRESS.match(dask_address):
+            raise SpindlebenchError(f"--dask-address {dask_address!r}: expected a scheduler "
+                                    "address like tcp://HOST:PORT")
         self.dask_address = dask_address
         self.progress = progress
         self.desc = desc
