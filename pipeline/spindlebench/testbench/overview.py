@@ -31,7 +31,8 @@ def plot_recording(frame: pd.DataFrame, out_png: str | os.PathLike[str], title: 
     ax_near.set_ylabel("spindle-near sensors (°C)")
     ax_far.set_ylabel("headstock, ambient, feed axes (°C)")
     for ax in (ax_near, ax_far):
-        ax.legend(ncol=6, fontsize=7, loc="upper left")
+        if ax.lines:
+            ax.legend(ncol=6, fontsize=7, loc="upper left")
         ax.grid(alpha=0.3)
     ax_drift.plot(hours, frame["drift_um"], lw=1, label="measured (probe)")
     if "true_drift_um" in frame:
