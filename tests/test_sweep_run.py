@@ -248,7 +248,7 @@ def test_command_line(tmp_path, capsys, reference):
     assert cli.main(["sweep", str(TINY), "-o", str(out), "--workers", "0",
                      "--no-progress"]) == 0
     printed = capsys.readouterr().out
-    assert "resumed 0 simulation(s) and 0 evaluation(s)" in printed
+    assert "resumed: ran 0 simulation(s) and 0 evaluation(s)" in printed
     assert "skipped 8 done simulation(s), 6 done evaluation(s)" in printed
     bad = tmp_path / "bad.toml"
     bad.write_text(TINY.read_text().replace("replicas = 2", "replicas = -1"))

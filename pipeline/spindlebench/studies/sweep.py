@@ -309,7 +309,7 @@ def _main(args: argparse.Namespace) -> int:
     results = outcome.results
     failed = int((results["error"] != "").sum()) if len(results) else 0
     stats = outcome.stats
-    print(f"{'resumed' if outcome.resumed else 'ran'} {stats.total('simulation')} "
+    print(f"{'resumed: ' if outcome.resumed else ''}ran {stats.total('simulation')} "
           f"simulation(s) and {stats.total('evaluation')} evaluation(s) in "
           f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
           f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
