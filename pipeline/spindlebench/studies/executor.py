@@ -15,6 +15,7 @@ never idle between the phases of a study.
 
 from __future__ import annotations
 
+import argparse
 import concurrent.futures as cf
 import multiprocessing
 import os
@@ -25,6 +26,7 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from tqdm.auto import tqdm
@@ -285,3 +287,22 @@ def _run_quarantined(task: Task) -> Outcome:
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
     return Outcome(task, value, error, detail, seconds)
+
+
+def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
+    """The options every study command shares: study file, results folder, where to run."""
+    parser.add_argument("study", type=Path, help=f"study file (e.g. {example})")
+    parser.add_argument("-o", "--out", type=Path, default=None,
+                        help="results folder (default: results/<study name>)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; 0 = in-process)")
+    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
+                        help="run on an existing Dask distributed cluster instead")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) -> Path:
+    """The study command's output folder, after refusing contradictory execution options."""
+    if args.workers is not None and args.dask_address:
+        raise SpindlebenchError("give either --workers or --dask-address, not both")
+    return args.out if args.out is not None else Path("results") / study_name(args.study)

@@ -21,10 +21,16 @@ from pathlib import Path
 import pandas as pd
 
 from spindlebench.atomic import write_text
-from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance, sha256_file
 from spindlebench.recordings import read_recording
-from spindlebench.studies.executor import Outcome, RunStats, Task, TaskRunner
+from spindlebench.studies.executor import (
+    Outcome,
+    RunStats,
+    Task,
+    TaskRunner,
+    add_study_arguments,
+    results_folder,
+)
 from spindlebench.studies.experiments import (
     Condition,
     Experiment,
@@ -286,24 +292,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
         "it on the others, and write results.csv, a summary, box plots and README.md.")
-    parser.add_argument("study", type=Path, help="study file (e.g. "
-                        "scenarios/studies/season_sweep.toml)")
-    parser.add_argument("-o", "--out", type=Path, default=None,
-                        help="results folder (default: results/<study name>)")
-    parser.add_argument("--workers", type=int, default=None,
-                        help="local worker processes (default: all cores; 0 = in-process)")
-    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
-                        help="run on an existing Dask distributed cluster instead")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_study_arguments(parser, "scenarios/studies/season_sweep.toml")
     parser.set_defaults(func=_main)
 
 
 def _main(args: argparse.Namespace) -> int:
-    if args.workers is not None and args.dask_address:
-        raise SpindlebenchError("give either --workers or --dask-address, not both")
-    out = args.out
-    if out is None:
-        out = Path("results") / load_study(args.study).name
+    out = results_folder(args, lambda study: load_study(study).name)
     outcome = run_sweep(args.study, out, workers=args.workers,
                         dask_address=args.dask_address, progress=not args.no_progress)
     results = outcome.results

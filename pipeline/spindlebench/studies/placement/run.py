@@ -26,7 +26,14 @@ from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance, sha256_file
 from spindlebench.recordings import read_recording
 from spindlebench.selection import rmse
-from spindlebench.studies.executor import Outcome, RunStats, Task, TaskRunner
+from spindlebench.studies.executor import (
+    Outcome,
+    RunStats,
+    Task,
+    TaskRunner,
+    add_study_arguments,
+    results_folder,
+)
 from spindlebench.studies.experiments import (
     Experiment,
     experiments,
@@ -209,23 +216,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
         "seasons and write placements.csv, plots, schematic drawings and README.md.")
-    parser.add_argument("study", type=Path,
-                        help="study file (e.g. scenarios/studies/placement.toml)")
-    parser.add_argument("-o", "--out", type=Path, default=None,
-                        help="results folder (default: results/<study name>)")
-    parser.add_argument("--workers", type=int, default=None,
-                        help="local worker processes (default: all cores; 0 = in-process)")
-    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
-                        help="simulate on an existing Dask distributed cluster instead")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_study_arguments(parser, "scenarios/studies/placement.toml")
     parser.set_defaults(func=_main)
 
 
 def _main(args: argparse.Namespace) -> int:
-    if args.workers is not None and args.dask_address:
-        raise SpindlebenchError("give either --workers or --dask-address, not both")
-    out = args.out if args.out is not None else \
-        Path("results") / load_placement_study(args.study).name
+    out = results_folder(args, lambda study: load_placement_study(study).name)
     outcome = run_placement(args.study, out, workers=args.workers,
                             dask_address=args.dask_address, progress=not args.no_progress)
     found = [p for p in outcome.placements if p.found]
