@@ -20,3 +20,24 @@ def test_console_script_is_installed():
     )
     assert result.returncode == 0
     assert "spindlebench" in result.stdout
+
+
+def test_unwritable_output_is_one_line_error(tmp_path, capsys):
+    """An output folder that cannot be created (a file is in the way) is reported in one
+    line naming the path, with status 2 and no traceback, and nothing is written."""
+    from selection_data import synthetic_experiment
+
+    train, test = tmp_path / "a.csv", tmp_path / "b.csv"
+    synthetic_experiment(0).to_csv(train, index=False)
+    synthetic_experiment(1).to_csv(test, index=False)
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file, not a folder")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    status = cli.main(["evaluate", "--train", str(train), "--test", str(test), "--target",
+                       "drift_um", "--clusters", "2", "--json", str(blocker / "out.json")])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.startswith("error: ") and err.count("\n") == 1
+    assert str(blocker) in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert blocker.read_text() == "a file, not a folder"

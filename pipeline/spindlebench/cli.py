@@ -49,6 +49,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SpindlebenchError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # the environment refused a file: unwritable folder, full disk, ...
+        name = exc.filename2 or exc.filename  # a failed rename names its target second
+        where = f"{name}: " if name else ""
+        print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
