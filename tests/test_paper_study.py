@@ -193,6 +193,9 @@ def test_bad_configuration_is_one_line(tmp_path, generated):
     bad.write_text("clusters = [2, 3\n")
     with pytest.raises(SpindlebenchError, match=r"bad\.toml: not valid TOML"):
         study_config.load(bad)
+    bad.write_bytes("# Grüße\nclusters = [2, 3]\n".encode("latin-1"))
+    with pytest.raises(SpindlebenchError, match=r"bad\.toml: not valid TOML \(not UTF-8"):
+        study_config.load(bad)
     with pytest.raises(SpindlebenchError, match="six: T99 not among sensors_all"):
         study_config.load(None, {"six": "T1,T99"})
     with pytest.raises(SpindlebenchError, match="also the training run"):

@@ -225,3 +225,13 @@ def test_shipped_ambient_series_covers_its_scenario():
     scenario = load_scenario(SCENARIOS / "examples" / "measured_ambient.toml")
     values = drivers.drive(scenario).ambient_C
     assert 10.0 < values.min() < values.max() < 20.0
+
+
+def test_non_utf8_scenario_and_ambient_csv_are_one_line(tmp_path):
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(BASE.replace("seed = 3", "# Grüße\nseed = 3").encode("latin-1"))
+    with pytest.raises(SpindlebenchError, match=r"latin1\.toml: not valid TOML: not UTF-8"):
+        load_scenario(path)
+    (tmp_path / "amb.csv").write_bytes("time_s,ambient_C\n0,10\n3600,11 °C\n".encode("latin-1"))
+    with pytest.raises(SpindlebenchError, match=r"'ambient.file': .*amb\.csv is not UTF-8"):
+        load_scenario(write(tmp_path, CSV_SCENARIO))

@@ -171,6 +171,9 @@ def load(path: str | Path | None, overrides: dict[str, Any] | None = None) -> St
             raise SpindlebenchError(f"{path}: config file not found") from None
         except tomllib.TOMLDecodeError as exc:
             raise SpindlebenchError(f"{path}: not valid TOML ({exc})") from None
+        except UnicodeDecodeError as exc:
+            raise SpindlebenchError(f"{path}: not valid TOML (not UTF-8 text, byte "
+                                    f"{exc.start})") from None
         config = updated(config, values, str(path))
     if overrides:
         config = updated(config, overrides, "command line")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import io
 import math
 import tomllib
 from collections.abc import Mapping
@@ -488,7 +489,11 @@ def _read_ambient_csv(
     times: list[float] = []
     values: list[float] = []
     header: list[str] | None = None
-    with open(file, newline="", encoding="utf-8") as handle:
+    try:
+        text = file.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise t.fail("file", f"{file} is not UTF-8 text (byte {exc.start})") from None
+    with io.StringIO(text, newline="") as handle:
         for line_no, line in enumerate(handle, start=1):
             if not line.strip() or line.startswith("#"):
                 continue
@@ -611,6 +616,9 @@ def load_scenario(path: str | Path) -> Scenario:
         raise SpindlebenchError(f"{path}: is a directory, expected a scenario .toml file") from None
     except tomllib.TOMLDecodeError as exc:
         raise SpindlebenchError(f"{path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise SpindlebenchError(f"{path}: not valid TOML: not UTF-8 text (byte "
+                                f"{exc.start})") from None
     top = _Table(path, data)
     scenario_dir = path.resolve().parent
     name = top.string("name", path.stem)
