@@ -110,6 +110,14 @@ def test_output_must_be_csv_or_directory(tmp_path, capsys):
     assert not (tmp_path / "x.json").exists()
 
 
+def test_negative_seed_is_refused_before_simulating(tmp_path, capsys):
+    scenario = write(tmp_path, "quick.toml", QUICK)
+    status = cli.main(["simulate", str(scenario), "-o", str(tmp_path / "q.csv"), "--seed", "-1"])
+    assert status == 2
+    assert capsys.readouterr().err == "error: --seed: must be >= 0, got -1\n"
+    assert not (tmp_path / "q.csv").exists()
+
+
 def test_missing_fmu_is_one_line(tmp_path, capsys):
     scenario = write(tmp_path, "quick.toml", QUICK)
     status = cli.main(["simulate", str(scenario), "-o", str(tmp_path / "q.csv"),

@@ -110,6 +110,8 @@ def _scenario_files(arguments: list[str]) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate every scenario given; one file → ``-o`` is the CSV, several → a directory."""
+    if args.seed is not None and args.seed < 0:
+        raise SpindlebenchError(f"--seed: must be >= 0, got {args.seed}")
     files = _scenario_files(args.scenarios)
     out = Path(args.output)
     single = len(files) == 1 and out.suffix.lower() == ".csv"
