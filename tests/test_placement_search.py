@@ -7,6 +7,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pandas as pd
 import pytest
 from spindlebench.selection import CandidateSet
 from spindlebench.studies.placement.candidates import physical_nodes
@@ -152,3 +153,16 @@ def test_schematic_places_every_node_of_the_model_on_its_part():
     # A node the drawing does not know is still drawn, in the strip beneath the machine.
     positions, unknown = node_positions([*nodes, "coolant_tank"])
     assert unknown == ["coolant_tank"] and positions["coolant_tank"][1] < 0
+
+
+def test_findings_name_the_budgets_a_method_wins():
+    from spindlebench.studies.placement.report import findings
+
+    rows = [  # greedy wins at m = 3 only; at m = 2 fuzzy is better
+        ("fuzzy", 2, 0.8), ("greedy", 2, 0.9), ("fuzzy", 3, 0.8), ("greedy", 3, 0.7),
+    ]
+    table = pd.DataFrame([{"label": label, "method": label, "m": m, "test_mean_rmse_um": rmse,
+                           "design_rmse_um": rmse, "variables": "a;b", "n_sensors": 2}
+                          for label, m, rmse in rows])
+    text = "\n".join(findings(table, honest=True))
+    assert "- greedy beats fuzzy at 1 of 2 budget(s) (m = 3) on the test days." in text

@@ -48,9 +48,10 @@ def findings(table: pd.DataFrame, honest: bool) -> list[str]:
         wb = ok[ok["label"] == b].set_index("m")["test_mean_rmse_um"]
         common = wa.index.intersection(wb.index)
         if len(common):
-            wins = int((wa[common] < wb[common]).sum())
-            lines.append(f"- {a} beats {b} at {wins} of {len(common)} budget(s) "
-                         f"(m = {', '.join(str(m) for m in common)}) on the {days}.")
+            won = [m for m in common if wa[m] < wb[m]]
+            where = f"m = {', '.join(str(m) for m in won)}" if won else "none"
+            lines.append(f"- {a} beats {b} at {len(won)} of {len(common)} budget(s) "
+                         f"({where}) on the {days}.")
     if honest:
         gap = ok.assign(gap=ok["test_mean_rmse_um"] - ok["design_rmse_um"]) \
             .groupby("label", sort=False)["gap"].median()
