@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -215,7 +215,7 @@ class ExhaustiveResult:
     evaluated: int
 
 
-def subset_batches(n: int, size: int, chunk: int = EXHAUSTIVE_CHUNK):
+def subset_batches(n: int, size: int, chunk: int = EXHAUSTIVE_CHUNK) -> Iterator[np.ndarray]:
     """Every ``size``-subset of ``range(n)`` in lexicographic order, as index arrays of about
     ``chunk`` rows: all but the last two members come from ``itertools``, the last two from
     ``numpy.triu_indices``, so Python loops once per prefix, not once per subset."""
