@@ -15,11 +15,15 @@ def test_version_flag_prints_version(capsys):
 
 
 def test_console_script_is_installed():
-    result = subprocess.run(
-        [sys.executable, "-m", "spindlebench.cli", "--help"], capture_output=True, text=True
-    )
+    """The installed ``spindlebench`` entry point (not ``python -m``) lists every command."""
+    from pathlib import Path
+
+    executable = Path(sys.executable).with_name("spindlebench")
+    result = subprocess.run([str(executable), "--help"], capture_output=True, text=True)
     assert result.returncode == 0
-    assert "spindlebench" in result.stdout
+    assert result.stdout.startswith("usage: spindlebench")
+    for command in ("build", "simulate", "evaluate", "paper", "adapt", "sweep", "place", "demo"):
+        assert f"    {command} " in result.stdout, command
 
 
 def test_unwritable_output_is_one_line_error(tmp_path, capsys):
