@@ -45,3 +45,16 @@ def test_unwritable_output_is_one_line_error(tmp_path, capsys):
     assert str(blocker) in err
     assert sorted(p.name for p in tmp_path.iterdir()) == before
     assert blocker.read_text() == "a file, not a folder"
+
+
+def test_usage_mistake_is_one_error_line(capsys):
+    """A bad flag value is reported like every other bad input: one line, status 2."""
+    try:
+        status = cli.main(["evaluate", "--train", "a.csv", "--test", "b.csv", "--target",
+                           "drift_um", "--clusters", "two"])
+    except SystemExit as exc:
+        status = exc.code
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1
+    assert err.startswith("error: spindlebench evaluate: argument --clusters: invalid int")

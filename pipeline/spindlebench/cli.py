@@ -11,6 +11,7 @@ import argparse
 import importlib
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from spindlebench import __version__
 from spindlebench.errors import SpindlebenchError
@@ -27,9 +28,17 @@ COMMAND_MODULES: tuple[str, ...] = (
 )
 
 
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """argparse, but a usage mistake is one ``error:`` line (status 2) like every other error;
+    sub-command parsers inherit the class."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"error: {self.prog}: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every sub-command registered."""
-    parser = argparse.ArgumentParser(
+    parser = _OneLineErrorParser(
         prog="spindlebench",
         description="Modelica/FMU testbench and temperature-sensitive point selection "
         "for machine-tool thermal error.",
