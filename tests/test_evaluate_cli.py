@@ -163,3 +163,12 @@ def test_missing_file(recordings, tmp_path, capsys):
     status, _, err = run_cli(capsys, "--train", tmp_path / "none.csv", "--test", recordings[1],
                              "--target", "drift_um", "--clusters", "2")
     assert status == 2 and "none.csv: file not found" in err
+
+
+def test_constant_target_in_training_file_is_named(recordings, tmp_path, capsys):
+    train = write_variant(tmp_path, recordings[0], "flat_error.csv",
+                          lambda f: f.assign(drift_um=0.0))
+    status, _, err = run_cli(capsys, "--train", train, "--test", recordings[1], "--target",
+                             "drift_um", "--clusters", "2")
+    assert status == 2 and err.count("\n") == 1
+    assert err.startswith(f"error: recording {train}: target column 'drift_um' is constant")

@@ -40,6 +40,7 @@ from spindlebench.selection.differences import difference_names, pair_indices
 from spindlebench.selection.errors import SelectionError, SelectionWarning
 from spindlebench.selection.regression import LinearFit, fit_ols, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
+from spindlebench.selection.similarity import constant_columns
 
 RecordingLike = str | os.PathLike[str] | pd.DataFrame
 
@@ -372,6 +373,9 @@ def evaluate(
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
     y_train = train_frame[target].to_numpy(dtype=float)
+    if constant_columns(y_train[:, None])[0]:
+        raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
+                             f"({y_train[0]:g} in every sample); nothing to select or fit")
     selection = select_sensitive_points(
         candidates.matrix(train_frame), y_train, k, similarity, closure, names=names
     )
