@@ -212,3 +212,18 @@ def test_bad_configuration_is_one_line(tmp_path, generated):
     with pytest.raises(SpindlebenchError, match="group six_raw, k = 4: cannot make 4 clusters"):
         run_study(folder, config)
     assert cli.main(["paper", "--recordings", str(tmp_path / "nowhere")]) == 2
+
+
+def test_rerun_into_the_same_folder_removes_only_its_own_stale_files(generated, tmp_path):
+    folder, _out = generated
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out)]) == 0
+    (out / "my_notes.txt").write_text("keep me")
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out),
+                     "--tests", "exp3,exp4"]) == 0
+    names = {path.name for path in out.iterdir()}
+    assert "fig5_measured_vs_predicted_exp3.png" in names
+    assert "fig5_measured_vs_predicted_exp2.png" not in names  # the first run's, now stale
+    assert "my_notes.txt" in names  # not the study's: never touched
+    listed = set(json.loads((out / "provenance.json").read_text())["outputs"])
+    assert names - {"my_notes.txt", "provenance.json"} == listed

@@ -159,9 +159,36 @@ Paper: {reference.CITATION}.
 """
 
 
+def _previous_outputs(out_dir: Path) -> list[str]:
+    """The file names an earlier run listed in ``out_dir/provenance.json`` (none if unreadable)."""
+    try:
+        outputs = json.loads((out_dir / "provenance.json").read_text(encoding="utf-8"))["outputs"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return []
+    if not isinstance(outputs, list):
+        return []
+    # Only plain names of this study's own kinds of file: never a path out of the folder.
+    return [name for name in outputs if isinstance(name, str) and name == Path(name).name
+            and Path(name).suffix in {".csv", ".md", ".png", ".json"}]
+
+
+def _remove_stale(out_dir: Path, previous: list[str], current: dict[str, Path]) -> None:
+    """Delete what an earlier run wrote and this one did not (a figure of another test run,
+    a dendrogram of a dropped group), so the folder never mixes two studies."""
+    kept = {path.name for path in current.values()}
+    for name in previous:
+        if name not in kept:
+            (out_dir / name).unlink(missing_ok=True)
+
+
 def write_outputs(result: StudyResult, out_dir: str | Path, command: str) -> dict[str, Path]:
-    """Write everything for ``result`` into ``out_dir``; return the paths by role."""
+    """Write everything for ``result`` into ``out_dir``; return the paths by role.
+
+    Files an earlier run listed in its provenance and this run does not write are removed
+    after the new ones are in place; other files in ``out_dir`` are never touched.
+    """
     out_dir = Path(out_dir)
+    previous = _previous_outputs(out_dir)
     paths: dict[str, Path] = {
         "table4_csv": _write_csv(out_dir / "table4_selected.csv", tables.table4_frame(result)),
         "table5_csv": _write_csv(out_dir / "table5_r2.csv", tables.table5_frame(result)),
@@ -195,4 +222,5 @@ def write_outputs(result: StudyResult, out_dir: str | Path, command: str) -> dic
         outputs=sorted(p.name for p in paths.values()),
         paper=reference.CITATION,
     ))
+    _remove_stale(out_dir, previous, paths)
     return paths
