@@ -90,6 +90,7 @@ def test_written_runs_are_canonical_and_lossless(written, source, phase):
         )
         assert sidecar["phase"] == phase
         assert sidecar["source"]["sha256"] == sha256_file(caiviac.default_source())
+        assert sidecar["recording_sha256"] == sha256_file(path)
         spindle_on = frame["spindle_speed_rpm"] > 0
         if phase == "heating":
             assert spindle_on.all()

@@ -227,3 +227,22 @@ def test_rerun_into_the_same_folder_removes_only_its_own_stale_files(generated, 
     assert "my_notes.txt" in names  # not the study's: never touched
     listed = set(json.loads((out / "provenance.json").read_text())["outputs"])
     assert names - {"my_notes.txt", "provenance.json"} == listed
+
+
+def test_a_sidecar_of_another_csv_is_one_warning_line_and_not_embedded(generated, tmp_path,
+                                                                       capsys):
+    folder, _out = generated
+    recordings = tmp_path / "recordings"
+    recordings.mkdir()
+    for path in folder.glob("exp*.csv"):
+        (recordings / path.name).write_bytes(path.read_bytes())
+    (recordings / "exp1.json").write_text(json.dumps({"seed": 1, "recording_sha256": "0" * 64}))
+    (recordings / "exp2.json").write_text(json.dumps({"seed": 2}))  # older sidecar: trusted
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(recordings), "--out", str(out)]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "exp1.json" in line]
+    assert len(warned) == 1 and warned[0].startswith("warning: ")
+    assert "not the CSV's" in warned[0]
+    inputs = json.loads((out / "provenance.json").read_text())["inputs"]
+    assert "not embedded" in inputs["exp1"]["sidecar"]  # a note, not the wrong provenance
+    assert inputs["exp2"]["sidecar"] == {"seed": 2}

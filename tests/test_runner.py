@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
 from spindlebench.testbench import simulate_scenario
 from spindlebench.testbench.runner import DEFAULT_FMU, co_simulate, inspect_fmu
 from spindlebench.testbench.scenario import load_scenario
@@ -98,7 +99,8 @@ def test_cold_start_puts_every_node_at_the_ambient(quick_run):
 
 
 def test_sidecar_carries_provenance_and_end_state(quick_run):
-    scenario, _, frame, sidecar = quick_run
+    scenario, csv, frame, sidecar = quick_run
+    assert sidecar["recording_sha256"] == sha256_file(csv)  # the pair is checkable
     assert sidecar["scenario"]["path"] == str(scenario)
     assert len(sidecar["scenario"]["sha256"]) == 64
     assert sidecar["fmu"]["sha256"] == fmpy_sha(FMU)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -50,9 +51,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _print_warning(message: Warning | str, category: type[Warning], filename: str,
+                   lineno: int, file=None, line: str | None = None) -> None:
+    """A warning as one ``warning:`` line, like errors (not Python's two lines of source)."""
+    text = " ".join(str(message).split())
+    print(f"warning: {text}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: run a sub-command; user errors become one ``error:`` line and status 2."""
+    """Entry point: run a sub-command; user errors become one ``error:`` line and status 2,
+    warnings one ``warning:`` line each."""
     args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _print_warning
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
     except SpindlebenchError as exc:

@@ -35,7 +35,7 @@ import pandas as pd
 from spindlebench import atomic
 from spindlebench.adapters import shared_recordings_dir
 from spindlebench.errors import SpindlebenchError
-from spindlebench.provenance import file_entry, provenance
+from spindlebench.provenance import file_entry, provenance, sha256_file
 
 DATASET = "caiviac-fl-thermal"
 TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
@@ -207,6 +207,7 @@ def write_runs(
         csv_path = out_dir / f"{run.name}.csv"
         with atomic.atomic_path(csv_path) as tmp:
             table.to_csv(tmp, index=False, float_format="%.6f")
+            recording_sha256 = sha256_file(tmp)
         record = provenance(
             dataset=DATASET,
             adapter="spindlebench.adapters.caiviac",
@@ -222,6 +223,7 @@ def write_runs(
             axial_target=AXIAL_TARGET,
             displacement_zero_offsets_um=offsets,
             license="MIT (c) 2024 CAIVIAC, see LICENSE-MIT-CAIVIAC.txt beside the source",
+            recording_sha256=recording_sha256,
         )
         atomic.write_text(out_dir / f"{run.name}.json", json.dumps(record, indent=2) + "\n")
         written.append(csv_path)

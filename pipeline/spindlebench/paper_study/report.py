@@ -6,6 +6,7 @@ Every file is written atomically; the README is the page a reader opens first.
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ import numpy as np
 from spindlebench import atomic
 from spindlebench.paper_study import figures, reference, tables
 from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
-from spindlebench.provenance import file_entry, provenance
+from spindlebench.provenance import file_entry, provenance, sidecar_mismatch
 
 
 def _json(value: Any) -> Any:
@@ -51,9 +52,15 @@ def _inputs(result: StudyResult) -> dict[str, Any]:
         sidecar = path.with_suffix(".json")
         if sidecar.is_file():
             try:
-                entry["sidecar"] = json.loads(sidecar.read_text(encoding="utf-8"))
+                record = json.loads(sidecar.read_text(encoding="utf-8"))
             except json.JSONDecodeError:
-                entry["sidecar"] = f"{sidecar.name}: not valid JSON, not embedded"
+                record = f"{sidecar.name}: not valid JSON, not embedded"
+            problem = sidecar_mismatch(entry["sha256"], record) if isinstance(record, dict) \
+                else None
+            if problem:
+                warnings.warn(f"{sidecar}: {problem}; not embedded", stacklevel=2)
+                record = f"{sidecar.name}: {problem}; not embedded"
+            entry["sidecar"] = record
         entries[name] = entry
     return entries
 

@@ -1,7 +1,10 @@
-"""Writing a recording: the CSV and its JSON sidecar, both atomically and together.
+"""Writing a recording: the CSV and its JSON sidecar, each atomically, as a checkable pair.
 
-A recording is only useful with its provenance, so the pair is moved into place at the end:
-a crash leaves either the old pair or none, never a CSV without its sidecar or a half file.
+A recording is only useful with its provenance, so both files are written in full first and
+then moved into place one right after the other: a crash never leaves a half file or a new
+CSV without a sidecar. Two renames cannot be one atomic step, so the sidecar also carries
+the CSV's SHA-256 (``recording_sha256``): a reader can tell a pair that does not belong
+together (see ``spindlebench.provenance.sidecar_mismatch``).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import pandas as pd
 
 from spindlebench.atomic import atomic_path
 from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
 
 #: Text format of every float in the CSV: shortest round-trip repr (bit-exact, stable).
 FLOAT_FORMAT = None
@@ -34,9 +38,10 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     if csv_path.suffix.lower() != ".csv":
         raise SpindlebenchError(f"{csv_path}: a recording must be written to a .csv file")
     json_path = sidecar_path(csv_path)
-    text = json.dumps(sidecar, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     with atomic_path(csv_path) as tmp_csv, atomic_path(json_path) as tmp_json:
         frame.to_csv(tmp_csv, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+        paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
+        text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
         tmp_json.write_text(text, encoding="utf-8")
     return csv_path
 
