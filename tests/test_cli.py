@@ -58,3 +58,16 @@ def test_usage_mistake_is_one_error_line(capsys):
     assert status == 2
     assert err.count("\n") == 1
     assert err.startswith("error: spindlebench evaluate: argument --clusters: invalid int")
+
+
+def test_warnings_are_one_line_each(capsys):
+    """A warning from a sub-command prints as one 'warning:' line, not Python's source echo."""
+    import warnings
+
+    from spindlebench.cli import _print_warning
+
+    with warnings.catch_warnings():
+        warnings.showwarning = _print_warning
+        warnings.warn("cluster ties:\n  exactly 3 clusters impossible", UserWarning, stacklevel=1)
+    err = capsys.readouterr().err
+    assert err == "warning: cluster ties: exactly 3 clusters impossible\n"
