@@ -173,6 +173,18 @@ def test_continue_from_a_missing_run_fails_cleanly(tmp_path):
     assert not (tmp_path / "c.csv").exists()
 
 
+def test_continue_from_a_sibling_scenario_is_looked_up_next_to_the_output(tmp_path):
+    path = write(tmp_path, "c.toml", scenario_text(
+        minutes=10, extra='[initial]\nkind = "continue"\nfrom = "day1"\n'))
+    with pytest.raises(SpindlebenchError, match=r"c\.toml: key 'initial\.from': no recording "
+                       r"of scenario 'day1' at .*out/day1\.json"):
+        simulate_scenario(path, tmp_path / "out" / "c.csv", fmu_path=FMU)
+    with pytest.raises(SpindlebenchError, match=r"c\.toml: key 'initial\.from': names the "
+                       r"scenario 'day1'"):
+        co_simulate(load_scenario(path), FMU)  # no output folder to look in
+    assert not (tmp_path / "out").exists()
+
+
 def test_unknown_parameter_is_one_line_and_writes_nothing(tmp_path):
     path = write(tmp_path, "p.toml", scenario_text(
         minutes=10, extra="[parameters]\nno_such_parameter_xyz = 1.0\n"))

@@ -12,6 +12,7 @@ from spindlebench.testbench.scenario import (
     MeasuredAmbient,
     SeasonAmbient,
     load_scenario,
+    resolve_initial,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -149,6 +150,11 @@ BAD_CASES = {
                                "number"),
     "continue without source": (BASE + '[initial]\nkind = "continue"\n', "initial.from",
                                 "missing"),
+    "continue from a scenario file": (
+        BASE + '[initial]\nkind = "continue"\nfrom = "day1.toml"\n', "initial.from",
+        "without .toml ('day1')"),
+    "continue from nothing": (BASE + '[initial]\nkind = "continue"\nfrom = " "\n',
+                              "initial.from", "empty"),
     "speed table is a number": (BASE.replace('[speed]\nkind = "constant"\nrpm = 4000\n', "")
                                 .replace("seed = 3", "seed = 3\nspeed = 4000"), "speed", "table"),
 }
@@ -235,3 +241,26 @@ def test_non_utf8_scenario_and_ambient_csv_are_one_line(tmp_path):
     (tmp_path / "amb.csv").write_bytes("time_s,ambient_C\n0,10\n3600,11 °C\n".encode("latin-1"))
     with pytest.raises(SpindlebenchError, match=r"'ambient.file': .*amb\.csv is not UTF-8"):
         load_scenario(write(tmp_path, CSV_SCENARIO))
+
+
+@pytest.mark.parametrize(
+    ("value", "scenario_name", "file_name"),
+    [
+        ("day1_warmup", "day1_warmup", None),
+        ("run.v2", "run.v2", None),
+        ("day1_warmup.json", None, "day1_warmup.json"),
+        ("day1_warmup.CSV", None, "day1_warmup.json"),
+        ("runs/day1", None, "day1"),
+    ],
+)
+def test_initial_from_is_a_scenario_name_or_a_path(tmp_path, value, scenario_name, file_name):
+    """No '/' and no .json/.csv: a sibling scenario, found later in the output folder."""
+    path = write(tmp_path, BASE + f'[initial]\nkind = "continue"\nfrom = "{value}"\n')
+    initial = load_scenario(path).initial
+    assert initial.from_scenario == scenario_name
+    if file_name is None:
+        assert initial.from_file is None
+        resolved = resolve_initial(load_scenario(path), tmp_path / "out").initial
+        assert resolved.from_file == tmp_path / "out" / f"{value}.json"
+    else:
+        assert initial.from_file == (tmp_path / value).with_name(file_name).resolve()

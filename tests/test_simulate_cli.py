@@ -150,3 +150,90 @@ def test_progress_bar_path_runs_and_stays_quiet_for_short_runs(tmp_path, capsys)
     second = simulate_scenario(scenario, tmp_path / "b.csv", progress=False)
     assert first.read_bytes() == second.read_bytes()
     assert "sim-s" not in capsys.readouterr().err  # shown only after 2 s of wall time
+
+
+def shipped_pair(folder: Path) -> None:
+    """The shipped two-part example, 10 + 10 simulated minutes instead of 3 + 3 hours."""
+    examples = Path(__file__).resolve().parents[1] / "scenarios" / "examples"
+    first = (examples / "day1_warmup.toml").read_text(encoding="utf-8")
+    second = (examples / "continue_day1.toml").read_text(encoding="utf-8")
+    assert "duration_s = 10800" in first and "at_s = 3600" in second
+    write(folder, "day1_warmup.toml", first.replace("duration_s = 10800", "duration_s = 600"))
+    write(folder, "continue_day1.toml", second.replace("duration_s = 10800", "duration_s = 600")
+          .replace("at_s = 3600", "at_s = 300"))
+
+
+def test_folder_run_continues_from_a_sibling_after_it(tmp_path, capsys):
+    """continue_day1 sorts first, yet runs second and starts from the output folder's day 1."""
+    shipped_pair(tmp_path / "scen")
+    stale = write(tmp_path / "elsewhere", "day1_warmup.json", "{}")  # must not be used
+    out = tmp_path / "res"
+    assert cli.main(["simulate", str(tmp_path / "scen"), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert [line.split()[0].rsplit("/", 1)[-1] for line in printed] == [
+        "day1_warmup.toml", "continue_day1.toml"]
+    day1 = json.loads((out / "day1_warmup.json").read_text())
+    second = json.loads((out / "continue_day1.json").read_text())
+    assert second["initial_state_from"]["path"] == str(out / "day1_warmup.json")
+    assert second["initial_state"]["states_K"] == day1["end_state"]["states_K"]
+    assert stale.read_text() == "{}"
+
+
+def test_one_scenario_continues_from_a_sibling_in_its_output_folder(tmp_path, capsys):
+    shipped_pair(tmp_path / "scen")
+    alone = ["simulate", str(tmp_path / "scen" / "continue_day1.toml"), "-o"]
+    assert cli.main([*alone, str(tmp_path / "res" / "c.csv")]) == 2
+    err = capsys.readouterr().err
+    missing = tmp_path / "res" / "day1_warmup.json"
+    assert err.count("\n") == 1 and "continue_day1.toml: key 'initial.from': no scenario " \
+        f"'day1_warmup' in this batch and no recording {missing}" in err
+    assert not (tmp_path / "res").exists()
+    assert cli.main(["simulate", str(tmp_path / "scen" / "day1_warmup.toml"), "-o",
+                     str(tmp_path / "res" / "day1_warmup.csv"), "-q"]) == 0
+    assert cli.main([*alone, str(tmp_path / "res" / "c.csv"), "-q"]) == 0
+    sidecar = json.loads((tmp_path / "res" / "c.json").read_text())
+    assert sidecar["initial_state_from"]["path"] == str(tmp_path / "res" / "day1_warmup.json")
+
+
+def test_circular_continuation_is_one_line_before_any_simulation(tmp_path, capsys):
+    folder = tmp_path / "scen"
+    write(folder, "a.toml", QUICK + '[initial]\nkind = "continue"\nfrom = "b"\n')
+    write(folder, "b.toml", QUICK + '[initial]\nkind = "continue"\nfrom = "a"\n')
+    write(folder, "c.toml", QUICK)
+    assert cli.main(["simulate", str(folder), "-o", str(tmp_path / "res")]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: {folder / 'a.toml'}: key 'initial.from': circular continuation: "
+                   "a continues from b continues from a\n")
+    assert not (tmp_path / "res").exists()
+
+
+def test_a_path_to_a_batch_output_also_orders_the_batch(tmp_path):
+    """from = "../res/b.json" names what b.toml is about to write: b runs first."""
+    folder = tmp_path / "scen"
+    write(folder, "a.toml", QUICK + '[initial]\nkind = "continue"\nfrom = "../res/b.json"\n')
+    write(folder, "b.toml", QUICK)
+    assert cli.main(["simulate", str(folder), "-o", str(tmp_path / "res"), "-q"]) == 0
+    a = json.loads((tmp_path / "res" / "a.json").read_text())
+    b = json.loads((tmp_path / "res" / "b.json").read_text())
+    assert a["initial_state"]["states_K"] == b["end_state"]["states_K"]
+
+
+def test_two_scenarios_writing_one_recording_are_refused(tmp_path, capsys):
+    write(tmp_path / "x", "quick.toml", QUICK)
+    write(tmp_path / "y", "quick.toml", QUICK)
+    assert cli.main(["simulate", str(tmp_path / "x"), str(tmp_path / "y"), "-o",
+                     str(tmp_path / "res")]) == 2
+    assert "rename one of the two scenario files" in capsys.readouterr().err
+    assert not (tmp_path / "res").exists()
+
+
+def test_shipped_examples_plan_day1_before_its_continuation():
+    """The real example folder, planned (not simulated) for a fresh output folder."""
+    from spindlebench.testbench.simulate import plan_batch
+
+    examples = Path(__file__).resolve().parents[1] / "scenarios" / "examples"
+    files = sorted(examples.glob("*.toml"))
+    out = Path("/nonexistent-output-folder")
+    order = [files[i].stem for i in plan_batch(files, [out / f"{f.stem}.csv" for f in files])]
+    assert sorted(order) == sorted(f.stem for f in files)
+    assert order.index("day1_warmup") < order.index("continue_day1")

@@ -156,9 +156,17 @@ def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> d
         return dict.fromkeys(fmu.state_names, start_C + KELVIN_OFFSET)
     source = initial.from_file
     where = f"{scenario.path}: key 'initial.from'"
+    if source is None:  # a sibling name, not yet placed in an output folder
+        raise SpindlebenchError(f"{where}: names the scenario {initial.from_scenario!r}, whose "
+                                "recording is looked up in the output folder; simulate with "
+                                "simulate_scenario() or resolve_initial() first")
     try:
         saved = json.loads(Path(source).read_text(encoding="utf-8"))["end_state"]["states_K"]
     except FileNotFoundError:
+        if initial.from_scenario is not None:
+            raise SpindlebenchError(
+                f"{where}: no recording of scenario {initial.from_scenario!r} at {source} "
+                "(simulate it into the same output folder first)") from None
         raise SpindlebenchError(f"{where}: no such file {source} (simulate the previous "
                                 "run first)") from None
     except (json.JSONDecodeError, KeyError, TypeError):

@@ -14,7 +14,7 @@ import io
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -194,11 +194,15 @@ class InitialState:
 
     ``cold`` uses ``temperature_C`` or, if absent, the ambient at the start of the run;
     ``continue`` reads the end state from a previous run's JSON sidecar (``from_file``).
+    ``from_scenario`` names a sibling scenario instead of a file: its recording is the one in
+    this run's output folder, so ``from_file`` stays ``None`` until ``resolve_initial`` knows
+    that folder (a scenario file cannot know where its sibling's output will be written).
     """
 
     kind: Literal["cold", "continue"] = "cold"
     temperature_C: float | None = None  # noqa: N815
     from_file: Path | None = None
+    from_scenario: str | None = None
 
 
 @dataclass(frozen=True)
@@ -580,12 +584,44 @@ def _read_initial(top: _Table, scenario_dir: Path) -> InitialState:
         initial = InitialState(temperature_C=t.temperature("temperature_C", None))
     else:
         name = t.string("from")
-        source = (scenario_dir / name).resolve()
-        if source.suffix == ".csv":
-            source = source.with_suffix(".json")
-        initial = InitialState(kind="continue", from_file=source)
+        if not name.strip():
+            raise t.fail("from", "is empty; give a scenario name (\"day1_warmup\") or a "
+                         "recording's .json")
+        if Path(name).suffix.lower() == ".toml":
+            raise t.fail("from", f"{name!r} is a scenario file; name the scenario without "
+                         f".toml ({Path(name).stem!r}) or give its recording's .json")
+        if is_scenario_reference(name):
+            initial = InitialState(kind="continue", from_scenario=name)
+        else:
+            source = (scenario_dir / name).resolve()
+            if source.suffix.lower() == ".csv":
+                source = source.with_suffix(".json")
+            initial = InitialState(kind="continue", from_file=source)
     t.finish()
     return initial
+
+
+def is_scenario_reference(value: str) -> bool:
+    """Whether ``initial.from`` names a sibling scenario rather than a recording file.
+
+    The rule a user can see at a glance: no folder separator and no ``.json``/``.csv`` ending
+    means a scenario name (``"day1_warmup"``); anything else is a path to a recording.
+    """
+    return ("/" not in value and "\\" not in value
+            and Path(value).suffix.lower() not in (".json", ".csv"))
+
+
+def resolve_initial(scenario: Scenario, output_dir: str | Path) -> Scenario:
+    """The scenario with a sibling reference in ``initial.from`` turned into a file.
+
+    ``from = "day1_warmup"`` means the recording ``day1_warmup.json`` in the folder this run
+    writes into, so a folder of scenarios continues from the runs of the same batch.
+    """
+    initial = scenario.initial
+    if initial.kind != "continue" or initial.from_scenario is None:
+        return scenario
+    source = Path(output_dir) / f"{initial.from_scenario}.json"
+    return replace(scenario, initial=replace(initial, from_file=source))
 
 
 def _read_parameters(top: _Table) -> dict[str, float]:

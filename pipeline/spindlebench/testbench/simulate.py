@@ -22,7 +22,12 @@ from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
 from spindlebench.testbench.recording import recording_frame, write_recording
 from spindlebench.testbench.runner import DEFAULT_FMU, SENSOR_OUTPUTS, Simulation, co_simulate
-from spindlebench.testbench.scenario import MeasuredAmbient, Scenario, load_scenario
+from spindlebench.testbench.scenario import (
+    MeasuredAmbient,
+    Scenario,
+    load_scenario,
+    resolve_initial,
+)
 from spindlebench.testbench.sensors import measure
 
 
@@ -78,11 +83,13 @@ def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
     """Simulate one scenario file into ``out_csv`` (+ ``.json`` sidecar); return the CSV path.
 
     ``seed`` overrides the scenario's seed; ``fmu_path`` defaults to ``fmus/SpindleBench.fmu``.
+    A scenario that continues from a sibling (``initial.from = "day1_warmup"``) starts from
+    that scenario's recording next to ``out_csv``.
     """
     out_csv = Path(out_csv)
     if out_csv.suffix.lower() != ".csv":
         raise SpindlebenchError(f"{out_csv}: output must be a .csv file")
-    scenario = load_scenario(scenario_path)
+    scenario = resolve_initial(load_scenario(scenario_path), out_csv.parent)
     frame, sidecar = record(scenario, fmu_path, seed, progress)
     return write_recording(out_csv, frame, sidecar)
 
@@ -108,6 +115,61 @@ def _scenario_files(arguments: list[str]) -> list[Path]:
     return files
 
 
+def plan_batch(files: list[Path], targets: list[Path]) -> list[int]:
+    """Validate a batch and order it so a run comes after the run it continues from.
+
+    ``targets[i]`` is the CSV that ``files[i]`` will be written to. A scenario whose
+    ``initial.from`` is the sidecar of another target (by sibling name or by path) runs after
+    it; otherwise the given (alphabetical) order is kept. A reference that no run of the batch
+    writes and that does not exist yet, or a circle of continuations, is one error line naming
+    the file and key, before anything is simulated. Returns indices into ``files``.
+    """
+    seen: dict[Path, int] = {}
+    for i, target in enumerate(targets):
+        key = target.resolve()
+        if key in seen:
+            raise SpindlebenchError(f"{files[i]}: writes {target} like {files[seen[key]]}; "
+                                    "rename one of the two scenario files")
+        seen[key] = i
+    producers = {target.with_suffix(".json").resolve(): i for i, target in enumerate(targets)}
+    after: list[int | None] = []
+    for path, target in zip(files, targets, strict=True):
+        scenario = resolve_initial(load_scenario(path), target.parent)
+        source = scenario.initial.from_file
+        if scenario.initial.kind != "continue" or source is None:
+            after.append(None)
+            continue
+        producer = producers.get(source.resolve())
+        if producer is None and not source.is_file():
+            sibling = scenario.initial.from_scenario
+            what = (f"no scenario {sibling!r} in this batch and no recording {source}"
+                    if sibling is not None else f"no such file {source}")
+            raise SpindlebenchError(f"{path}: key 'initial.from': {what} (simulate the "
+                                    "previous run first, or together with this one)")
+        after.append(producer)
+    order: list[int] = []
+    state: dict[int, str] = {}  # "open" while its chain is being followed, then "done"
+
+    def visit(i: int, chain: list[int]) -> None:
+        if state.get(i) == "done":
+            return
+        if state.get(i) == "open":
+            loop = [*chain[chain.index(i):], i]
+            names = " continues from ".join(files[j].stem for j in loop)
+            raise SpindlebenchError(f"{files[i]}: key 'initial.from': circular continuation: "
+                                    f"{names}")
+        state[i] = "open"
+        producer = after[i]
+        if producer is not None:
+            visit(producer, [*chain, i])
+        state[i] = "done"
+        order.append(i)
+
+    for i in range(len(files)):
+        visit(i, [])
+    return order
+
+
 def run(args: argparse.Namespace) -> int:
     """Simulate every scenario given; one file → ``-o`` is the CSV, several → a directory."""
     if args.seed is not None and args.seed < 0:
@@ -120,11 +182,12 @@ def run(args: argparse.Namespace) -> int:
                                 ".csv file")
     if not single and (out.is_file() or out.suffix.lower() in (".json", ".toml")):
         raise SpindlebenchError(f"{out}: -o must be a .csv file (one scenario) or a directory")
-    for scenario in files:  # validate all first: a typo in the last file should cost nothing
-        load_scenario(scenario)
+    targets = [out if single else out / f"{scenario.stem}.csv" for scenario in files]
+    # validate all first: a typo in the last file should cost nothing
+    order = plan_batch(files, targets)
     show_progress = not args.quiet and sys.stderr.isatty()
-    for scenario in files:
-        target = out if single else out / f"{scenario.stem}.csv"
+    for i in order:
+        scenario, target = files[i], targets[i]
         written = simulate_scenario(scenario, target, fmu_path=args.fmu, seed=args.seed,
                                     progress=show_progress)
         if not args.quiet:
