@@ -109,6 +109,25 @@ def test_a_rerun_resumes_and_reproduces_the_placements(tiny_run, capsys):
     pd.testing.assert_frame_equal(table[columns], again[columns])
 
 
+def test_resuming_ignores_comments_but_not_changed_values(tiny_run, tmp_path, capsys):
+    import shutil
+
+    out = tmp_path / "copy"
+    shutil.copytree(tiny_run[0], out)
+    commented = tmp_path / "commented.toml"
+    commented.write_text("# my notes\n" + TINY.read_text(encoding="utf-8"), encoding="utf-8")
+    assert main(["place", str(commented), "-o", str(out), "--workers", "0",
+                 "--no-progress"]) == 0
+    assert "resumed: 0 simulation(s)" in capsys.readouterr().out
+    changed = tmp_path / "changed.toml"
+    changed.write_text(study_text(**{"budgets = [2, 3]": "budgets = [2, 4]"}), encoding="utf-8")
+    assert main(["place", str(changed), "-o", str(out), "--workers", "0",
+                 "--no-progress"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"error: {out}: holds results of a different study (study file key "
+        "'placement.budgets': [2, 3] → [2, 4]); use a new output folder to run this study")
+
+
 def study_text(**replace: str) -> str:
     text = TINY.read_text(encoding="utf-8")
     for old, new in replace.items():

@@ -238,8 +238,53 @@ def test_a_folder_of_another_study_is_not_resumed(tmp_path, reference):
     shutil.copytree(reference[1].out_dir, out)
     changed = tmp_path / "tiny_changed.toml"
     changed.write_text(TINY.read_text().replace("seed = 7", "seed = 8"))
-    with pytest.raises(SpindlebenchError, match="holds results of a different study_sha256"):
+    with pytest.raises(SpindlebenchError) as refused:
         run_sweep(changed, out, workers=0, progress=False)
+    assert str(refused.value) == (
+        f"{out}: holds results of a different study (study file key 'study.seed': 7 → 8); "
+        "use a new output folder to run this study")
+
+
+def test_a_comment_or_reordered_key_does_not_block_resuming(tmp_path, reference):
+    out = tmp_path / "edited"
+    shutil.copytree(reference[1].out_dir, out)
+    edited = tmp_path / "tiny_edited.toml"
+    text = TINY.read_text().replace("seed = 7\nreplicas = 2", "replicas = 2   # two days\nseed = 7")
+    edited.write_text("# a note the user added\n" + text.replace(
+        "[study]", '[study]\ndescription = "prose does not change a number"')
+        .replace("speeds_rpm = [2000, 4000]", "speeds_rpm = [2000.0, 4000]"))
+    assert edited.read_bytes() != TINY.read_bytes()
+    outcome = run_sweep(edited, out, workers=0, progress=False)
+    assert outcome.resumed and outcome.stats.total("simulation") == 0
+    assert outcome.stats.total("evaluation") == 0
+    provenance = json.loads((out / "provenance.json").read_text())
+    original = json.loads((reference[1].out_dir / "provenance.json").read_text())
+    assert provenance["study_content_sha256"] == original["study_content_sha256"]
+    assert provenance["study"]["sha256"] != original["study"]["sha256"]  # the raw file hash
+
+
+def test_a_folder_of_the_previous_version_resumes_only_if_the_file_is_unchanged(tmp_path,
+                                                                             reference):
+    from spindlebench.provenance import sha256_file
+
+    out = tmp_path / "old"
+    shutil.copytree(reference[1].out_dir, out)
+    fmu = load_study(TINY).fmu
+    old_state = {"inputs": {"study_sha256": sha256_file(TINY), "fmu_sha256": sha256_file(fmu)}}
+    (out / "state.json").write_text(json.dumps(old_state))
+    commented = tmp_path / "tiny_commented.toml"
+    commented.write_text(TINY.read_text() + "# a comment\n")
+    with pytest.raises(SpindlebenchError) as refused:
+        run_sweep(commented, out, workers=0, progress=False)
+    assert str(refused.value) == (
+        f"{out}: was started by an earlier spindlebench version, which pinned the study file "
+        "byte for byte, and the study file changed since (the old state cannot tell what); "
+        "undo the change or use a new output folder")
+    assert run_sweep(TINY, out, workers=0, progress=False).resumed
+    state = json.loads((out / "state.json").read_text())
+    assert set(state["inputs"]) == {"study_content_sha256", "fmu_sha256"}
+    assert state["content"]["study file"]["study"]["seed"] == 7
+    assert run_sweep(commented, out, workers=0, progress=False).resumed  # upgraded state
 
 
 def test_command_line(tmp_path, capsys, reference):

@@ -2,12 +2,15 @@
 
 Each unit (a simulated recording, an evaluation) is written atomically when it finishes, so
 the folder is always consistent: an interrupted study restarts, finds what is on disk, and
-does only the rest. ``state.json`` pins the inputs (study file hash, FMU hash); resuming with
-different inputs would mix incompatible results, so it is refused with a clear message.
+does only the rest. ``state.json`` pins the inputs: the study's *content* (its parsed,
+canonicalised tables, so a comment, blank line or reordered key does not count as a change)
+and the FMU's hash. Resuming with different inputs would mix incompatible results, so it is
+refused with one line naming what differs.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -18,6 +21,67 @@ from spindlebench.atomic import atomic_path, write_text
 from spindlebench.errors import SpindlebenchError
 
 STATE_FILE = "state.json"
+CONTENT_KEY = "study_content_sha256"
+#: How a refusal names each pinned input (``study_sha256``: the raw file hash that state files
+#: of earlier versions pinned).
+_LABELS = {CONTENT_KEY: "study", "fmu_sha256": "FMU", "study_sha256": "study file"}
+_MAX_NAMED = 3
+
+
+def canonical(content: Any) -> Any:
+    """``content`` as it reads back from JSON, with 6000.0 written as 6000.
+
+    Whole-number floats become ints so that ``6000`` and ``6000.0`` in a study file (the same
+    value to the loader) pin the same content; dates become strings, tuples lists.
+    """
+    if isinstance(content, dict):
+        return {str(key): canonical(value) for key, value in content.items()}
+    if isinstance(content, list | tuple):
+        return [canonical(value) for value in content]
+    if isinstance(content, float) and content.is_integer():
+        return int(content)
+    if content is None or isinstance(content, bool | int | float | str):
+        return content
+    return str(content)
+
+
+def content_sha256(content: Any) -> str:
+    """Hex SHA-256 of the canonical JSON of ``content`` (sorted keys, no whitespace)."""
+    text = json.dumps(canonical(content), sort_keys=True, ensure_ascii=False,
+                      separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _flatten(table: Any, prefix: str = "") -> dict[str, Any]:
+    if not isinstance(table, dict):
+        return {prefix: table}
+    out: dict[str, Any] = {}
+    for key, value in table.items():
+        out.update(_flatten(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+_ABSENT: Any = object()
+
+
+def _short(value: Any) -> str:
+    text = "(absent)" if value is _ABSENT else json.dumps(value, ensure_ascii=False)
+    return text if len(text) <= 40 else text[:39] + "…"
+
+
+def differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    """``<section> key 'a.b': old → new`` for every leaf that differs between two contents.
+
+    A content is a dict of sections (``"study file"``, ``"climate file"``), each a table.
+    """
+    out = []
+    for section in sorted(set(old) | set(new)):
+        before, after = _flatten(old.get(section, {})), _flatten(new.get(section, {}))
+        for key in sorted(set(before) | set(after)):
+            was, now = before.get(key, _ABSENT), after.get(key, _ABSENT)
+            if was != now:
+                out.append(f"{section} key '{key}': {_short(was)} → {_short(now)}")
+    return out
 
 
 class ResultStore:
@@ -52,27 +116,65 @@ class ResultStore:
     def read_frame(self, relative: str | Path) -> pd.DataFrame:
         return pd.read_csv(self.path(relative), keep_default_na=True)
 
-    def claim(self, inputs: dict[str, str]) -> bool:
-        """Start or resume: record ``inputs`` or check them against the recorded ones.
+    def claim(self, content: dict[str, Any], hashes: dict[str, str],
+              legacy: dict[str, str] | None = None) -> bool:
+        """Start or resume: pin the inputs or check them against the pinned ones.
 
+        ``content``: the study's canonical content (sections of tables, see
+        :func:`differences`); its hash is pinned and the content itself is kept, so a refusal
+        names the keys that changed. ``hashes``: other inputs pinned by hash (the FMU).
+        ``legacy``: the inputs an earlier version pinned (the study file's raw hash); a folder
+        it wrote is resumed, and its state rewritten in today's form, only if they match.
         Returns True when resuming existing work; refuses a folder made from other inputs.
         """
+        content = canonical(content)
+        inputs = {CONTENT_KEY: content_sha256(content), **hashes}
         state_path = self.path(STATE_FILE)
         if state_path.is_file():
             try:
-                recorded = json.loads(state_path.read_text(encoding="utf-8"))["inputs"]
-            except (json.JSONDecodeError, KeyError, TypeError):
+                state = json.loads(state_path.read_text(encoding="utf-8"))
+                recorded = state["inputs"]
+                if not isinstance(recorded, dict):
+                    raise TypeError
+            except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
                 raise SpindlebenchError(f"{state_path}: not a study state file; "
                                         "choose another output folder") from None
+            if CONTENT_KEY not in recorded:
+                self._resume_legacy(recorded, inputs, content, legacy or {})
+                return True
             for key, value in inputs.items():
                 if recorded.get(key) != value:
-                    raise SpindlebenchError(
-                        f"{self.root}: holds results of a different {key} "
-                        f"({str(recorded.get(key))[:12]}… vs {value[:12]}…); "
-                        "use a new output folder to run this study")
+                    raise self._refusal(key, recorded.get(key), value, state.get("content"),
+                                        content)
             return True
         if self.root.exists() and any(self.root.iterdir()) and not state_path.is_file():
             raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
                                     "choose an empty or new folder")
-        self.write_json(STATE_FILE, {"inputs": inputs})
+        self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
         return False
+
+    def _resume_legacy(self, recorded: dict[str, Any], inputs: dict[str, str],
+                       content: dict[str, Any], legacy: dict[str, str]) -> None:
+        """Adopt a folder whose state an earlier version wrote, if its pins still hold."""
+        changed = [key for key, value in legacy.items() if recorded.get(key) != value]
+        if legacy and not changed:
+            self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
+            return
+        what = " and ".join(f"the {_LABELS.get(key, key)}" for key in changed) or "its inputs"
+        raise SpindlebenchError(
+            f"{self.root}: was started by an earlier spindlebench version, which pinned the "
+            f"study file byte for byte, and {what} changed since (the old state cannot tell "
+            "what); undo the change or use a new output folder")
+
+    def _refusal(self, key: str, was: Any, now: str, old_content: Any,
+                 new_content: dict[str, Any]) -> SpindlebenchError:
+        label = _LABELS.get(key, key)
+        named = differences(old_content, new_content) if (
+            key == CONTENT_KEY and isinstance(old_content, dict)) else []
+        if named:
+            more = len(named) - _MAX_NAMED
+            what = "; ".join(named[:_MAX_NAMED]) + (f"; and {more} more" if more > 0 else "")
+        else:
+            what = f"sha256 {str(was)[:12]}… vs {now[:12]}…"
+        return SpindlebenchError(f"{self.root}: holds results of a different {label} ({what}); "
+                                 "use a new output folder to run this study")

@@ -409,6 +409,23 @@ def describe(study: SweepStudy) -> dict[str, Any]:
     }
 
 
+#: Study keys that change no result: prose, and the FMU's path (its content is pinned apart).
+UNPINNED_KEYS = (("study", "description"), ("study", "fmu"))
+
+
+def pinned_content(study: SweepStudy) -> dict[str, Any]:
+    """What a results folder of ``study`` is pinned to: the parsed study and climate files.
+
+    Parsed, not raw, so that editing a comment or reordering keys does not lock the user out
+    of resuming; the climate table is part of it because it sets every run's ambient.
+    """
+    data = load_toml(study.path)
+    for table, key in UNPINNED_KEYS:
+        if isinstance(data.get(table), dict):
+            data[table].pop(key, None)
+    return {"study file": data, "climate file": load_toml(study.climate.path)}
+
+
 def check_fmu(study: SweepStudy) -> Path:
     """The FMU the study runs; a missing default FMU gets a message that says how to build."""
     if not study.fmu.is_file():

@@ -49,8 +49,14 @@ from spindlebench.studies.jobs import (
     simulate_job,
 )
 from spindlebench.studies.methods import method_specs
-from spindlebench.studies.store import ResultStore
-from spindlebench.studies.study import SweepStudy, check_fmu, describe, load_study
+from spindlebench.studies.store import ResultStore, content_sha256
+from spindlebench.studies.study import (
+    SweepStudy,
+    check_fmu,
+    describe,
+    load_study,
+    pinned_content,
+)
 from spindlebench.testbench.recording import write_recording
 
 RESULT_COLUMNS = (
@@ -156,8 +162,10 @@ class Sweep:
     # ----------------------------------------------------------------- running
 
     def run(self, runner: TaskRunner) -> SweepOutcome:
-        inputs = {"study_sha256": self.study.sha256, "fmu_sha256": sha256_file(self.fmu)}
-        resumed = self.store.claim(inputs)
+        fmu_sha256 = sha256_file(self.fmu)
+        resumed = self.store.claim(pinned_content(self.study), {"fmu_sha256": fmu_sha256},
+                                   legacy={"study_sha256": self.study.sha256,
+                                           "fmu_sha256": fmu_sha256})
         pending = self.pending_simulations()
         waiting = {r: {e.id for e in exps} for r, exps in pending.items()}
         tasks: list[Task] = []
@@ -271,6 +279,7 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> No
     record = provenance(
         kind="spindlebench season sweep",
         study=file_entry(study.path),
+        study_content_sha256=content_sha256(pinned_content(study)),
         climate=file_entry(study.climate.path),
         fmu=file_entry(sweep.fmu),
         study_seed=study.seed,

@@ -50,8 +50,8 @@ from spindlebench.studies.placement.placements import (
     score_all,
 )
 from spindlebench.studies.placement.study import PlacementStudy, describe, load_placement_study
-from spindlebench.studies.store import ResultStore
-from spindlebench.studies.study import check_fmu
+from spindlebench.studies.store import ResultStore, content_sha256
+from spindlebench.studies.study import check_fmu, pinned_content
 from spindlebench.studies.sweep import failure_path, recording_path
 from spindlebench.testbench.recording import write_recording
 from spindlebench.testbench.simulate import record
@@ -88,9 +88,11 @@ class PlacementStudyRun:
                 if not self.store.exists(recording_path(r, e))]
 
     def simulate(self, runner: TaskRunner) -> tuple[RunStats, bool]:
-        inputs = {"study_sha256": sha256_file(self.study.path),
-                  "fmu_sha256": sha256_file(self.fmu)}
-        resumed = self.store.claim(inputs)
+        fmu_sha256 = sha256_file(self.fmu)
+        resumed = self.store.claim(pinned_content(self.study.family),
+                                   {"fmu_sha256": fmu_sha256},
+                                   legacy={"study_sha256": sha256_file(self.study.path),
+                                           "fmu_sha256": fmu_sha256})
         tasks = []
         for replica, experiment in self.pending():
             key = f"simulate r{replica} {experiment.id}"
@@ -189,6 +191,7 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
     record_ = provenance(
         kind="spindlebench sensor placement",
         study=file_entry(study.path),
+        study_content_sha256=content_sha256(pinned_content(study.family)),
         climate=file_entry(study.family.climate.path),
         fmu=file_entry(work.fmu),
         study_seed=study.family.seed,
