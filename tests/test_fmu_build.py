@@ -13,7 +13,7 @@ import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Model
 from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica.build import build_fmu
+from spindlebench.modelica.build import build_fmu, output_path
 from spindlebench.modelica.cold_start import cold_start, rise
 from spindlebench.modelica.equations import explicit_ode
 
@@ -149,3 +149,53 @@ def test_build_stops_at_the_first_modelica_problem_with_its_line(tmp_path):
     ):
         build_fmu(tmp_path, tmp_path / "out.fmu")
     assert not (tmp_path / "out.fmu").exists()
+
+
+@pytest.mark.parametrize(
+    ("out", "segments", "written"),
+    [
+        ("fmus", 12, "fmus/SpindleBench.fmu"),
+        ("fmus", 6, "fmus/SpindleBench_6seg.fmu"),
+        ("elsewhere", 24, "elsewhere/SpindleBench_24seg.fmu"),
+        ("elsewhere/coarse.fmu", 6, "elsewhere/coarse.fmu"),
+    ],
+)
+def test_only_the_default_segment_count_is_written_as_spindlebench_fmu(out, segments, written):
+    assert output_path(out, segments) == Path(written)
+
+
+def test_build_with_other_segments_keeps_the_default_fmu(coarse, tmp_path, monkeypatch, capsys):
+    """`spindlebench build --segments 6` (no --out) next to fmus/SpindleBench.fmu leaves it be.
+
+    The compile itself is the `coarse` fixture's; here only where the command puts it.
+    """
+    import shutil
+
+    from spindlebench import cli
+    from spindlebench.modelica import build
+
+    def fake_build(model_dir, out_path, segments):
+        assert segments == 6
+        Path(out_path).parent.mkdir(parents=True, exist_ok=True)
+        return Path(shutil.copyfile(coarse, out_path))
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fmus").mkdir()
+    default = tmp_path / "fmus" / "SpindleBench.fmu"
+    default.write_bytes(COMMITTED.read_bytes())
+    monkeypatch.setattr(build, "build_fmu", fake_build)
+    assert cli.main(["build", "--segments", "6"]) == 0
+    printed = capsys.readouterr().out
+    assert default.read_bytes() == COMMITTED.read_bytes()
+    assert (tmp_path / "fmus" / "SpindleBench_6seg.fmu").read_bytes() == coarse.read_bytes()
+    assert "built fmus/SpindleBench_6seg.fmu: 6 segments" in printed
+    assert "--fmu fmus/SpindleBench_6seg.fmu" in printed
+
+
+def test_variant_builds_are_not_committed():
+    if not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    ignored = subprocess.run(
+        ["git", "check-ignore", "-q", "fmus/SpindleBench_6seg.fmu"], cwd=ROOT, check=False
+    )
+    assert ignored.returncode == 0, ".gitignore should hold fmus/SpindleBench_*seg.fmu"

@@ -1,4 +1,8 @@
-"""``spindlebench build``: Modelica package in ``models/`` → ``fmus/SpindleBench.fmu``."""
+"""``spindlebench build``: Modelica package in ``models/`` → ``fmus/SpindleBench.fmu``.
+
+A build with a non-default ``--segments N`` goes to ``fmus/SpindleBench_<N>seg.fmu`` unless
+``--out`` names a ``.fmu`` file, so the committed default model is only replaced by itself.
+"""
 
 from __future__ import annotations
 
@@ -55,17 +59,32 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--out",
         default="fmus",
-        help="output folder, or a path ending in .fmu (default: fmus)",
+        help=f"output folder, or a path ending in .fmu (default: fmus; in a folder the file "
+        f"is {FMU_NAME}.fmu, or {FMU_NAME}_<N>seg.fmu for a non-default --segments N)",
     )
     parser.set_defaults(func=run)
 
 
+def output_path(out: str | Path, segments: int) -> Path:
+    """Where ``build --out OUT --segments N`` writes.
+
+    A path ending in ``.fmu`` is taken as given. In a folder, only the default segment count
+    is ``SpindleBench.fmu``: every default ``simulate``, ``sweep`` and ``place`` uses
+    ``fmus/SpindleBench.fmu``, so a coarse experiment must not silently replace it.
+    """
+    out = Path(out)
+    if out.suffix == ".fmu":
+        return out
+    if segments == DEFAULT_SEGMENTS:
+        return out / f"{FMU_NAME}.fmu"
+    return out / f"{FMU_NAME}_{segments}seg.fmu"
+
+
 def run(args: argparse.Namespace) -> int:
-    """Build the FMU and print where it went."""
+    """Build the FMU and print where it went (and, for a variant, how to use it)."""
     if args.segments < 2:
         raise SpindlebenchError(f"--segments: must be at least 2, got {args.segments}")
-    out = Path(args.out)
-    target = out if out.suffix == ".fmu" else out / f"{FMU_NAME}.fmu"
+    target = output_path(args.out, args.segments)
     started = time.perf_counter()
     path = build_fmu(args.models, target, segments=args.segments)
     elapsed = time.perf_counter() - started
@@ -75,4 +94,8 @@ def run(args: argparse.Namespace) -> int:
         f"built {path}: {args.segments} segments per part, {nodes} nodes, "
         f"{len(description.derivatives)} states, {elapsed:.1f} s, sha256 {sha256_file(path)[:12]}"
     )
+    if path.name != f"{FMU_NAME}.fmu":
+        print(f"the default {FMU_NAME}.fmu is unchanged; to use this build: 'spindlebench "
+              f"simulate SCENARIO.toml -o OUT.csv --fmu {path}', or in a sweep/place study "
+              f"file's [study] table fmu = \"<{path} relative to the study file>\"")
     return 0
