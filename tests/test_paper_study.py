@@ -246,3 +246,45 @@ def test_a_sidecar_of_another_csv_is_one_warning_line_and_not_embedded(generated
     inputs = json.loads((out / "provenance.json").read_text())["inputs"]
     assert "not embedded" in inputs["exp1"]["sidecar"]  # a note, not the wrong provenance
     assert inputs["exp2"]["sidecar"] == {"seed": 2}
+
+
+def test_table6_shows_the_papers_numbers_only_for_the_experiments_we_predict(generated,
+                                                                             tmp_path):
+    """--tests exp3 exp4: the paper's exp3/exp4 beside ours and their mean, labelled as such;
+    not its exp2/exp5 nor its printed 4-run mean."""
+    folder, _ = generated
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out),
+                     "--tests", "exp3,exp4", "--clusters", "2"]) == 0
+    table6 = pd.read_csv(out / "table6_rmse.csv").set_index(["clusters", "group"])
+    assert list(table6.columns) == ["exp3", "exp4", "mean", "paper_exp3", "paper_exp4",
+                                    "paper_mean_over_exp3_exp4"]
+    _, exp3, exp4, _, _ = reference.RMSE_UM[2]["six_raw"]
+    assert table6.loc[(2, "six_raw"), "paper_mean_over_exp3_exp4"] == pytest.approx(
+        (exp3 + exp4) / 2)
+    markdown = (out / "table6.md").read_text()
+    assert "| paper exp3 | paper exp4 | **paper mean over exp3, exp4** |" in markdown
+    assert "paper exp2" not in markdown and "**10.3**" not in markdown  # its 4-run mean
+    assert "**6.7**" in markdown  # (10.6 + 2.7) / 2 = 6.65
+    assert "for the experiments predicted here too (exp3, exp4)" in markdown
+    assert "paper mean over exp3, exp4" in (out / "README.md").read_text()
+
+
+def test_table6_without_a_common_experiment_shows_no_paper_numbers(caiviac_runs, tmp_path):
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(caiviac_runs), "--out", str(out),
+                     "--config", str(caiviac_runs / caiviac.STUDY_FILE), "--clusters", "2"]) == 0
+    table6 = pd.read_csv(out / "table6_rmse.csv")
+    assert not [c for c in table6.columns if c.startswith("paper")]
+    markdown = (out / "table6.md").read_text()
+    assert "paper" not in markdown.splitlines()[0]
+    assert "is not shown: none of the experiments predicted here (run1_1250rpm" in markdown
+
+
+def test_table6_of_another_training_experiment_shows_no_paper_numbers(generated, tmp_path):
+    folder, _ = generated
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out), "--train", "exp2",
+                     "--tests", "exp1,exp3", "--clusters", "2"]) == 0
+    assert not [c for c in pd.read_csv(out / "table6_rmse.csv").columns if c.startswith("paper")]
+    assert "this study trains on exp2" in (out / "table6.md").read_text()

@@ -92,8 +92,8 @@ def readme_text(result: StudyResult, figure_paths: dict[str, Path], command: str
     fig = {key: path.name for key, path in figure_paths.items()}
     best = min(result.cells, key=lambda c: c.mean_rmse_um)
     paper_note = (
-        "The paper's columns are its own experiments (exp2 … exp5 of a different machine); "
-        "they show the size of the effect it reported, not numbers these data should reproduce."
+        "The paper's experiments are not ours (a different machine): its numbers show the size "
+        "of the effect it reported, not numbers these data should reproduce."
     )
     tests = ", ".join(config.tests)
     dendrograms = "\n".join(
@@ -137,7 +137,8 @@ magnitudes).
 
 ## Table 6 analogue: RMSE of the predictions (µm)
 
-Ours first, then the paper's Table 6 in the same row. {paper_note}
+Ours first, then the paper's Table 6 in the same row where it predicted the same experiment
+(see the line below the table). {paper_note}
 
 {tables.table6_markdown(result)}
 
@@ -156,7 +157,7 @@ Ours first, then the paper's Table 6 in the same row. {paper_note}
 
 ## Files
 - `table4_selected.csv`, `table5_r2.csv`, `table6_rmse.csv`: the tables (paper's numbers in
-  the `paper_*` columns).
+  the `paper_*` columns; in Table 6 only for the experiments it predicted too).
 - `results.json`: every model's full evaluation (selected, ψ, η, clusters, coefficients, R²,
   RMSE per experiment).
 - `provenance.json`: inputs with their SHA-256 (and their own provenance), configuration,

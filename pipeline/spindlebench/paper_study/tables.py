@@ -56,10 +56,38 @@ def table5_frame(result: StudyResult) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def paper_tests(result: StudyResult) -> tuple[str, ...]:
+    """The predicted experiments whose RMSE the paper's Table 6 also gives: ours that are
+    among its exp2 … exp5, and none unless we train on its exp1 too (otherwise its numbers
+    answer another question)."""
+    if result.config.train != reference.TRAIN_EXPERIMENT:
+        return ()
+    return tuple(t for t in result.config.tests if t in reference.TEST_EXPERIMENTS)
+
+
+def paper_mean_label(result: StudyResult) -> str:
+    """``paper mean`` for the paper's four predictions, ``paper mean over exp3, exp4`` for a
+    subset (the mean of those columns, not the paper's printed 4-run mean)."""
+    shown = paper_tests(result)
+    if set(shown) == set(reference.TEST_EXPERIMENTS):
+        return "paper mean"
+    return f"paper mean over {', '.join(shown)}"
+
+
+def _paper_mean(numbers: tuple[float, ...], shown: tuple[str, ...]) -> float:
+    """The printed mean when all four are shown, else the mean of the shown ones."""
+    if set(shown) == set(reference.TEST_EXPERIMENTS):
+        return numbers[-1]
+    return float(np.mean([numbers[reference.TEST_EXPERIMENTS.index(t)] for t in shown]))
+
+
 def table6_frame(result: StudyResult) -> pd.DataFrame:
-    """RMSE (µm) per predicted experiment and mean, one row per (k, group), then the paper's."""
+    """RMSE (µm) per predicted experiment and mean, one row per (k, group), then the paper's
+    for the experiments it predicts too (``paper_tests``) and their mean; the mean column is
+    ``paper_mean`` only when it is the paper's 4-run mean, else ``paper_mean_over_exp3_exp4``."""
     rows = []
-    paper_tests = reference.TEST_EXPERIMENTS
+    shown = paper_tests(result)
+    mean_column = paper_mean_label(result).replace(", ", "_").replace(" ", "_")
     for k in result.config.clusters:
         for group in result.groups:
             cell = result.cell(group, k)
@@ -67,12 +95,33 @@ def table6_frame(result: StudyResult) -> pd.DataFrame:
             for test in result.config.tests:
                 row[test] = cell.rmse_um[test]
             row["mean"] = cell.mean_rmse_um
-            paper = reference.RMSE_UM.get(k, {}).get(group)
-            for i, test in enumerate(paper_tests):
-                row[f"paper_{test}"] = paper[i] if paper else float("nan")
-            row["paper_mean"] = paper[-1] if paper else float("nan")
+            if shown:
+                paper = reference.RMSE_UM.get(k, {}).get(group)
+                for test in shown:
+                    row[f"paper_{test}"] = (paper[reference.TEST_EXPERIMENTS.index(test)]
+                                            if paper else float("nan"))
+                row[mean_column] = _paper_mean(paper, shown) if paper else float("nan")
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def table6_paper_note(result: StudyResult) -> str:
+    """One sentence on which of the paper's Table 6 numbers are shown, and why."""
+    config = result.config
+    shown = paper_tests(result)
+    theirs = f"trained on {reference.TRAIN_EXPERIMENT}, predicting " \
+        f"{', '.join(reference.TEST_EXPERIMENTS)}"
+    if not any(t in reference.TEST_EXPERIMENTS for t in config.tests):
+        return (f"The paper's Table 6 ({theirs}) is not shown: none of the experiments "
+                f"predicted here ({', '.join(config.tests)}) is one of its.")
+    if not shown:
+        return (f"The paper's Table 6 ({theirs}) is not shown: this study trains on "
+                f"{config.train}, so none of its numbers answers the same question.")
+    if set(shown) == set(reference.TEST_EXPERIMENTS):
+        return f"The paper's columns are its Table 6 ({theirs}), its printed mean last."
+    return (f"The paper's columns are its Table 6 ({theirs}) for the experiments predicted "
+            f"here too ({', '.join(shown)}), and their mean; its printed 4-run mean is not "
+            f"comparable with ours and not shown.")
 
 
 def table4_markdown(result: StudyResult) -> str:
@@ -127,26 +176,30 @@ def table5_markdown(result: StudyResult) -> str:
 
 
 def table6_markdown(result: StudyResult) -> str:
-    """RMSE per predicted experiment and mean, ours, then the paper's in the same row."""
+    """RMSE per predicted experiment and mean, ours, then the paper's in the same row (only
+    the experiments it predicts too; ``table6_paper_note`` below the table says which)."""
     frame = table6_frame(result)
     tests = list(result.config.tests)
+    shown = paper_tests(result)
+    mean_column = frame.columns[-1]
     header = ["k", "group", *tests, "**mean**"]
-    header += [f"paper {t}" for t in reference.TEST_EXPERIMENTS] + ["**paper mean**"]
+    if shown:
+        header += [f"paper {t}" for t in shown] + [f"**{paper_mean_label(result)}**"]
     body = []
     for _, row in frame.iterrows():
+        paper_cells = [*(_fmt(row[f"paper_{t}"], 1) for t in shown),
+                       f"**{_fmt(row[mean_column], 1)}**"] if shown else []
         body.append([
             str(int(row["clusters"])), GROUP_LABELS[row["group"]],
-            *(_fmt(row[t], 1) for t in tests), f"**{_fmt(row['mean'], 1)}**",
-            *(_fmt(row[f"paper_{t}"], 1) for t in reference.TEST_EXPERIMENTS),
-            f"**{_fmt(row['paper_mean'], 1)}**",
+            *(_fmt(row[t], 1) for t in tests), f"**{_fmt(row['mean'], 1)}**", *paper_cells,
         ])
     scale = measured_rms(result)
     body.append([
         "", "*scale: RMS of the measured error (= RMSE of predicting 0)*",
         *(_fmt(scale[t], 1) for t in tests), f"*{_fmt(float(np.mean(list(scale.values()))), 1)}*",
-        *([""] * (len(reference.TEST_EXPERIMENTS) + 1)),
+        *([""] * (len(shown) + 1 if shown else 0)),
     ])
-    return _markdown(pd.DataFrame(body, columns=header))
+    return _markdown(pd.DataFrame(body, columns=header)) + "\n\n" + table6_paper_note(result)
 
 
 def measured_rms(result: StudyResult) -> dict[str, float]:
