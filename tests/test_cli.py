@@ -71,3 +71,24 @@ def test_warnings_are_one_line_each(capsys):
         warnings.warn("cluster ties:\n  exactly 3 clusters impossible", UserWarning, stacklevel=1)
     err = capsys.readouterr().err
     assert err == "warning: cluster ties: exactly 3 clusters impossible\n"
+
+
+def _status_and_err(capsys, argv):
+    try:
+        status = cli.main(argv)
+    except SystemExit as exc:
+        status = exc.code
+    return status, capsys.readouterr().err
+
+
+def test_unknown_argument_after_a_command_points_to_that_commands_help(capsys):
+    """Left-over words after a sub-command are its mistake: the hint names its --help (which
+    lists its flags), not the top level's."""
+    status, err = _status_and_err(capsys, ["paper", "--recordings", "r", "--bogus", "1"])
+    assert status == 2 and err.count("\n") == 1
+    assert err == ("error: spindlebench paper: unrecognized arguments: --bogus 1 "
+                   "(see 'spindlebench paper --help')\n")
+    status, err = _status_and_err(capsys, ["--bogus", "paper", "--recordings", "r"])
+    assert status == 2
+    assert err.startswith("error: spindlebench: unrecognized arguments: --bogus (see "
+                          "'spindlebench --help')")

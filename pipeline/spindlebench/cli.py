@@ -51,6 +51,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def parse_args(parser: argparse.ArgumentParser,
+               argv: Sequence[str] | None) -> argparse.Namespace:
+    """``parser.parse_args``, but arguments left over after a sub-command are reported by that
+    sub-command's parser, so the hint names ``spindlebench <cmd> --help`` (its flags), not the
+    top-level help that does not list them."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args, extras = parser.parse_known_args(argv)
+    if extras:
+        command = getattr(args, "command", None)
+        after = argv[argv.index(command) + 1:] if command in argv else []
+        subparser = _subparsers(parser).get(command) if command else None
+        if subparser is None or any(extra not in after for extra in extras):
+            subparser = parser  # something before the sub-command: the top level's mistake
+        subparser.error(f"unrecognized arguments: {' '.join(extras)}")
+    return args
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
 def _print_warning(message: Warning | str, category: type[Warning], filename: str,
                    lineno: int, file=None, line: str | None = None) -> None:
     """A warning as one ``warning:`` line, like errors (not Python's two lines of source)."""
@@ -61,7 +85,7 @@ def _print_warning(message: Warning | str, category: type[Warning], filename: st
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: run a sub-command; user errors become one ``error:`` line and status 2,
     warnings one ``warning:`` line each."""
-    args = build_parser().parse_args(argv)
+    args = parse_args(build_parser(), argv)
     with warnings.catch_warnings():
         warnings.showwarning = _print_warning
         return _run(args)
