@@ -172,3 +172,34 @@ def test_constant_target_in_training_file_is_named(recordings, tmp_path, capsys)
                              "drift_um", "--clusters", "2")
     assert status == 2 and err.count("\n") == 1
     assert err.startswith(f"error: recording {train}: target column 'drift_um' is constant")
+
+
+@pytest.mark.parametrize("sensors", [["T1", "T6", "T8"], ["T1,T6,T8"], ["T1,", "T6,", "T8"],
+                                     ["T1,T6", "T8"]])
+def test_sensors_space_or_comma_separated(recordings, tmp_path, capsys, sensors):
+    out_json = tmp_path / "result.json"
+    status, _, err = run_cli(capsys, "--train", recordings[0], "--test", recordings[1],
+                             "--target", "drift_um", "--clusters", "2", "--sensors", *sensors,
+                             "--json", out_json)
+    assert status == 0, err
+    assert json.loads(out_json.read_text())["provenance"]["sensors"] == ["T1", "T6", "T8"]
+
+
+def test_with_sensors_a_gap_in_an_unused_column_is_ignored(recordings, tmp_path, capsys):
+    """--sensors T1,T6: a blank T13 cell and a text column do not matter; a blank in T6 does,
+    and without --sensors (every column a sensor) the T13 gap is still an error."""
+    gaps = write_variant(tmp_path, recordings[1], "gaps.csv", lambda f: f.assign(
+        T13=f["T13"].where(f.index != 15), note="text"))
+    args = ["--train", recordings[0], "--test", gaps, "--target", "drift_um", "--clusters", "2"]
+    status, out, err = run_cli(capsys, *args, "--sensors", "T1", "T6")
+    assert status == 0, err
+    assert "gaps.csv" in out
+    status, _, err = run_cli(capsys, *args)
+    assert status == 2 and "line 17, column 'T13': missing value" in err
+    gap6 = write_variant(tmp_path, recordings[1], "gap6.csv",
+                         lambda f: f.assign(T6=f["T6"].where(f.index != 15)))
+    status, _, err = run_cli(capsys, "--train", recordings[0], "--test", gap6, "--target",
+                             "drift_um", "--clusters", "2", "--sensors", "T1,T6")
+    assert status == 2 and err.count("\n") == 1
+    assert "gap6.csv, line 17, column 'T6': missing value" in err
+    assert "--missing drop-rows" in err

@@ -68,3 +68,27 @@ def test_missing_file(tmp_path):
         read_recording(tmp_path / "nope.csv")
     with pytest.raises(SpindlebenchError, match="not a file"):
         read_recording(tmp_path)
+
+
+def test_columns_reads_and_checks_only_the_columns_used(tmp_path):
+    """A gap or a note in a column the caller does not use does not reject the file; the used
+    columns (and time_s) are checked as ever; every line must still have all its fields."""
+    text = "time_s,T1,T2,T3,note\n0,20.0,21.0,,start\n15,20.5,21.1,22,\n30,21.0,21.3,22,x\n"
+    path = write(tmp_path, text)
+    with pytest.raises(SpindlebenchError, match="line 2, column 'T3': missing value"):
+        read_recording(path)
+    frame = read_recording(path, columns=["T1", "T2", "T99"])
+    assert list(frame.columns) == ["time_s", "T1", "T2"]
+    assert frame.attrs["header"] == ["time_s", "T1", "T2", "T3", "note"]
+    assert frame["T2"].tolist() == [21.0, 21.1, 21.3]
+    with pytest.raises(SpindlebenchError, match="line 2, column 'T3': missing value"):
+        read_recording(path, columns=["T1", "T3"])
+    short = write(tmp_path, "time_s,T1,T2,T3\n0,20,21,22\n15,20.5,21.1\n30,21,21.3,22\n",
+                  "short.csv")
+    with pytest.raises(SpindlebenchError, match="line 3: 3 field"):
+        read_recording(short, columns=["T1"])
+    quoted = write(tmp_path, 'time_s,T1,note\n0,20,"a, b"\n15,21,\n', "quoted.csv")
+    assert read_recording(quoted, columns=["T1"])["T1"].tolist() == [20.0, 21.0]
+    bad_time = write(tmp_path, "time_s,T1,T2\n0,20,\n0,21,\n", "time.csv")
+    with pytest.raises(SpindlebenchError, match="'time_s' does not increase"):
+        read_recording(bad_time, columns=["T1"])

@@ -13,6 +13,10 @@ cells (the testbench's sensor dropout) are read as NaN so that a consumer can dr
 incomplete samples, as ``selection.evaluate(..., missing="drop-rows")`` does, with a warning.
 Only those two spellings count as missing; text, ``inf``, booleans, rows with fewer fields than
 the header and a missing ``time_s`` stay errors. Nothing is filled in either way.
+
+``read_recording(path, columns=[...])`` reads and checks only those columns (and ``time_s``):
+a caller that names the columns it uses (``evaluate --sensors``, the paper study) is not
+stopped by a gap or a note in a column it ignores.
 """
 
 from __future__ import annotations
@@ -49,12 +53,21 @@ class MissingValueError(SpindlebenchError):
     case a caller can opt out of, so callers can point to their option."""
 
 
-def read_recording(path: str | os.PathLike[str], *, allow_missing: bool = False) -> pd.DataFrame:
+def read_recording(
+    path: str | os.PathLike[str],
+    *,
+    allow_missing: bool = False,
+    columns: Iterable[str] | None = None,
+) -> pd.DataFrame:
     """Read and validate one recording; all columns become float64.
 
     ``allow_missing`` reads empty and NaN cells (not in ``time_s``) as NaN instead of raising
-    ``MissingValueError``; see the module docstring. ``frame.attrs["path"]`` keeps the file
-    name for later messages.
+    ``MissingValueError``; see the module docstring. ``columns`` keeps only those columns (plus
+    ``time_s``) and checks only their cells, so a gap or a note in a column the caller does
+    not use cannot reject the file; names not in the header are left out (the caller says
+    what it missed, ``require_columns`` lists the whole header); every line must still have
+    all its fields. ``frame.attrs["path"]`` keeps the file name for later messages,
+    ``frame.attrs["header"]`` every column name of the file.
     """
     path = Path(path)
     if not path.exists():
@@ -62,9 +75,10 @@ def read_recording(path: str | os.PathLike[str], *, allow_missing: bool = False)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
     header = _read_header(path)
-    frame = _read_clean(path, header, allow_missing)
+    keep = header if columns is None else _kept(header, columns)
+    frame = _read_clean(path, header, allow_missing, keep)
     if frame is None:  # something is wrong: read as text to say exactly what and where
-        frame = _read_diagnosing(path, header, allow_missing)
+        frame = _read_diagnosing(path, header, allow_missing, keep)
     if len(frame) < 2:
         raise SpindlebenchError(
             f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
@@ -78,12 +92,21 @@ def read_recording(path: str | os.PathLike[str], *, allow_missing: bool = False)
                 f"({frame[TIME_COLUMN].iloc[bad[0]]:g} -> {frame[TIME_COLUMN].iloc[bad[0] + 1]:g})"
             )
     frame.attrs["path"] = str(path)
+    frame.attrs["header"] = list(header)
     return frame
 
 
-def _read_clean(path: Path, header: list[str], allow_missing: bool) -> pd.DataFrame | None:
-    """Fast path: the file parses as finite floats throughout (or NaN where ``allow_missing``
-    permits it), or None."""
+def _kept(header: list[str], columns: Iterable[str]) -> list[str]:
+    """The header's names among ``columns``, plus ``time_s``, in file order."""
+    wanted = {str(name) for name in columns} | {TIME_COLUMN}
+    return [name for name in header if name in wanted]
+
+
+def _read_clean(
+    path: Path, header: list[str], allow_missing: bool, keep: list[str]
+) -> pd.DataFrame | None:
+    """Fast path: the ``keep`` columns parse as finite floats throughout (or NaN where
+    ``allow_missing`` permits it), and every line has all its fields; or None."""
     na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
         frame = pd.read_csv(path, skip_blank_lines=False, engine="c", **na)
@@ -91,6 +114,12 @@ def _read_clean(path: Path, header: list[str], allow_missing: bool) -> pd.DataFr
         return None
     if frame.shape[1] != len(header):
         return None
+    # pandas pads short rows and blank lines with NaN: where a NaN is not an error (an ignored
+    # column, or allow_missing), every line must be checked to have all its fields.
+    if frame.isna().to_numpy().any() and (allow_missing or len(keep) < len(header)) \
+            and not _all_fields_fast(path, len(frame), len(header)):
+        return None
+    frame = frame.set_axis(header, axis=1).loc[:, keep]
     numeric = all(
         pd.api.types.is_float_dtype(dtype) or pd.api.types.is_integer_dtype(dtype)
         for dtype in frame.dtypes
@@ -99,22 +128,24 @@ def _read_clean(path: Path, header: list[str], allow_missing: bool) -> pd.DataFr
         return None
     values = frame.to_numpy(dtype=float)
     if not allow_missing:
-        return frame.set_axis(header, axis=1).astype(float) if np.isfinite(values).all() else None
-    nan = np.isnan(values)
+        return frame.astype(float) if np.isfinite(values).all() else None
     if np.isinf(values).any():
         return None
-    if nan.any():
-        # pandas pads short rows and blank lines with NaN too: every line must have all its
-        # fields (one comma fewer than columns), and time_s must be complete.
-        if path.read_bytes().count(b",") != (len(frame) + 1) * (len(header) - 1):
-            return None
-        if TIME_COLUMN in header and nan[:, header.index(TIME_COLUMN)].any():
-            return None
-    return frame.set_axis(header, axis=1).astype(float)
+    if TIME_COLUMN in keep and np.isnan(values[:, keep.index(TIME_COLUMN)]).any():
+        return None  # time_s must be complete
+    return frame.astype(float)
 
 
-def _read_diagnosing(path: Path, header: list[str], allow_missing: bool) -> pd.DataFrame:
-    """Slow path: read every cell as text, raise naming the first bad cell."""
+def _all_fields_fast(path: Path, rows: int, width: int) -> bool:
+    """Whether the file has one comma fewer than columns on every line (no quoting), cheaply;
+    False sends the caller to the slow path, which checks line by line."""
+    return path.read_bytes().count(b",") == (rows + 1) * (width - 1)
+
+
+def _read_diagnosing(
+    path: Path, header: list[str], allow_missing: bool, keep: list[str]
+) -> pd.DataFrame:
+    """Slow path: read every cell as text, raise naming the first bad cell of ``keep``."""
     try:
         raw = pd.read_csv(
             path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c"
@@ -126,12 +157,13 @@ def _read_diagnosing(path: Path, header: list[str], allow_missing: bool) -> pd.D
         raise SpindlebenchError(f"recording {path}: header and data have different widths")
     raw.columns = header  # names stripped of surrounding spaces
     raw = _drop_trailing_blank_rows(raw)
-    if allow_missing:  # pandas pads short rows with empty cells: those are not missing values
+    if allow_missing or len(keep) < len(header):
+        # pandas pads short rows with empty cells: those are not missing values
         _check_field_counts(path, len(header), len(raw))
     return pd.DataFrame(
         {
             name: _numeric_column(path, name, raw[name], allow_missing)
-            for name in header
+            for name in keep
         },
         index=raw.index,
     )
@@ -217,12 +249,14 @@ def recording_name(frame: pd.DataFrame, fallback: str = "<data frame>") -> str:
 
 
 def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> None:
-    """Raise naming the recording and the ``what`` columns it lacks."""
+    """Raise naming the recording and the ``what`` columns it lacks (listing every column of
+    the file, also those ``read_recording(columns=...)`` left out)."""
     missing = [name for name in columns if name not in frame.columns]
     if missing:
         raise SpindlebenchError(
             f"recording {recording_name(frame)}: {what} column(s) not found: "
-            f"{', '.join(missing)} (columns are: {', '.join(map(str, frame.columns))})"
+            f"{', '.join(missing)} (columns are: "
+            f"{', '.join(map(str, frame.attrs.get('header', frame.columns)))})"
         )
 
 

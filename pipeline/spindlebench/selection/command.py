@@ -2,7 +2,8 @@
 
 Warnings (dropped constant candidates, tied similarities, samples dropped for missing values
 with ``--missing drop-rows``) go to stderr as ``warning:`` lines and into the JSON's
-``provenance.warnings``.
+``provenance.warnings``. With ``--sensors`` only the target, ``time_s`` and those sensors are
+read and checked; other columns are ignored.
 """
 
 from __future__ import annotations
@@ -11,13 +12,20 @@ import argparse
 import json
 import sys
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
+import pandas as pd
+
 from spindlebench import atomic, provenance
+from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
-from spindlebench.selection.evaluate import MISSING_MODES, evaluate
+from spindlebench.selection.evaluate import MISSING_MODES, RecordingLike, evaluate
 from spindlebench.selection.similarity import SIMILARITIES
+
+#: The same hint ``evaluate`` gives when it reads a file itself.
+DROP_HINT = "--missing drop-rows drops incomplete samples"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -36,7 +44,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--test", required=True, nargs="+", type=Path, help="recording(s) to predict (CSV)"
     )
     parser.add_argument("--target", required=True, help="thermal-error column, e.g. drift_um")
-    parser.add_argument("--sensors", help="comma-separated sensor columns (default: see above)")
+    parser.add_argument(
+        "--sensors", nargs="+", metavar="NAME",
+        help="sensor columns, space- or comma-separated (--sensors T1 T6 T8 or --sensors "
+        "T1,T6,T8); only these, the target and time_s are read and checked, other columns "
+        "are ignored (default: see above, every column is checked)",
+    )
     parser.add_argument(
         "--clusters", required=True, type=int, metavar="K", help="number of clusters k"
     )
@@ -59,24 +72,50 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def parse_sensor_list(text: str | None) -> list[str] | None:
-    """``"T1,T6, T8"`` -> ``["T1", "T6", "T8"]``; None stays None."""
-    if text is None:
+def parse_sensor_list(values: str | Sequence[str] | None) -> list[str] | None:
+    """``["T1,T6", "T8"]`` or ``"T1,T6, T8"`` -> ``["T1", "T6", "T8"]``; None stays None.
+
+    Both separators are accepted because users type either; an empty name between two commas
+    (``T1,,T6``) is an error, but a comma next to a space (``T1, T6`` unquoted) is just a
+    separator.
+    """
+    if values is None:
         return None
-    names = [name.strip() for name in text.split(",")]
-    if not all(names):
-        raise SelectionError(f"--sensors: empty name in {text!r}")
+    items = [values] if isinstance(values, str) else list(values)
+    names: list[str] = []
+    for item in items:
+        text = item.strip()
+        if len(items) > 1:
+            text = text.strip(",").strip()
+        pieces = [name.strip() for name in text.split(",")]
+        if not all(pieces):
+            raise SelectionError(f"--sensors: empty name in {' '.join(items)!r}")
+        names.extend(pieces)
     return names
+
+
+def _read_used(path: Path, columns: list[str], missing: str) -> pd.DataFrame:
+    """One recording with only ``columns`` (and time_s) read and checked: with --sensors a
+    gap or a note in a column nobody uses must not reject the file."""
+    try:
+        return read_recording(path, allow_missing=missing == "drop-rows", columns=columns)
+    except MissingValueError as exc:
+        raise SelectionError(f"{exc}; {DROP_HINT}") from exc
 
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
     sensors = parse_sensor_list(args.sensors)
+    train: RecordingLike = args.train
+    tests: list[RecordingLike] = [str(path) for path in args.test]
+    if sensors is not None:  # read and check only the columns used
+        train = _read_used(args.train, [args.target, *sensors], args.missing)
+        tests = [_read_used(path, [args.target, *sensors], args.missing) for path in args.test]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = evaluate(
-            args.train,
-            [str(path) for path in args.test],
+            train,
+            tests,
             args.target,
             sensors=sensors,
             k=args.clusters,
