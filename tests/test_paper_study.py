@@ -288,3 +288,45 @@ def test_table6_of_another_training_experiment_shows_no_paper_numbers(generated,
                      "--tests", "exp1,exp3", "--clusters", "2"]) == 0
     assert not [c for c in pd.read_csv(out / "table6_rmse.csv").columns if c.startswith("paper")]
     assert "this study trains on exp2" in (out / "table6.md").read_text()
+
+
+def test_folder_study_file_is_used_without_config_and_named_in_errors(caiviac_runs, tmp_path,
+                                                                      capsys):
+    """The adapter's paper_study.toml is used when --config is not given (said on stderr and
+    recorded in the command line); an experiment not found lists the folder's and points to
+    the file."""
+    own = caiviac_runs / caiviac.STUDY_FILE
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(caiviac_runs), "--out", str(out),
+                     "--clusters", "2"]) == 0
+    err = capsys.readouterr().err
+    assert f"using {own} (the folder's own study file" in err
+    provenance = json.loads((out / "provenance.json").read_text())
+    assert f"--config {own}" in provenance["command"]
+    assert provenance["study"]["train"] == "run4_5000rpm"
+    with pytest.raises(SpindlebenchError) as info:
+        run_study(caiviac_runs, study_config.load(None))
+    message = str(info.value)
+    assert "experiment 'exp1' not found (the folder has: run1_1250rpm, run2_2500rpm" in message
+    assert message.endswith(f"describes this folder: pass --config {own}")
+
+
+def test_list_flags_space_or_comma_separated_and_unused_columns_ignored(generated, tmp_path):
+    """--tests/--clusters/--six take either separator; a gap in a column the study does not
+    read (not the target, sensors_all or time_s) does not stop it."""
+    folder, _ = generated
+    recordings = tmp_path / "recordings"
+    recordings.mkdir()
+    for path in folder.glob("exp*.csv"):
+        frame = pd.read_csv(path)
+        frame["ch2_um"] = np.where(frame.index == 3, np.nan, 0.0)  # an unused channel
+        frame.to_csv(recordings / path.name, index=False)
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(recordings), "--out", str(out),
+                     "--tests", "exp3", "exp4", "--clusters", "2", "3",
+                     "--six", "T1,T6,T8", "T10", "T13", "T16"]) == 0
+    provenance = json.loads((out / "provenance.json").read_text())
+    assert provenance["study"]["tests"] == ["exp3", "exp4"]
+    assert provenance["study"]["clusters"] == [2, 3]
+    assert provenance["study"]["six"] == list(study_config.PAPER_SIX)
+    assert "--tests exp3,exp4 --six T1,T6,T8,T10,T13,T16 --clusters 2,3" in provenance["command"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 from pathlib import Path
 
 from spindlebench.paper_study import config as study_config
@@ -20,46 +21,70 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "sensors and those six plus their differences, at each number of clusters; write the "
         "analogues of the paper's Tables 4-6 and Figures 3-6 plus dendrograms. Defaults are "
         "the paper's set-up on synthetic recordings exp1 ... exp5 (T1 ... T20, drift_um); a "
-        "--config TOML or the flags below change it (flags win).",
+        f"--config TOML (or, without --config, the folder's own {study_config.CONFIG_NAME}, "
+        "as 'spindlebench adapt caiviac' writes) or the flags below change it (flags win). "
+        "Only the columns the study uses are read; a gap or a note in another column is "
+        "ignored.",
     )
     parser.add_argument("--recordings", required=True, help="folder with <experiment>.csv files")
     parser.add_argument("--out", default=None,
                         help="output folder (default: <recordings>/paper_study)")
-    parser.add_argument("--config", default=None, help="study TOML (see paper_study.config)")
+    parser.add_argument("--config", default=None,
+                        help="study TOML (see paper_study.config); default: "
+                        f"<recordings>/{study_config.CONFIG_NAME} when the folder has one (the "
+                        "CAIVIAC adapter writes it; said on stderr), else the paper's set-up")
     parser.add_argument("--target", default=None, help="thermal-error column (default drift_um)")
     parser.add_argument("--train", default=None, help="training experiment (default exp1)")
-    parser.add_argument("--tests", default=None,
-                        help="comma-separated predicted experiments (default exp2,...,exp5)")
-    parser.add_argument("--sensors-all", default=None,
-                        help="comma-separated sensors of group 1 (default T1,...,T20)")
-    parser.add_argument("--six", default=None,
-                        help="comma-separated six-sensor subset, or 'auto' "
-                        "(default T1,T6,T8,T10,T13,T16)")
-    parser.add_argument("--clusters", default=None, help="comma-separated k values (default 2,3,4)")
+    parser.add_argument("--tests", default=None, nargs="+", metavar="NAME",
+                        help="predicted experiments, space- or comma-separated "
+                        "(default exp2 exp3 exp4 exp5)")
+    parser.add_argument("--sensors-all", default=None, nargs="+", metavar="NAME",
+                        help="sensors of group 1, space- or comma-separated (default T1 ... T20)")
+    parser.add_argument("--six", default=None, nargs="+", metavar="NAME",
+                        help="six-sensor subset, space- or comma-separated, or 'auto' "
+                        "(default T1 T6 T8 T10 T13 T16)")
+    parser.add_argument("--clusters", default=None, nargs="+", metavar="K",
+                        help="k values, space- or comma-separated (default 2 3 4)")
     parser.add_argument("--similarity", default=None, choices=study_config.SIMILARITIES,
                         help="reading of eq. 1 (default abs-pearson)")
     parser.add_argument("--missing", default=None, choices=study_config.MISSING_MODES,
-                        help="missing (empty/NaN) values: one-line error (default), or drop "
-                        "the samples where the target or a used sensor is missing (warned)")
+                        help="missing (empty/NaN) values in the columns the study uses "
+                        "(target, sensors_all, time_s; other columns are ignored): one-line "
+                        "error (default), or drop the samples where the target or a used "
+                        "sensor is missing (warned)")
     parser.set_defaults(func=_run)
 
 
+def _joined(values: list[str] | None) -> str | None:
+    """A list flag's words as one comma-separated value (``T1 T6,T8`` -> ``T1,T6,T8``)."""
+    if values is None:
+        return None
+    return ",".join(part.strip() for value in values for part in value.split(",") if part.strip())
+
+
 def _run(args: argparse.Namespace) -> int:
+    lists = {key: _joined(getattr(args, key)) for key in ("tests", "sensors_all", "six",
+                                                          "clusters")}
     overrides = {
-        "target": args.target, "train": args.train, "tests": args.tests,
-        "sensors_all": args.sensors_all, "six": args.six, "clusters": args.clusters,
-        "similarity": args.similarity, "missing": args.missing,
+        "target": args.target, "train": args.train, "similarity": args.similarity,
+        "missing": args.missing, **lists,
     }
-    config = study_config.load(args.config, overrides)
+    config_path = args.config
+    own = Path(args.recordings) / study_config.CONFIG_NAME
+    if config_path is None and own.is_file():
+        config_path = str(own)
+        print(f"using {own} (the folder's own study file; --config chooses another)",
+              file=sys.stderr)
+    config = study_config.load(config_path, overrides)
     out_dir = Path(args.out) if args.out else Path(args.recordings) / "paper_study"
     command = "spindlebench paper " + " ".join(
         f"{flag} {shlex.quote(str(value))}"
         for flag, value in (
             ("--recordings", args.recordings), ("--out", str(out_dir)),
-            ("--config", args.config), ("--target", args.target), ("--train", args.train),
-            ("--tests", args.tests), ("--sensors-all", args.sensors_all), ("--six", args.six),
-            ("--clusters", args.clusters), ("--similarity", args.similarity),
-            ("--missing", args.missing),
+            ("--config", config_path), ("--target", args.target), ("--train", args.train),
+            ("--tests", lists["tests"]), ("--sensors-all", lists["sensors_all"]),
+            ("--six", lists["six"]), ("--clusters", lists["clusters"]),
+            ("--similarity", args.similarity), ("--missing", args.missing),
         )
         if value is not None
     )

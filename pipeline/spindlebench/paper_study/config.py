@@ -37,6 +37,9 @@ from spindlebench.errors import SpindlebenchError
 PAPER_SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
 PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
 AUTO_SIX = "auto"
+#: A recordings folder's own study file (the CAIVIAC adapter writes one); ``spindlebench paper``
+#: uses it when no --config is given.
+CONFIG_NAME = "paper_study.toml"
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 #: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
 MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.paper_study.config import AUTO_SIX, StudyConfig
+from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import evaluate
 from spindlebench.selection.closure import transitive_closure
@@ -97,7 +97,8 @@ class StudyResult:
 
 
 def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, dict]:
-    """Read ``<directory>/<name>.csv`` for every experiment; check the columns the study needs."""
+    """Read ``<directory>/<name>.csv`` for every experiment: only the columns the study uses
+    (target, ``sensors_all``, ``time_s``) are read and checked, others are ignored."""
     directory = Path(directory)
     if not directory.is_dir():
         raise SpindlebenchError(f"{directory}: recordings folder not found")
@@ -108,9 +109,16 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
         path = directory / f"{name}.csv"
         if not path.is_file():
             found = ", ".join(sorted(p.stem for p in directory.glob("*.csv"))) or "none"
-            raise SpindlebenchError(f"{path}: experiment {name!r} not found (have: {found})")
+            hint = ""
+            own = directory / CONFIG_NAME
+            if own.is_file() and not _uses(config, own):
+                hint = f"; {own} describes this folder: pass --config {own}"
+            raise SpindlebenchError(
+                f"{path}: experiment {name!r} not found (the folder has: {found}){hint}"
+            )
         try:
-            frame = read_recording(path, allow_missing=config.missing == "drop-rows")
+            frame = read_recording(path, allow_missing=config.missing == "drop-rows",
+                                   columns=needed)
         except MissingValueError as exc:
             raise SpindlebenchError(
                 f"{exc}; missing = \"drop-rows\" (--missing drop-rows) drops incomplete samples"
@@ -121,6 +129,11 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
         frames[name] = frame
         paths[name] = path
     return frames, paths
+
+
+def _uses(config: StudyConfig, path: Path) -> bool:
+    """Whether ``config`` was read from ``path``."""
+    return any(Path(part) == path for part in config.source.split(" + "))
 
 
 def choose_six(frame: pd.DataFrame, sensors: Sequence[str], similarity: str) -> tuple[str, ...]:
