@@ -330,3 +330,36 @@ def test_list_flags_space_or_comma_separated_and_unused_columns_ignored(generate
     assert provenance["study"]["clusters"] == [2, 3]
     assert provenance["study"]["six"] == list(study_config.PAPER_SIX)
     assert "--tests exp3,exp4 --six T1,T6,T8,T10,T13,T16 --clusters 2,3" in provenance["command"]
+
+
+def test_figures_label_the_quantity_and_keep_legends_off_the_data(generated, monkeypatch):
+    """Fig. 3/5 say 'thermal error (µm)' (the column in the title); legends sit right of the
+    axes (inside they hid curves and branches); the dendrogram legend says each line is the
+    cut for k, with its η."""
+    from spindlebench.paper_study import figures
+
+    folder, _ = generated
+    drawn = {}
+
+    def keep(figure, path):
+        figure.canvas.draw()
+        drawn[path.name] = figure
+        return path
+
+    monkeypatch.setattr(figures, "_save", keep)
+    result = run_study(folder, study_config.load(None, {"clusters": "2,3"}))
+    figures.write_all(result, folder / "unused")
+    for name in ("fig3_error_curves.png", "fig5_measured_vs_predicted_exp2.png",
+                 "dendrogram_six_diff.png"):
+        for ax in drawn[name].axes:
+            legend = ax.get_legend()
+            assert legend.get_window_extent().x0 >= ax.get_window_extent().x1, name
+    fig3 = drawn["fig3_error_curves.png"].axes[0]
+    assert fig3.get_ylabel() == "thermal error (µm)" and "drift_um" in fig3.get_title()
+    fig5 = drawn["fig5_measured_vs_predicted_exp2.png"].axes
+    assert all(ax.get_ylabel() == "thermal error (µm)" for ax in fig5)
+    dendrogram = drawn["dendrogram_six_diff.png"].axes[0]
+    assert dendrogram.get_ylabel() == "merge height 1 − t(R)"
+    eta = result.cell("six_diff", 2).eta
+    labels = [text.get_text() for text in dendrogram.get_legend().get_texts()]
+    assert labels[0] == f"cut for k = 2\n(η = {eta:.4f})"

@@ -34,18 +34,29 @@ def _hours(result: StudyResult, name: str) -> np.ndarray:
     return np.arange(len(frame)) / 3600.0
 
 
+#: The quantity every target is (the study reports RMSE in µm); the column name goes in the
+#: title, where a reader looks for which channel it is.
+ERROR_LABEL = "thermal error (µm)"
+
+
+def _legend_outside(ax, **kwargs) -> None:
+    """A legend right of the axes: inside, it hides curves or branches wherever it goes."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kwargs)
+
+
 def error_curves(result: StudyResult, path: Path) -> Path:
     """Fig. 3: the measured thermal error of every experiment."""
-    figure = Figure(figsize=(7, 4))
+    figure = Figure(figsize=(8.5, 4))
     ax = figure.add_subplot()
     for name in result.config.experiments:
         label = f"{name} (train)" if name == result.config.train else name
         ax.plot(_hours(result, name), result.frames[name][result.config.target], label=label)
     ax.set_xlabel("time (h)")
-    ax.set_ylabel(f"{result.config.target} (measured)")
-    ax.set_title("Thermal error of every experiment")
+    ax.set_ylabel(ERROR_LABEL)
+    ax.set_title(f"Measured thermal error of every experiment (column {result.config.target})",
+                 fontsize="medium")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
+    _legend_outside(ax, fontsize="small")
     return _save(figure, path)
 
 
@@ -67,7 +78,7 @@ def six_temperatures(result: StudyResult, path: Path) -> Path:
 def measured_vs_predicted(result: StudyResult, path: Path, experiment: str) -> Path:
     """Fig. 5: measured and predicted error of one test experiment, one panel per k."""
     ks = result.config.clusters
-    figure = Figure(figsize=(7, 2.6 * len(ks)))
+    figure = Figure(figsize=(9.5, 2.6 * len(ks)))
     hours = _hours(result, experiment)
     measured = result.frames[experiment][result.config.target]
     for row, k in enumerate(ks, start=1):
@@ -76,11 +87,12 @@ def measured_vs_predicted(result: StudyResult, path: Path, experiment: str) -> P
         for group in result.groups:
             cell = result.cell(group, k)
             ax.plot(hours, cell.predictions_um[experiment], color=GROUP_COLORS[group],
-                    label=f"{GROUP_LABELS[group]} (RMSE {cell.rmse_um[experiment]:.1f})")
-        ax.set_title(f"{experiment}, {k} clusters", fontsize="medium")
-        ax.set_ylabel(result.config.target)
+                    label=f"{GROUP_LABELS[group]} ({cell.rmse_um[experiment]:.1f})")
+        ax.set_title(f"{experiment}, {k} clusters: measured and predicted "
+                     f"{result.config.target}", fontsize="medium")
+        ax.set_ylabel(ERROR_LABEL)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize="x-small")
+        _legend_outside(ax, fontsize="x-small", title="RMSE in µm", title_fontsize="x-small")
     ax.set_xlabel("time (h)")
     return _save(figure, path)
 
@@ -124,7 +136,7 @@ def closure_dendrogram(result: StudyResult, group: str, path: Path) -> Path:
     """Fuzzy equivalence hierarchy of a group on the training experiment, with the η cuts."""
     names, closure = result.closure(group)
     tree = linkage_from_similarity(closure)  # heights 1 - t(R); cut at 1 - η = λ-cut
-    figure = Figure(figsize=(max(6.0, 0.35 * len(names) + 2), 4.5))
+    figure = Figure(figsize=(max(7.5, 0.35 * len(names) + 4), 4.5))
     ax = figure.add_subplot()
     dendrogram(tree, labels=names, ax=ax, leaf_rotation=90, color_threshold=0,
                above_threshold_color="0.3")
@@ -132,10 +144,14 @@ def closure_dendrogram(result: StudyResult, group: str, path: Path) -> Path:
     for i, k in enumerate(result.config.clusters):
         eta = result.cell(group, k).eta
         ax.axhline(cut_height(tree[:, 2], eta), color=f"C{i + 1}", ls=styles[i % len(styles)],
-                   label=f"k = {k}: η = {eta:.4f}")
-    ax.set_ylabel("1 − t(R)")
-    ax.set_title(f"{GROUP_LABELS[group]}: fuzzy equivalence hierarchy on {result.config.train}")
-    ax.legend(fontsize="small")
+                   label=f"cut for k = {k}\n(η = {eta:.4f})")
+    ax.set_ylabel("merge height 1 − t(R)")
+    ax.set_title(f"{GROUP_LABELS[group]}: fuzzy equivalence hierarchy on {result.config.train}",
+                 fontsize="medium")
+    # The line sits midway between the merges it separates, not at 1 − η: drawn at 1 − η it
+    # would touch the merge at that height and leave it unclear on which side that merge is.
+    _legend_outside(ax, fontsize="small", title="λ-cut at t(R) ≥ η,\ndrawn between merges",
+                    title_fontsize="x-small")
     return _save(figure, path)
 
 

@@ -151,8 +151,8 @@ Ours first, then the paper's Table 6 in the same row where it predicted the same
   ![measured vs predicted]({fig["measured_vs_predicted"]})
 - RMSE of every prediction (paper Fig. 6, as grouped bars): ![rmse]({fig["rmse_bars"]})
 - Fuzzy equivalence hierarchies with the λ-cuts (not in the paper): single-linkage dendrograms
-  of 1 − t(R) on {config.train}; a horizontal line at k clusters cuts the tree into exactly
-  the clusters of t(R) ≥ η.
+  of 1 − t(R) on {config.train}; the line "cut for k" cuts the tree into exactly the clusters
+  of t(R) ≥ η (drawn midway between the two merges it separates, not at 1 − η itself).
 {dendrograms}
 
 ## Files
