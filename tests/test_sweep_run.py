@@ -99,6 +99,9 @@ def test_results_table_has_one_row_per_replica_condition_method_k_and_test(refer
     assert set(record["seeds"]) == {"r1", "r2"}
     readme = (out / "README.md").read_text()
     assert "Does the paper's claim hold?" in readme and "![by_method]" in readme
+    assert "runs of 40 min sampled" in readme and "bound" not in readme.split("Methods:")[0]
+    assert "**On measured data the paper's claim" in readme
+    assert "On the noise-free truth (perfect instruments)" in readme
     assert pd.read_csv(out / "results.csv").shape == results.shape
 
 

@@ -77,32 +77,59 @@ def verdict_sentences(verdict: pd.DataFrame, kind: str) -> list[str]:
     return lines
 
 
-def overall(verdict: pd.DataFrame) -> str:
-    measured = verdict[verdict["data"] == "measured"]
-    if measured.empty:
-        return "No paired results of the three groups: the claim could not be tested."
-    lower = measured["lower"].astype(bool)
-    stable = measured["more_stable"].astype(bool)
-    ks = measured["k"].tolist()
-    if lower.all() and stable.all():
-        return (f"**The paper's claim holds in this synthetic world** at every k tested "
-                f"({', '.join(map(str, ks))}): the six sensors plus their differences give a "
-                "lower median held-out error and a smaller spread than either raw group.")
-    if not lower.any():
-        return ("**The paper's claim does not hold in this synthetic world**: at no k tested "
-                "do the differences give a lower median held-out error than the better raw "
-                "group.")
-    good = [str(k) for k, lo, st in zip(ks, lower, stable, strict=True) if lo and st]
-    low_only = [str(k) for k, lo, st in zip(ks, lower, stable, strict=True) if lo and not st]
-    bad = [str(k) for k, lo in zip(ks, lower, strict=True) if not lo]
+def _claim_state(rows: pd.DataFrame) -> tuple[str, str]:
+    """("holds" | "fails" | "partly", what the differences do per k) for one data kind."""
+    lower = rows["lower"].astype(bool).tolist()
+    stable = rows["more_stable"].astype(bool).tolist()
+    ks = [str(k) for k in rows["k"]]
+    if all(lower) and all(stable):
+        return "holds", (f"at every k tested ({', '.join(ks)}) the six sensors plus their "
+                         "differences give a lower median held-out error and a smaller spread "
+                         "than either raw group")
+    if not any(lower):
+        return "fails", (f"at no k tested ({', '.join(ks)}) do the differences give a lower "
+                         "median held-out error than the better raw group")
+    good = [k for k, lo, st in zip(ks, lower, stable, strict=True) if lo and st]
+    low_only = [k for k, lo, st in zip(ks, lower, stable, strict=True) if lo and not st]
+    bad = [k for k, lo in zip(ks, lower, strict=True) if not lo]
     parts = []
     if good:
         parts.append(f"lower and more stable at k = {', '.join(good)}")
     if low_only:
-        parts.append(f"lower but not more stable on every criterion at k = {', '.join(low_only)}")
+        parts.append(f"lower but not more stable on all criteria at k = {', '.join(low_only)}")
     if bad:
         parts.append(f"not lower at k = {', '.join(bad)}")
-    return "**The paper's claim holds only in part**: differences are " + "; ".join(parts) + "."
+    return "partly", "differences are " + "; ".join(parts)
+
+
+def overall(verdict: pd.DataFrame) -> str:
+    """The headline: the verdict on measured data, then, if run, on the noise-free truth.
+
+    Both come from the same ``verdict`` rows as the per-k bullets, so they cannot disagree.
+    """
+    measured = verdict[verdict["data"] == "measured"]
+    if measured.empty:
+        return "No paired results of the three groups: the claim could not be tested."
+    state, detail = _claim_state(measured)
+    head = {"holds": "**On measured data the paper's claim holds in this synthetic world**",
+            "fails": "**On measured data the paper's claim does not hold in this synthetic "
+                     "world**",
+            "partly": "**On measured data the paper's claim holds only in part**"}[state]
+    text = f"{head}: {detail}."
+    truth = verdict[verdict["data"] == "noise-free"]
+    if not truth.empty:
+        state, detail = _claim_state(truth)
+        verb = {"holds": "it holds", "fails": "it does not hold",
+                "partly": "it holds only in part"}[state]
+        text += f" On the noise-free truth (perfect instruments) {verb}: {detail}."
+    return text
+
+
+def duration_text(seconds: float) -> str:
+    """A run length people read at a glance: 40 min, 1.5 h, 6 h (not 0.666667 h)."""
+    if seconds < 3600.0:
+        return f"{seconds / 60:.3g} min"
+    return f"{seconds / 3600:.3g} h"
 
 
 def failure_slices(slices: pd.DataFrame, versus: str) -> list[str]:
@@ -156,11 +183,12 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
         "(1 σ) around the monthly normals per replica.",
         f"- Spindle speeds {', '.join(f'{s:g}' for s in study.speeds_rpm)} rpm; programmes "
         f"{', '.join(p.name for p in study.programmes)}; cooling "
-        f"{', '.join(c.name for c in study.cooling)}; runs of {study.duration_s / 3600:g} h "
+        f"{', '.join(c.name for c in study.cooling)}; runs of {duration_text(study.duration_s)} "
         f"sampled every {study.sample_interval_s:g} s.",
         f"- Measurement conditions: noise levels {', '.join(n.name for n in study.noise)} × "
-        f"faults {', '.join(faults)} (faults strike the held-out runs only), plus the "
-        "noise-free truth as an upper bound.",
+        f"faults {', '.join(faults)} (faults strike the held-out runs only)"
+        + (", plus the noise-free truth (true temperatures and drift, no faults)."
+           if study.methods.ground_truth else "."),
         f"- {study.replicas} replica(s) → {simulations} simulations; training "
         f"({study.training.rule}): {', '.join(e.id for e in trains)}; every other run is "
         "held out.",
@@ -173,10 +201,11 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
         "keeps the k raw sensors most correlated with the error (no clustering). `ridge` "
         "fits all 20 sensors and 190 differences with a cross-validated ridge penalty (no "
         "selection, no k). *noise-free* rows run the same methods on the true temperatures "
-        "and true drift: what perfect instruments would give (not a bound: selection can "
-        "choose worse on perfectly smooth data). `oracle` fits all 20 sensors on the "
-        "held-out run itself: no method that predicts from these sensors' rises can score "
-        "lower, so it is the floor.",
+        "and true drift: what perfect instruments would give. That is a reference, not a "
+        "bound: selection can choose worse on perfectly smooth data. `oracle` fits all 20 "
+        "sensors on the held-out run itself: no method that predicts from these sensors' "
+        "rises can score lower on the same run, so it is the floor (a lower bound on "
+        "`rmse_um`).",
         "",
         "## Does the paper's claim hold?",
         "",
