@@ -60,6 +60,8 @@ def test_place_writes_every_output(tiny_run):
     readme = (out / "README.md").read_text()
     assert "## Findings" in readme and "exhaustive+diff m = 2: skipped" in readme
     assert "![m2](schematic/placement_m2.png)" in readme
+    assert f"Made by `spindlebench place {TINY}`" in readme  # the path as given
+    assert "runs of 40 min from a cold start" in readme
 
 
 def test_searches_rank_by_the_reported_design_score(tiny_run):

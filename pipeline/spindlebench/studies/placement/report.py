@@ -16,7 +16,7 @@ import pandas as pd
 from spindlebench.studies.experiments import Experiment
 from spindlebench.studies.placement.placements import Placement
 from spindlebench.studies.placement.study import PlacementStudy
-from spindlebench.studies.report import markdown_table
+from spindlebench.studies.report import duration_text, markdown_table
 
 if TYPE_CHECKING:
     from spindlebench.studies.placement.run import PlacementOutcome
@@ -132,7 +132,7 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
     out = [
         f"# Sensor placement: {study.name}", "",
         family.description or "", "",
-        f"Made by `spindlebench place {study.path.name}` (study SHA-256 "
+        f"Made by `spindlebench place {study.path}` (study file SHA-256 "
         f"`{record['study']['sha256'][:12]}…`, FMU `{record['fmu']['sha256'][:12]}…`, "
         f"simulated on {record['executor']}). Every number below is computed from "
         "`placements.csv` and `scores.csv`.", "",
@@ -147,7 +147,7 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
         f"{', '.join(f'{s:g}' for s in family.speeds_rpm)} rpm, programmes "
         f"{', '.join(p.name for p in family.programmes)}, cooling "
         f"{', '.join(c.name for c in family.cooling)}; runs of "
-        f"{family.duration_s / 3600:g} h from a cold start at {family.start_hour:g}:00, "
+        f"{duration_text(family.duration_s)} from a cold start at {family.start_hour:g}:00, "
         f"sampled every {family.sample_interval_s:g} s.",
         f"- Model: OLS of the drift on the rises of the m chosen variables, trained on "
         f"{', '.join(e.id for e in trains)} and predicting every other run of the same "
