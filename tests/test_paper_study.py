@@ -363,3 +363,19 @@ def test_figures_label_the_quantity_and_keep_legends_off_the_data(generated, mon
     eta = result.cell("six_diff", 2).eta
     labels = [text.get_text() for text in dendrogram.get_legend().get_texts()]
     assert labels[0] == f"cut for k = 2\n(η = {eta:.4f})"
+
+
+def test_paper_tables_4_and_5_only_beside_a_study_that_trains_like_the_paper(generated, tmp_path):
+    folder, out = generated  # the default study trains on exp1, like the paper
+    assert "paper_selected" in pd.read_csv(out / "table4_selected.csv").columns
+    assert "paper_all_raw" in pd.read_csv(out / "table5_r2.csv").columns
+    other = tmp_path / "other"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(other),
+                     "--train", "exp2", "--tests", "exp1,exp3"]) == 0
+    assert not any(c.startswith("paper_")
+                   for c in pd.read_csv(other / "table4_selected.csv").columns)
+    assert not any(c.startswith("paper_") for c in pd.read_csv(other / "table5_r2.csv").columns)
+    for number in (4, 5):
+        text = (other / f"table{number}.md").read_text()
+        assert "(paper)" not in text
+        assert f"The paper's Table {number} (trained on its exp1) is not shown" in text

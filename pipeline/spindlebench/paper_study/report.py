@@ -87,7 +87,8 @@ _MISSING_TEXT = {
 
 
 def readme_text(result: StudyResult, figure_paths: dict[str, Path], command: str) -> str:
-    """The results page: set-up, the three tables with the paper's beside ours, the figures."""
+    """The results page: set-up, the three tables (the paper's beside ours where they answer
+    the same question), the figures."""
     config = result.config
     fig = {key: path.name for key, path in figure_paths.items()}
     best = min(result.cells, key=lambda c: c.mean_rmse_um)
@@ -157,7 +158,8 @@ Ours first, then the paper's Table 6 in the same row where it predicted the same
 
 ## Files
 - `table4_selected.csv`, `table5_r2.csv`, `table6_rmse.csv`: the tables (paper's numbers in
-  the `paper_*` columns; in Table 6 only for the experiments it predicted too).
+  the `paper_*` columns when this study trains on the paper's exp1; in Table 6 only for the
+  experiments it predicted too).
 - `results.json`: every model's full evaluation (selected, ψ, η, clusters, coefficients, R²,
   RMSE per experiment).
 - `provenance.json`: inputs with their SHA-256 (and their own provenance), configuration,

@@ -28,30 +28,50 @@ def _markdown(frame: pd.DataFrame) -> str:
     return "\n".join([header, rule, *rows])
 
 
+def trains_like_paper(result: StudyResult) -> bool:
+    """Whether this study trains on the paper's training experiment (its exp1): only then do
+    the paper's selections (Table 4) and R² (Table 5) answer the same question as ours."""
+    return result.config.train == reference.TRAIN_EXPERIMENT
+
+
+def paper_training_note(result: StudyResult, table: int) -> str:
+    """One sentence under Table 4 or 5 when the paper's columns are left out, else ''."""
+    if trains_like_paper(result):
+        return ""
+    return (f"The paper's Table {table} (trained on its {reference.TRAIN_EXPERIMENT}) is not "
+            f"shown: this study trains on {result.config.train}, so its numbers would answer "
+            "another question.")
+
+
 def table4_frame(result: StudyResult) -> pd.DataFrame:
-    """Selected candidates, one row each: k, group, rank, name, ψ, cluster size, η."""
+    """Selected candidates, one row each: k, group, rank, name, ψ, cluster size, η (and the
+    paper's choice at the same rank when the study trains like the paper)."""
     rows = []
     for cell in result.cells:
         for rank, (name, psi) in enumerate(zip(cell.selected, cell.psi, strict=True), start=1):
-            paper = reference.SELECTED.get(cell.k, {}).get(cell.group, [])
-            rows.append({
+            row: dict[str, object] = {
                 "clusters": cell.k, "group": cell.group, "rank": rank, "selected": name,
                 "psi": psi, "cluster_size": len(cell.clusters[rank - 1]), "eta": cell.eta,
-                "paper_selected": paper[rank - 1][0] if rank <= len(paper) else "",
-                "paper_psi": paper[rank - 1][1] if rank <= len(paper) else float("nan"),
-            })
+            }
+            if trains_like_paper(result):
+                paper = reference.SELECTED.get(cell.k, {}).get(cell.group, [])
+                row["paper_selected"] = paper[rank - 1][0] if rank <= len(paper) else ""
+                row["paper_psi"] = paper[rank - 1][1] if rank <= len(paper) else float("nan")
+            rows.append(row)
     return pd.DataFrame(rows)
 
 
 def table5_frame(result: StudyResult) -> pd.DataFrame:
-    """Training R², one row per k, one column per group, then the paper's."""
+    """Training R², one row per k, one column per group, then the paper's (when the study
+    trains like the paper)."""
     rows = []
     for k in result.config.clusters:
         row: dict[str, object] = {"clusters": k}
         for group in result.groups:
             row[group] = result.cell(group, k).r2
-        for group in reference.GROUPS:
-            row[f"paper_{group}"] = reference.R2.get(k, {}).get(group, float("nan"))
+        if trains_like_paper(result):
+            for group in reference.GROUPS:
+                row[f"paper_{group}"] = reference.R2.get(k, {}).get(group, float("nan"))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -128,11 +148,13 @@ def table4_markdown(result: StudyResult) -> str:
     """Like the paper's Table 4: per k, the selected points of each group with ψ."""
     lines = []
     header = ["k", *(f"{GROUP_LABELS[g]} (ours)" for g in result.groups)]
-    header += [f"{GROUP_LABELS[g]} (paper)" for g in reference.GROUPS]
+    with_paper = trains_like_paper(result)
+    paper_groups = reference.GROUPS if with_paper else ()
+    header += [f"{GROUP_LABELS[g]} (paper)" for g in paper_groups]
     body = []
     for k in result.config.clusters:
         cells = [result.cell(g, k) for g in result.groups]
-        paper = reference.SELECTED.get(k, {})
+        paper = reference.SELECTED.get(k, {}) if with_paper else {}
         depth = max([len(c.selected) for c in cells] + [len(v) for v in paper.values()])
         for rank in range(depth):
             row = [str(k) if rank == 0 else ""]
@@ -141,13 +163,15 @@ def table4_markdown(result: StudyResult) -> str:
                     f"{cell.selected[rank]} (ψ={cell.psi[rank]:+.4f})"
                     if rank < len(cell.selected) else ""
                 )
-            for group in reference.GROUPS:
+            for group in paper_groups:
                 chosen = paper.get(group, [])
                 row.append(
                     f"{chosen[rank][0]} (ψ={chosen[rank][1]:.4f})" if rank < len(chosen) else ""
                 )
             body.append(row)
     lines.append(_markdown(pd.DataFrame(body, columns=header)))
+    if note := paper_training_note(result, 4):
+        lines += ["", note]
     eta_rows = [
         [str(k), *(_fmt(result.cell(g, k).eta, 4) for g in result.groups)]
         for k in result.config.clusters
@@ -164,15 +188,18 @@ def table4_markdown(result: StudyResult) -> str:
 def table5_markdown(result: StudyResult) -> str:
     """Training R² of each model, ours beside the paper's."""
     frame = table5_frame(result)
+    paper_groups = reference.GROUPS if trains_like_paper(result) else ()
     header = ["k", *(f"{GROUP_LABELS[g]} (ours)" for g in result.groups)]
-    header += [f"{GROUP_LABELS[g]} (paper)" for g in reference.GROUPS]
+    header += [f"{GROUP_LABELS[g]} (paper)" for g in paper_groups]
     body = [
         [str(int(row["clusters"])),
          *(_fmt(row[g], 4) for g in result.groups),
-         *(_fmt(row[f"paper_{g}"], 4) for g in reference.GROUPS)]
+         *(_fmt(row[f"paper_{g}"], 4) for g in paper_groups)]
         for _, row in frame.iterrows()
     ]
-    return _markdown(pd.DataFrame(body, columns=header))
+    table = _markdown(pd.DataFrame(body, columns=header))
+    note = paper_training_note(result, 5)
+    return f"{table}\n\n{note}" if note else table
 
 
 def table6_markdown(result: StudyResult) -> str:
