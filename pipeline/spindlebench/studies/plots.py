@@ -15,8 +15,13 @@ from spindlebench.studies.seasons import MONTHS
 
 METHOD_ORDER = ("raw20", "raw6", "raw6+diff", "top-k-correlated", "ridge", "oracle")
 COLOURS = {"raw20": "#8c8c8c", "raw6": "#5b8fc9", "raw6+diff": "#d9622b",
-           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f2f2f2",
+           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f0c419",
            "measured": "#4c72b0", "noise-free": "#d0d0d0"}
+#: Drawn over every box: black contrasts with each fill above (an orange median vanished on
+#: the orange raw6+diff boxes).
+MEDIAN = {"color": "black", "linewidth": 1.5}
+#: Methods without a k (fitted on all candidates): drawn once, in their own panel.
+NO_K = ("ridge", "oracle")
 
 
 def _save(fig: plt.Figure, path: Path) -> Path:
@@ -45,7 +50,7 @@ def _grouped_boxes(ax: plt.Axes, frame: pd.DataFrame, categories: list, category
         if not data:
             continue
         parts = ax.boxplot(data, positions=positions, widths=width * 0.85, patch_artist=True,
-                           showfliers=True, flierprops={"markersize": 2})
+                           showfliers=True, flierprops={"markersize": 2}, medianprops=MEDIAN)
         for box in parts["boxes"]:
             box.set_facecolor(COLOURS.get(method, "white"))
             box.set_alpha(0.85)
@@ -59,21 +64,26 @@ def _grouped_boxes(ax: plt.Axes, frame: pd.DataFrame, categories: list, category
 
 
 def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
-    """One panel per k: every method's RMSE, measured next to noise-free truth."""
+    """One panel per k with the methods that have one, and one "no k" panel for ridge and the
+    oracle (they do not depend on k, so repeating them in every k panel suggested they did);
+    measured next to the noise-free truth."""
     ok = results[results["rmse_um"].notna()]
     ks = sorted(int(k) for k in ok["k"].dropna().unique())
     if not ks:
         return None
-    fig, axes = plt.subplots(1, len(ks), figsize=(4.2 * len(ks), 4.2), sharey=True,
-                             squeeze=False)
-    for ax, k in zip(axes[0], ks, strict=True):
-        at = ok[(ok["k"] == k) | ok["k"].isna()].copy()
-        at["series"] = at["data"]
-        methods = _methods(at)
-        series = [s for s in ("measured", "noise-free") if s in set(at["series"])]
-        _grouped_boxes(ax, at.rename(columns={"method": "m", "series": "method"})
-                       .rename(columns={"m": "category"}), methods, "category", series)
-        ax.set_title(f"k = {k} (ridge, oracle: all candidates)")
+    no_k = ok[ok["k"].isna()]
+    panels: list[tuple[str, pd.DataFrame]] = [(f"k = {k}", ok[ok["k"] == k]) for k in ks]
+    if len(no_k):
+        panels.append(("no k: " + ", ".join(_methods(no_k)), no_k))
+    widths = [max(1, len(_methods(frame))) for _, frame in panels]
+    fig, axes = plt.subplots(1, len(panels), figsize=(0.85 * sum(widths) + 1.2, 4.4),
+                             sharey=True, squeeze=False, layout="constrained",
+                             gridspec_kw={"width_ratios": widths})
+    series = [s for s in ("measured", "noise-free") if s in set(ok["data"])]
+    for ax, (title, at) in zip(axes[0], panels, strict=True):
+        _grouped_boxes(ax, at.rename(columns={"method": "category", "data": "method"}),
+                       _methods(at), "category", series)
+        ax.set_title(title, fontsize=10)
     for ax in axes[0][1:]:
         ax.set_ylabel("")
     # A few extreme cases would flatten every box: clip the axis, say so.
@@ -81,9 +91,14 @@ def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
     clipped = int((ok["rmse_um"] > top).sum())
     axes[0][0].set_ylim(0, top)
     axes[0][0].legend(loc="upper left", fontsize=8)
-    note = f" ({clipped} of {len(ok)} values above {top:.0f} µm not shown)" if clipped else ""
-    fig.suptitle("Held-out RMSE per method: measured vs noise-free truth" + note)
+    note = f"\n({clipped} of {len(ok)} values above {top:.0f} µm not shown)" if clipped else ""
+    fig.suptitle("Held-out RMSE per method: measured vs noise-free truth" + note, fontsize=11)
     return _save(fig, path)
+
+
+def _no_k_note(frame: pd.DataFrame) -> str:
+    names = [m for m in _methods(frame) if m in NO_K]
+    return f"; {' and '.join(names)}: no k" if names else ""
 
 
 def by_month(results: pd.DataFrame, path: Path, k: int) -> Path | None:
@@ -94,7 +109,8 @@ def by_month(results: pd.DataFrame, path: Path, k: int) -> Path | None:
     months = [m for m in MONTHS if m in set(at["test_month"])]
     fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(months)), 4.2))
     _grouped_boxes(ax, at, months, "test_month", _methods(at))
-    ax.set_title(f"Held-out RMSE by month of the held-out run (measured, k = {k})")
+    ax.set_title(f"Held-out RMSE by month of the held-out run (measured, k = {k}"
+                 f"{_no_k_note(at)})")
     ax.legend(fontsize=8, ncols=3)
     return _save(fig, path)
 
@@ -108,7 +124,8 @@ def by_condition(results: pd.DataFrame, path: Path, k: int) -> Path | None:
     conditions = list(dict.fromkeys(at["condition"]))
     fig, ax = plt.subplots(figsize=(max(6.0, 1.8 * len(conditions)), 4.2))
     _grouped_boxes(ax, at, conditions, "condition", _methods(at))
-    ax.set_title(f"Held-out RMSE by measurement condition (noise / fault, k = {k})")
+    ax.set_title(f"Held-out RMSE by measurement condition (noise / fault, k = {k}"
+                 f"{_no_k_note(at)})")
     ax.legend(fontsize=8, ncols=3)
     return _save(fig, path)
 

@@ -68,6 +68,17 @@ LUMPED = {
 
 #: Parts whose node labels go to the left of the dot (the right side is crowded).
 LABEL_LEFT = ("spindle_shaft",)
+#: Node labels nudged off their default spot (dy, dz from the dot, text to the right): the X
+#: drive's four nodes sit 0.2 apart, closer than their names are long, so they alternate
+#: above and below; the labels of the Y screw nodes sit above its dashed line; the Y motor's
+#: stays inside its box.
+LABEL_NUDGE = {"x_motor": (-0.01, 0.05), "x_bearing_seat": (0.0, -0.05),
+               "x_screw": (0.0, 0.05), "x_nut": (0.0, -0.05),
+               "y_screw": (0.0, 0.045), "y_bearing_seat": (0.0, 0.045),
+               "y_motor": (-0.075, -0.05)}
+#: Part labels moved off the top-left corner where something is drawn over them (the
+#: spindle and its node labels cover the headstock's corner): (y, z) of the label.
+PART_LABEL_AT = {"housing": (0.97, 2.38)}
 
 _INDEXED = re.compile(r"^(?P<part>.+)_(?P<index>\d+)$")
 METHOD_COLOURS = {"fuzzy": "#d9622b", "greedy": "#2b7bd9", "exhaustive": "#2a9d52"}
@@ -100,14 +111,14 @@ def node_positions(nodes: Sequence[str]) -> tuple[dict[str, tuple[float, float]]
 
 def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> dict[str, tuple]:
     """The machine outline, axes and every node as a grey dot; returns the node positions."""
-    for _part, (y, z, w, h, colour, label, above) in PARTS.items():
+    for part, (y, z, w, h, colour, label, above) in PARTS.items():
         ax.add_patch(Rectangle((y, z), w, h, facecolor=colour, edgecolor="#555555", lw=0.8,
                                alpha=0.7, zorder=1))
         if above:
             ax.text(y, z + h + 0.02, label, fontsize=6, va="bottom", color="#333333", zorder=2)
         else:
-            ax.text(y + 0.02, z + h - 0.02, label, fontsize=6, va="top", color="#333333",
-                    zorder=2)
+            at = PART_LABEL_AT.get(part, (y + 0.02, z + h - 0.02))
+            ax.text(*at, label, fontsize=6, va="top", color="#333333", zorder=2)
     ax.add_patch(Rectangle((0.75, 1.22), 0.20, 1.18, facecolor="#9fb0c0", edgecolor="#555555",
                            lw=0.6, zorder=1.5))  # spindle in the headstock
     ax.plot([0.85, 0.85], [1.22, 1.10], color="#333333", lw=2.5, zorder=2)  # tool
@@ -122,7 +133,7 @@ def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> di
     ax.plot([-0.25], [1.55], marker="o", mfc="white", mec="black", ms=7, zorder=4)
     ax.plot([-0.25], [1.55], marker=".", color="black", ms=4, zorder=5)
     ax.text(-0.21, 1.45, "X (out of page)", fontsize=6, zorder=3)
-    ax.annotate("drift", xy=(0.85, 1.10), xytext=(0.35, 1.25), fontsize=6,
+    ax.annotate("drift", xy=(0.85, 1.10), xytext=(0.35, 1.13), fontsize=6,
                 arrowprops={"arrowstyle": "->", "lw": 0.6}, zorder=3)
     positions, _ = node_positions(nodes)
     pts = np.array([positions[n] for n in nodes])
@@ -131,8 +142,12 @@ def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> di
         for node in nodes:
             y, z = positions[node]
             left = any(node.startswith(f"{part}_") for part in LABEL_LEFT)
-            ax.text(y - 0.025 if left else y + 0.025, z, node, fontsize=4.5, va="center",
-                    ha="right" if left else "left", zorder=5)
+            if node in LABEL_NUDGE:
+                dy, dz = LABEL_NUDGE[node]
+                ax.text(y + dy, z + dz, node, fontsize=4.5, va="center", ha="left", zorder=5)
+            else:
+                ax.text(y - 0.025 if left else y + 0.025, z, node, fontsize=4.5,
+                        va="center", ha="right" if left else "left", zorder=5)
     low = min(-0.45, float(pts[:, 1].min()) - 0.1)
     ax.set_xlim(-0.45, 2.65)
     ax.set_ylim(low, 2.85)
@@ -175,23 +190,35 @@ def nodes_figure(nodes: Sequence[str], path: Path) -> Path:
 
 def budget_figure(nodes: Sequence[str], placements: Sequence[Placement], table: pd.DataFrame,
                   budget: int, path: Path) -> Path | None:
-    """One panel per method (and candidate set) for budget ``budget``."""
+    """One panel per method (and candidate set) for budget ``budget``.
+
+    Each panel is a drawing with its variable list in a strip of its own beneath it, so the
+    list cannot run into the next row's title; the figure is sized to the drawing's aspect,
+    so no empty band is left around the equal-aspect drawings.
+    """
     chosen = [p for p in placements if p.budget == budget and p.found]
     if not chosen:
         return None
     cols = min(3, len(chosen))
     rows = -(-len(chosen) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.9 * rows), squeeze=False)
-    for ax, placement in zip(axes.flat, chosen, strict=False):
+    lines = max(len(p.variables) for p in chosen)
+    drawing_h, listing_h, width = 4.5, 0.16 + 0.105 * lines, 4.2
+    fig = plt.figure(figsize=(width * cols, rows * (drawing_h + listing_h) + 0.35),
+                     layout="constrained")
+    grid = fig.add_gridspec(2 * rows, cols,
+                            height_ratios=[drawing_h, listing_h] * rows)
+    for i, placement in enumerate(chosen):
+        row, col = divmod(i, cols)
+        ax = fig.add_subplot(grid[2 * row, col])
         draw_placement(ax, nodes, placement, METHOD_COLOURS.get(placement.method, "purple"))
-        row = table[(table["label"] == placement.label) & (table["m"] == budget)]
-        rmse = row["test_mean_rmse_um"].iloc[0] if len(row) else float("nan")
-        listing = "\n".join(f"{i}: {v}" for i, v in enumerate(placement.variables, start=1))
+        found = table[(table["label"] == placement.label) & (table["m"] == budget)]
+        rmse = found["test_mean_rmse_um"].iloc[0] if len(found) else float("nan")
         ax.set_title(f"{placement.label}, m = {budget}: test RMSE {rmse:.2f} µm", fontsize=8)
-        ax.text(0.0, 0.0, listing, fontsize=6, ha="left", va="top", family="monospace",
-                transform=ax.transAxes)
-    for ax in list(axes.flat)[len(chosen):]:
-        ax.axis("off")
+        strip = fig.add_subplot(grid[2 * row + 1, col])
+        strip.axis("off")
+        listing = "\n".join(f"{n}: {v}" for n, v in enumerate(placement.variables, start=1))
+        strip.text(0.02, 1.0, listing, fontsize=6, ha="left", va="top", family="monospace",
+                   transform=strip.transAxes)
     fig.suptitle(f"Sensor placements for a budget of m = {budget} (numbers: order in the "
                  "model; dotted line: a difference of two nodes)", fontsize=9)
     return _save(fig, path)
