@@ -203,3 +203,24 @@ def test_with_sensors_a_gap_in_an_unused_column_is_ignored(recordings, tmp_path,
     assert status == 2 and err.count("\n") == 1
     assert "gap6.csv, line 17, column 'T6': missing value" in err
     assert "--missing drop-rows" in err
+
+
+@pytest.mark.parametrize("with_bom", [(True, True), (True, False), (False, True)])
+def test_utf8_byte_order_mark_is_ignored(recordings, tmp_path, capsys, with_bom):
+    """An Excel export with a BOM evaluates like the plain file, whether both files or only one
+    has it (time_s became a sensor '\\ufefftime_s', or the files' sensors 'differed')."""
+    paths = []
+    for path, bom in zip(recordings[:2], with_bom, strict=True):
+        copy = tmp_path / f"bom_{path.name}"
+        copy.write_bytes((b"\xef\xbb\xbf" if bom else b"") + path.read_bytes())
+        paths.append(copy)
+    status, _, err = run_cli(capsys, "--train", paths[0], "--test", paths[1], "--target",
+                             "drift_um", "--clusters", "2", "--json", tmp_path / "bom.json")
+    assert status == 0, err
+    plain = tmp_path / "plain.json"
+    assert run_cli(capsys, "--train", recordings[0], "--test", recordings[1], "--target",
+                   "drift_um", "--clusters", "2", "--json", plain)[0] == 0
+    got, want = (json.loads((tmp_path / name).read_text()) for name in ("bom.json", "plain.json"))
+    assert got["provenance"]["sensors"] == want["provenance"]["sensors"]
+    assert "time_s" not in got["provenance"]["sensors"]
+    assert list(got["rmse_um"].values()) == list(want["rmse_um"].values())

@@ -92,3 +92,23 @@ def test_columns_reads_and_checks_only_the_columns_used(tmp_path):
     bad_time = write(tmp_path, "time_s,T1,T2\n0,20,\n0,21,\n", "time.csv")
     with pytest.raises(SpindlebenchError, match="'time_s' does not increase"):
         read_recording(bad_time, columns=["T1"])
+
+
+@pytest.mark.parametrize("body", [GOOD, GOOD.replace("21.1", ""), GOOD.replace("21.1", "x")])
+def test_utf8_byte_order_mark_is_not_part_of_the_first_name(tmp_path, body):
+    """Excel's "CSV UTF-8" starts with a BOM: the first column is still 'time_s' (it was
+    '\\ufefftime_s' and became a sensor), on the fast path, the allow_missing path and in an
+    error message naming a cell."""
+    path = tmp_path / "bom.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + body.encode())
+    if "x" in body:
+        with pytest.raises(SpindlebenchError, match=r"line 3, column 'T2': non-numeric") as info:
+            read_recording(path)
+        assert "\ufeff" not in str(info.value)
+        return
+    frame = read_recording(path, allow_missing=True)
+    assert list(frame.columns) == ["time_s", "T1", "T2", "drift_um"]
+    assert frame.attrs["header"][0] == "time_s"
+    assert default_sensors(frame, "drift_um") == ["T1", "T2"]
+    assert list(read_recording(path, allow_missing=True, columns=["T1"]).columns) == [
+        "time_s", "T1"]

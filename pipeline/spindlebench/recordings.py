@@ -6,7 +6,8 @@ sensor temperatures, the measured thermal error, optionally drivers and ``true_*
 ``SpindlebenchError`` naming the file, line and column: a missing file, an empty file, repeated
 or empty column names, rows with the wrong number of fields, empty/NaN/non-numeric/infinite
 cells, fewer than 2 samples, or a ``time_s`` that does not strictly increase. Missing values
-are never interpolated: whoever made the file knows better how to fill them.
+are never interpolated: whoever made the file knows better how to fill them. A leading UTF-8
+byte-order mark (Excel's "CSV UTF-8") is ignored.
 
 ``read_recording(path, allow_missing=True)`` is the one opt-in exception: empty and ``NaN``
 cells (the testbench's sensor dropout) are read as NaN so that a consumer can drop the
@@ -34,6 +35,9 @@ import pandas as pd
 from spindlebench.errors import SpindlebenchError
 
 TIME_COLUMN = "time_s"
+#: UTF-8, with a leading byte-order mark (Excel's "CSV UTF-8" export) dropped: kept, it would
+#: glue itself to the first column name ("\ufefftime_s") and time_s would become a sensor.
+ENCODING = "utf-8-sig"
 
 #: Columns that are never sensors by default: the synthetic testbench's driver inputs and
 #: noise-free truth, and, on any recording, thermal errors/displacements (``*_um``), speeds
@@ -109,7 +113,9 @@ def _read_clean(
     ``allow_missing`` permits it), and every line has all its fields; or None."""
     na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
-        frame = pd.read_csv(path, skip_blank_lines=False, engine="c", **na)
+        frame = pd.read_csv(
+            path, skip_blank_lines=False, engine="c", encoding=ENCODING, **na
+        )
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError):
         return None
     if frame.shape[1] != len(header):
@@ -148,7 +154,8 @@ def _read_diagnosing(
     """Slow path: read every cell as text, raise naming the first bad cell of ``keep``."""
     try:
         raw = pd.read_csv(
-            path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c"
+            path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c",
+            encoding=ENCODING,
         )
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         detail = " ".join(str(exc).split())
@@ -171,7 +178,7 @@ def _read_diagnosing(
 
 def _read_header(path: Path) -> list[str]:
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
+        with open(path, newline="", encoding=ENCODING) as handle:
             header = next(csv.reader(handle), None)
     except UnicodeDecodeError as exc:
         raise SpindlebenchError(f"recording {path}: not UTF-8 text") from exc
@@ -189,7 +196,7 @@ def _read_header(path: Path) -> list[str]:
 
 def _check_field_counts(path: Path, width: int, rows: int) -> None:
     """Raise naming the first of the first ``rows`` data lines without ``width`` fields."""
-    with open(path, newline="", encoding="utf-8") as handle:
+    with open(path, newline="", encoding=ENCODING) as handle:
         lines = csv.reader(handle)
         next(lines, None)
         for number, fields in enumerate(itertools.islice(lines, rows), start=2):
