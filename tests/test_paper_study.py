@@ -379,3 +379,36 @@ def test_paper_tables_4_and_5_only_beside_a_study_that_trains_like_the_paper(gen
         text = (other / f"table{number}.md").read_text()
         assert "(paper)" not in text
         assert f"The paper's Table {number} (trained on its exp1) is not shown" in text
+
+
+def test_a_folder_not_written_by_paper_is_refused_before_anything_is_written(generated,
+                                                                              tmp_path, capsys):
+    folder, _out = generated
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "README.md").write_text("someone else's")
+    status = cli.main(["paper", "--recordings", str(folder), "--out", str(foreign)])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and "is not a paper-study folder" in err
+    assert [p.name for p in foreign.iterdir()] == ["README.md"]
+    assert (foreign / "README.md").read_text() == "someone else's"
+
+
+def test_a_folder_in_the_way_of_an_output_leaves_every_old_file_in_place(generated, tmp_path,
+                                                                          capsys):
+    folder, _out = generated
+    out = tmp_path / "study"
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    (out / "table6.md").unlink()
+    (out / "table6.md").mkdir()
+    capsys.readouterr()
+    status = cli.main(["paper", "--recordings", str(folder), "--out", str(out),
+                       "--tests", "exp3,exp4"])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and "table6.md: is a folder" in err
+    after = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    assert after == {name: data for name, data in before.items() if name != "table6.md"}
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no staging left

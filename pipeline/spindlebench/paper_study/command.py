@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from spindlebench.paper_study import config as study_config
-from spindlebench.paper_study.report import write_outputs
+from spindlebench.paper_study.report import check_out_dir, write_outputs
 from spindlebench.paper_study.study import GROUP_LABELS, run_study
 
 
@@ -88,6 +88,7 @@ def _run(args: argparse.Namespace) -> int:
         )
         if value is not None
     )
+    check_out_dir(out_dir)  # before the study's minutes, not after
     result = run_study(args.recordings, config)
     paths = write_outputs(result, out_dir, command)
     print(f"paper comparison: train {config.train}, predict {', '.join(config.tests)}; "

@@ -5,7 +5,11 @@ Every file is written atomically; the README is the page a reader opens first.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import shutil
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Any
@@ -13,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from spindlebench import atomic
+from spindlebench.errors import SpindlebenchError
 from spindlebench.paper_study import figures, reference, tables
 from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
 from spindlebench.provenance import file_entry, provenance, sidecar_mismatch
@@ -171,15 +176,48 @@ Paper: {reference.CITATION}.
 
 def _previous_outputs(out_dir: Path) -> list[str]:
     """The file names an earlier run listed in ``out_dir/provenance.json`` (none if unreadable)."""
-    try:
-        outputs = json.loads((out_dir / "provenance.json").read_text(encoding="utf-8"))["outputs"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return []
+    record = _paper_provenance(out_dir)
+    outputs = record.get("outputs") if record else None
     if not isinstance(outputs, list):
         return []
     # Only plain names of this study's own kinds of file: never a path out of the folder.
     return [name for name in outputs if isinstance(name, str) and name == Path(name).name
             and Path(name).suffix in {".csv", ".md", ".png", ".json"}]
+
+
+def _paper_provenance(out_dir: Path) -> dict[str, Any] | None:
+    """``out_dir/provenance.json`` when ``spindlebench paper`` wrote it (it names the paper
+    and lists its outputs), else None."""
+    try:
+        record = json.loads((out_dir / "provenance.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if isinstance(record, dict) and "paper" in record and isinstance(record.get("outputs"), list):
+        return record
+    return None
+
+
+_STAGING_PREFIX = ".paper-study."
+
+
+def _is_staging(path: Path) -> bool:
+    """Whether ``path`` is a staging folder of ``write_outputs``."""
+    return path.name.startswith(_STAGING_PREFIX) and path.name.endswith(".part")
+
+
+def check_out_dir(out_dir: str | Path) -> None:
+    """Refuse an output folder that exists, is not empty and was not written by ``paper``:
+    a rerun replaces its own files and removes its own stale ones, but a README.md or a table
+    of something else must never be overwritten."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise SpindlebenchError(f"{out_dir}: exists and is not a folder")
+    # A staging folder left by a killed run does not count as content.
+    content = [path for path in out_dir.iterdir() if not _is_staging(path)] \
+        if out_dir.is_dir() else []
+    if content and _paper_provenance(out_dir) is None:
+        raise SpindlebenchError(f"{out_dir}: exists and is not a paper-study folder; "
+                                "choose an empty or new folder")
 
 
 def _remove_stale(out_dir: Path, previous: list[str], current: dict[str, Path]) -> None:
@@ -194,11 +232,43 @@ def _remove_stale(out_dir: Path, previous: list[str], current: dict[str, Path]) 
 def write_outputs(result: StudyResult, out_dir: str | Path, command: str) -> dict[str, Path]:
     """Write everything for ``result`` into ``out_dir``; return the paths by role.
 
-    Files an earlier run listed in its provenance and this run does not write are removed
-    after the new ones are in place; other files in ``out_dir`` are never touched.
+    Everything is first written into a hidden folder inside ``out_dir``; only when every file
+    exists and no target name is taken by a folder are they moved into place (so an error
+    never leaves half the tables replaced). Files an earlier run listed in its provenance and
+    this run does not write are removed after the new ones are in place; other files in
+    ``out_dir`` are never touched.
     """
     out_dir = Path(out_dir)
-    previous = _previous_outputs(out_dir)
+    check_out_dir(out_dir)
+    created = not out_dir.exists()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=_STAGING_PREFIX, suffix=".part", dir=out_dir))
+    try:
+        staged = _write_all(result, staging, command)
+        blocked = sorted(path.name for path in staged.values()
+                         if (out_dir / path.name).is_dir())
+        if blocked:
+            raise SpindlebenchError(f"{out_dir / blocked[0]}: is a folder, where the study "
+                                    "writes a file; nothing was written")
+        previous = _previous_outputs(out_dir)
+        # provenance.json last: until it is in place the folder still describes the old run.
+        order = sorted(staged, key=lambda role: role == "provenance")
+        for role in order:
+            os.replace(staged[role], out_dir / staged[role].name)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        if created:
+            with contextlib.suppress(OSError):
+                out_dir.rmdir()
+        raise
+    shutil.rmtree(staging, ignore_errors=True)
+    paths = {role: out_dir / path.name for role, path in staged.items()}
+    _remove_stale(out_dir, previous, paths)
+    return paths
+
+
+def _write_all(result: StudyResult, out_dir: Path, command: str) -> dict[str, Path]:
+    """Every output file of ``result`` in ``out_dir`` (the staging folder); paths by role."""
     paths: dict[str, Path] = {
         "table4_csv": _write_csv(out_dir / "table4_selected.csv", tables.table4_frame(result)),
         "table5_csv": _write_csv(out_dir / "table5_r2.csv", tables.table5_frame(result)),
@@ -232,5 +302,4 @@ def write_outputs(result: StudyResult, out_dir: str | Path, command: str) -> dic
         outputs=sorted(p.name for p in paths.values()),
         paper=reference.CITATION,
     ))
-    _remove_stale(out_dir, previous, paths)
     return paths
