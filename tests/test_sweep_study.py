@@ -73,6 +73,22 @@ def test_chongqing_climate_is_complete_and_plausible():
         ({"clusters = [2, 3]": "clusters = [2, 9]"},
          "key 'methods.clusters': item 2 (9): must be between 1 and 6"),
         ({"[noise.lab]": "[noise.lab]\nnoise_K = 0.1"}, "key 'noise.lab.noise_K': unknown key"),
+        # non-finite numbers slip past range checks unless refused as such
+        ({"[noise.lab]": "[parameters]\nfb_housing_G = nan\n\n[noise.lab]"},
+         "key 'parameters.fb_housing_G': must be a finite number, got nan"),
+        ({"speeds_rpm = [2000, 4000]": "speeds_rpm = [2000, inf]"},
+         "key 'axes.speeds_rpm': item 2 must be a finite number, got inf"),
+        # parameter names are checked against the FMU at load time, not in every simulation
+        ({"[noise.lab]": "[parameters]\nfoo = 1.0\n\n[noise.lab]"},
+         "key 'parameters.foo': the FMU SpindleBench.fmu has no parameter 'foo'"),
+        ({"[noise.lab]": "[parameters]\ncooling_enabled = 1.0\n\n[noise.lab]"},
+         "key 'parameters.cooling_enabled': set cooling with [cooling]"),
+        ({"step_s = 120.0": "step_s = 1e-300"},
+         "key 'experiment.step_s': must be at least 0.001 s, got 1e-300"),
+        ({"duration_min = 40\nstep_s = 120.0": "duration_min = 600\nstep_s = 0.001"},
+         "key 'experiment.step_s': 0.001 s gives 3.6e+07 steps in 36000 s (at most 1e+07)"),
+        ({"weather_sd_C = 1.0": "weather_sd_C = 1.0\nfeed_x_mm_per_min = 1e15"},
+         "key 'experiment.feed_x_mm_per_min': must be in [0, 60000] mm/min"),
     ],
 )
 def test_bad_study_gets_one_line_naming_file_and_key(tmp_path, replace, expected):
@@ -99,6 +115,24 @@ def test_climate_in_kelvin_is_refused(tmp_path):
     study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"': 'climate = "hot.toml"'}))
     with pytest.raises(SpindlebenchError, match=r"hot.toml: key 'months.Jan.low_C': 278.9 looks "
                                                 r"like Kelvin"):
+        load_study(study)
+
+
+def test_a_nan_in_the_climate_names_the_month(tmp_path):
+    text = resolve_climate_path("chongqing").read_text(encoding="utf-8")
+    write_study(tmp_path, text.replace("low_C = 5.8", "low_C = nan"), "nan.toml")
+    study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"': 'climate = "nan.toml"'}))
+    with pytest.raises(SpindlebenchError, match=r"nan.toml: key 'months.Jan.low_C': must be a "
+                                                r"finite number, got nan"):
+        load_study(study)
+
+
+def test_an_unreadable_fmu_is_refused_at_load_time(tmp_path):
+    (tmp_path / "bad.fmu").write_text("not a zip", encoding="utf-8")
+    study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"':
+                                               'climate = "chongqing"\nfmu = "bad.fmu"'}))
+    with pytest.raises(SpindlebenchError, match=r"key 'study.fmu': .*bad.fmu: not a readable "
+                                                r"FMU"):
         load_study(study)
 
 

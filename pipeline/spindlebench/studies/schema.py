@@ -7,6 +7,7 @@ unknown key (usually a typo) is never silently ignored.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -69,6 +70,8 @@ class Table:
         if value is _MISSING:
             raise self.error(name, f"must be {_TYPE_NAMES.get(kind, kind.__name__)}, "
                                    f"got {_describe(self.data[name])}")
+        if not _finite(value):
+            raise self.error(name, f"must be a finite number, got {value!r}")
         if check is not None and (complaint := check(value)) is not None:
             raise self.error(name, complaint)
         return value
@@ -94,6 +97,9 @@ class Table:
                 raise self.error(name, f"item {index + 1} must be "
                                        f"{_TYPE_NAMES.get(kind, kind.__name__)}, "
                                        f"got {_describe(item)}")
+            if not _finite(value):
+                raise self.error(name, f"item {index + 1} must be a finite number, "
+                                       f"got {value!r}")
             if check is not None and (complaint := check(value)) is not None:
                 raise self.error(name, f"item {index + 1} ({item!r}): {complaint}")
             if value in items:
@@ -145,6 +151,12 @@ def _coerce(value: Any, kind: type) -> Any:
     if isinstance(value, kind):
         return value
     return _MISSING
+
+
+def _finite(value: Any) -> bool:
+    """False for a NaN or infinite float: TOML allows them, no study value means them, and
+    they slip past range checks (every comparison with NaN is false)."""
+    return not isinstance(value, float) or math.isfinite(value)
 
 
 def _describe(value: Any) -> str:

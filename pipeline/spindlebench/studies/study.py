@@ -38,6 +38,13 @@ PROGRAMME_KINDS = ("constant", "cycles", "steps")
 COOLING_MODES = ("off", "absolute", "follow_ambient")
 FAULT_KINDS = ("dropout", "stuck", "offset")
 NO_FAULT = "none"
+#: Run-length limits, the same as a scenario's (``testbench.scenario``): the thermal time
+#: constants are minutes, so a millisecond step resolves them a thousand times over, and ten
+#: million steps keep the driver arrays and the run time bounded.
+MIN_STEP_S = 1e-3
+MAX_STEPS = 10_000_000
+#: Fastest mean feed (mm/min), as for a scenario: the rapid traverse of fast machining centres.
+MAX_FEED_MM_PER_MIN = 60_000.0
 
 
 @dataclass(frozen=True)
@@ -159,15 +166,20 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     fmu = (here / fmu_text).resolve() if fmu_text else DEFAULT_FMU
     if fmu_text and not fmu.is_file():
         raise head.error("fmu", f"no such FMU: {fmu}")
+    fmu_parameters = _fmu_parameters(head, fmu) if fmu.is_file() else None
     head.finish()
 
     exp = root.table("experiment")
     duration_s, duration_key = _duration_s(exp)
-    step_s = exp.get("step_s", float, check=positive)
+    step_s = exp.get("step_s", float, check=lambda v: None if v >= MIN_STEP_S
+                     else f"must be at least {MIN_STEP_S:g} s, got {v:g}")
     sample_interval_s = exp.get("sample_interval_s", float, default=max(step_s, 60.0),
                                 check=positive)
     if step_s > duration_s:
         raise exp.error("step_s", f"{step_s:g} s is longer than the duration ({duration_s:g} s)")
+    if duration_s / step_s > MAX_STEPS:
+        raise exp.error("step_s", f"{step_s:g} s gives {duration_s / step_s:.3g} steps in "
+                                  f"{duration_s:g} s (at most {MAX_STEPS:.0e}); use a longer step")
     if sample_interval_s > duration_s / 2:
         raise exp.error("sample_interval_s", f"{sample_interval_s:g} s leaves fewer than 3 "
                                              f"samples in {duration_s:g} s")
@@ -184,8 +196,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     feed = exp.get("feed", str, default="constant",
                    check=lambda v: None if v in ("constant", "with_spindle")
                    else "must be 'constant' or 'with_spindle'")
-    feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=non_negative)
-    feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=non_negative)
+    feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=_feed)
+    feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=_feed)
     exp.finish()
 
     definitions = {
@@ -222,6 +234,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     params = root.table("parameters", required=False)
     parameters = {name: params.get(name, float) for name in list(params.names())}
     params.finish()
+    if fmu_parameters is not None:
+        _check_parameters(params, parameters, fmu_parameters, fmu)
     for name in extra_tables:
         root.raw(name, default=None)
     root.finish()
@@ -238,6 +252,43 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
         training=training, methods=methods, parameters=parameters,
     )
+
+
+def _feed(value: float) -> str | None:
+    if 0 <= value <= MAX_FEED_MM_PER_MIN:
+        return None
+    return f"must be in [0, {MAX_FEED_MM_PER_MIN:g}] mm/min"
+
+
+def _fmu_parameters(head: Table, fmu: Path) -> frozenset[str]:
+    """The FMU's settable parameter names; an unreadable FMU fails here, at load time.
+
+    Checked now, not in the workers, so a wrong FMU or a misspelt parameter is one line
+    before any results folder exists, not the same error once per simulation afterwards.
+    """
+    from spindlebench.testbench.runner import inspect_fmu
+
+    try:
+        return frozenset(inspect_fmu(fmu).parameters)
+    except SpindlebenchError as exc:
+        raise head.error("fmu", str(exc)) from None
+
+
+def _check_parameters(params: Table, parameters: dict[str, float], known: frozenset[str],
+                      fmu: Path) -> None:
+    """Every ``[parameters]`` name must be one the FMU lets the runner set (as for a scenario)."""
+    import difflib
+
+    from spindlebench.testbench.runner import COOLING_PARAMETERS
+
+    for name in parameters:
+        if name in COOLING_PARAMETERS:
+            raise params.error(name, "set cooling with [cooling] and axes.cooling "
+                                     "(mode, setpoint_C)")
+        if name not in known:
+            near = difflib.get_close_matches(name, sorted(known), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise params.error(name, f"the FMU {fmu.name} has no parameter {name!r}{hint}")
 
 
 def _duration_s(exp: Table) -> tuple[float, str]:
