@@ -412,3 +412,36 @@ def test_a_folder_in_the_way_of_an_output_leaves_every_old_file_in_place(generat
     after = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     assert after == {name: data for name, data in before.items() if name != "table6.md"}
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+@pytest.mark.parametrize(("toml", "match"), [
+    ("clusters = [2, 2]", r"bad\.toml: clusters: k = 2 is listed twice"),
+    ('clusters = "2,,3"', r"bad\.toml: clusters: empty item in '2,,3'"),
+    ('tests = "exp2,,exp3"', r"bad\.toml: tests: empty item"),
+    ('train = "../good/exp1"', r"bad\.toml: train: '\.\./good/exp1' is not an experiment name"),
+    ('tests = ["exp2", "sub/exp3"]', r"bad\.toml: tests: 'sub/exp3' is not an experiment name"),
+    ('tests = ["exp2", ".."]', r"bad\.toml: tests: '\.\.' is not an experiment name"),
+    ('target = "time_s"', r"bad\.toml: target: time_s is the time axis"),
+    ('target = "T3"', r"bad\.toml: target: 'T3' is also in sensors_all"),
+    ('sensors_all = ["T1", "T2", "time_s"]\nsix = "auto"', r"sensors_all: time_s is the time"),
+])
+def test_config_values_that_were_accepted_silently_are_one_line_errors(tmp_path, toml, match):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(toml + "\n")
+    with pytest.raises(SpindlebenchError, match=match):
+        study_config.load(bad)
+
+
+def test_list_flags_with_an_empty_item_are_refused(generated, tmp_path, capsys):
+    folder, _ = generated
+    out = tmp_path / "study"
+    status = cli.main(["paper", "--recordings", str(folder), "--out", str(out),
+                       "--clusters", "2,,3"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1
+    assert "--clusters: empty item in '2,,3'" in err
+    assert not out.exists()
+    # a comma at the end of a word is a separator, as in evaluate --sensors
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(out),
+                     "--tests", "exp2,", "exp3", "--clusters", "2"]) == 0
+    assert json.loads((out / "provenance.json").read_text())["study"]["tests"] == ["exp2", "exp3"]

@@ -43,6 +43,7 @@ CONFIG_NAME = "paper_study.toml"
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 #: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
 MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
+TIME_COLUMN = "time_s"
 
 _KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
          "missing")
@@ -71,6 +72,22 @@ class StudyConfig:
     def checked(self) -> StudyConfig:
         """Self, after checks that need no data; one-line errors naming the key."""
         where = self.source
+        for key, names in (("train", (self.train,)), ("tests", self.tests)):
+            for name in names:
+                if not _plain_name(name):
+                    raise SpindlebenchError(
+                        f"{where}: {key}: {name!r} is not an experiment name (the stem of a "
+                        "CSV in --recordings: no folder separators, '.' or '..')"
+                    )
+        if self.target == TIME_COLUMN:
+            raise SpindlebenchError(f"{where}: target: {TIME_COLUMN} is the time axis, not a "
+                                    "thermal error")
+        if TIME_COLUMN in self.sensors_all:
+            raise SpindlebenchError(f"{where}: sensors_all: {TIME_COLUMN} is the time axis, "
+                                    "not a sensor")
+        if self.target in self.sensors_all:
+            raise SpindlebenchError(f"{where}: target: {self.target!r} is also in sensors_all "
+                                    "(a model would predict it from itself)")
         if not self.tests:
             raise SpindlebenchError(f"{where}: tests: at least one experiment to predict")
         if self.train in self.tests:
@@ -92,6 +109,9 @@ class StudyConfig:
                 )
         if not self.clusters or any(k < 1 for k in self.clusters):
             raise SpindlebenchError(f"{where}: clusters: need one or more integers >= 1")
+        repeated = sorted({k for k in self.clusters if self.clusters.count(k) > 1})
+        if repeated:
+            raise SpindlebenchError(f"{where}: clusters: k = {repeated[0]} is listed twice")
         if self.similarity not in SIMILARITIES:
             raise SpindlebenchError(
                 f"{where}: similarity: {self.similarity!r} is not one of {', '.join(SIMILARITIES)}"
@@ -113,23 +133,32 @@ class StudyConfig:
         }
 
 
-def split_list(text: str) -> tuple[str, ...]:
-    """``"a, b,c"`` -> ``("a", "b", "c")`` (for comma-separated flags)."""
-    return tuple(item.strip() for item in text.split(",") if item.strip())
+def split_list(text: str, key: str = "list", where: str = "command line") -> tuple[str, ...]:
+    """``"a, b,c"`` -> ``("a", "b", "c")`` (for comma-separated flags); an empty item
+    (``"2,,3"``) is an error, not silently dropped: it is usually a name left out."""
+    items = tuple(item.strip() for item in text.split(","))
+    if not all(items):
+        raise SpindlebenchError(f"{where}: {key}: empty item in {text!r}")
+    return items
+
+
+def _plain_name(name: str) -> bool:
+    """Whether ``name`` names a file directly in the recordings folder (no path out of it)."""
+    return bool(name) and "/" not in name and "\\" not in name and name not in (".", "..")
 
 
 def _names(value: Any, key: str, where: str) -> tuple[str, ...]:
     if isinstance(value, str):
-        return split_list(value)
-    if isinstance(value, list) and all(isinstance(item, str) for item in value):
+        return split_list(value, key, where)
+    if isinstance(value, list) and all(isinstance(item, str) and item.strip() for item in value):
         return tuple(value)
-    raise SpindlebenchError(f"{where}: {key}: expected a list of names")
+    raise SpindlebenchError(f"{where}: {key}: expected a list of non-empty names")
 
 
 def _ints(value: Any, key: str, where: str) -> tuple[int, ...]:
     if isinstance(value, str):
         try:
-            return tuple(int(item) for item in split_list(value))
+            return tuple(int(item) for item in split_list(value, key, where))
         except ValueError:
             raise SpindlebenchError(f"{where}: {key}: expected integers, got {value!r}") from None
     if isinstance(value, list) and all(isinstance(i, int) and not isinstance(i, bool)
