@@ -304,3 +304,46 @@ def test_command_line(tmp_path, capsys, reference):
     assert capsys.readouterr().err.strip().splitlines() == [
         f"error: {bad}: key 'study.replicas': must be between 1 and 10000"]
     assert not (tmp_path / "x").exists()
+
+
+class EveryExperimentBroken(Sweep):
+    """Every simulation gets a parameter the FMU does not have (a run-time failure)."""
+
+    def simulation_task(self, replica, experiment):
+        task = super().simulation_task(replica, experiment)
+        scenario = dataclasses.replace(task.args[0], parameters={"no_such_parameter": 1.0})
+        return dataclasses.replace(task, args=(scenario, *task.args[1:]))
+
+
+def test_when_every_simulation_fails_the_sweep_says_so_in_one_line(tmp_path):
+    out = tmp_path / "all-failed"
+    with pytest.raises(SpindlebenchError) as info:
+        sweep_into(out, EveryExperimentBroken)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith("sweep: all 8 simulations failed; first: SpindlebenchError: ")
+    assert "no_such_parameter" in message
+    assert message.endswith(f"see {out / 'runs' / 'r001'}/Jan-2000rpm-constant-off.error.json")
+    results = pd.read_csv(out / "results.csv")
+    assert len(results) and results["rmse_um"].isna().all()
+    assert results["error"].str.startswith("training experiment failed: ").all()
+    readme = (out / "README.md").read_text(encoding="utf-8")
+    assert "all 8 simulations failed" in readme and "no_such_parameter" in readme
+    assert not (out / "summary").exists()
+
+
+class EveryEvaluationBroken(Sweep):
+    def evaluation_task(self, replica, condition, train):
+        task = super().evaluation_task(replica, condition, train)
+        return dataclasses.replace(task, args=(dataclasses.replace(task.args[0], truths={}),))
+
+
+def test_when_every_evaluation_fails_the_sweep_says_so_in_one_line(tmp_path, reference):
+    out = tmp_path / "no-evaluation"
+    shutil.copytree(reference[1].out_dir / "runs", out / "runs")
+    shutil.copy(reference[1].out_dir / "state.json", out / "state.json")
+    with pytest.raises(SpindlebenchError, match=r"^sweep: no evaluation produced an RMSE "
+                                                r"\(6 result rows, 0 of 8 simulations failed\); "
+                                                r"first: evaluation failed: KeyError"):
+        sweep_into(out, EveryEvaluationBroken)
+    assert "no evaluation produced an RMSE" in (out / "README.md").read_text(encoding="utf-8")

@@ -21,6 +21,7 @@ from pathlib import Path
 import pandas as pd
 
 from spindlebench.atomic import write_text
+from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance, sha256_file
 from spindlebench.recordings import read_recording
 from spindlebench.studies.executor import (
@@ -270,6 +271,8 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> No
     store, study = sweep.store, sweep.study
     results = outcome.results
     store.write_frame("results.csv", results)
+    if not results["rmse_um"].notna().any():
+        raise nothing_to_summarise(sweep, results)
     tables = summary.summarise(results)
     for name, table in tables.items():
         store.write_frame(f"summary/{name}.csv", table)
@@ -290,6 +293,39 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> No
     store.write_json("provenance.json", record)
     write_text(store.path("README.md"),
                report.readme(study, results, tables, figures, record, sweep.trains))
+
+
+def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchError:
+    """Write a README that says why there are no findings; return the one-line error.
+
+    When every simulation (or every evaluation) failed there is nothing to summarise, plot or
+    judge; results.csv (written before) keeps every row with its error, and the README and
+    the error line point at the first cause instead of a crash in the summary.
+    """
+    store, study = sweep.store, sweep.study
+    runs = [(r, e) for r in replicas(study) for e in sweep.family]
+    failed = [(r, e) for r, e in runs if store.exists(failure_path(r, e))]
+    if failed:
+        where = failure_path(*failed[0])
+        first = store.read_json(where)["error"]
+    else:
+        with_error = results[results["error"] != ""]
+        first = with_error["error"].iloc[0] if len(with_error) else "no result rows"
+        where = "results.csv"
+    if len(failed) == len(runs):
+        what = f"all {len(runs)} simulations failed"
+    else:
+        what = (f"no evaluation produced an RMSE ({len(results)} result rows, "
+                f"{len(failed)} of {len(runs)} simulations failed)")
+    write_text(store.path("README.md"), "\n".join([
+        f"# {study.name}: no findings", "",
+        f"Nothing to summarise: {what} ({len(sweep.family)} experiments × "
+        f"{study.replicas} replica(s)).", "",
+        f"First error (`{where}`):", "", f"    {first}", "",
+        "`results.csv` lists every result row with its error. Fix the cause and run the same "
+        "command again: finished work is kept and failed simulations and evaluations are "
+        "retried.", ""]))
+    return SpindlebenchError(f"sweep: {what}; first: {first}; see {store.path(where)}")
 
 
 # --------------------------------------------------------------------- command line
