@@ -155,6 +155,18 @@ BAD_CASES = {
         "without .toml ('day1')"),
     "continue from nothing": (BASE + '[initial]\nkind = "continue"\nfrom = " "\n',
                               "initial.from", "empty"),
+    "step too small for numpy": (BASE.replace("step_s = 1.0", "step_s = 1e-300"), "step_s",
+                                 ">= 0.001"),
+    "too many steps": (BASE.replace("duration_s = 3600", "duration_s = 7776000")
+                       .replace("step_s = 1.0", "step_s = 0.5"), "step_s", "at most 10,000,000"),
+    "speed above the studies' limit": (BASE.replace("rpm = 4000", "rpm = 1e12"), "speed.rpm",
+                                       "<= 40000"),
+    "stepped speed above the limit": (
+        BASE.replace('kind = "constant"\nrpm = 4000',
+                     'kind = "steps"\nsteps = [{at_s = 0, rpm = 40001}]'),
+        "speed.steps[0].rpm", "<= 40000"),
+    "feed above rapid traverse": (BASE.replace("x_mm_per_min = 1500", "x_mm_per_min = 1e15"),
+                                  "feed.x_mm_per_min", "<= 60000"),
     "speed table is a number": (BASE.replace('[speed]\nkind = "constant"\nrpm = 4000\n', "")
                                 .replace("seed = 3", "seed = 3\nspeed = 4000"), "speed", "table"),
 }
@@ -264,3 +276,16 @@ def test_initial_from_is_a_scenario_name_or_a_path(tmp_path, value, scenario_nam
         assert resolved.from_file == tmp_path / "out" / f"{value}.json"
     else:
         assert initial.from_file == (tmp_path / value).with_name(file_name).resolve()
+
+
+def test_ambient_csv_with_a_duplicated_column_is_one_line(tmp_path):
+    """Which of two 'ambient_C' columns was meant is a guess; it used to take the first."""
+    (tmp_path / "amb.csv").write_text("time_s,ambient_C,ambient_C\n0,10,30\n3600,11,31\n",
+                                      encoding="utf-8")
+    text = BASE.replace('kind = "season"\nlow_C = 5.3\nhigh_C = 10.4',
+                        'kind = "csv"\nfile = "amb.csv"')
+    with pytest.raises(SpindlebenchError) as info:
+        load_scenario(write(tmp_path, text))
+    message = str(info.value)
+    assert "\n" not in message
+    assert "amb.csv: line 1: column 'ambient_C' appears more than once" in message

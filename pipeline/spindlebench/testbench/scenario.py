@@ -26,6 +26,18 @@ KELVIN_SUSPECT_C = 60.0
 COLDEST_AMBIENT_C = -40.0
 #: The paper's sensors, the only ones a fault can target.
 SENSOR_NAMES = tuple(f"T{i}" for i in range(1, 21))
+#: Fastest spindle a scenario may ask for (rev/min): the studies' limit; high-speed spindles
+#: of machining centres reach 30 000-40 000 rpm, the model's bearing losses are not meant beyond.
+MAX_RPM = 40_000.0
+#: Fastest mean feed (mm/min): 60 m/min is the rapid traverse of fast machining centres; above
+#: it the feed-drive friction heat of the model has no physical meaning.
+MAX_FEED_MM_PER_MIN = 60_000.0
+#: Smallest communication step (s): the thermal time constants are minutes, a millisecond step
+#: already resolves them a thousand times over.
+MIN_STEP_S = 1e-3
+#: Most communication steps of one run: 90 days at 1 s; the driver arrays (4 inputs × 8 bytes
+#: a step) and the run time stay bounded.
+MAX_STEPS = 10_000_000
 
 _MISSING = object()
 
@@ -375,11 +387,19 @@ def _kind(table: _Table, choices: tuple[str, ...], default: str | None = None) -
 # --------------------------------------------------------------------------- sections
 
 
+def _rpm(t: _Table) -> float:
+    return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit="rev/min")
+
+
+def _feed(t: _Table, name: str) -> float:
+    return t.number(name, minimum=0.0, maximum=MAX_FEED_MM_PER_MIN, unit="mm/min")
+
+
 def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
     t = top.table("speed", required=True)
     kind = _kind(t, ("constant", "steps", "cycles"))
     if kind == "constant":
-        programme: SpeedProgramme = ConstantSpeed(rpm=t.number("rpm", minimum=0.0))
+        programme: SpeedProgramme = ConstantSpeed(rpm=_rpm(t))
     elif kind == "steps":
         steps = []
         for step in t.tables("steps"):
@@ -389,7 +409,7 @@ def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
                                 f"({duration_s:g} s)")
             if steps and at_s <= steps[-1].at_s:
                 raise step.fail("at_s", "steps must be in increasing time order")
-            steps.append(SpeedStep(at_s=at_s, rpm=step.number("rpm", minimum=0.0)))
+            steps.append(SpeedStep(at_s=at_s, rpm=_rpm(step)))
             step.finish()
         if not steps:
             raise t.fail("steps", "needs at least one step")
@@ -404,7 +424,7 @@ def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
             raise t.fail("on_s", f"one cycle ({on_s + off_s:g} s) is longer than the duration "
                          f"({duration_s:g} s)")
         programme = SpeedCycles(
-            rpm=t.number("rpm", minimum=0.0), on_s=on_s, off_s=off_s, start_s=start_s,
+            rpm=_rpm(t), on_s=on_s, off_s=off_s, start_s=start_s,
             count=t.integer("count", None, minimum=1),
         )
     t.finish()
@@ -415,8 +435,8 @@ def _read_feed(top: _Table, duration_s: float) -> FeedProgramme:
     t = top.table("feed", required=True)
     kind = _kind(t, ("constant", "with_spindle", "steps"))
     if kind in ("constant", "with_spindle"):
-        x = t.number("x_mm_per_min", minimum=0.0)
-        y = t.number("y_mm_per_min", minimum=0.0)
+        x = _feed(t, "x_mm_per_min")
+        y = _feed(t, "y_mm_per_min")
         programme: FeedProgramme = (
             ConstantFeed(x, y) if kind == "constant" else FeedWithSpindle(x, y)
         )
@@ -431,8 +451,8 @@ def _read_feed(top: _Table, duration_s: float) -> FeedProgramme:
                 raise step.fail("at_s", "steps must be in increasing time order")
             steps.append(FeedStep(
                 at_s=at_s,
-                x_mm_per_min=step.number("x_mm_per_min", minimum=0.0),
-                y_mm_per_min=step.number("y_mm_per_min", minimum=0.0),
+                x_mm_per_min=_feed(step, "x_mm_per_min"),
+                y_mm_per_min=_feed(step, "y_mm_per_min"),
             ))
             step.finish()
         if not steps:
@@ -504,6 +524,10 @@ def _read_ambient_csv(
             cells = next(csv.reader([line]))
             if header is None:
                 header = [c.strip() for c in cells]
+                twice = sorted({c for c in header if header.count(c) > 1})
+                if twice:  # which of the two would be "the" column is a guess
+                    raise SpindlebenchError(f"{file}: line {line_no}: column {twice[0]!r} "
+                                            "appears more than once in the header")
                 for column, key in ((time_column, "time_column"), (value_column, "value_column")):
                     if column not in header:
                         raise t.fail(key, f"column {column!r} not in {file} "
@@ -631,6 +655,21 @@ def _read_parameters(top: _Table) -> dict[str, float]:
     return values
 
 
+def step_count_problem(duration_s: float, step_s: float) -> str | None:
+    """Why ``duration_s`` at ``step_s`` is too many steps to simulate (None when it is not).
+
+    Checked before any array is made: a tiny step would otherwise fail deep in numpy
+    ("Maximum allowed size exceeded") or run for hours.
+    """
+    if not step_s >= MIN_STEP_S:
+        return f"must be at least {MIN_STEP_S:g} s, got {step_s:g}"
+    steps = duration_s / step_s
+    if steps > MAX_STEPS:
+        return (f"{step_s:g} s gives {steps:.3g} communication steps over {duration_s:g} s; at "
+                f"most {MAX_STEPS:,} (use a larger step_s)")
+    return None
+
+
 def _check_grid(top: _Table, name: str, value: float, unit_name: str, unit_s: float) -> None:
     ratio = value / unit_s
     if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio):
@@ -660,11 +699,14 @@ def load_scenario(path: str | Path) -> Scenario:
     name = top.string("name", path.stem)
     description = top.string("description", "")
     duration_s = top.number("duration_s", positive=True, maximum=90 * 86400.0)
-    step_s = top.number("step_s", positive=True)
+    step_s = top.number("step_s", positive=True, minimum=MIN_STEP_S)
     if step_s > duration_s:
         raise top.fail("step_s", f"communication step {step_s:g} s is larger than the duration "
                        f"({duration_s:g} s)")
     _check_grid(top, "duration_s", duration_s, "step_s", step_s)
+    too_many = step_count_problem(duration_s, step_s)
+    if too_many:
+        raise top.fail("step_s", too_many)
     sample_interval_s = top.number("sample_interval_s", positive=True)
     if sample_interval_s > duration_s:
         raise top.fail("sample_interval_s", f"{sample_interval_s:g} s is larger than the "
