@@ -161,6 +161,12 @@ def study_text(**replace: str) -> str:
          "key 'axes.noise': a placement study measures with one noise level, got 2"),
         ({"[placement]": "[placment]"}, "key 'placment': unknown key"),
         ({"replicas = 2": "replicas = 0"}, "key 'study.replicas': must be between 1"),
+        # checked at load time: before, each failed once per simulation, on one huge line
+        ({"[placement]": "[parameters]\nfoo = 1.0\n\n[placement]"},
+         "key 'parameters.foo': the FMU SpindleBench.fmu has no parameter 'foo'"),
+        ({"[placement]": "[parameters]\nfb_housing_G = nan\n\n[placement]"},
+         "key 'parameters.fb_housing_G': must be a finite number, got nan"),
+        ({"step_s = 120.0": "step_s = 1e-300"}, "key 'experiment.step_s': must be at least"),
     ],
 )
 def test_bad_study_gets_one_line_naming_file_and_key(tmp_path, capsys, replace, expected):
@@ -184,3 +190,22 @@ def test_missing_placement_table_and_file(tmp_path):
         load_placement_study(path)
     with pytest.raises(SpindlebenchError, match="file not found"):
         load_placement_study(tmp_path / "nope.toml")
+
+
+def test_when_every_run_fails_the_error_is_one_short_line(tmp_path, capsys, monkeypatch):
+    import dataclasses
+
+    from spindlebench.studies.placement import run
+
+    def broken(*args):
+        return dataclasses.replace(real(*args), parameters={"no_such_parameter": 1.0})
+
+    real = run.scenario_for
+    monkeypatch.setattr(run, "scenario_for", broken)
+    out = tmp_path / "out"
+    assert main(["place", str(TINY), "-o", str(out), "--workers", "0", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and len(err[0]) < 600, err
+    assert "8 of 8 simulations failed; first, r1 Jan-2000rpm-constant-off: " in err[0]
+    assert err[0].count("no_such_parameter") == 2  # in the key and in the message, once
+    assert err[0].endswith(f"see {out}/runs/r001/Jan-2000rpm-constant-off.error.json)")

@@ -124,6 +124,25 @@ class PlacementStudyRun:
                     out[f"r{replica} {experiment.id}"] = error
         return out
 
+    def failure_summary(self) -> str:
+        """The failures in a few words: how many, the first error once, where it is kept.
+
+        One line however many runs failed: the same cause (a bad FMU, a bad parameter)
+        usually fails every run, and repeating it per run made a line of thousands of
+        characters.
+        """
+        runs = [(r, e) for r in replicas(self.study.family) for e in self.family]
+        failed = [(r, e) for r, e in runs if self.store.exists(failure_path(r, e))]
+        if not failed:
+            return "no runs"
+        errors = [self.store.read_json(failure_path(r, e))["error"] for r, e in failed]
+        replica, experiment = failed[0]
+        others = len(set(errors)) - 1
+        return (f"{len(failed)} of {len(runs)} simulations failed; first, r{replica} "
+                f"{experiment.id}: {errors[0]}"
+                + (f" ({others} other distinct error(s))" if others else "")
+                + f"; see {self.store.path(failure_path(replica, experiment))}")
+
     def runs(self, replica: int) -> tuple[list[Run], list[Run]] | None:
         """(training runs, held-out runs) of a replica; None if a training run is missing."""
         loaded: dict[str, Run] = {}
@@ -153,9 +172,8 @@ def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | No
         if split is not None and split[1]:
             runs[replica] = split
     if study.design_replica not in runs:
-        raise SpindlebenchError(
-            f"{study.path}: the design replica's training or held-out runs failed to simulate "
-            f"({'; '.join(f'{k}: {v}' for k, v in failures.items()) or 'no runs'})")
+        raise SpindlebenchError(f"{study.path}: the design replica's training or held-out runs "
+                                f"failed to simulate ({work.failure_summary()})")
     start = time.perf_counter()
     train_runs, valid_runs = runs[study.design_replica]
     placements = find_placements(study, train_runs, valid_runs)
