@@ -1,10 +1,11 @@
 """Writing a recording: the CSV and its JSON sidecar, each atomically, as a checkable pair.
 
 A recording is only useful with its provenance, so both files are written in full first and
-then moved into place one right after the other: a crash never leaves a half file or a new
-CSV without a sidecar. Two renames cannot be one atomic step, so the sidecar also carries
-the CSV's SHA-256 (``recording_sha256``): a reader can tell a pair that does not belong
-together (see ``spindlebench.provenance.sidecar_mismatch``).
+then moved into place one right after the other, the CSV first: a crash never leaves a half
+file, and a failed CSV move never leaves a new sidecar describing a CSV that is not there.
+Two renames cannot be one atomic step (a crash between them leaves a new CSV beside the old
+sidecar), so the sidecar also carries the CSV's SHA-256 (``recording_sha256``): a reader can
+tell a pair that does not belong together (see ``spindlebench.provenance.sidecar_mismatch``).
 """
 
 from __future__ import annotations
@@ -38,7 +39,12 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     if csv_path.suffix.lower() != ".csv":
         raise SpindlebenchError(f"{csv_path}: a recording must be written to a .csv file")
     json_path = sidecar_path(csv_path)
-    with atomic_path(csv_path) as tmp_csv, atomic_path(json_path) as tmp_json:
+    for path in (csv_path, json_path):
+        if path.is_dir():
+            raise SpindlebenchError(f"{path}: is a directory, cannot write a recording there")
+    # the JSON context is the outer one, so the CSV is moved into place first: if that move
+    # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
+    with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
         frame.to_csv(tmp_csv, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
         paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
         text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
