@@ -123,10 +123,11 @@ def _small_source(tmp_path, rpm, **changes):
 
 
 def test_small_schedule_is_cut_without_hard_coded_rows(tmp_path):
-    path = _small_source(tmp_path, [0, 0, 800, 800, 800, 0, 0, 1600, 1600, 0, 400, 900])
+    rpm = [0, 0, 800, 800, 800, 0, 0, 1600, 1600, 0, 400, 900]
+    path = _small_source(tmp_path, np.repeat(rpm, 5))  # every spindle-on block >= 10 samples
     paths = caiviac.write_runs(tmp_path / "out", path, phase="cycle")
     assert [p.stem for p in paths] == ["run1_800rpm", "run2_1600rpm", "run3_stepped"]
-    assert [len(read_recording(p)) for p in paths] == [5, 3, 2]
+    assert [len(read_recording(p)) for p in paths] == [25, 15, 10]
 
 
 def test_bad_sources_give_one_line_errors(tmp_path):
@@ -147,3 +148,41 @@ def test_bad_sources_give_one_line_errors(tmp_path):
     with pytest.raises(SpindlebenchError, match="never turns"):
         caiviac.write_runs(tmp_path / "out", path)
     assert not (tmp_path / "out").exists()
+
+
+def test_no_constant_speed_run_is_one_line_and_writes_nothing(tmp_path, capsys):
+    path = _small_source(tmp_path, [0] * 5 + [1000, 2000] * 5 + [0] * 5)
+    out = tmp_path / "out"
+    status = cli.main(["adapt", "caiviac", "--source", str(path), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1
+    assert "0 constant-speed run(s)" in err and str(path) in err
+    assert not out.exists()
+
+
+def test_only_one_run_is_an_error_too(tmp_path):
+    path = _small_source(tmp_path, [0] * 5 + [1000] * 10 + [0] * 5)
+    with pytest.raises(SpindlebenchError, match="another run to predict"):
+        caiviac.write_runs(tmp_path / "out", path)
+    assert not (tmp_path / "out").exists()
+
+
+def test_inf_cell_is_one_line_naming_line_and_column(tmp_path):
+    temps = np.linspace(20.0, 21.0, 12).astype(object)
+    temps[4] = "inf"
+    path = _small_source(tmp_path, [0, 0] + [100] * 10, t5_C=temps)
+    with pytest.raises(SpindlebenchError, match=r"line 6, column t5_C: non-finite value 'inf'"):
+        caiviac.read_source(path)
+
+
+def test_a_short_spindle_on_block_is_skipped_with_a_warning(tmp_path, capsys):
+    rpm = [0] * 3 + [800] * 12 + [0] * 3 + [1600] + [0] * 3 + [400] * 10 + [0] * 2
+    path = _small_source(tmp_path, rpm)
+    out = tmp_path / "out"
+    assert cli.main(["adapt", "caiviac", "--source", str(path), "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1
+    assert "warning:" in captured.err and "skipped run2_1600rpm (rows 18-18)" in captured.err
+    assert sorted(p.name for p in out.glob("*.csv")) == ["run1_800rpm.csv", "run3_400rpm.csv"]
+    assert all(len(read_recording(p)) >= caiviac.MIN_RUN_SAMPLES for p in out.glob("*.csv"))
+    assert 'tests = ["run3_400rpm"]' in (out / caiviac.STUDY_FILE).read_text()

@@ -5,7 +5,11 @@ baseline, five constant-speed cycles (4 h spindle on, 4 h off) and a stepped-spe
 Runs are found from ``spindle_rpm`` alone: a run starts where the spindle switches on after
 standing still, its heating phase lasts while the spindle turns, and its cooling phase is the
 idle stretch up to the next switch-on (or the end of the file). A heating phase with one speed
-is a constant-speed cycle; one with several speeds is the stepped block.
+is a constant-speed cycle; one with several speeds is the stepped block. A spindle-on block
+shorter than ``MIN_RUN_SAMPLES`` (10 samples) is a jog, not a run: it is skipped, with one
+warning line naming its source rows (not rejected: one jog should not make a 46-hour file
+unusable). A source without a constant-speed run to train on and another run to predict is
+an error, and nothing is written. Non-finite cells (``inf``) are errors naming line and column.
 
 Two ways to cut (``phase``):
 - ``heating`` (default): only the spindle-on part of each run. This is the analogue of the
@@ -24,7 +28,9 @@ them configures ``spindlebench paper`` for these runs (see ``study_config_text``
 
 from __future__ import annotations
 
+import hashlib
 import json
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Literal
@@ -35,7 +41,7 @@ import pandas as pd
 from spindlebench import atomic
 from spindlebench.adapters import shared_recordings_dir
 from spindlebench.errors import SpindlebenchError
-from spindlebench.provenance import file_entry, provenance, sha256_file
+from spindlebench.provenance import file_entry, provenance
 
 DATASET = "caiviac-fl-thermal"
 TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
@@ -43,6 +49,9 @@ DISPLACEMENTS = tuple(f"ch{i}_um" for i in range(1, 6))
 SOURCE_COLUMNS = ("time_s", "spindle_rpm", *DISPLACEMENTS, *TEMPERATURES)
 AXIAL_TARGET = "ch3_um"
 SAMPLE_STEP_S = 15.0
+#: A spindle-on block shorter than this (2.5 min at 15 s) is a jog, not a run: it is skipped
+#: with a warning (the readers need 2 samples, a regression at k = 4 more than 4).
+MIN_RUN_SAMPLES = 10
 
 Phase = Literal["heating", "cycle"]
 PHASES: tuple[str, ...] = ("heating", "cycle")
@@ -101,6 +110,12 @@ def read_source(path: str | Path) -> pd.DataFrame:
             # +2: one header line, 1-based line numbers.
             raise SpindlebenchError(
                 f"{path}: line {bad[0] + 2}, column {column}: missing or non-numeric value"
+            )
+        bad = np.flatnonzero(~np.isfinite(values.to_numpy(dtype=float)))
+        if bad.size:  # 'inf' parses as a number, but no recording reader accepts it
+            raise SpindlebenchError(
+                f"{path}: line {bad[0] + 2}, column {column}: non-finite value "
+                f"'{frame[column].iloc[bad[0]]}'"
             )
         frame[column] = values.astype(float)
     if len(frame) < 2:
@@ -166,6 +181,12 @@ def study_config_text(schedule: Schedule, phase: Phase) -> str:
     target-free ``auto`` rule (locations are not documented, so no choice by location).
     """
     constant = [run for run in schedule.runs if run.kind == "constant"]
+    if not constant or len(schedule.runs) < 2:
+        raise SpindlebenchError(
+            f"spindle_rpm: {len(constant)} constant-speed run(s) among {len(schedule.runs)} "
+            "usable run(s); the paper comparison needs a constant-speed run to train on and "
+            "another run to predict"
+        )
     train = max(constant, key=lambda run: run.speeds_rpm[0]).name
     tests = [run.name for run in schedule.runs if run.name != train]
 
@@ -188,26 +209,48 @@ def study_config_text(schedule: Schedule, phase: Phase) -> str:
     ])
 
 
+def usable_runs(schedule: Schedule, source_path: Path | str = "source") -> Schedule:
+    """``schedule`` without the runs whose spindle-on part is shorter than
+    ``MIN_RUN_SAMPLES`` (a jog, not a run), each skipped one warned with its source rows."""
+    kept = []
+    for run in schedule.runs:
+        length = run.heating_stop - run.start
+        if length < MIN_RUN_SAMPLES:
+            warnings.warn(
+                f"{source_path}: skipped {run.name} (rows {run.start}-{run.heating_stop - 1}): "
+                f"the spindle turns for {length} sample(s), a run needs at least "
+                f"{MIN_RUN_SAMPLES}", stacklevel=2)
+            continue
+        kept.append(run)
+    return Schedule(n_rows=schedule.n_rows, baseline=schedule.baseline, runs=tuple(kept))
+
+
 def write_runs(
     out_dir: str | Path, source_path: str | Path | None = None, phase: Phase = "heating"
 ) -> list[Path]:
     """Write every run as ``<out_dir>/<name>.csv`` + ``<name>.json``, and a study config
-    (``paper_study.toml``) for ``spindlebench paper``; return the CSV paths."""
+    (``paper_study.toml``) for ``spindlebench paper``; return the CSV paths.
+
+    Every file's content is made before the first one is written, so a source the adapter
+    cannot cut (no constant-speed run, nothing to predict) writes nothing.
+    """
     if phase not in PHASES:
         raise SpindlebenchError(f"phase: {phase!r} is not one of {', '.join(PHASES)}")
     source_path = Path(source_path) if source_path is not None else default_source()
     source = read_source(source_path)
-    schedule = find_schedule(source["spindle_rpm"].to_numpy())
+    schedule = usable_runs(find_schedule(source["spindle_rpm"].to_numpy()), source_path)
+    try:
+        config_text = study_config_text(schedule, phase)
+    except SpindlebenchError as exc:
+        raise SpindlebenchError(f"{source_path}: {exc}") from None
     source_entry = file_entry(source_path)
     out_dir = Path(out_dir)
-    written: list[Path] = []
+    files: list[tuple[Path, bytes]] = []
     for run in schedule.runs:
         table, offsets = canonical_run(source, run, phase)
         rows = run.rows(phase)
-        csv_path = out_dir / f"{run.name}.csv"
-        with atomic.atomic_path(csv_path) as tmp:
-            table.to_csv(tmp, index=False, float_format="%.6f")
-            recording_sha256 = sha256_file(tmp)
+        # lineterminator fixed: the bytes hashed are the bytes written, on every platform.
+        data = table.to_csv(index=False, float_format="%.6f", lineterminator="\n").encode()
         record = provenance(
             dataset=DATASET,
             adapter="spindlebench.adapters.caiviac",
@@ -223,9 +266,15 @@ def write_runs(
             axial_target=AXIAL_TARGET,
             displacement_zero_offsets_um=offsets,
             license="MIT (c) 2024 CAIVIAC, see LICENSE-MIT-CAIVIAC.txt beside the source",
-            recording_sha256=recording_sha256,
+            recording_sha256=hashlib.sha256(data).hexdigest(),
         )
-        atomic.write_text(out_dir / f"{run.name}.json", json.dumps(record, indent=2) + "\n")
-        written.append(csv_path)
-    atomic.write_text(out_dir / STUDY_FILE, study_config_text(schedule, phase))
-    return written
+        files.append((out_dir / f"{run.name}.csv", data))
+        files.append((out_dir / f"{run.name}.json",
+                      (json.dumps(record, indent=2) + "\n").encode()))
+    files.append((out_dir / STUDY_FILE, config_text.encode()))
+    blocked = [path for path, _ in files if path.is_dir()]
+    if blocked:
+        raise SpindlebenchError(f"{blocked[0]}: is a folder, where the adapter writes a file")
+    for path, data in files:
+        atomic.write_bytes(path, data)
+    return [path for path, _ in files if path.suffix == ".csv"]
