@@ -92,3 +92,32 @@ def test_unknown_argument_after_a_command_points_to_that_commands_help(capsys):
     assert status == 2
     assert err.startswith("error: spindlebench: unrecognized arguments: --bogus (see "
                           "'spindlebench --help')")
+
+
+def test_an_error_message_with_newlines_is_printed_as_one_line(tmp_path, capsys):
+    """A message that embeds another library's (pandas: 'Error tokenizing data. C error:
+    Expected 23 fields in line 4, saw 24\\n') is still one line."""
+    from spindlebench.adapters import caiviac
+
+    path = tmp_path / "data.csv"
+    header = ",".join(caiviac.SOURCE_COLUMNS)
+    row = ",".join(["0"] * len(caiviac.SOURCE_COLUMNS))
+    path.write_text(f"{header}\n{row}\n{row}\n{row},7\n{row}\n")
+    status = cli.main(["adapt", "caiviac", "--source", str(path), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.startswith(f"error: {path}: not a readable CSV") and err.count("\n") == 1
+    assert "line 4" in err
+
+
+def test_any_error_with_a_newline_is_collapsed(capsys):
+    """The collapse is in cli, for every sub-command, not in each message."""
+    import argparse
+
+    from spindlebench.errors import SpindlebenchError
+
+    def fail(_args):
+        raise SpindlebenchError("first part\n  second part\r\n")
+
+    assert cli._run(argparse.Namespace(func=fail)) == 2
+    assert capsys.readouterr().err == "error: first part second part\n"

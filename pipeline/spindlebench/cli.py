@@ -75,11 +75,16 @@ def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentP
     return {}
 
 
+def _one_line(text: str) -> str:
+    """``text`` with every run of whitespace (newlines of an embedded pandas or TOML message)
+    as one space: an error is one line, whoever wrote the message."""
+    return " ".join(text.split())
+
+
 def _print_warning(message: Warning | str, category: type[Warning], filename: str,
                    lineno: int, file=None, line: str | None = None) -> None:
     """A warning as one ``warning:`` line, like errors (not Python's two lines of source)."""
-    text = " ".join(str(message).split())
-    print(f"warning: {text}", file=sys.stderr)
+    print(f"warning: {_one_line(str(message))}", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -95,12 +100,12 @@ def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.func(args) or 0)
     except SpindlebenchError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
     except OSError as exc:  # the environment refused a file: unwritable folder, full disk, ...
         name = exc.filename2 or exc.filename  # a failed rename names its target second
         where = f"{name}: " if name else ""
-        print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
+        print(f"error: {_one_line(f'{where}{exc.strerror or exc}')}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
