@@ -300,3 +300,54 @@ def test_a_failing_integration_is_one_line_and_writes_nothing(tmp_path):
     with pytest.raises(SpindlebenchError, match=r"simulation failed in scenario .*neg\.toml"):
         simulate_scenario(path, tmp_path / "neg.csv", fmu_path=FMU)
     assert not (tmp_path / "neg.csv").exists()
+
+
+def _sidecar_with_states(states: object) -> str:
+    return json.dumps({"end_state": {"time_s": 600.0, "states_K": states}})
+
+
+def _good_states() -> dict[str, float]:
+    return dict.fromkeys(inspect_fmu(FMU).state_names, 293.15)
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        (lambda s: {**s, next(iter(s)): "abc"}, 'is not a number (got "abc")'),
+        (lambda s: {**s, next(iter(s)): None}, "is not a number (got null)"),
+        (lambda s: {**s, next(iter(s)): True}, "is not a number (got true)"),
+        (lambda s: list(s.values()), "states_K must map state names to kelvin, got a list"),
+        (lambda s: {**s, next(iter(s)): 1e30}, "= 1e+30 K is outside 200-600 K"),
+        (lambda s: {**s, next(iter(s)): 20.0}, "= 20 K is outside 200-600 K"),
+    ],
+)
+def test_continue_from_a_sidecar_with_bad_states_is_one_line(tmp_path, content, words):
+    (tmp_path / "prev.json").write_text(_sidecar_with_states(content(_good_states())),
+                                        encoding="utf-8")
+    path = write(tmp_path, "c.toml", scenario_text(
+        minutes=10, extra='[initial]\nkind = "continue"\nfrom = "prev.json"\n'))
+    with pytest.raises(SpindlebenchError) as info:
+        simulate_scenario(path, tmp_path / "c.csv", fmu_path=FMU)
+    message = str(info.value)
+    assert "\n" not in message
+    assert "c.toml: key 'initial.from'" in message and "prev.json" in message
+    assert words in message
+    assert not (tmp_path / "c.csv").exists()
+
+
+def test_continue_from_a_non_utf8_sidecar_is_one_line(tmp_path):
+    (tmp_path / "prev.json").write_bytes(b'{"end_state": "\xe9"}')
+    path = write(tmp_path, "c.toml", scenario_text(
+        minutes=10, extra='[initial]\nkind = "continue"\nfrom = "prev.json"\n'))
+    with pytest.raises(SpindlebenchError, match=r"prev\.json is not UTF-8 text \(byte 15\)"):
+        simulate_scenario(path, tmp_path / "c.csv", fmu_path=FMU)
+
+
+def test_too_many_steps_of_a_scenario_built_in_code_is_one_line(tmp_path):
+    """Studies build Scenario objects without load_scenario; the runner checks them too."""
+    from dataclasses import replace
+
+    scenario = replace(load_scenario(write(tmp_path, "q.toml", scenario_text(minutes=10))),
+                       step_s=1e-300)
+    with pytest.raises(SpindlebenchError, match=r"q\.toml: key 'step_s': must be at least"):
+        co_simulate(scenario, FMU)

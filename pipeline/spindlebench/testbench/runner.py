@@ -33,7 +33,7 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
-from spindlebench.testbench.scenario import Scenario
+from spindlebench.testbench.scenario import Scenario, step_count_problem
 
 #: The project's default FMU, built from models/ by ``spindlebench build``.
 DEFAULT_FMU = Path(__file__).resolve().parents[3] / "fmus" / "SpindleBench.fmu"
@@ -148,12 +148,27 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
     return values
 
 
+#: A saved state temperature outside this range (K) is not a machine in a workshop (-73 to
+#: 327 °C): a corrupted or foreign sidecar, or kelvin and celsius mixed up.
+STATE_RANGE_K = (200.0, 600.0)
+
+
 def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> dict[str, float]:
     """Initial value (K) of every state: a cold soak, or a previous run's end state."""
     initial = scenario.initial
     if initial.kind == "cold":
         start_C = ambient0_C if initial.temperature_C is None else initial.temperature_C
         return dict.fromkeys(fmu.state_names, start_C + KELVIN_OFFSET)
+    return saved_state(scenario, fmu)
+
+
+def saved_state(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
+    """The end state a ``continue`` scenario starts from, checked name by name and value by value.
+
+    The sidecar is user-reachable input (any file can be named), so everything about it that
+    could break the run later is one line naming the scenario, the key and the sidecar.
+    """
+    initial = scenario.initial
     source = initial.from_file
     where = f"{scenario.path}: key 'initial.from'"
     if source is None:  # a sibling name, not yet placed in an output folder
@@ -161,7 +176,7 @@ def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> d
                                 "recording is looked up in the output folder; simulate with "
                                 "simulate_scenario() or resolve_initial() first")
     try:
-        saved = json.loads(Path(source).read_text(encoding="utf-8"))["end_state"]["states_K"]
+        text = Path(source).read_text(encoding="utf-8")
     except FileNotFoundError:
         if initial.from_scenario is not None:
             raise SpindlebenchError(
@@ -169,16 +184,52 @@ def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> d
                 "(simulate it into the same output folder first)") from None
         raise SpindlebenchError(f"{where}: no such file {source} (simulate the previous "
                                 "run first)") from None
+    except UnicodeDecodeError as exc:
+        raise SpindlebenchError(f"{where}: {source} is not UTF-8 text (byte {exc.start}), "
+                                "not a recording sidecar") from None
+    except OSError as exc:  # a directory, no permission
+        raise SpindlebenchError(f"{where}: cannot read {source}: "
+                                f"{exc.strerror or exc}") from None
+    try:
+        saved = json.loads(text)["end_state"]["states_K"]
     except (json.JSONDecodeError, KeyError, TypeError):
         raise SpindlebenchError(f"{where}: {source} is not a recording sidecar with an "
                                 "end_state") from None
+    if not isinstance(saved, dict):
+        raise SpindlebenchError(f"{where}: {source}: end_state.states_K must map state names "
+                                f"to kelvin, got a {type(saved).__name__}")
     missing = [n for n in fmu.state_names if n not in saved]
     extra = [n for n in saved if n not in fmu.state_names]
     if missing or extra:
         what = f"lacks state {missing[0]!r}" if missing else f"has unknown state {extra[0]!r}"
         raise SpindlebenchError(f"{where}: {source} {what} of {fmu.path.name} (saved from a "
                                 "different model build?)")
+    low, high = STATE_RANGE_K
+    for name in fmu.state_names:
+        value = saved[name]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise SpindlebenchError(f"{where}: {source}: state {name!r} is not a number "
+                                    f"(got {json.dumps(value)})")
+        if not low <= value <= high:  # also catches NaN
+            raise SpindlebenchError(f"{where}: {source}: state {name!r} = {value:g} K is "
+                                    f"outside {low:g}-{high:g} K")
     return {name: float(saved[name]) for name in fmu.state_names}
+
+
+def check_scenario(scenario: Scenario, fmu: FmuInterface, *,
+                   state_written_later: bool = False) -> None:
+    """Everything about a scenario that needs the FMU, checked without simulating.
+
+    A batch runs this for every scenario before the first simulation, so a bad parameter
+    name or continue-from file in its last scenario writes nothing. ``state_written_later``
+    skips the continue-from file when an earlier run of the same batch will write it.
+    """
+    problem = step_count_problem(scenario.duration_s, scenario.step_s)
+    if problem:
+        raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
+    parameter_values(scenario, fmu)
+    if scenario.initial.kind == "continue" and not state_written_later:
+        saved_state(scenario, fmu)
 
 
 def _row_pointer(matrix: np.ndarray, row: int) -> Any:
@@ -207,6 +258,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     set_stop_time = _cvode_set_stop_time()
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
+    check_scenario(scenario, fmu_info)
     signals = drive(scenario)
     inputs = np.ascontiguousarray(signals.matrix)
     jumps = signals.jumps()
