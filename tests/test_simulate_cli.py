@@ -237,3 +237,57 @@ def test_shipped_examples_plan_day1_before_its_continuation():
     order = [files[i].stem for i in plan_batch(files, [out / f"{f.stem}.csv" for f in files])]
     assert sorted(order) == sorted(f.stem for f in files)
     assert order.index("day1_warmup") < order.index("continue_day1")
+
+
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        ("[parameters]\nfoo = 1.0\n", "key 'parameters.foo'"),
+        ('[initial]\nkind = "continue"\nfrom = "prev.json"\n', "prev.json lacks state"),
+    ],
+)
+def test_a_batch_checks_every_scenario_against_the_fmu_before_simulating(tmp_path, capsys,
+                                                                          extra, words):
+    """a.toml is fine, b.toml fails only against the FMU: nothing of a is written either."""
+    (tmp_path / "prev.json").write_text(
+        json.dumps({"end_state": {"states_K": {"front_bearing_T": "abc"}}}), encoding="utf-8")
+    folder = tmp_path / "scen"
+    write(folder, "a.toml", QUICK)
+    write(folder, "b.toml", QUICK + extra.replace("prev.json", "../prev.json"))
+    status = cli.main(["simulate", str(folder), "-o", str(tmp_path / "res"), "-q"])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and "b.toml" in err and words in err
+    assert not (tmp_path / "res").exists()
+
+
+def test_a_batch_continuation_from_a_sibling_is_not_read_before_it_is_written(tmp_path):
+    """The sibling's old recording in the output folder is bad; the batch rewrites it first."""
+    folder = tmp_path / "scen"
+    write(folder, "a.toml", QUICK)
+    write(folder, "b.toml", QUICK + '[initial]\nkind = "continue"\nfrom = "a"\n')
+    write(tmp_path / "res", "a.json", "not json")
+    assert cli.main(["simulate", str(folder), "-o", str(tmp_path / "res"), "-q"]) == 0
+
+
+def test_an_output_with_another_suffix_is_refused(tmp_path, capsys):
+    """`-o x.txt` made a folder x.txt/; the README's form is `-o OUT.csv` for one scenario."""
+    scenario = write(tmp_path, "quick.toml", QUICK)
+    assert cli.main(["simulate", str(scenario), "-o", str(tmp_path / "x.txt")]) == 2
+    assert "not a .txt file" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["quick.toml"]
+
+
+def test_an_existing_folder_with_a_dot_is_still_an_output_folder(tmp_path):
+    scenario = write(tmp_path, "quick.toml", QUICK)
+    (tmp_path / "run.v2").mkdir()
+    assert cli.main(["simulate", str(scenario), "-o", str(tmp_path / "run.v2"), "-q"]) == 0
+    assert (tmp_path / "run.v2" / "quick.csv").is_file()
+
+
+def test_an_output_csv_that_is_a_directory_is_refused_before_simulating(tmp_path, capsys):
+    scenario = write(tmp_path, "quick.toml", QUICK)
+    (tmp_path / "out.csv").mkdir()
+    assert cli.main(["simulate", str(scenario), "-o", str(tmp_path / "out.csv")]) == 2
+    assert "out.csv: is a directory" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv", "quick.toml"]

@@ -21,7 +21,14 @@ from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
 from spindlebench.testbench.recording import recording_frame, write_recording
-from spindlebench.testbench.runner import DEFAULT_FMU, SENSOR_OUTPUTS, Simulation, co_simulate
+from spindlebench.testbench.runner import (
+    DEFAULT_FMU,
+    SENSOR_OUTPUTS,
+    Simulation,
+    check_scenario,
+    co_simulate,
+    inspect_fmu,
+)
 from spindlebench.testbench.scenario import (
     MeasuredAmbient,
     Scenario,
@@ -170,21 +177,56 @@ def plan_batch(files: list[Path], targets: list[Path]) -> list[int]:
     return order
 
 
+def _output_targets(files: list[Path], out: Path) -> list[Path]:
+    """The CSV each scenario is written to, or one error line about ``-o``.
+
+    ``simulate SCENARIO.toml -o OUT.csv`` names the recording; any other ``-o`` is a folder
+    that gets ``<scenario>.csv`` per scenario. A folder name with a suffix (``-o x.txt``) is
+    taken for a mistyped file name unless that folder already exists.
+    """
+    suffix = out.suffix.lower()
+    single = len(files) == 1 and suffix == ".csv"
+    if not single and suffix == ".csv":
+        raise SpindlebenchError(f"{out}: several scenarios need an output directory, not a "
+                                ".csv file")
+    if not single and (out.is_file() or (suffix and not out.is_dir())):
+        raise SpindlebenchError(f"{out}: -o must be a .csv file (one scenario) or a directory "
+                                f"(a name without a suffix), not a {suffix or 'plain'} file")
+    targets = [out if single else out / f"{scenario.stem}.csv" for scenario in files]
+    for target in targets:
+        for path in (target, target.with_suffix(".json")):
+            if path.is_dir():
+                raise SpindlebenchError(f"{path}: is a directory; the recording needs it as "
+                                        "a file name (choose another -o)")
+    return targets
+
+
+def check_batch(files: list[Path], targets: list[Path], order: list[int],
+                fmu_path: str | Path | None) -> None:
+    """Check every scenario of a planned batch against the FMU before any is simulated.
+
+    Parameter names, step count and continue-from sidecars are checked here, so a batch is
+    all or nothing. A state that an earlier run of the batch writes can only be checked to
+    come from the batch (``plan_batch`` did that).
+    """
+    fmu = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
+    produced = {target.with_suffix(".json").resolve() for target in targets}
+    for i in order:
+        scenario = resolve_initial(load_scenario(files[i]), targets[i].parent)
+        source = scenario.initial.from_file
+        check_scenario(scenario, fmu, state_written_later=(
+            source is not None and source.resolve() in produced))
+
+
 def run(args: argparse.Namespace) -> int:
     """Simulate every scenario given; one file → ``-o`` is the CSV, several → a directory."""
     if args.seed is not None and args.seed < 0:
         raise SpindlebenchError(f"--seed: must be >= 0, got {args.seed}")
     files = _scenario_files(args.scenarios)
-    out = Path(args.output)
-    single = len(files) == 1 and out.suffix.lower() == ".csv"
-    if not single and out.suffix.lower() == ".csv":
-        raise SpindlebenchError(f"{out}: several scenarios need an output directory, not a "
-                                ".csv file")
-    if not single and (out.is_file() or out.suffix.lower() in (".json", ".toml")):
-        raise SpindlebenchError(f"{out}: -o must be a .csv file (one scenario) or a directory")
-    targets = [out if single else out / f"{scenario.stem}.csv" for scenario in files]
+    targets = _output_targets(files, Path(args.output))
     # validate all first: a typo in the last file should cost nothing
     order = plan_batch(files, targets)
+    check_batch(files, targets, order, args.fmu)
     show_progress = not args.quiet and sys.stderr.isatty()
     for i in order:
         scenario, target = files[i], targets[i]
