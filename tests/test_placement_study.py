@@ -209,3 +209,9 @@ def test_when_every_run_fails_the_error_is_one_short_line(tmp_path, capsys, monk
     assert "8 of 8 simulations failed; first, r1 Jan-2000rpm-constant-off: " in err[0]
     assert err[0].count("no_such_parameter") == 2  # in the key and in the message, once
     assert err[0].endswith(f"see {out}/runs/r001/Jan-2000rpm-constant-off.error.json)")
+
+
+def test_the_study_name_is_the_one_the_file_gives(tmp_path):
+    # The loop over the extra tables once rebound 'name', so every placement study was
+    # called 'placement' (and wrote to results/placement by default).
+    assert load_placement_study(TINY).name == "tiny-placement"

@@ -91,3 +91,27 @@ def test_malformed_dask_address_is_refused_before_connecting(address):
 def test_one_line_error_is_short_and_single_line():
     message = one_line_error(RuntimeError("a\nb " + "x" * 500))
     assert "\n" not in message and len(message) < 330 and message.startswith("RuntimeError: a b")
+
+
+@pytest.mark.parametrize("name", ["../../escape/tiny-sweep", "a/b", "", "..", "tiny sweep"])
+@pytest.mark.parametrize("command", ["sweep", "place"])
+def test_a_study_name_that_is_no_folder_name_is_refused_without_o(tmp_path, monkeypatch,
+                                                                  capsys, name, command):
+    from pathlib import Path
+
+    from spindlebench import cli
+
+    repo = Path(__file__).resolve().parents[1]
+    tiny = repo / "scenarios" / "studies" / ("tiny_sweep.toml" if command == "sweep"
+                                            else "tiny_placement.toml")
+    study = tmp_path / "work" / "study.toml"
+    study.parent.mkdir()
+    text = tiny.read_text(encoding="utf-8")
+    study.write_text(text.replace(f'name = "tiny-{"sweep" if command == "sweep" else "placement"}"',
+                                  f'name = "{name}"'), encoding="utf-8")
+    monkeypatch.chdir(study.parent)
+    assert cli.main([command, str(study), "--workers", "0", "--no-progress"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"error: {study}: key 'study.name': {name!r} cannot name a folder under results/ (use "
+        "only letters, digits, '.', '_' and '-'), or give -o/--out"]
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["study.toml", "work"]

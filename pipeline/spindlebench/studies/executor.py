@@ -33,6 +33,8 @@ from tqdm.auto import tqdm
 
 from spindlebench.errors import SpindlebenchError
 
+#: A study name that may serve as the default results folder ``results/<name>``.
+FOLDER_NAME = re.compile(r"[A-Za-z0-9._-]+")
 #: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
 DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$|^inproc://\S+$")
 
@@ -305,4 +307,12 @@ def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) 
     """The study command's output folder, after refusing contradictory execution options."""
     if args.workers is not None and args.dask_address:
         raise SpindlebenchError("give either --workers or --dask-address, not both")
-    return args.out if args.out is not None else Path("results") / study_name(args.study)
+    if args.out is not None:
+        return args.out
+    name = study_name(args.study)
+    # The name becomes a folder under results/: '../x', 'a/b' or '' would write elsewhere.
+    if not FOLDER_NAME.fullmatch(name) or set(name) == {"."}:
+        raise SpindlebenchError(
+            f"{args.study}: key 'study.name': {name!r} cannot name a folder under results/ "
+            "(use only letters, digits, '.', '_' and '-'), or give -o/--out")
+    return Path("results") / name

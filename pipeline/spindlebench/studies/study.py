@@ -236,8 +236,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     params.finish()
     if fmu_parameters is not None:
         _check_parameters(params, parameters, fmu_parameters, fmu)
-    for name in extra_tables:
-        root.raw(name, default=None)
+    for table_name in extra_tables:  # not 'name': that is the study's name
+        root.raw(table_name, default=None)
     root.finish()
 
     n_experiments = len(months) * len(speeds) * len(programmes) * len(cooling)
