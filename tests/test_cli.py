@@ -107,7 +107,7 @@ def test_an_error_message_with_newlines_is_printed_as_one_line(tmp_path, capsys)
     err = capsys.readouterr().err
     assert status == 2
     assert err.startswith(f"error: {path}: not a readable CSV") and err.count("\n") == 1
-    assert "line 4" in err
+    assert "line 4, saw 24)" in err
 
 
 def test_any_error_with_a_newline_is_collapsed(capsys):

@@ -98,7 +98,7 @@ def read_source(path: str | Path) -> pd.DataFrame:
     try:
         frame = pd.read_csv(path)
     except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
-        raise SpindlebenchError(f"{path}: not a readable CSV ({exc})") from exc
+        raise SpindlebenchError(f"{path}: not a readable CSV ({str(exc).strip()})") from exc
     missing = [c for c in SOURCE_COLUMNS if c not in frame.columns]
     if missing:
         raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
