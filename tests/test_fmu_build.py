@@ -136,6 +136,17 @@ def test_build_command_rejects_bad_segments_in_one_line(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_build_command_refuses_too_many_segments_before_building(tmp_path, capsys):
+    """--segments 100000 ran for minutes; the model is meant for 2 to 50."""
+    from spindlebench import cli
+
+    assert cli.main(["build", "--segments", "100000", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == "error: --segments: must be from 2 to 50, got 100000\n"
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(SpindlebenchError, match="from 2 to 50"):
+        build_fmu(MODELS, tmp_path / "x.fmu", segments=51)
+
+
 def test_build_stops_at_the_first_modelica_problem_with_its_line(tmp_path):
     text = (MODELS / "SpindleBench.mo").read_text()
     broken = text.replace(

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import MODEL_FILE
-from spindlebench.modelica.frontend import translate, validate
+from spindlebench.modelica.frontend import model_source, translate, validate
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
@@ -86,3 +86,24 @@ def test_missing_equation_is_reported_with_the_file(tmp_path):
     folder = broken_copy(tmp_path, "    T2_C = sensor_T2.T - 273.15;\n", "")
     with pytest.raises(SpindlebenchError, match=r"not balanced.*no equation for: T2_C"):
         explicit_ode(folder, segments=2)
+
+
+def test_non_utf8_model_file_is_one_line_with_file_and_line(tmp_path):
+    """rumoca and pymoca both gave a traceback ('stream did not contain valid UTF-8')."""
+    text = (MODELS / MODEL_FILE).read_text(encoding="utf-8")
+    (tmp_path / MODEL_FILE).write_bytes(text.encode("utf-8")
+                                        + b"\n// caf\xe9\n")
+    line = text.count("\n") + 2
+    with pytest.raises(SpindlebenchError) as info:
+        translate(tmp_path, segments=3)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(f"{tmp_path / MODEL_FILE}:{line}: Modelica source is not UTF-8")
+    with pytest.raises(SpindlebenchError, match="is not UTF-8"):
+        model_source(tmp_path)
+
+
+@pytest.mark.parametrize("segments", [51, 100_000])
+def test_segments_have_an_upper_bound(segments):
+    with pytest.raises(SpindlebenchError, match="from 2 to 50"):
+        translate(MODELS, segments=segments)

@@ -13,10 +13,10 @@ from pathlib import Path
 from fmpy import read_model_description
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica import DEFAULT_SEGMENTS, FMU_NAME
+from spindlebench.modelica import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.modelica.equations import build_explicit_ode
 from spindlebench.modelica.fmu_export import export_fmu, find_compiler
-from spindlebench.modelica.frontend import model_source, translate, validate
+from spindlebench.modelica.frontend import check_segments, model_source, translate, validate
 from spindlebench.provenance import sha256_file
 
 
@@ -30,6 +30,7 @@ def build_fmu(
     rumoca checks the package first (the second, independent front end the issue asks for);
     its first complaint, if any, stops the build with the file, line and column.
     """
+    check_segments(segments)
     find_compiler()
     problems = validate(model_source(model_dir))
     if problems:
@@ -54,7 +55,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--segments",
         type=int,
         default=DEFAULT_SEGMENTS,
-        help=f"segments per large part (default: {DEFAULT_SEGMENTS})",
+        help=f"segments per large part, 2 to {MAX_SEGMENTS} (default: {DEFAULT_SEGMENTS})",
     )
     parser.add_argument(
         "--out",
@@ -82,8 +83,9 @@ def output_path(out: str | Path, segments: int) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     """Build the FMU and print where it went (and, for a variant, how to use it)."""
-    if args.segments < 2:
-        raise SpindlebenchError(f"--segments: must be at least 2, got {args.segments}")
+    if not 2 <= args.segments <= MAX_SEGMENTS:
+        raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
+                                f"{args.segments}")
     target = output_path(args.out, args.segments)
     started = time.perf_counter()
     path = build_fmu(args.models, target, segments=args.segments)

@@ -17,7 +17,7 @@ from typing import Any
 import casadi as ca
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica import MODEL_CLASS, MODEL_FILE
+from spindlebench.modelica import MAX_SEGMENTS, MODEL_CLASS, MODEL_FILE
 
 # pymoca 0.12 still calls the Python 2 division hook on CasADi 3.8 expressions.
 ca.MX.__div__ = ca.MX.__truediv__
@@ -49,12 +49,26 @@ def model_source(model_dir: str | Path) -> Path:
     path = Path(model_dir) / MODEL_FILE
     if not path.is_file():
         raise SpindlebenchError(f"{path}: Modelica source not found")
+    try:  # rumoca and pymoca both fail on other encodings with a traceback
+        path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[: exc.start].count(b"\n") + 1
+        raise SpindlebenchError(f"{path}:{line}: Modelica source is not UTF-8 text (byte "
+                                f"{exc.start}); save it as UTF-8") from None
     return path
 
 
 def _syntax_error_line(message: str) -> int | None:
     match = re.search(r"line (\d+)", message)
     return int(match.group(1)) if match else None
+
+
+def check_segments(segments: object) -> None:
+    """Refuse a segment count the model is not meant for, before any slow step runs."""
+    if (isinstance(segments, bool) or not isinstance(segments, int)
+            or not 2 <= segments <= MAX_SEGMENTS):
+        raise SpindlebenchError(f"segments: must be an integer from 2 to {MAX_SEGMENTS}, got "
+                                f"{segments!r}")
 
 
 def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
@@ -67,8 +81,7 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
     import pymoca.parser
     import pymoca.tree
 
-    if isinstance(segments, bool) or not isinstance(segments, int) or segments < 2:
-        raise SpindlebenchError(f"segments: must be an integer >= 2, got {segments!r}")
+    check_segments(segments)
     path = model_source(model_dir)
     text = path.read_text(encoding="utf-8")
     chatter = io.StringIO()
