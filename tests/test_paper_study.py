@@ -393,6 +393,10 @@ def test_a_folder_not_written_by_paper_is_refused_before_anything_is_written(gen
     assert err.count("\n") == 1 and "is not a paper-study folder" in err
     assert [p.name for p in foreign.iterdir()] == ["README.md"]
     assert (foreign / "README.md").read_text() == "someone else's"
+    # a provenance.json of another command (a sweep's) does not make it a paper-study folder
+    (foreign / "provenance.json").write_text('{"outputs": ["README.md"], "study": {}}')
+    assert cli.main(["paper", "--recordings", str(folder), "--out", str(foreign)]) == 2
+    assert (foreign / "README.md").read_text() == "someone else's"
 
 
 def test_a_folder_in_the_way_of_an_output_leaves_every_old_file_in_place(generated, tmp_path,

@@ -187,12 +187,12 @@ def _previous_outputs(out_dir: Path) -> list[str]:
 
 def _paper_provenance(out_dir: Path) -> dict[str, Any] | None:
     """``out_dir/provenance.json`` when ``spindlebench paper`` wrote it (it names the paper
-    and lists its outputs), else None."""
+    and the study; older versions listed no outputs), else None."""
     try:
         record = json.loads((out_dir / "provenance.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    if isinstance(record, dict) and "paper" in record and isinstance(record.get("outputs"), list):
+    if isinstance(record, dict) and "paper" in record and "study" in record:
         return record
     return None
 
