@@ -115,3 +115,27 @@ def test_a_study_name_that_is_no_folder_name_is_refused_without_o(tmp_path, monk
         f"error: {study}: key 'study.name': {name!r} cannot name a folder under results/ (use "
         "only letters, digits, '.', '_' and '-'), or give -o/--out"]
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["study.toml", "work"]
+
+
+@pytest.mark.parametrize("command", ["sweep", "place"])
+def test_an_unreachable_scheduler_fails_before_the_results_folder_is_made(tmp_path, monkeypatch,
+                                                                         capsys, command):
+    import functools
+    from pathlib import Path
+
+    from spindlebench import cli
+    from spindlebench.studies import sweep
+    from spindlebench.studies.placement import run as place
+
+    for module in (sweep, place):  # a short connect timeout keeps the test fast
+        monkeypatch.setattr(module, "TaskRunner", functools.partial(TaskRunner,
+                                                                    connect_timeout_s=1))
+    studies = Path(__file__).resolve().parents[1] / "scenarios" / "studies"
+    study = studies / ("tiny_sweep.toml" if command == "sweep" else "tiny_placement.toml")
+    out = tmp_path / "out"
+    assert cli.main([command, str(study), "-o", str(out), "--dask-address",
+                     "tcp://127.0.0.1:9", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --dask-address tcp://127.0.0.1:9: "
+                                               "cannot connect to a Dask scheduler")
+    assert not out.exists()

@@ -175,6 +175,24 @@ class TaskRunner:
         self.desc = desc
         self.unit = unit
         self.connect_timeout_s = connect_timeout_s
+        self._dask: cf.Executor | None = None
+
+    @contextmanager
+    def connected(self) -> Iterator[TaskRunner]:
+        """Connect to the Dask scheduler now (if any) and keep the connection for ``run``.
+
+        Entered before a study touches its results folder, so an unreachable scheduler is
+        one line with nothing written, not a folder with a state.json and no results.
+        """
+        if not self.dask_address or self._dask is not None:
+            yield self
+            return
+        with dask_executor(self.dask_address, self.connect_timeout_s) as executor:
+            self._dask = executor
+            try:
+                yield self
+            finally:
+                self._dask = None
 
     def describe(self) -> str:
         if self.dask_address:
@@ -211,7 +229,8 @@ class TaskRunner:
                    disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
         try:
             if self.dask_address:
-                with dask_executor(self.dask_address, self.connect_timeout_s) as executor:
+                with self.connected():
+                    executor = self._dask
                     self._drain(lambda: executor, queue, on_outcome, stats, bar)
             else:
                 self._drain(self._open, queue, on_outcome, stats, bar)

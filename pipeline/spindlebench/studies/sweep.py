@@ -259,8 +259,9 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
     sweep = Sweep(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="job")
-    outcome = sweep.run(runner)
-    write_outputs(sweep, outcome, runner)
+    with runner.connected():  # an unreachable scheduler fails before the folder is made
+        outcome = sweep.run(runner)
+        write_outputs(sweep, outcome, runner)
     return outcome
 
 

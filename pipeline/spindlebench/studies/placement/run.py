@@ -164,7 +164,8 @@ def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | No
     work = PlacementStudyRun(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="run")
-    stats, resumed = work.simulate(runner)
+    with runner.connected():  # an unreachable scheduler fails before the folder is made
+        stats, resumed = work.simulate(runner)
     failures = work.failures()
     runs: dict[int, tuple[list[Run], list[Run]]] = {}
     for replica in replicas(study.family):
