@@ -14,12 +14,17 @@ from pathlib import Path
 
 from spindlebench import atomic
 from spindlebench.adapters import caiviac
+from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import FMU_NAME
+from spindlebench.modelica.frontend import model_source
 from spindlebench.provenance import sha256_file
 from spindlebench.recordings import read_recording
 from spindlebench.testbench.overview import plot_recording
+from spindlebench.testbench.simulate import plan_batch
 
 COMMITTED_FMU = Path("fmus") / f"{FMU_NAME}.fmu"
+#: The scenarios the paper stage needs: it trains on exp1 and predicts exp2 … exp5.
+PAPER_EXPERIMENTS = tuple(f"exp{i}" for i in range(1, 6))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -46,11 +51,32 @@ def _step(argv: list[str]) -> None:
         raise SystemExit(status)
 
 
+def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path) -> None:
+    """Check the Modelica folder and the scenario folder before the ~25 s build writes anything.
+
+    The scenarios are loaded and planned as ``simulate`` will, so a missing experiment or a
+    typo in exp5.toml is one line naming that file, not an error about an output file later.
+    """
+    model_source(models)
+    folder = Path(scenarios)
+    if not folder.is_dir():
+        raise SpindlebenchError(f"--scenarios {folder}: no such folder (it needs "
+                                f"{', '.join(f'{name}.toml' for name in PAPER_EXPERIMENTS)})")
+    missing = [f"{name}.toml" for name in PAPER_EXPERIMENTS
+               if not (folder / f"{name}.toml").is_file()]
+    if missing:
+        raise SpindlebenchError(f"--scenarios {folder}: lacks {', '.join(missing)} (the paper "
+                                "stage trains on exp1 and predicts exp2 … exp5)")
+    files = sorted(folder.glob("*.toml"))
+    plan_batch(files, [synthetic / f"{file.stem}.csv" for file in files])
+
+
 def run(args: argparse.Namespace) -> int:
     """All stages; the results folder gets a README that links what each stage wrote."""
     out = Path(args.out)
     fmu = out / "fmu" / f"{FMU_NAME}.fmu"
     synthetic = out / "paper"
+    check_inputs(args.models, args.scenarios, synthetic)
     _step(["build", "--models", args.models, "--out", str(fmu)])
     same = COMMITTED_FMU.exists() and sha256_file(fmu) == sha256_file(COMMITTED_FMU)
     print(f"rebuilt FMU {'is byte-identical to' if same else 'differs from'} {COMMITTED_FMU}")
