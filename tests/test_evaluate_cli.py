@@ -224,3 +224,20 @@ def test_utf8_byte_order_mark_is_ignored(recordings, tmp_path, capsys, with_bom)
     assert got["provenance"]["sensors"] == want["provenance"]["sensors"]
     assert "time_s" not in got["provenance"]["sensors"]
     assert list(got["rmse_um"].values()) == list(want["rmse_um"].values())
+
+
+@pytest.mark.parametrize("big_file", ["train", "test"])
+def test_values_too_large_are_one_line_and_no_json(recordings, tmp_path, capsys, big_file):
+    """Every cell x 1e200: the sums of squares overflow. It printed overflow warnings, then a
+    JSON traceback (inf), or without --json 'training R2: nan' and RMSE inf with exit 0."""
+    big = write_variant(tmp_path, recordings[0 if big_file == "train" else 1], "big.csv",
+                        lambda f: f * 1e200)
+    train, test = (big, recordings[1]) if big_file == "train" else (recordings[0], big)
+    out_json = tmp_path / "o.json"
+    for extra in ([], ["--json", out_json]):
+        status, out, err = run_cli(capsys, "--train", train, "--test", test, "--target",
+                                   "drift_um", "--clusters", "2", *extra)
+        assert status == 2 and out == ""
+        assert err.count("\n") == 1 and "overflow" in err
+        assert err.startswith(f"error: recording {big}: values too large")
+    assert not out_json.exists()

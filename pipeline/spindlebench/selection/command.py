@@ -21,7 +21,7 @@ from spindlebench import atomic, provenance
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
-from spindlebench.selection.evaluate import MISSING_MODES, RecordingLike, evaluate
+from spindlebench.selection.evaluate import MISSING_MODES, Evaluation, RecordingLike, evaluate
 from spindlebench.selection.similarity import SIMILARITIES
 
 #: The same hint ``evaluate`` gives when it reads a file itself.
@@ -125,24 +125,37 @@ def run(args: argparse.Namespace) -> int:
             missing=args.missing,
         )
     messages = [str(item.message) for item in caught]
+    text = None if args.json is None else _json_text(result, args, messages)
     for message in messages:
         print(f"warning: {message}", file=sys.stderr)
     print(result.summary())
-    if args.json is not None:
-        record = result.to_dict()
-        record["provenance"] = provenance.provenance(
-            command="evaluate",
-            train=provenance.file_entry(args.train),
-            tests=[provenance.file_entry(path) for path in args.test],
-            target=args.target,
-            sensors=result.sensors,
-            clusters=args.clusters,
-            differences=args.differences,
-            similarity=args.similarity,
-            closure=args.closure,
-            missing=args.missing,
-            warnings=messages,
-        )
-        atomic.write_text(args.json, json.dumps(record, indent=2, allow_nan=False) + "\n")
+    if text is not None:
+        atomic.write_text(args.json, text)
         print(f"wrote {args.json}")
     return 0
+
+
+def _json_text(result: Evaluation, args: argparse.Namespace, messages: list[str]) -> str:
+    """The --json document, made before anything is printed so that a value JSON cannot
+    hold (inf, NaN) is one error line, not a traceback after the summary."""
+    record = result.to_dict()
+    record["provenance"] = provenance.provenance(
+        command="evaluate",
+        train=provenance.file_entry(args.train),
+        tests=[provenance.file_entry(path) for path in args.test],
+        target=args.target,
+        sensors=result.sensors,
+        clusters=args.clusters,
+        differences=args.differences,
+        similarity=args.similarity,
+        closure=args.closure,
+        missing=args.missing,
+        warnings=messages,
+    )
+    try:
+        return json.dumps(record, indent=2, allow_nan=False) + "\n"
+    except ValueError as exc:
+        raise SelectionError(
+            f"--json {args.json}: the result holds a value JSON cannot store ({exc}); "
+            f"the input values are probably too large"
+        ) from exc

@@ -51,8 +51,12 @@ def _components(n: int, child: np.ndarray, parent: np.ndarray) -> list[np.ndarra
 
 
 def cut_at(T: np.ndarray, eta: float) -> Cut:
-    """Clusters of the cut t(R) >= ``eta``."""
+    """Clusters of the cut t(R) >= ``eta``; ``eta`` is a finite number in [0, 1] (NaN would
+    cut every edge, 2.0 silently give singletons)."""
     T = check_similarity(T)
+    if isinstance(eta, bool) or not isinstance(eta, (int, float, np.integer, np.floating)) \
+            or not 0.0 <= float(eta) <= 1.0:
+        raise SelectionError(f"the cut threshold eta must be a number in [0, 1], got {eta!r}")
     child, parent, weight = maximum_spanning_tree(T).edges()
     keep = weight >= eta
     return Cut(eta=float(eta), clusters=_components(T.shape[0], child[keep], parent[keep]))

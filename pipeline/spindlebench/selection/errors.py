@@ -14,3 +14,9 @@ class SelectionError(SpindlebenchError, ValueError):
 class SelectionWarning(UserWarning):
     """Input the method handles in a documented way that changes the result (e.g. a
     constant sensor dropped, or ties making the requested cluster count impossible)."""
+
+
+class SelectionOverflowError(SelectionError):
+    """Finite input so large that a sum of squares or a product overflows float64: the
+    result would be inf or NaN (or, worse, silently zero correlations), so it is refused.
+    ``evaluate`` adds the recording's name."""

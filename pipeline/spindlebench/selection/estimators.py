@@ -25,8 +25,16 @@ Example::
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
-from sklearn.base import BaseEstimator, OneToOneFeatureMixin, RegressorMixin, TransformerMixin
+from sklearn.base import (
+    BaseEstimator,
+    OneToOneFeatureMixin,
+    RegressorMixin,
+    TransformerMixin,
+    _fit_context,
+)
 from sklearn.feature_selection import SelectorMixin
 from sklearn.pipeline import Pipeline
 from sklearn.utils.validation import (
@@ -51,9 +59,13 @@ class PairwiseDifferences(TransformerMixin, BaseEstimator):
         Keep the raw columns in front of the differences (the paper's candidate set).
     """
 
+    # scikit-learn checks it at fit: "no" would otherwise be truthy and keep the raw columns
+    _parameter_constraints: ClassVar[dict] = {"include_raw": ["boolean"]}
+
     def __init__(self, include_raw: bool = True):
         self.include_raw = include_raw
 
+    @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
         """Remember the number (and names) of the input columns."""
         validate_data(self, X, dtype=FLOAT_DTYPES)
@@ -98,6 +110,12 @@ class RiseTransformer(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
             if reference.shape != (X.shape[1],):
                 raise SelectionError(
                     f"reference has {reference.size} values but X has {X.shape[1]} feature(s)"
+                )
+            bad = np.flatnonzero(~np.isfinite(reference))
+            if bad.size:  # every rise of that feature would be NaN
+                raise SelectionError(
+                    f"reference must be finite; NaN or inf at position(s) "
+                    f"{', '.join(map(str, bad[:10].tolist()))}"
                 )
             self.reference_ = reference
         return self
@@ -184,7 +202,8 @@ class RiseRegressor(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         """Fit on rises ``X`` and error ``y``."""
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
-        fit = fit_ols(X, y)
+        names = getattr(self, "feature_names_in_", None)
+        fit = fit_ols(X, y, names=None if names is None else list(names))
         self.intercept_ = fit.intercept
         self.coef_ = fit.coefficients
         self.r2_ = fit.r2

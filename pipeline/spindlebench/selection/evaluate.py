@@ -22,7 +22,8 @@ from __future__ import annotations
 import math
 import os
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,7 +38,11 @@ from spindlebench.recordings import (
     recording_name,
 )
 from spindlebench.selection.differences import difference_names, pair_indices
-from spindlebench.selection.errors import SelectionError, SelectionWarning
+from spindlebench.selection.errors import (
+    SelectionError,
+    SelectionOverflowError,
+    SelectionWarning,
+)
 from spindlebench.selection.regression import LinearFit, fit_ols, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
 from spindlebench.selection.similarity import constant_columns
@@ -65,12 +70,20 @@ class CandidateSet:
         return names + difference_names(names) if self.differences else names
 
     def matrix(self, frame: pd.DataFrame, columns: Sequence[int] | None = None) -> np.ndarray:
-        """Candidate values (rises) of ``frame``; only ``columns`` if given."""
-        raw = rises(frame.loc[:, list(self.sensors)].to_numpy(dtype=float))
-        n = raw.shape[1]
+        """Candidate values (rises) of ``frame``; only ``columns`` if given.
+
+        Only the sensors those candidates are made of are read: with ``missing="drop-rows"``
+        a test recording is complete only in those, and an unused sensor's gap must not
+        matter."""
+        n = len(self.sensors)
         wanted = np.arange(len(self.names)) if columns is None else np.asarray(columns, int)
         if wanted.size and (wanted.min() < 0 or wanted.max() >= len(self.names)):
             raise SelectionError(f"candidate index out of range 0..{len(self.names) - 1}")
+        needed = self.sensors_of(wanted)
+        raw = np.full((len(frame), n), np.nan)
+        raw[:, [self.sensors.index(s) for s in needed]] = rises(
+            frame.loc[:, needed].to_numpy(dtype=float)
+        )
         is_raw = wanted < n
         pair = wanted[~is_raw] - n  # index into the pair list
         first, second = pair_indices(n)
@@ -174,6 +187,28 @@ class Evaluation:
             lines.append(f"  {name:<{width}}  {value:8.3f}")
         lines.append(f"  {'mean':<{width}}  {self.mean_rmse_um:8.3f}")
         return "\n".join(lines)
+
+
+@contextmanager
+def _naming(name: str) -> Iterator[None]:
+    """Put the recording's name in front of an overflow error from the numerics below."""
+    try:
+        yield
+    except SelectionOverflowError as exc:
+        raise SelectionOverflowError(f"recording {name}: {exc}") from exc
+
+
+def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:
+    """``matrix`` (rises, differences), or an overflow error naming the first columns where
+    subtracting two finite values gave inf (|values| near 1e308)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        bad = np.flatnonzero(~np.isfinite(matrix).all(axis=0))
+    if bad.size:
+        shown = ", ".join(names[i] for i in bad[:10])
+        raise SelectionOverflowError(
+            f"values too large for rises and differences (overflow) in {shown}"
+        )
+    return matrix
 
 
 def _finite_or_none(value: float) -> float | None:
@@ -322,7 +357,7 @@ def resolve_sensors(
 
 def evaluate(
     train: RecordingLike,
-    tests: Sequence[RecordingLike] | Mapping[str, RecordingLike],
+    tests: RecordingLike | Sequence[RecordingLike] | Mapping[str, RecordingLike],
     target: str,
     sensors: Sequence[str] | None = None,
     k: int = 2,
@@ -333,8 +368,9 @@ def evaluate(
 ) -> Evaluation:
     """Select ``k`` points on ``train``, fit the rise model, and score it on every test.
 
-    Recordings are paths (read with ``read_recording``) or DataFrames; ``tests`` may be a
-    mapping from display name to recording (default names: the paths). ``sensors`` None means
+    Recordings are paths (read with ``read_recording``) or DataFrames; ``tests`` is a list of
+    them, a single one, or a mapping from display name to recording (default names: the
+    paths). ``sensors`` None means
     ``default_sensors`` of the training file, and every test file must then have exactly the
     same sensor columns; with explicit ``sensors`` the files only need to contain them.
     ``missing`` is ``"error"`` or ``"drop-rows"`` (see the module docstring).
@@ -348,6 +384,8 @@ def evaluate(
         raise SelectionError(
             f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
         )
+    if isinstance(tests, (str, os.PathLike, pd.DataFrame)):
+        tests = [tests]  # one test recording; a string would otherwise be read per character
     train_name, train_frame = _load(train, "train", missing)
     items = tests.items() if isinstance(tests, Mapping) else enumerate(tests, start=1)
     test_frames: dict[str, pd.DataFrame] = {}
@@ -376,10 +414,14 @@ def evaluate(
     if constant_columns(y_train[:, None])[0]:
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
-    selection = select_sensitive_points(
-        candidates.matrix(train_frame), y_train, k, similarity, closure, names=names
-    )
-    fit = fit_ols(candidates.matrix(train_frame, selection.selected), y_train)
+    with _naming(train_name):
+        selection = select_sensitive_points(
+            _finite(candidates.matrix(train_frame), names), y_train, k, similarity, closure,
+            names=names,
+        )
+        selected_names = [names[i] for i in selection.selected]
+        fit = fit_ols(candidates.matrix(train_frame, selection.selected), y_train,
+                      names=selected_names)
     used = [*candidates.sensors_of(selection.selected), target]
     predictions, measured, errors, test_rows = {}, {}, {}, {}
     for name, frame in test_frames.items():
@@ -388,8 +430,12 @@ def evaluate(
             test_rows[name] = _complete_rows(name, frame, used)
             frame = frame.iloc[test_rows[name]]
         measured[name] = frame[target].to_numpy(dtype=float)
-        predictions[name] = fit.predict(candidates.matrix(frame, selection.selected))
-        errors[name] = rmse(measured[name], predictions[name])
+        with _naming(name):
+            values = _finite(candidates.matrix(frame, selection.selected), selected_names)
+            predictions[name] = fit.predict(values)
+            if not np.all(np.isfinite(predictions[name])):
+                raise SelectionOverflowError("values too large to predict (overflow)")
+            errors[name] = rmse(measured[name], predictions[name])
     return Evaluation(
         train=train_name,
         target=target,

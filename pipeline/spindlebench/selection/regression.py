@@ -4,32 +4,87 @@ Rises are relative to the first sample of each experiment (the paper's Delta T).
 ordinary least squares with an intercept, solved on centred data with ``numpy.linalg.lstsq``
 (the intercept then follows from the means), which is better conditioned than appending a
 column of ones to temperatures that sit far from zero.
+
+Bad input is refused in one line rather than answered with NaN or a numpy broadcast error:
+fewer samples than features + 1, a reference (first) row with NaN under a column that has
+values later, NaN experiment labels, mismatched or empty inputs of ``rmse``/``r2_score``, and
+values so large that the sums of squares overflow. Collinear features (a duplicate column, or
+``A``, ``B`` and ``A-B`` together) get a ``SelectionWarning`` naming them: the fit is then the
+minimum-norm one and their coefficients are not unique.
 """
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.errors import (
+    SelectionError,
+    SelectionOverflowError,
+    SelectionWarning,
+)
+
+
+def check_groups(groups: object, n_rows: int | None = None) -> np.ndarray:
+    """Experiment labels as a 1-D array (one per row if ``n_rows``), without NaN labels:
+    NaN never equals itself, so every NaN row would become an experiment of its own."""
+    groups = np.asarray(groups)
+    if groups.ndim != 1:
+        raise SelectionError(f"groups must be 1-D, got shape {groups.shape}")
+    if n_rows is not None and groups.shape != (n_rows,):
+        raise SelectionError(f"groups must label each of the {n_rows} rows, got {groups.size}")
+    missing = np.flatnonzero(_is_nan_label(groups))
+    if missing.size:
+        raise SelectionError(
+            f"groups: {missing.size} NaN/None label(s), first in row {int(missing[0])}; "
+            f"every row needs the experiment it belongs to"
+        )
+    return groups
+
+
+def _is_nan_label(groups: np.ndarray) -> np.ndarray:
+    if groups.dtype.kind in "fc":
+        return np.isnan(groups)
+    if groups.dtype.kind == "O":
+        return np.array([g is None or (isinstance(g, float) and g != g) for g in groups],
+                        dtype=bool)
+    return np.zeros(groups.shape, dtype=bool)
 
 
 def rises(X: np.ndarray, groups: np.ndarray | None = None) -> np.ndarray:
-    """``X`` minus the first row of its experiment (``groups`` labels rows; None = one)."""
+    """``X`` minus the first row of its experiment (``groups`` labels rows; None = one).
+
+    A column whose reference (first) value is NaN or inf while later rows of the experiment
+    have values is an error: every rise of it would be NaN. A column with no value at all
+    stays NaN (a sensor that dropped out for the whole run loses nothing).
+    """
     X = np.asarray(X, dtype=float)
     if X.ndim != 2 or X.shape[0] == 0:
         raise SelectionError(f"rises need a non-empty 2-D array, got shape {X.shape}")
     if groups is None:
+        _check_reference(X, None)
         return X - X[0]
-    groups = np.asarray(groups)
-    if groups.shape != (X.shape[0],):
-        raise SelectionError(f"groups must label each of the {X.shape[0]} rows")
+    groups = check_groups(groups, X.shape[0])
     out = np.empty_like(X)
     for label in _unique_in_order(groups):
         rows = np.flatnonzero(groups == label)
+        _check_reference(X[rows], label)
         out[rows] = X[rows] - X[rows[0]]
     return out
+
+
+def _check_reference(X: np.ndarray, label: object) -> None:
+    bad = np.flatnonzero(~np.isfinite(X[0]) & np.isfinite(X).any(axis=0))
+    if bad.size:
+        where = "the first row" if label is None else f"the first row of experiment {label!r}"
+        raise SelectionError(
+            f"rises: {where} (the reference) has NaN/inf in column(s) "
+            f"{', '.join(map(str, bad[:10].tolist()))} that have values later; drop the "
+            f"incomplete rows first"
+        )
 
 
 def _unique_in_order(values: np.ndarray) -> list:
@@ -39,20 +94,53 @@ def _unique_in_order(values: np.ndarray) -> list:
     return list(seen)
 
 
+def _paired(y: np.ndarray, predicted: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Measured and predicted as equally long 1-D arrays ((n, 1) counts as n samples); a
+    length mismatch would otherwise broadcast into an n x n matrix or a numpy error."""
+    y_in, p_in = np.asarray(y, dtype=float), np.asarray(predicted, dtype=float)
+    y_flat, p_flat = _samples(y_in), _samples(p_in)
+    if y_flat is None or p_flat is None or y_flat.shape != p_flat.shape:
+        raise SelectionError(
+            f"{what}: measured and predicted must be equally long 1-D arrays, got shapes "
+            f"{y_in.shape} and {p_in.shape}"
+        )
+    if y_flat.size == 0:
+        raise SelectionError(f"{what}: needs at least 1 sample, got none")
+    return y_flat, p_flat
+
+
+def _samples(values: np.ndarray) -> np.ndarray | None:
+    if values.ndim == 1:
+        return values
+    if values.ndim == 2 and values.shape[1] == 1:
+        return values[:, 0]
+    return None
+
+
 def r2_score(y: np.ndarray, predicted: np.ndarray) -> float:
-    """Coefficient of determination 1 - SS_res / SS_tot (NaN for a constant target)."""
-    y = np.asarray(y, dtype=float)
-    residual = y - np.asarray(predicted, dtype=float)
-    total = y - y.mean()
-    if total @ total == 0:
+    """Coefficient of determination 1 - SS_res / SS_tot (NaN for a constant target, and
+    where the inputs hold NaN)."""
+    y, predicted = _paired(y, predicted, "r2_score")
+    with np.errstate(over="ignore", invalid="ignore"):
+        residual = y - predicted
+        total = y - y.mean()
+        ss_res, ss_tot = residual @ residual, total @ total
+    finite_input = np.isfinite(y).all() and np.isfinite(predicted).all()
+    if finite_input and not (np.isfinite(ss_res) and np.isfinite(ss_tot)):
+        raise SelectionOverflowError("values too large for R2 (overflow in the sums of squares)")
+    if ss_tot == 0:
         return float("nan")  # undefined for a constant target
-    return float(1.0 - residual @ residual / (total @ total))
+    return float(1.0 - ss_res / ss_tot)
 
 
 def rmse(y: np.ndarray, predicted: np.ndarray) -> float:
-    """Root-mean-square error, in the unit of ``y``."""
-    residual = np.asarray(y, dtype=float) - np.asarray(predicted, dtype=float)
-    return float(np.sqrt(np.mean(residual**2)))
+    """Root-mean-square error, in the unit of ``y`` (NaN where the inputs hold NaN)."""
+    y, predicted = _paired(y, predicted, "rmse")
+    with np.errstate(over="ignore", invalid="ignore"):
+        value = float(np.sqrt(np.mean((y - predicted) ** 2)))
+    if not np.isfinite(value) and np.isfinite(y).all() and np.isfinite(predicted).all():
+        raise SelectionOverflowError("values too large for the RMSE (overflow)")
+    return value
 
 
 @dataclass(frozen=True)
@@ -64,23 +152,69 @@ class LinearFit:
     r2: float
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        """Predicted error for candidate values (rises) ``X``."""
-        return self.intercept + np.asarray(X, dtype=float) @ self.coefficients
+        """Predicted error for candidate values (rises) ``X`` (inf where they overflow)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return self.intercept + np.asarray(X, dtype=float) @ self.coefficients
 
 
-def fit_ols(X: np.ndarray, y: np.ndarray) -> LinearFit:
-    """Ordinary least squares with intercept (minimum-norm if the design is rank deficient)."""
+def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) -> LinearFit:
+    """Ordinary least squares with intercept.
+
+    Needs at least features + 1 samples (fewer fit any data exactly and mean nothing).
+    Collinear features give a ``SelectionWarning`` naming them (``names`` or "column i") and
+    the minimum-norm fit. Values whose squares overflow raise ``SelectionOverflowError``.
+    """
     X = np.asarray(X, dtype=float)
     y = np.asarray(y, dtype=float).ravel()
     if X.ndim != 2 or X.shape[0] != y.shape[0]:
         raise SelectionError(f"regression needs X (n x p) and y (n); got {X.shape}, {y.shape}")
     if X.shape[0] < 2:
         raise SelectionError(f"regression needs at least 2 samples, got {X.shape[0]}")
+    if X.shape[0] < X.shape[1] + 1:
+        raise SelectionError(
+            f"regression needs at least features + 1 = {X.shape[1] + 1} samples, got "
+            f"{X.shape[0]} (with fewer, any data fit exactly)"
+        )
+    if names is not None and len(names) != X.shape[1]:
+        raise SelectionError(f"{len(names)} name(s) given for {X.shape[1]} feature(s)")
     if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
         raise SelectionError("regression inputs must be finite (no NaN or inf)")
-    x_mean = X.mean(axis=0)
-    y_mean = y.mean()
-    coefficients, *_ = np.linalg.lstsq(X - x_mean, y - y_mean, rcond=None)
-    intercept = float(y_mean - x_mean @ coefficients)
-    r2 = r2_score(y, intercept + X @ coefficients)
-    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2)
+    with np.errstate(over="ignore", invalid="ignore"):
+        x_mean = X.mean(axis=0)
+        y_mean = y.mean()
+        centred = X - x_mean
+        try:
+            coefficients, _, rank, _ = np.linalg.lstsq(centred, y - y_mean, rcond=None)
+        except np.linalg.LinAlgError as exc:
+            raise SelectionOverflowError(
+                f"values too large to fit (overflow; the solver failed: {exc})"
+            ) from exc
+        intercept = float(y_mean - x_mean @ coefficients)
+        fitted = intercept + X @ coefficients
+    if not (np.isfinite(intercept) and np.all(np.isfinite(coefficients))
+            and np.all(np.isfinite(fitted))):
+        raise SelectionOverflowError("values too large to fit (overflow)")
+    if rank < X.shape[1]:
+        _warn_collinear(centred, int(rank), names)
+    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2_score(y, fitted))
+
+
+def _warn_collinear(centred: np.ndarray, rank: int, names: Sequence[str] | None) -> None:
+    """Name the features that add nothing to the ones before them (a constant column, a
+    duplicate, or a sum or difference of others)."""
+    dependent: list[str] = []
+    independent: list[int] = []
+    for j in range(centred.shape[1]):
+        trial = [*independent, j]
+        if np.linalg.matrix_rank(centred[:, trial]) == len(trial):
+            independent = trial
+        else:
+            dependent.append(str(names[j]) if names is not None else f"column {j}")
+    which = f"feature(s) {', '.join(dependent)} are" if dependent else "features are"
+    warnings.warn(
+        f"regression: {which} linear combinations of the "
+        f"others or constant (rank {rank} of {centred.shape[1]}); the fit is the "
+        f"minimum-norm one and their coefficients are not unique",
+        SelectionWarning,
+        stacklevel=3,
+    )

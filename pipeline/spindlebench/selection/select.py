@@ -85,9 +85,16 @@ def select_sensitive_points(
 ) -> Selection:
     """Steps 2-5 on candidates ``X`` (n_samples x n_candidates) and thermal error ``y``.
 
-    ``names`` only serve the warning about dropped constant candidates.
+    ``names`` (one per column of ``X``) only serve messages: the warning about dropped
+    constant candidates and the error about values too large to correlate.
     """
     X, y = _check_inputs(X, y, n_clusters)
+    if names is not None:
+        names = [str(name) for name in names]
+        if len(names) != X.shape[1]:
+            raise SelectionError(
+                f"{len(names)} name(s) given for {X.shape[1]} candidate column(s)"
+            )
     constant = constant_columns(X)
     kept = np.flatnonzero(~constant)
     dropped = np.flatnonzero(constant)
@@ -106,11 +113,12 @@ def select_sensitive_points(
             f"cannot make {n_clusters} clusters: only {kept.size} candidate(s) vary "
             f"({dropped.size} constant one(s) dropped)"
         )
-    R = similarity_matrix(X[:, kept], similarity)
+    kept_names = None if names is None else [names[i] for i in kept]
+    R = similarity_matrix(X[:, kept], similarity, kept_names)
     T = transitive_closure(R, closure)
     cut = cut_for_clusters(T, n_clusters)
     psi = np.full(X.shape[1], np.nan)
-    psi[kept] = correlation_with(X[:, kept], y)
+    psi[kept] = correlation_with(X[:, kept], y, kept_names)
     clusters = [kept[members] for members in cut.clusters]
     return Selection(
         kept=kept,

@@ -15,9 +15,11 @@ Constant columns have no correlation; they must be removed first (see ``constant
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.errors import SelectionError, SelectionOverflowError
 
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 
@@ -41,15 +43,34 @@ def constant_columns(X: np.ndarray) -> np.ndarray:
     return spread <= CONSTANT_RTOL * scale
 
 
-def standardized(X: np.ndarray) -> np.ndarray:
-    """Columns centred (two passes) and scaled to unit Euclidean norm."""
+def standardized(X: np.ndarray, names: Sequence[str] | None = None) -> np.ndarray:
+    """Columns centred (two passes) and scaled to unit Euclidean norm.
+
+    A column of finite values whose sum of squares overflows (|values| ~ 1e154 and up) raises
+    ``SelectionOverflowError`` naming it (``names`` or "column i"): its norm would be inf and
+    its correlations silently 0. Columns with NaN or inf stay NaN (callers that must not see
+    them check first).
+    """
     X = np.asarray(X, dtype=float)
-    centred = X - X.mean(axis=0)
-    centred -= centred.mean(axis=0)
-    norms = np.sqrt(np.einsum("ij,ij->j", centred, centred))
+    with np.errstate(over="ignore", invalid="ignore"):
+        centred = X - X.mean(axis=0)
+        centred -= centred.mean(axis=0)
+        norms = np.sqrt(np.einsum("ij,ij->j", centred, centred))
+    overflow = np.flatnonzero(np.isfinite(X).all(axis=0) & ~np.isfinite(norms))
+    if overflow.size:
+        raise SelectionOverflowError(
+            f"values too large to correlate (overflow) in {_column_list(overflow, names)}"
+        )
     if np.any(norms == 0) or np.any(constant_columns(X)):
         raise SelectionError("similarity needs non-constant columns; drop constant ones first")
     return centred / norms
+
+
+def _column_list(indices: np.ndarray, names: Sequence[str] | None) -> str:
+    """``T1, T6`` (or ``column 0, column 5``), the first 10 and a count of the rest."""
+    labels = [str(names[i]) if names is not None else f"column {i}" for i in indices]
+    shown = ", ".join(labels[:10])
+    return shown + (f" and {len(labels) - 10} more" if len(labels) > 10 else "")
 
 
 def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
@@ -61,8 +82,14 @@ def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
     return out
 
 
-def similarity_matrix(X: np.ndarray, method: str = "abs-pearson") -> np.ndarray:
-    """Fuzzy similarity R (n_candidates x n_candidates) of the columns of ``X``."""
+def similarity_matrix(
+    X: np.ndarray, method: str = "abs-pearson", names: Sequence[str] | None = None
+) -> np.ndarray:
+    """Fuzzy similarity R (n_candidates x n_candidates) of the columns of ``X``.
+
+    NaN or inf anywhere is an error (it would make R, and every cluster, NaN); ``names``
+    (one per column) only serve the messages.
+    """
     if method not in SIMILARITIES:
         raise SelectionError(
             f"unknown similarity {method!r}; choose one of {', '.join(SIMILARITIES)}"
@@ -70,20 +97,38 @@ def similarity_matrix(X: np.ndarray, method: str = "abs-pearson") -> np.ndarray:
     X = np.asarray(X, dtype=float)
     if X.ndim != 2 or X.shape[0] < 2:
         raise SelectionError(f"similarity needs at least 2 samples, got shape {X.shape}")
-    Z = standardized(X)
+    _check_names(names, X.shape[1])
+    bad = np.flatnonzero(~np.isfinite(X).all(axis=0))
+    if bad.size:
+        raise SelectionError(
+            f"similarity needs finite values; NaN or inf in {_column_list(bad, names)}"
+        )
+    Z = standardized(X, names)
     if method == "literal":
         Z = np.abs(Z)
         return _symmetric_unit(Z.T @ Z)
     return _symmetric_unit(np.abs(Z.T @ Z))
 
 
-def correlation_with(X: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Pearson correlation of every column of ``X`` with ``y`` (eq. 4), sign kept."""
+def correlation_with(
+    X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None
+) -> np.ndarray:
+    """Pearson correlation of every column of ``X`` with ``y`` (eq. 4), sign kept.
+
+    A column holding NaN or inf gets NaN (the studies rank such a dropped-out sensor last);
+    values whose squares overflow are an error naming the column (``names``) or the target.
+    """
     y = np.asarray(y, dtype=float).ravel()
     X = np.asarray(X, dtype=float)
     if X.shape[0] != y.shape[0]:
         raise SelectionError(f"X has {X.shape[0]} samples but the target has {y.shape[0]}")
+    _check_names(names, X.shape[1])
     if constant_columns(y[:, None])[0]:
         raise SelectionError("the target (thermal error) is constant; no correlation exists")
-    zy = standardized(y[:, None])[:, 0]
-    return np.clip(standardized(X).T @ zy, -1.0, 1.0)
+    zy = standardized(y[:, None], ["the target"])[:, 0]
+    return np.clip(standardized(X, names).T @ zy, -1.0, 1.0)
+
+
+def _check_names(names: Sequence[str] | None, n_columns: int) -> None:
+    if names is not None and len(names) != n_columns:
+        raise SelectionError(f"{len(names)} name(s) given for {n_columns} column(s)")

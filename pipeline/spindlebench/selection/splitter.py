@@ -13,6 +13,7 @@ import numpy as np
 from sklearn.model_selection import BaseCrossValidator
 
 from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.regression import check_groups
 
 
 class TrainOnOneExperiment(BaseCrossValidator):
@@ -20,9 +21,10 @@ class TrainOnOneExperiment(BaseCrossValidator):
 
     Parameters
     ----------
-    train_groups : sequence or None
-        Group labels to use as training experiments, in this order (e.g. ``["exp1"]`` for the
-        paper's single fold). None means every group, in order of first appearance.
+    train_groups : sequence, single label or None
+        Group labels to use as training experiments, in this order (e.g. ``["exp1"]``, or just
+        ``"exp1"``, for the paper's single fold). None means every group, in order of first
+        appearance. NaN group labels are an error (each would be an experiment of its own).
     """
 
     def __init__(self, train_groups: Sequence | None = None):
@@ -31,9 +33,7 @@ class TrainOnOneExperiment(BaseCrossValidator):
     def _groups(self, groups) -> tuple[np.ndarray, list]:
         if groups is None:
             raise SelectionError("TrainOnOneExperiment needs 'groups' (the experiment of each row)")
-        groups = np.asarray(groups)
-        if groups.ndim != 1:
-            raise SelectionError(f"groups must be 1-D, got shape {groups.shape}")
+        groups = check_groups(groups)
         present = list(dict.fromkeys(groups.tolist()))
         if len(present) < 2:
             raise SelectionError(
@@ -41,7 +41,12 @@ class TrainOnOneExperiment(BaseCrossValidator):
             )
         if self.train_groups is None:
             return groups, present
-        chosen = list(self.train_groups)
+        if isinstance(self.train_groups, (str, bytes)) or np.ndim(self.train_groups) == 0:
+            chosen = [self.train_groups]  # one label: "exp1" is not 'e', 'x', 'p', '1'
+        else:
+            chosen = list(self.train_groups)
+        if not chosen:
+            raise SelectionError("train_groups is empty; give at least one experiment or None")
         missing = [label for label in chosen if label not in present]
         if missing:
             raise SelectionError(f"training experiment(s) not among the groups: {missing}")
