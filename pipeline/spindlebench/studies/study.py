@@ -23,6 +23,7 @@ from spindlebench.errors import SpindlebenchError
 from spindlebench.provenance import sha256_file
 from spindlebench.studies.schema import Table, load_toml, non_negative, positive
 from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_climate_path
+from spindlebench.testbench.scenario import MAX_FEED_MM_PER_MIN, MAX_RPM, MAX_STEPS, MIN_STEP_S
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_FMU = REPO_ROOT / "fmus" / "SpindleBench.fmu"
@@ -37,14 +38,9 @@ TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
 COOLING_MODES = ("off", "absolute", "follow_ambient")
 FAULT_KINDS = ("dropout", "stuck", "offset")
+#: MIN_STEP_S, MAX_STEPS, MAX_RPM and MAX_FEED_MM_PER_MIN are a scenario's limits (imported
+#: from ``testbench.scenario``): a study's experiments are scenarios.
 NO_FAULT = "none"
-#: Run-length limits, the same as a scenario's (``testbench.scenario``): the thermal time
-#: constants are minutes, so a millisecond step resolves them a thousand times over, and ten
-#: million steps keep the driver arrays and the run time bounded.
-MIN_STEP_S = 1e-3
-MAX_STEPS = 10_000_000
-#: Fastest mean feed (mm/min), as for a scenario: the rapid traverse of fast machining centres.
-MAX_FEED_MM_PER_MIN = 60_000.0
 
 
 @dataclass(frozen=True)
@@ -210,8 +206,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     axes = root.table("axes")
     months = tuple(axes.get_list("months", str, check=lambda m: None if m in MONTHS
                                  else f"not a month (use {', '.join(MONTHS)})"))
-    speeds = tuple(axes.get_list("speeds_rpm", float, check=lambda v: None if 0 < v <= 40_000
-                                 else "must be > 0 and at most 40000 rpm"))
+    speeds = tuple(axes.get_list("speeds_rpm", float, check=lambda v: None if 0 < v <= MAX_RPM
+                                 else f"must be > 0 and at most {MAX_RPM:g} rpm"))
     programme_names = axes.get_list("programmes", str, default=["constant"])
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
