@@ -109,21 +109,15 @@ def test_bad_toml_and_missing_file(tmp_path):
         load_study(path)
 
 
-def test_climate_in_kelvin_is_refused(tmp_path):
+@pytest.mark.parametrize(("value", "message"), [
+    ("278.9", r"278.9 looks like Kelvin"),
+    ("nan", r"must be a finite number, got nan"),
+])
+def test_a_bad_climate_value_names_the_file_and_month(tmp_path, value, message):
     text = resolve_climate_path("chongqing").read_text(encoding="utf-8")
-    write_study(tmp_path, text.replace("low_C = 5.8", "low_C = 278.9"), "hot.toml")
-    study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"': 'climate = "hot.toml"'}))
-    with pytest.raises(SpindlebenchError, match=r"hot.toml: key 'months.Jan.low_C': 278.9 looks "
-                                                r"like Kelvin"):
-        load_study(study)
-
-
-def test_a_nan_in_the_climate_names_the_month(tmp_path):
-    text = resolve_climate_path("chongqing").read_text(encoding="utf-8")
-    write_study(tmp_path, text.replace("low_C = 5.8", "low_C = nan"), "nan.toml")
-    study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"': 'climate = "nan.toml"'}))
-    with pytest.raises(SpindlebenchError, match=r"nan.toml: key 'months.Jan.low_C': must be a "
-                                                r"finite number, got nan"):
+    write_study(tmp_path, text.replace("low_C = 5.8", f"low_C = {value}"), "bad.toml")
+    study = write_study(tmp_path, tiny_text(**{'climate = "chongqing"': 'climate = "bad.toml"'}))
+    with pytest.raises(SpindlebenchError, match=r"bad.toml: key 'months.Jan.low_C': " + message):
         load_study(study)
 
 

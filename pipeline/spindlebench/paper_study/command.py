@@ -7,7 +7,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from spindlebench.errors import SpindlebenchError
+from spindlebench.listflags import split_list_flag
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study.report import check_out_dir, write_outputs
 from spindlebench.paper_study.study import GROUP_LABELS, run_study
@@ -57,23 +57,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _joined(flag: str, values: list[str] | None) -> str | None:
-    """A list flag's words as one comma-separated value (``T1 T6,T8`` -> ``T1,T6,T8``).
-
-    A comma at either end of a word is a separator (``exp2, exp3``); an empty item inside
-    (``2,,3``) is an error, since it is usually a value left out.
-    """
-    if values is None:
-        return None
-    parts: list[str] = []
-    for value in values:
-        text = value.strip()
-        if len(values) > 1:
-            text = text.strip(",").strip()
-        pieces = [piece.strip() for piece in text.split(",")]
-        if not all(pieces):
-            raise SpindlebenchError(f"{flag}: empty item in {' '.join(values)!r}")
-        parts.extend(pieces)
-    return ",".join(parts)
+    """A list flag's words as one comma-separated value (``T1 T6,T8`` -> ``T1,T6,T8``)."""
+    names = split_list_flag(flag, values)
+    return None if names is None else ",".join(names)
 
 
 def _run(args: argparse.Namespace) -> int:

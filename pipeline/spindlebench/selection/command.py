@@ -18,6 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from spindlebench import atomic, provenance
+from spindlebench.listflags import split_list_flag
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
@@ -73,25 +74,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def parse_sensor_list(values: str | Sequence[str] | None) -> list[str] | None:
-    """``["T1,T6", "T8"]`` or ``"T1,T6, T8"`` -> ``["T1", "T6", "T8"]``; None stays None.
-
-    Both separators are accepted because users type either; an empty name between two commas
-    (``T1,,T6``) is an error, but a comma next to a space (``T1, T6`` unquoted) is just a
-    separator.
-    """
-    if values is None:
-        return None
-    items = [values] if isinstance(values, str) else list(values)
-    names: list[str] = []
-    for item in items:
-        text = item.strip()
-        if len(items) > 1:
-            text = text.strip(",").strip()
-        pieces = [name.strip() for name in text.split(",")]
-        if not all(pieces):
-            raise SelectionError(f"--sensors: empty name in {' '.join(items)!r}")
-        names.extend(pieces)
-    return names
+    """``["T1,T6", "T8"]`` or ``"T1,T6, T8"`` -> ``["T1", "T6", "T8"]``; None stays None."""
+    return split_list_flag("--sensors", values, what="name", error=SelectionError)
 
 
 def _read_used(path: Path, columns: list[str], missing: str) -> pd.DataFrame:
