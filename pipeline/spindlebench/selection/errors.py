@@ -2,7 +2,10 @@
 
 ``SelectionError`` is both a ``SpindlebenchError`` (the CLI prints it as one line) and a
 ``ValueError`` (scikit-learn's estimator checks expect bad input to raise ``ValueError``).
+It also phrases the column lists and name checks those one-line messages share.
 """
+
+from collections.abc import Sequence
 
 from spindlebench.errors import SpindlebenchError
 
@@ -20,3 +23,16 @@ class SelectionOverflowError(SelectionError):
     """Finite input so large that a sum of squares or a product overflows float64: the
     result would be inf or NaN (or, worse, silently zero correlations), so it is refused.
     ``evaluate`` adds the recording's name."""
+
+
+def check_names(names: Sequence[str] | None, n_columns: int) -> None:
+    """Refuse a list of column names (used only in messages) of the wrong length."""
+    if names is not None and len(names) != n_columns:
+        raise SelectionError(f"{len(names)} name(s) given for {n_columns} column(s)")
+
+
+def column_list(indices: Sequence[int], names: Sequence[str] | None) -> str:
+    """``T1, T6`` (or ``column 0, column 5``), the first 10 and a count of the rest."""
+    labels = [str(names[i]) if names is not None else f"column {i}" for i in indices]
+    shown = ", ".join(labels[:10])
+    return shown + (f" and {len(labels) - 10} more" if len(labels) > 10 else "")

@@ -42,6 +42,7 @@ from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,
     SelectionWarning,
+    column_list,
 )
 from spindlebench.selection.regression import LinearFit, fit_ols, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
@@ -204,9 +205,8 @@ def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:
     with np.errstate(over="ignore", invalid="ignore"):
         bad = np.flatnonzero(~np.isfinite(matrix).all(axis=0))
     if bad.size:
-        shown = ", ".join(names[i] for i in bad[:10])
         raise SelectionOverflowError(
-            f"values too large for rises and differences (overflow) in {shown}"
+            f"values too large for rises and differences (overflow) in {column_list(bad, names)}"
         )
     return matrix
 

@@ -25,6 +25,7 @@ from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,
     SelectionWarning,
+    check_names,
 )
 
 
@@ -175,8 +176,7 @@ def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) ->
             f"regression needs at least features + 1 = {X.shape[1] + 1} samples, got "
             f"{X.shape[0]} (with fewer, any data fit exactly)"
         )
-    if names is not None and len(names) != X.shape[1]:
-        raise SelectionError(f"{len(names)} name(s) given for {X.shape[1]} feature(s)")
+    check_names(names, X.shape[1])
     if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
         raise SelectionError("regression inputs must be finite (no NaN or inf)")
     with np.errstate(over="ignore", invalid="ignore"):

@@ -18,7 +18,7 @@ import numpy as np
 
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
-from spindlebench.selection.errors import SelectionError, SelectionWarning
+from spindlebench.selection.errors import SelectionError, SelectionWarning, check_names
 from spindlebench.selection.similarity import (
     constant_columns,
     correlation_with,
@@ -91,10 +91,7 @@ def select_sensitive_points(
     X, y = _check_inputs(X, y, n_clusters)
     if names is not None:
         names = [str(name) for name in names]
-        if len(names) != X.shape[1]:
-            raise SelectionError(
-                f"{len(names)} name(s) given for {X.shape[1]} candidate column(s)"
-            )
+        check_names(names, X.shape[1])
     constant = constant_columns(X)
     kept = np.flatnonzero(~constant)
     dropped = np.flatnonzero(constant)

@@ -19,7 +19,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from spindlebench.selection.errors import SelectionError, SelectionOverflowError
+from spindlebench.selection.errors import (
+    SelectionError,
+    SelectionOverflowError,
+    check_names,
+    column_list,
+)
 
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 
@@ -59,18 +64,11 @@ def standardized(X: np.ndarray, names: Sequence[str] | None = None) -> np.ndarra
     overflow = np.flatnonzero(np.isfinite(X).all(axis=0) & ~np.isfinite(norms))
     if overflow.size:
         raise SelectionOverflowError(
-            f"values too large to correlate (overflow) in {_column_list(overflow, names)}"
+            f"values too large to correlate (overflow) in {column_list(overflow, names)}"
         )
     if np.any(norms == 0) or np.any(constant_columns(X)):
         raise SelectionError("similarity needs non-constant columns; drop constant ones first")
     return centred / norms
-
-
-def _column_list(indices: np.ndarray, names: Sequence[str] | None) -> str:
-    """``T1, T6`` (or ``column 0, column 5``), the first 10 and a count of the rest."""
-    labels = [str(names[i]) if names is not None else f"column {i}" for i in indices]
-    shown = ", ".join(labels[:10])
-    return shown + (f" and {len(labels) - 10} more" if len(labels) > 10 else "")
 
 
 def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
@@ -97,11 +95,11 @@ def similarity_matrix(
     X = np.asarray(X, dtype=float)
     if X.ndim != 2 or X.shape[0] < 2:
         raise SelectionError(f"similarity needs at least 2 samples, got shape {X.shape}")
-    _check_names(names, X.shape[1])
+    check_names(names, X.shape[1])
     bad = np.flatnonzero(~np.isfinite(X).all(axis=0))
     if bad.size:
         raise SelectionError(
-            f"similarity needs finite values; NaN or inf in {_column_list(bad, names)}"
+            f"similarity needs finite values; NaN or inf in {column_list(bad, names)}"
         )
     Z = standardized(X, names)
     if method == "literal":
@@ -122,13 +120,9 @@ def correlation_with(
     X = np.asarray(X, dtype=float)
     if X.shape[0] != y.shape[0]:
         raise SelectionError(f"X has {X.shape[0]} samples but the target has {y.shape[0]}")
-    _check_names(names, X.shape[1])
+    check_names(names, X.shape[1])
     if constant_columns(y[:, None])[0]:
         raise SelectionError("the target (thermal error) is constant; no correlation exists")
     zy = standardized(y[:, None], ["the target"])[:, 0]
     return np.clip(standardized(X, names).T @ zy, -1.0, 1.0)
 
-
-def _check_names(names: Sequence[str] | None, n_columns: int) -> None:
-    if names is not None and len(names) != n_columns:
-        raise SelectionError(f"{len(names)} name(s) given for {n_columns} column(s)")
