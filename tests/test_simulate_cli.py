@@ -234,7 +234,7 @@ def test_shipped_examples_plan_day1_before_its_continuation():
     examples = Path(__file__).resolve().parents[1] / "scenarios" / "examples"
     files = sorted(examples.glob("*.toml"))
     out = Path("/nonexistent-output-folder")
-    order = [files[i].stem for i in plan_batch(files, [out / f"{f.stem}.csv" for f in files])]
+    order = [files[i].stem for i in plan_batch(files, [out / f"{f.stem}.csv" for f in files]).order]
     assert sorted(order) == sorted(f.stem for f in files)
     assert order.index("day1_warmup") < order.index("continue_day1")
 

@@ -217,18 +217,19 @@ def saved_state(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
 
 
 def check_scenario(scenario: Scenario, fmu: FmuInterface, *,
-                   state_written_later: bool = False) -> None:
+                   check_saved_state: bool = True) -> None:
     """Everything about a scenario that needs the FMU, checked without simulating.
 
     A batch runs this for every scenario before the first simulation, so a bad parameter
-    name or continue-from file in its last scenario writes nothing. ``state_written_later``
-    skips the continue-from file when an earlier run of the same batch will write it.
+    name or continue-from file in its last scenario writes nothing. ``check_saved_state``
+    False skips the continue-from file: an earlier run of the same batch will write it, or
+    the caller reads it next anyway.
     """
     problem = step_count_problem(scenario.duration_s, scenario.step_s)
     if problem:
         raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
     parameter_values(scenario, fmu)
-    if scenario.initial.kind == "continue" and not state_written_later:
+    if scenario.initial.kind == "continue" and check_saved_state:
         saved_state(scenario, fmu)
 
 
@@ -258,7 +259,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     set_stop_time = _cvode_set_stop_time()
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
-    check_scenario(scenario, fmu_info)
+    check_scenario(scenario, fmu_info, check_saved_state=False)  # initial_state() reads it
     signals = drive(scenario)
     inputs = np.ascontiguousarray(signals.matrix)
     jumps = signals.jumps()

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -122,14 +123,23 @@ def _scenario_files(arguments: list[str]) -> list[Path]:
     return files
 
 
-def plan_batch(files: list[Path], targets: list[Path]) -> list[int]:
+@dataclass(frozen=True)
+class BatchPlan:
+    """A validated batch: each scenario loaded once, and the order to run them in."""
+
+    order: list[int]  # indices into the batch, each after the run it continues from
+    scenarios: list[Scenario]  # loaded, with sibling references resolved to files
+    state_from_batch: list[bool]  # whether a run's start state is written by an earlier run
+
+
+def plan_batch(files: list[Path], targets: list[Path]) -> BatchPlan:
     """Validate a batch and order it so a run comes after the run it continues from.
 
     ``targets[i]`` is the CSV that ``files[i]`` will be written to. A scenario whose
     ``initial.from`` is the sidecar of another target (by sibling name or by path) runs after
     it; otherwise the given (alphabetical) order is kept. A reference that no run of the batch
     writes and that does not exist yet, or a circle of continuations, is one error line naming
-    the file and key, before anything is simulated. Returns indices into ``files``.
+    the file and key, before anything is simulated.
     """
     seen: dict[Path, int] = {}
     for i, target in enumerate(targets):
@@ -139,9 +149,10 @@ def plan_batch(files: list[Path], targets: list[Path]) -> list[int]:
                                     "rename one of the two scenario files")
         seen[key] = i
     producers = {target.with_suffix(".json").resolve(): i for i, target in enumerate(targets)}
+    scenarios = [resolve_initial(load_scenario(path), target.parent)
+                 for path, target in zip(files, targets, strict=True)]
     after: list[int | None] = []
-    for path, target in zip(files, targets, strict=True):
-        scenario = resolve_initial(load_scenario(path), target.parent)
+    for path, scenario in zip(files, scenarios, strict=True):
         source = scenario.initial.from_file
         if scenario.initial.kind != "continue" or source is None:
             after.append(None)
@@ -174,7 +185,8 @@ def plan_batch(files: list[Path], targets: list[Path]) -> list[int]:
 
     for i in range(len(files)):
         visit(i, [])
-    return order
+    return BatchPlan(order=order, scenarios=scenarios,
+                     state_from_batch=[producer is not None for producer in after])
 
 
 def _output_targets(files: list[Path], out: Path) -> list[Path]:
@@ -201,8 +213,7 @@ def _output_targets(files: list[Path], out: Path) -> list[Path]:
     return targets
 
 
-def check_batch(files: list[Path], targets: list[Path], order: list[int],
-                fmu_path: str | Path | None) -> None:
+def check_batch(plan: BatchPlan, fmu_path: str | Path | None) -> None:
     """Check every scenario of a planned batch against the FMU before any is simulated.
 
     Parameter names, step count and continue-from sidecars are checked here, so a batch is
@@ -210,12 +221,8 @@ def check_batch(files: list[Path], targets: list[Path], order: list[int],
     come from the batch (``plan_batch`` did that).
     """
     fmu = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
-    produced = {target.with_suffix(".json").resolve() for target in targets}
-    for i in order:
-        scenario = resolve_initial(load_scenario(files[i]), targets[i].parent)
-        source = scenario.initial.from_file
-        check_scenario(scenario, fmu, state_written_later=(
-            source is not None and source.resolve() in produced))
+    for i in plan.order:
+        check_scenario(plan.scenarios[i], fmu, check_saved_state=not plan.state_from_batch[i])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -225,15 +232,14 @@ def run(args: argparse.Namespace) -> int:
     files = _scenario_files(args.scenarios)
     targets = _output_targets(files, Path(args.output))
     # validate all first: a typo in the last file should cost nothing
-    order = plan_batch(files, targets)
-    check_batch(files, targets, order, args.fmu)
+    plan = plan_batch(files, targets)
+    check_batch(plan, args.fmu)
     show_progress = not args.quiet and sys.stderr.isatty()
-    for i in order:
-        scenario, target = files[i], targets[i]
-        written = simulate_scenario(scenario, target, fmu_path=args.fmu, seed=args.seed,
-                                    progress=show_progress)
+    for i in plan.order:
+        frame, sidecar = record(plan.scenarios[i], args.fmu, args.seed, show_progress)
+        written = write_recording(targets[i], frame, sidecar)
         if not args.quiet:
-            print(f"{scenario} -> {written} (+ {written.with_suffix('.json').name})")
+            print(f"{files[i]} -> {written} (+ {written.with_suffix('.json').name})")
     return 0
 
 
