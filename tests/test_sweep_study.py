@@ -86,7 +86,8 @@ def test_chongqing_climate_is_complete_and_plausible():
         ({"step_s = 120.0": "step_s = 1e-300"},
          "key 'experiment.step_s': must be at least 0.001 s, got 1e-300"),
         ({"duration_min = 40\nstep_s = 120.0": "duration_min = 600\nstep_s = 0.001"},
-         "key 'experiment.step_s': 0.001 s gives 3.6e+07 steps in 36000 s (at most 1e+07)"),
+         "key 'experiment.step_s': 0.001 s gives 3.6e+07 communication steps over 36000 s; "
+         "at most 10,000,000"),
         ({"weather_sd_C = 1.0": "weather_sd_C = 1.0\nfeed_x_mm_per_min = 1e15"},
          "key 'experiment.feed_x_mm_per_min': must be in [0, 60000] mm/min"),
     ],
