@@ -38,8 +38,6 @@ TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
 COOLING_MODES = ("off", "absolute", "follow_ambient")
 FAULT_KINDS = ("dropout", "stuck", "offset")
-#: The step-count, speed and feed limits are a scenario's (``testbench.scenario``): a
-#: study's experiments are scenarios.
 NO_FAULT = "none"
 
 
@@ -247,6 +245,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
 
 
 def _feed(value: float) -> str | None:
+    """A scenario's feed limit (like its step-count and speed limits, imported from
+    ``testbench.scenario``): a study's experiments are scenarios."""
     if 0 <= value <= MAX_FEED_MM_PER_MIN:
         return None
     return f"must be in [0, {MAX_FEED_MM_PER_MIN:g}] mm/min"

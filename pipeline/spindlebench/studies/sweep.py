@@ -90,6 +90,14 @@ def failure_path(replica: int, experiment: Experiment) -> str:
     return f"{run_dir(replica)}/{experiment.id}.error.json"
 
 
+def failed_runs(store: ResultStore, study: SweepStudy, family: list[Experiment]
+                ) -> tuple[list[tuple[int, Experiment]], list[tuple[int, Experiment]]]:
+    """Every (replica, experiment) run of a study, and those whose simulation failed (an
+    error file is kept in place of the recording)."""
+    runs = [(r, e) for r in replicas(study) for e in family]
+    return runs, [(r, e) for r, e in runs if store.exists(failure_path(r, e))]
+
+
 def condition_id(condition: Condition | None) -> str:
     return condition.id if condition is not None else NOISE_FREE
 
@@ -304,8 +312,7 @@ def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchErr
     the error line point at the first cause instead of a crash in the summary.
     """
     store, study = sweep.store, sweep.study
-    runs = [(r, e) for r in replicas(study) for e in sweep.family]
-    failed = [(r, e) for r, e in runs if store.exists(failure_path(r, e))]
+    runs, failed = failed_runs(store, study, sweep.family)
     if failed:
         where = failure_path(*failed[0])
         first = store.read_json(where)["error"]

@@ -52,7 +52,7 @@ from spindlebench.studies.placement.placements import (
 from spindlebench.studies.placement.study import PlacementStudy, describe, load_placement_study
 from spindlebench.studies.store import ResultStore, content_sha256
 from spindlebench.studies.study import check_fmu, pinned_content
-from spindlebench.studies.sweep import failure_path, recording_path
+from spindlebench.studies.sweep import failed_runs, failure_path, recording_path
 from spindlebench.testbench.recording import write_recording
 from spindlebench.testbench.simulate import record
 
@@ -131,8 +131,7 @@ class PlacementStudyRun:
         usually fails every run, and repeating it per run made a line of thousands of
         characters.
         """
-        runs = [(r, e) for r in replicas(self.study.family) for e in self.family]
-        failed = [(r, e) for r, e in runs if self.store.exists(failure_path(r, e))]
+        runs, failed = failed_runs(self.store, self.study.family, self.family)
         if not failed:
             return "no runs"
         errors = [self.store.read_json(failure_path(r, e))["error"] for r, e in failed]
