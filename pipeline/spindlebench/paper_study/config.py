@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.listflags import split_list_flag
 
 PAPER_SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
 PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
@@ -136,10 +137,7 @@ class StudyConfig:
 def split_list(text: str, key: str = "list", where: str = "command line") -> tuple[str, ...]:
     """``"a, b,c"`` -> ``("a", "b", "c")`` (for comma-separated flags); an empty item
     (``"2,,3"``) is an error, not silently dropped: it is usually a name left out."""
-    items = tuple(item.strip() for item in text.split(","))
-    if not all(items):
-        raise SpindlebenchError(f"{where}: {key}: empty item in {text!r}")
-    return items
+    return tuple(split_list_flag(f"{where}: {key}", text) or ())
 
 
 def _plain_name(name: str) -> bool:
