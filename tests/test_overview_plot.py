@@ -1,67 +1,158 @@
-"""The recording overview figure used by `spindlebench demo` and the README."""
+"""The recording figure (``spindlebench plot``, ``simulate --plot``, the README hero figure)."""
+
+import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.colors import to_rgba
-from spindlebench.testbench.overview import overview_figure, plot_recording
+from spindlebench import cli
+from spindlebench.errors import SpindlebenchError
+from spindlebench.testbench.overview import (
+    overview_figure,
+    plot_recording,
+    recordings_figure,
+    spread_labels,
+)
+from spindlebench.testbench.sensor_parts import PARTS, SENSORS, part_of
+
+REPO = Path(__file__).resolve().parents[1]
 
 
-def full_frame() -> pd.DataFrame:
-    t = np.arange(0, 3600, 60.0)
+def full_frame(hours: float = 1.0) -> pd.DataFrame:
+    t = np.arange(0, hours * 3600, 60.0)
     frame = pd.DataFrame({"time_s": t, "drift_um": t / 100, "true_drift_um": t / 100 + 3,
-                          "ambient_C": 20 + 0 * t})
+                          "ambient_C": 20 + 0 * t, "spindle_speed_rpm": 4000 + 0 * t,
+                          "feed_x_mm_per_min": 1500 + 0 * t, "feed_y_mm_per_min": 0 * t})
     for i in range(1, 21):
         frame[f"T{i}"] = 20 + i * t / 3600
     return frame
 
 
+def end_labels(ax) -> dict[str, tuple]:
+    """Line-end label text → (label height in data units, colour)."""
+    return {a.get_text(): (a.xyann[1], to_rgba(a.get_color()))
+            for a in ax.texts if hasattr(a, "xyann")}
+
+
 def test_overview_writes_a_png(tmp_path):
-    frame = full_frame()
     out = tmp_path / "overview.png"
-    plot_recording(frame, out, "test")
+    plot_recording(full_frame(), out, "test")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out.stat().st_size > 10_000
 
 
-def test_overview_without_drift_fails_and_leaves_nothing(tmp_path):
+def test_a_recording_without_the_error_column_is_one_line_and_leaves_nothing(tmp_path):
     frame = pd.DataFrame({"time_s": [0.0, 60.0], "T1": [20.0, 21.0]})
-    with pytest.raises(KeyError):
+    with pytest.raises(SpindlebenchError, match="no thermal-error column 'drift_um'"):
         plot_recording(frame, tmp_path / "o.png", "test")
     assert list(tmp_path.iterdir()) == []
 
 
-def test_every_sensor_of_a_panel_has_its_own_colour_and_t10_stands_apart():
-    """Twelve sensors on a ten-colour cycle gave T19 the colour of T6 and T20 that of T10."""
+def test_twenty_sensors_are_grouped_by_part_and_named_at_their_line_ends():
     import matplotlib.pyplot as plt
 
     fig = overview_figure(full_frame(), "test")
     try:
-        near, far, drift = fig.axes
-        for ax in (near, far):
-            sensors = [line for line in ax.lines if line.get_label().startswith("T")]
-            machine = [line for line in sensors if not line.get_label().startswith("T10")]
-            colours = {to_rgba(line.get_color()) for line in machine}
-            assert len(colours) == len(machine)
-            assert to_rgba("black") not in colours
-        assert len([line for line in far.lines if line.get_label().startswith("T")]) == 12
-        (probe,) = [line for line in far.lines if line.get_label().startswith("T10")]
-        assert to_rgba(probe.get_color()) == to_rgba("black")
-        assert probe.get_linestyle() == "--"
-        assert [ax.get_ylabel() for ax in fig.axes] == ["temperature (°C)", "temperature (°C)",
-                                                         "drift (µm)"]
-        assert drift.get_xlabel() == "time (h)"
+        spindle, axes_panel, drift, inputs = fig.axes[:4]
+        assert [ax.get_title(loc="left") for ax in fig.axes[:4]] == [
+            "spindle and headstock", "feed axes and ambient air",
+            "thermal error: axial drift, tool towards table, since the start", "inputs"]
+        labels = {**end_labels(spindle), **end_labels(axes_panel)}
+        assert {f"T{i}" for i in range(1, 21)} <= set(labels)  # every sensor named once
+        assert "ambient air" in labels
+        for ax in (spindle, axes_panel):  # labels of a panel never overlap
+            heights = sorted(y for y, _ in end_labels(ax).values())
+            assert min(np.diff(heights)) > 0
+        # one colour family per part: the parts' shades are disjoint, T10 is black
+        for part in PARTS:
+            shades = {labels[s][1] for s in part.sensors}
+            assert len(shades) == len(part.sensors)
+            others = {labels[s][1] for s in SENSORS if s not in part.sensors}
+            assert not shades & others
+        assert labels["T10"][1] == to_rgba("black")
+        assert drift.get_ylabel() == "drift (µm)"
+        assert inputs.get_xlabel() == "time (h)"
     finally:
         plt.close(fig)
 
 
-def test_overview_command_line_draws_a_recording(tmp_path, capsys):
-    from spindlebench.testbench.overview import main
+def test_rises_start_at_zero_and_absolute_values_do_not():
+    import matplotlib.pyplot as plt
 
-    frame = full_frame()
-    frame[["time_s", *[f"T{i}" for i in range(1, 21)], "drift_um"]].to_csv(
-        tmp_path / "run.csv", index=False)
-    out = tmp_path / "run.png"
-    assert main([str(tmp_path / "run.csv"), str(out)]) == 0
-    assert out.read_bytes()[:4] == b"\x89PNG"
-    assert main([]) == 2
+    for rises, first in ((True, 0.0), (False, 20.0)):
+        fig = recordings_figure([full_frame()], ["r"], rises=rises)
+        try:
+            (t1,) = [line for line in fig.axes[0].lines if line.get_label() == "T1"]
+            assert t1.get_ydata()[0] == pytest.approx(first)
+        finally:
+            plt.close(fig)
+
+
+def test_several_recordings_are_columns_and_unknown_sensors_get_their_own_panel():
+    import matplotlib.pyplot as plt
+
+    real = pd.DataFrame({"time_s": [0.0, 60, 120], "t1_C": [20.0, 21, 22],
+                         "t2_C": [20.0, 20.5, 21], "ch3_um": [0.0, 1, 2],
+                         "spindle_speed_rpm": [5000.0] * 3})
+    fig = recordings_figure([real, real], ["a", "b"], target="ch3_um")
+    try:
+        grid = fig.axes[0].get_subplotspec().get_gridspec()
+        assert (grid.nrows, grid.ncols) == (3, 2)  # sensors, error, inputs × two recordings
+        assert fig.axes[0].get_title(loc="left") == "sensors"
+        assert set(end_labels(fig.axes[0])) == {"t1_C", "t2_C"}
+    finally:
+        plt.close(fig)
+
+
+def test_spread_labels_keeps_order_and_gap_and_moves_as_little_as_needed():
+    placed = spread_labels([5.0, 5.0, 5.1, 9.0], gap=0.5, low=0.0, high=10.0)
+    assert placed[3] == 9.0
+    assert np.diff(sorted(placed[:3])).min() == pytest.approx(0.5)
+    assert spread_labels([9.9, 10.0], gap=0.5, low=0.0, high=10.0) == [9.5, 10.0]
+
+
+def test_the_part_table_matches_the_models_sensor_connections():
+    source = (REPO / "models" / "SpindleBench.mo").read_text(encoding="utf-8")
+    connected = {m[1]: m[2].removesuffix(".port")
+                 for m in re.finditer(r"connect\(sensor_(T\d+)\.port,\s*([\w.]+)\)", source)}
+    assert connected == {s: node for s, (node, _) in SENSORS.items()} | {"T10": "ambient"}
+    assert sorted(s for part in PARTS for s in part.sensors) == sorted(SENSORS)
+    assert part_of("t1_C") is None
+
+
+def test_plot_command_draws_one_or_several_recordings(tmp_path, capsys):
+    for name in ("a", "b"):
+        full_frame().to_csv(tmp_path / f"{name}.csv", index=False)
+    assert cli.main(["plot", str(tmp_path / "a.csv")]) == 0
+    assert (tmp_path / "a.png").read_bytes()[:4] == b"\x89PNG"
+    out = tmp_path / "both.png"
+    assert cli.main(["plot", str(tmp_path / "a.csv"), str(tmp_path / "b.csv"), "-o", str(out),
+                     "--rises", "--title", "two"]) == 0
+    assert out.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["-o", "x.pdf"], "x.pdf: the figure is written as PNG"),
+    (["--target", "ch3_um"], "no thermal-error column 'ch3_um'"),
+    (["SECOND"], "2 recordings go into one figure; name it with -o FIG.png"),
+])
+def test_plot_command_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, extra,
+                                                               message):
+    full_frame().to_csv(tmp_path / "a.csv", index=False)
+    extra = [str(tmp_path / "a.csv") if e == "SECOND" else e for e in extra]
+    before = set(tmp_path.iterdir())
+    assert cli.main(["plot", str(tmp_path / "a.csv"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert set(tmp_path.iterdir()) == before
+
+
+def test_simulate_plot_writes_the_figure_beside_the_recording(tmp_path, capsys):
+    out = tmp_path / "quick.csv"
+    assert cli.main(["simulate", str(REPO / "scenarios/examples/quick.toml"), "-o", str(out),
+                     "--plot"]) == 0
+    assert "quick.png" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["quick.csv", "quick.json",
+                                                          "quick.png"]

@@ -25,6 +25,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.selection.command",
     "spindlebench.studies.placement.run",
     "spindlebench.studies.sweep",
+    "spindlebench.testbench.plot",
     "spindlebench.testbench.simulate",
 )
 

@@ -1,92 +1,263 @@
-"""One-page picture of a recording: the sensor temperatures, the drivers and the drift.
+"""One-page picture of one or more recordings: temperatures, thermal error and inputs.
 
-The first thing a student or an engineer looks at when a run comes out of the testbench.
+The first thing a student or an engineer looks at when a run comes out of the testbench
+(``spindlebench plot``, ``spindlebench simulate --plot``). Twenty sensors in one panel are
+a tangle, so the sensors are grouped by machine part (``testbench.sensor_parts``): the
+spindle and headstock in one panel, the feed axes and the air in the next, each part in one
+colour family, and every line is named at its right end instead of in a legend. Columns the
+part table does not know (a real recording's ``t1_C`` …) get a panel of their own. Each
+recording is one column of panels; rows share their y axis so recordings compare at a glance.
+
 ``docs/figures/exp1_overview.png`` is this figure of ``scenarios/paper/exp1.toml``::
 
     spindlebench simulate scenarios/paper/exp1.toml -o results/paper/exp1.csv
-    python -m spindlebench.testbench.overview results/paper/exp1.csv \
-        docs/figures/exp1_overview.png \
-        "Synthetic experiment 1: 4000 rpm, January ambient 5.3-10.4 °C"
+    spindlebench plot results/paper/exp1.csv -o docs/figures/exp1_overview.png \
+        --title "Synthetic experiment 1: 4000 rpm, January ambient 5.3-10.4 °C"
 """
 
 from __future__ import annotations
 
 import os
-import sys
-from pathlib import Path
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from spindlebench.atomic import atomic_path
+from spindlebench.errors import SpindlebenchError
+from spindlebench.recordings import default_sensors, recording_name
+from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, part_of, sensor_colours
 
-SPINDLE_NEAR = ("T1", "T2", "T3", "T4", "T5", "T7", "T8", "T9")
-#: The paper's ambient air probe: drawn in black, apart from the machine's sensors.
-AMBIENT_SENSOR = "T10"
-# tab20's ten saturated colours, then their ten light partners, greys left out: up to 18
-# sensors per panel get a colour of their own (a 10-colour cycle repeated T6's colour on T19).
-_TAB20 = plt.get_cmap("tab20").colors
-PALETTE = tuple(_TAB20[i] for i in [*range(0, 20, 2), *range(1, 20, 2)] if i not in (14, 15))
+AMBIENT_DRIVER = "ambient_C"
+SPEED = "spindle_speed_rpm"
+FEEDS = ("feed_x_mm_per_min", "feed_y_mm_per_min")
+PANEL_TITLES = {"spindle": "spindle and headstock", "axes": "feed axes and ambient air",
+                "other": "sensors"}
+LABEL_FONTSIZE = 6.5
 
 
-def overview_figure(frame: pd.DataFrame, title: str) -> Figure:
-    """Temperatures (spindle-near vs feed axes/structure), ambient and drift over hours."""
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9.6), sharex=True)
+@dataclass(frozen=True)
+class _Panel:
+    key: str
+    sensors: tuple[str, ...]
+
+
+def _temperature_panels(frames: Sequence[pd.DataFrame], target: str) -> list[_Panel]:
+    """The temperature panels every recording shares, in the order of the part table."""
+    sensors: list[str] = []
+    for frame in frames:
+        for name in default_sensors(frame, target):
+            if name not in sensors:
+                sensors.append(name)
+    panels = []
+    for key in ("spindle", "axes"):
+        known = [s for part in PARTS if part.panel == key for s in part.sensors if s in sensors]
+        if known:
+            panels.append(_Panel(key, tuple(known)))
+    other = tuple(s for s in sensors if part_of(s) is None)
+    if other:
+        panels.append(_Panel("other", other))
+    return panels
+
+
+def _first_finite(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    return float(finite[0]) if finite.size else float("nan")
+
+
+def _colours(sensors: Sequence[str]) -> dict[str, tuple]:
+    colours: dict[str, tuple] = {}
+    for part in PARTS:
+        colours.update(sensor_colours(part))
+    unknown = [s for s in sensors if s not in colours]
+    cmap = matplotlib.colormaps["viridis"]
+    for i, name in enumerate(unknown):
+        colours[name] = cmap(0.9 * i / max(len(unknown) - 1, 1))
+    return colours
+
+
+def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | None = None, *,
+                      rises: bool = False, target: str = "drift_um",
+                      suptitle: str | None = None) -> Figure:
+    """Temperature panels by part, the thermal error ``target`` and the inputs, over hours.
+
+    ``rises`` draws every temperature (and the ambient driver) as its change since the first
+    sample, which shows the shapes that absolute values of different levels hide.
+    """
+    if not frames:
+        raise SpindlebenchError("plot: no recording given")
+    for frame in frames:
+        if target not in frame.columns:
+            raise SpindlebenchError(
+                f"recording {recording_name(frame)}: no thermal-error column {target!r} "
+                f"(columns are: {', '.join(map(str, frame.columns))}; choose one with --target)")
+    titles = list(titles) if titles is not None else [recording_name(f) for f in frames]
+    panels = _temperature_panels(frames, target)
+    has_inputs = any(SPEED in f or any(c in f for c in FEEDS) for f in frames)
+    heights = [3.0] * len(panels) + [1.9] + ([1.4] if has_inputs else [])
+    fig, axes = plt.subplots(len(heights), len(frames), squeeze=False, sharex="col",
+                             sharey="row", figsize=(1.3 + 5.6 * len(frames), sum(heights) + 1),
+                             gridspec_kw={"height_ratios": heights})
     try:
-        _draw(frame, title, fig, *axes)
+        colours = _colours([s for p in panels for s in p.sensors])
+        for column, (frame, title) in enumerate(zip(frames, titles, strict=True)):
+            _draw_column(frame, axes[:, column], panels, colours, rises, target, has_inputs)
+            axes[0, column].set_title(title, fontsize=10)
+        for row, panel in enumerate(panels):
+            axes[row, 0].set_ylabel("rise since start (K)" if rises else "temperature (°C)")
+            _part_legend(axes[row, 0], panel)
+        axes[len(panels), 0].set_ylabel("drift (µm)" if target == "drift_um" else
+                                        f"{target.removesuffix('_um')} (µm)"
+                                        if target.endswith("_um") else target)
+        for ax in axes[-1, :]:
+            ax.set_xlabel("time (h)")
+        if suptitle:
+            fig.suptitle(suptitle)
+        fig.tight_layout()
+        width_in = fig.get_figwidth()  # room right of each column for the line-end labels
+        fig.subplots_adjust(wspace=0.3, right=min(fig.subplotpars.right, 1 - 0.55 / width_in))
+        for ax in axes[:len(panels), :].flat:
+            _label_line_ends(ax)
     except BaseException:
         plt.close(fig)
         raise
     return fig
 
 
-def _draw(frame: pd.DataFrame, title: str, fig: Figure, ax_near: Axes, ax_far: Axes,
-          ax_drift: Axes) -> None:
-    hours = frame["time_s"].to_numpy() / 3600.0
-    sensors = [f"T{i}" for i in range(1, 21) if f"T{i}" in frame]
-    for ax, group in ((ax_near, [s for s in sensors if s in SPINDLE_NEAR]),
-                      (ax_far, [s for s in sensors if s not in SPINDLE_NEAR])):
-        machine = [s for s in group if s != AMBIENT_SENSOR]
-        if len(machine) > len(PALETTE):
-            raise ValueError(f"{len(machine)} sensors in one panel, {len(PALETTE)} colours")
-        for name, colour in zip(machine, PALETTE, strict=False):
-            ax.plot(hours, frame[name], color=colour, lw=1, label=name)
-        if AMBIENT_SENSOR in group:
-            ax.plot(hours, frame[AMBIENT_SENSOR], color="black", ls="--", lw=1.2,
-                    label=f"{AMBIENT_SENSOR} (ambient probe)")
-    if "ambient_C" in frame:  # a wide grey band under the probe that measures it
-        ax_far.plot(hours, frame["ambient_C"], color="0.6", lw=3.5, alpha=0.6, zorder=1,
-                    label="ambient air (driver)")
-    ax_near.set_title("spindle-near sensors", fontsize=10, loc="left")
-    ax_far.set_title("headstock, feed axes and ambient", fontsize=10, loc="left")
-    for ax in (ax_near, ax_far):
-        ax.set_ylabel("temperature (°C)")
-        if ax.lines:
-            n = len(ax.lines)
-            ax.legend(ncol=n if n <= 8 else -(-n // 2), fontsize=7, loc="upper left")
+def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel],
+                 colours: dict[str, tuple], rises: bool, target: str, has_inputs: bool) -> None:
+    hours = frame["time_s"].to_numpy(float) / 3600.0
+
+    def values(name: str) -> np.ndarray:
+        data = frame[name].to_numpy(float)
+        return data - _first_finite(data) if rises else data
+
+    for ax, panel in zip(axes, panels, strict=False):
+        ax.set_title(PANEL_TITLES[panel.key], fontsize=8, loc="left", color="0.3")
+        if panel.key == "axes" and AMBIENT_DRIVER in frame:  # a wide grey band under T10
+            ax.plot(hours, values(AMBIENT_DRIVER), color="0.6", lw=4, alpha=0.5, zorder=1,
+                    gid="end-label", label="ambient air")
+        for i, name in enumerate(panel.sensors):
+            if name not in frame:
+                continue
+            ambient = name == AMBIENT_SENSOR
+            ax.plot(hours, values(name), color="black" if ambient else colours[name],
+                    lw=1.1, ls="--" if ambient or i % 2 else "-", label=name, gid="end-label")
         ax.grid(alpha=0.3)
-    ax_drift.plot(hours, frame["drift_um"], lw=1, label="measured (probe)")
-    if "true_drift_um" in frame:
+    error = axes[len(panels)]
+    error.plot(hours, frame[target], lw=1.2, color="tab:brown", label="measured")
+    if target == "drift_um" and "true_drift_um" in frame:
         true = frame["true_drift_um"] - frame["true_drift_um"].iloc[0]
-        ax_drift.plot(hours, true, "k--", lw=1, label="noise-free")
-    ax_drift.set_title("axial drift, tool towards table, since the start", fontsize=10,
-                       loc="left")
-    ax_drift.set_ylabel("drift (µm)")
-    ax_drift.set_xlabel("time (h)")
-    ax_drift.legend(fontsize=8)
-    ax_drift.grid(alpha=0.3)
-    fig.suptitle(title)
-    fig.tight_layout()
+        error.plot(hours, true, "k--", lw=0.9, label="noise-free")
+    error.set_title("thermal error: axial drift, tool towards table, since the start"
+                    if target == "drift_um" else f"thermal error {target}",
+                    fontsize=8, loc="left", color="0.3")
+    error.legend(fontsize=7, loc="upper left")
+    error.grid(alpha=0.3)
+    if has_inputs:
+        _draw_inputs(axes[len(panels) + 1], frame, hours)
 
 
-def plot_recording(frame: pd.DataFrame, out_png: str | os.PathLike[str], title: str) -> None:
-    """Draw ``overview_figure`` into ``out_png`` atomically."""
-    fig = overview_figure(frame, title)
+def _draw_inputs(ax: Axes, frame: pd.DataFrame, hours: np.ndarray) -> None:
+    ax.set_title("inputs", fontsize=8, loc="left", color="0.3")
+    handles = []
+    if SPEED in frame:
+        handles += ax.plot(hours, frame[SPEED], color="black", lw=1.1, label="spindle (rpm)")
+    ax.set_ylabel("rpm")
+    top = max(float(np.nanmax(frame[SPEED])) if SPEED in frame else 0.0, 1.0)
+    ax.set_ylim(0, top * 1.15)
+    ax.grid(alpha=0.3)
+    feeds = [c for c in FEEDS if c in frame]
+    if feeds:
+        feed_ax = ax.twinx()
+        for name, style in zip(feeds, ("-", ":"), strict=False):
+            axis = name.split("_")[1].upper()
+            handles += feed_ax.plot(hours, frame[name], color="tab:blue", lw=1, ls=style,
+                                    label=f"{axis} feed (mm/min)")
+        feed_ax.set_ylabel("mm/min", color="tab:blue")
+        fastest = max(max(float(np.nanmax(frame[c])) for c in feeds), 1.0)
+        feed_ax.set_ylim(0, fastest * 2.0)  # feeds at mid-height, apart from the speed
+    ax.legend(handles=handles, fontsize=6.5, loc="lower right", ncol=len(handles))
+
+
+def _part_legend(ax: Axes, panel: _Panel) -> None:
+    """One entry per part in the panel: its colour family and its sensors."""
+    handles = []
+    for part in PARTS:
+        shown = [s for s in part.sensors if s in panel.sensors]
+        if shown:
+            shade = "black" if part.sensors == (AMBIENT_SENSOR,) else \
+                sensor_colours(part)[part.sensors[-1]]
+            handles.append(Line2D([], [], color=shade, lw=2,
+                                  label=f"{part.name}: {_span(shown)}"))
+    if handles:
+        ax.legend(handles=handles, fontsize=7, loc="upper left", framealpha=0.85)
+
+
+def _span(sensors: Sequence[str]) -> str:
+    numbers = [int(s[1:]) for s in sensors]
+    if numbers == list(range(numbers[0], numbers[-1] + 1)) and len(numbers) > 2:
+        return f"T{numbers[0]}–T{numbers[-1]}"
+    return ", ".join(sensors)
+
+
+def spread_labels(wanted: Sequence[float], gap: float, low: float, high: float) -> list[float]:
+    """Label positions as close to ``wanted`` as possible, at least ``gap`` apart, kept in
+    ``[low, high]`` where there is room: push up from the bottom, then down from the top."""
+    order = np.argsort(wanted, kind="stable")
+    placed = np.asarray(wanted, float)[order].copy()
+    for i in range(len(placed)):
+        floor = low if i == 0 else placed[i - 1] + gap
+        placed[i] = max(placed[i], floor)
+    for i in range(len(placed) - 1, -1, -1):
+        ceiling = high if i == len(placed) - 1 else placed[i + 1] - gap
+        placed[i] = min(placed[i], ceiling)
+    result = np.empty_like(placed)
+    result[order] = placed
+    return result.tolist()
+
+
+def _label_line_ends(ax: Axes) -> None:
+    """Name each temperature line just right of the axes, at the height where it ends,
+    joined to its end by a thin leader; labels are spread so none overlap."""
+    lines = [line for line in ax.lines if line.get_gid() == "end-label"]
+    ends = []
+    for line in lines:
+        x, y = (np.asarray(v, float) for v in line.get_data())
+        ok = np.isfinite(y)
+        if ok.any():
+            ends.append((line, float(x[ok][-1]), float(y[ok][-1])))
+    if not ends:
+        return
+    low, high = ax.get_ylim()
+    height_in = ax.get_window_extent().height / ax.figure.dpi
+    gap = (high - low) * (LABEL_FONTSIZE * 1.25 / 72.0) / max(height_in, 0.1)
+    placed = spread_labels([y for _, _, y in ends], gap, low, high)
+    for (line, x_end, y_end), y_label in zip(ends, placed, strict=True):
+        colour = line.get_color()
+        ax.annotate(line.get_label(), xy=(x_end, y_end), xycoords="data",
+                    xytext=(1.015, y_label), textcoords=("axes fraction", "data"),
+                    fontsize=LABEL_FONTSIZE, color=colour, va="center", ha="left",
+                    annotation_clip=False,
+                    arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.4,
+                                "shrinkA": 0, "shrinkB": 0})
+
+
+def overview_figure(frame: pd.DataFrame, title: str, *, rises: bool = False) -> Figure:
+    """``recordings_figure`` of one recording, ``title`` above it."""
+    return recordings_figure([frame], [title], rises=rises)
+
+
+def save_figure(fig: Figure, out_png: str | os.PathLike[str]) -> None:
+    """Write ``fig`` as PNG atomically and close it."""
     try:
         with atomic_path(out_png) as tmp:
             fig.savefig(tmp, format="png", dpi=110)
@@ -94,18 +265,7 @@ def plot_recording(frame: pd.DataFrame, out_png: str | os.PathLike[str], title: 
         plt.close(fig)
 
 
-def main(argv: list[str]) -> int:
-    """``python -m spindlebench.testbench.overview RECORDING.csv OUT.png [TITLE]``."""
-    from spindlebench.recordings import read_recording
-
-    if len(argv) not in (2, 3):
-        print(main.__doc__, file=sys.stderr)
-        return 2
-    title = argv[2] if len(argv) == 3 else Path(argv[0]).stem
-    plot_recording(read_recording(argv[0]), argv[1], title)
-    print(argv[1])
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))
+def plot_recording(frame: pd.DataFrame, out_png: str | os.PathLike[str], title: str,
+                   *, rises: bool = False) -> None:
+    """Draw ``overview_figure`` into ``out_png`` atomically."""
+    save_figure(overview_figure(frame, title, rises=rises), out_png)

@@ -231,6 +231,11 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--seed: must be >= 0, got {args.seed}")
     files = _scenario_files(args.scenarios)
     targets = _output_targets(files, Path(args.output))
+    if args.plot:
+        for target in targets:
+            if target.with_suffix(".png").is_dir():
+                raise SpindlebenchError(f"{target.with_suffix('.png')}: is a directory; "
+                                        "--plot writes the figure there (choose another -o)")
     # validate all first: a typo in the last file should cost nothing
     plan = plan_batch(files, targets)
     check_batch(plan, args.fmu)
@@ -238,8 +243,15 @@ def run(args: argparse.Namespace) -> int:
     for i in plan.order:
         frame, sidecar = record(plan.scenarios[i], args.fmu, args.seed, show_progress)
         written = write_recording(targets[i], frame, sidecar)
+        extras = [written.with_suffix(".json").name]
+        if args.plot:
+            from spindlebench.testbench.overview import plot_recording  # matplotlib: only here
+
+            frame.attrs["path"] = str(written)
+            plot_recording(frame, written.with_suffix(".png"), files[i].stem)
+            extras.append(written.with_suffix(".png").name)
         if not args.quiet:
-            print(f"{files[i]} -> {written} (+ {written.with_suffix('.json').name})")
+            print(f"{files[i]} -> {written} (+ {', '.join(extras)})")
     return 0
 
 
@@ -260,6 +272,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/)")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed of the sensor model (default: the scenario's)")
+    parser.add_argument("--plot", action="store_true",
+                        help="also draw each recording (as `spindlebench plot`) into "
+                        "<recording>.png beside it")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress bar, no summary")
     parser.set_defaults(func=run)
