@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
+from conftest import REAL_RECORDING, REPO
 
-REPO = Path(__file__).resolve().parents[1]
-REAL_RECORDING = REPO / ".." / "shared" / "recordings" / "caiviac-fl-thermal" / "data.csv"
+__all__ = ["HAND_R", "HAND_T", "REAL_RECORDING", "REPO", "random_similarity", "real_temperatures",
+           "synthetic_experiment"]
 
 
 def real_temperatures(rows: slice = slice(31, 1951)) -> pd.DataFrame:
@@ -40,3 +39,32 @@ def synthetic_experiment(seed: int, n: int = 240, speed: float = 1.0) -> pd.Data
     frame["spindle_speed_rpm"] = 4000.0 * speed
     frame["true_drift_um"] = drift - drift.iloc[0]
     return frame
+
+
+#: A hand-checked similarity matrix and its transitive closure (closure and cut tests).
+HAND_R = np.array([
+    [1.0, 0.1, 0.8, 0.5],
+    [0.1, 1.0, 0.2, 0.3],
+    [0.8, 0.2, 1.0, 0.6],
+    [0.5, 0.3, 0.6, 1.0],
+])
+# by hand: 0-2 (0.8), 2-3 (0.6) and 1-3 (0.3) are the strongest links; every other pair is
+# linked best through them: t(0,3) = min(0.8, 0.6), t(1, .) = 0.3.
+HAND_T = np.array([
+    [1.0, 0.3, 0.8, 0.6],
+    [0.3, 1.0, 0.3, 0.3],
+    [0.8, 0.3, 1.0, 0.6],
+    [0.6, 0.3, 0.6, 1.0],
+])
+
+
+def random_similarity(n: int, seed: int, levels: int | None = None) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    R = rng.random((n, n))
+    if levels:  # few distinct values: many ties
+        R = np.round(R * levels) / levels
+    R = np.triu(R, 1)
+    R = R + R.T
+    np.fill_diagonal(R, 1.0)
+    return R
+

@@ -4,9 +4,10 @@ import shutil
 from pathlib import Path
 
 import pytest
+from conftest import REPO
 from spindlebench import cli
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 PAPER = ROOT / "scenarios" / "paper"
 
 

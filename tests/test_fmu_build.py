@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Model
 from spindlebench.errors import SpindlebenchError
@@ -17,7 +18,7 @@ from spindlebench.modelica.build import build_fmu, output_path
 from spindlebench.modelica.cold_start import cold_start, rise
 from spindlebench.modelica.equations import explicit_ode
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 MODELS = ROOT / "models"
 COMMITTED = ROOT / "fmus" / "SpindleBench.fmu"
 

@@ -1,15 +1,13 @@
 """The committed FMU: valid FMI 3.0, the contract's interface, both FMPy solvers, real sensors."""
 
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import FMU
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 from spindlebench.modelica.cold_start import cold_start, state_names
-
-FMU = Path(__file__).resolve().parents[1] / "fmus" / "SpindleBench.fmu"
 
 
 @pytest.fixture(scope="module")

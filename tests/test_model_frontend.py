@@ -3,11 +3,10 @@
 from pathlib import Path
 
 import pytest
+from conftest import MODELS
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import MODEL_FILE
 from spindlebench.modelica.frontend import model_source, translate, validate
-
-MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
 def broken_copy(tmp_path: Path, old: str, new: str) -> Path:

@@ -1,11 +1,10 @@
 """Plausible magnitudes of the committed FMU on cold starts (the issue's expectations)."""
 
-from pathlib import Path
 
 import pytest
+from conftest import FMU
 from spindlebench.modelica.cold_start import cold_start, rise
 
-FMU = Path(__file__).resolve().parents[1] / "fmus" / "SpindleBench.fmu"
 SPINDLE_NEAR = ("T1_C", "T2_C", "T3_C", "T5_C", "T8_C")
 FEED_AND_STRUCTURE = ("T6_C", "T11_C", "T13_C", "T16_C", "T20_C")
 

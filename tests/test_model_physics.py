@@ -1,14 +1,13 @@
 """Physics of the thermal network, checked on its explicit equations (no FMU needed)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import MODELS
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 from spindlebench.modelica.equations import explicit_ode
 
-MODELS = Path(__file__).resolve().parents[1] / "models"
 SOURCES = ("Q_front_bearing_W", "Q_rear_bearing_W", "Q_spindle_motor_W", "Q_x_feed_W", "Q_y_feed_W")
 
 

@@ -9,10 +9,11 @@ from scipy.cluster.hierarchy import fcluster
 from spindlebench import cli
 from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import GROUPS, PAPER_SIX
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study import reference
 from spindlebench.paper_study.figures import cut_height
-from spindlebench.paper_study.study import GROUPS, choose_six, run_study
+from spindlebench.paper_study.study import choose_six, run_study
 from spindlebench.recordings import read_recording
 from spindlebench.selection import evaluate, linkage_from_similarity
 
@@ -98,7 +99,7 @@ def test_table6_matches_evaluate_called_directly(generated):
         folder / "exp1.csv",
         {f"exp{i}": folder / f"exp{i}.csv" for i in range(2, 6)},
         target="drift_um",
-        sensors=list(study_config.PAPER_SIX),
+        sensors=list(PAPER_SIX),
         k=3,
         differences=True,
     )
@@ -328,7 +329,7 @@ def test_list_flags_space_or_comma_separated_and_unused_columns_ignored(generate
     provenance = json.loads((out / "provenance.json").read_text())
     assert provenance["study"]["tests"] == ["exp3", "exp4"]
     assert provenance["study"]["clusters"] == [2, 3]
-    assert provenance["study"]["six"] == list(study_config.PAPER_SIX)
+    assert provenance["study"]["six"] == list(PAPER_SIX)
     assert "--tests exp3,exp4 --six T1,T6,T8,T10,T13,T16 --clusters 2,3" in provenance["command"]
 
 

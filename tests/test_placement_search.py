@@ -9,6 +9,7 @@ import itertools
 import numpy as np
 import pandas as pd
 import pytest
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.selection import CandidateSet
 from spindlebench.studies.placement.candidates import physical_nodes
 from spindlebench.studies.placement.schematic import node_positions
@@ -20,7 +21,6 @@ from spindlebench.studies.placement.search import (
     validation_score,
 )
 from spindlebench.studies.placement.study import fmu_nodes
-from spindlebench.testbench.runner import DEFAULT_FMU
 
 
 def synthetic_runs(rng, n_runs, n_samples, n_nodes, true_columns, coefficients, noise=0.05):

@@ -4,19 +4,18 @@ and one-line errors for bad placement study files."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import REPO
 from spindlebench.cli import main
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.studies.placement.candidates import candidate_set
 from spindlebench.studies.placement.run import PlacementStudyRun
 from spindlebench.studies.placement.study import fmu_nodes, load_placement_study
-from spindlebench.testbench.runner import DEFAULT_FMU
 
-REPO = Path(__file__).resolve().parents[1]
 TINY = REPO / "scenarios" / "studies" / "tiny_placement.toml"
 SHIPPED = REPO / "scenarios" / "studies" / "placement.toml"
 

@@ -12,9 +12,10 @@ import numpy as np
 import pandas as pd
 import pytest
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import sha256_file
 from spindlebench.testbench import simulate_scenario
-from spindlebench.testbench.runner import DEFAULT_FMU, co_simulate, inspect_fmu
+from spindlebench.testbench.runner import co_simulate, inspect_fmu
 from spindlebench.testbench.scenario import load_scenario
 
 FMU = DEFAULT_FMU

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 from spindlebench.errors import SpindlebenchError
 from spindlebench.testbench import drivers
 from spindlebench.testbench.scenario import (
@@ -15,7 +16,7 @@ from spindlebench.testbench.scenario import (
     resolve_initial,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 SCENARIOS = ROOT / "scenarios"
 
 BASE = """\

@@ -3,7 +3,7 @@ spanning-tree implementation with the paper's repeated squaring on random and re
 
 import numpy as np
 import pytest
-from selection_data import real_temperatures
+from selection_data import HAND_R, HAND_T, random_similarity, real_temperatures
 from spindlebench.selection import (
     SelectionError,
     closure_by_squaring,
@@ -13,32 +13,6 @@ from spindlebench.selection import (
     with_differences,
 )
 from spindlebench.selection.closure import maxmin_product
-
-HAND_R = np.array([
-    [1.0, 0.1, 0.8, 0.5],
-    [0.1, 1.0, 0.2, 0.3],
-    [0.8, 0.2, 1.0, 0.6],
-    [0.5, 0.3, 0.6, 1.0],
-])
-# by hand: 0-2 (0.8), 2-3 (0.6) and 1-3 (0.3) are the strongest links; every other pair is
-# linked best through them: t(0,3) = min(0.8, 0.6), t(1, .) = 0.3.
-HAND_T = np.array([
-    [1.0, 0.3, 0.8, 0.6],
-    [0.3, 1.0, 0.3, 0.3],
-    [0.8, 0.3, 1.0, 0.6],
-    [0.6, 0.3, 0.6, 1.0],
-])
-
-
-def random_similarity(n: int, seed: int, levels: int | None = None) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    R = rng.random((n, n))
-    if levels:  # few distinct values: many ties
-        R = np.round(R * levels) / levels
-    R = np.triu(R, 1)
-    R = R + R.T
-    np.fill_diagonal(R, 1.0)
-    return R
 
 
 @pytest.mark.parametrize("closure", [closure_by_squaring, closure_minimax])

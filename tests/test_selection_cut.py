@@ -5,6 +5,7 @@ import warnings
 import numpy as np
 import pytest
 from scipy.cluster.hierarchy import fcluster
+from selection_data import HAND_R, HAND_T, random_similarity
 from spindlebench.selection import (
     SelectionError,
     SelectionWarning,
@@ -13,7 +14,6 @@ from spindlebench.selection import (
     cut_for_clusters,
     linkage_from_similarity,
 )
-from test_selection_closure import HAND_R, HAND_T, random_similarity
 
 
 def members(cut):

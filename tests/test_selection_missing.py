@@ -7,14 +7,14 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from selection_data import REPO
+from conftest import REPO
 from spindlebench import cli
 from spindlebench.errors import SpindlebenchError
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study.study import run_study
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import SelectionError, SelectionWarning, evaluate
-from spindlebench.testbench.runner import DEFAULT_FMU
 
 FAULT_EXAMPLE = REPO / "scenarios" / "examples" / "sensor_faults.toml"
 SENSORS = [f"T{i}" for i in range(1, 21)]

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import REPO
 from spindlebench import cli
-from spindlebench.testbench.runner import DEFAULT_FMU
+from spindlebench.paths import DEFAULT_FMU
 
 QUICK = """\
 duration_s = 600
@@ -129,7 +130,7 @@ def test_missing_fmu_is_one_line(tmp_path, capsys):
 
 def test_console_script_runs_a_shipped_scenario(tmp_path):
     """The installed ``spindlebench`` entry point, on a real shipped example (30 min)."""
-    root = Path(__file__).resolve().parents[1]
+    root = REPO
     executable = Path(sys.executable).with_name("spindlebench")
     result = subprocess.run(
         [str(executable), "simulate", str(root / "scenarios" / "examples" / "quick.toml"),
@@ -154,7 +155,7 @@ def test_progress_bar_path_runs_and_stays_quiet_for_short_runs(tmp_path, capsys)
 
 def shipped_pair(folder: Path) -> None:
     """The shipped two-part example, 10 + 10 simulated minutes instead of 3 + 3 hours."""
-    examples = Path(__file__).resolve().parents[1] / "scenarios" / "examples"
+    examples = REPO / "scenarios" / "examples"
     first = (examples / "day1_warmup.toml").read_text(encoding="utf-8")
     second = (examples / "continue_day1.toml").read_text(encoding="utf-8")
     assert "duration_s = 10800" in first and "at_s = 3600" in second
@@ -231,7 +232,7 @@ def test_shipped_examples_plan_day1_before_its_continuation():
     """The real example folder, planned (not simulated) for a fresh output folder."""
     from spindlebench.testbench.simulate import plan_batch
 
-    examples = Path(__file__).resolve().parents[1] / "scenarios" / "examples"
+    examples = REPO / "scenarios" / "examples"
     files = sorted(examples.glob("*.toml"))
     out = Path("/nonexistent-output-folder")
     order = [files[i].stem for i in plan_batch(files, [out / f"{f.stem}.csv" for f in files]).order]

@@ -9,11 +9,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.studies import plots
 from spindlebench.studies.placement import schematic
 from spindlebench.studies.placement.placements import Placement
 from spindlebench.studies.placement.study import fmu_nodes
-from spindlebench.testbench.runner import DEFAULT_FMU
 
 
 @pytest.fixture
@@ -36,7 +36,7 @@ def results() -> pd.DataFrame:
     rng = np.random.default_rng(0)
     rows = []
     for data in ("measured", "noise-free"):
-        for method, ks in (("raw20", [2, 3]), ("raw6+diff", [2, 3]), ("ridge", [None]),
+        for method, ks in (("all_raw", [2, 3]), ("six_diff", [2, 3]), ("ridge", [None]),
                            ("oracle", [None])):
             for k in ks:
                 for month in ("Jan", "Jul"):
@@ -60,7 +60,7 @@ def test_methods_without_k_get_one_panel_and_medians_contrast(kept, tmp_path):
     titles = [ax.get_title() for ax in fig.axes]
     assert titles == ["k = 2", "k = 3", "no k: ridge, oracle"]
     ticks = [[t.get_text() for t in ax.get_xticklabels()] for ax in fig.axes]
-    assert ticks[0] == ticks[1] == ["raw20", "raw6+diff"]
+    assert ticks[0] == ticks[1] == ["all_raw", "six_diff"]
     assert ticks[2] == ["ridge", "oracle"]
     assert fig.get_layout_engine() is not None  # titles are not cramped
 
@@ -72,7 +72,7 @@ def test_every_method_colour_shows_on_white_and_under_a_black_median(kept, tmp_p
     plots.by_month(results(), tmp_path / "month.png", 2)
     medians = [line for line in kept[0].axes[0].lines
                if mcolors.to_rgb(line.get_color()) == (0, 0, 0) and line.get_linewidth() == 1.5]
-    assert len(medians) == 4 * 2  # raw20, raw6+diff, ridge, oracle in two months
+    assert len(medians) == 4 * 2  # all_raw, six_diff, ridge, oracle in two months
 
 
 def overlaps(a, b) -> bool:

@@ -6,6 +6,7 @@ import os
 
 import distributed
 import pytest
+from conftest import REPO
 from spindlebench.errors import SpindlebenchError
 from spindlebench.studies.executor import Task, TaskRunner, one_line_error
 
@@ -97,11 +98,9 @@ def test_one_line_error_is_short_and_single_line():
 @pytest.mark.parametrize("command", ["sweep", "place"])
 def test_a_study_name_that_is_no_folder_name_is_refused_without_o(tmp_path, monkeypatch,
                                                                   capsys, name, command):
-    from pathlib import Path
-
     from spindlebench import cli
 
-    repo = Path(__file__).resolve().parents[1]
+    repo = REPO
     tiny = repo / "scenarios" / "studies" / ("tiny_sweep.toml" if command == "sweep"
                                             else "tiny_placement.toml")
     study = tmp_path / "work" / "study.toml"
@@ -121,7 +120,6 @@ def test_a_study_name_that_is_no_folder_name_is_refused_without_o(tmp_path, monk
 def test_an_unreachable_scheduler_fails_before_the_results_folder_is_made(tmp_path, monkeypatch,
                                                                          capsys, command):
     import functools
-    from pathlib import Path
 
     from spindlebench import cli
     from spindlebench.studies import sweep
@@ -130,7 +128,7 @@ def test_an_unreachable_scheduler_fails_before_the_results_folder_is_made(tmp_pa
     for module in (sweep, place):  # a short connect timeout keeps the test fast
         monkeypatch.setattr(module, "TaskRunner", functools.partial(TaskRunner,
                                                                     connect_timeout_s=1))
-    studies = Path(__file__).resolve().parents[1] / "scenarios" / "studies"
+    studies = REPO / "scenarios" / "studies"
     study = studies / ("tiny_sweep.toml" if command == "sweep" else "tiny_placement.toml")
     out = tmp_path / "out"
     assert cli.main([command, str(study), "-o", str(out), "--dask-address",

@@ -15,6 +15,7 @@ import distributed
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import REPO
 from spindlebench import cli
 from spindlebench.errors import SpindlebenchError
 from spindlebench.recordings import read_recording
@@ -31,7 +32,6 @@ from spindlebench.studies.sweep import (
     write_outputs,
 )
 
-REPO = Path(__file__).resolve().parents[1]
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 NUMBERS = ["rmse_um", "rmse_true_um"]
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import REPO
 from spindlebench.errors import SpindlebenchError
 from spindlebench.studies import experiments as ex
 from spindlebench.studies.seasons import MONTHS, load_climate, resolve_climate_path
 from spindlebench.studies.seeds import derive_seed
 from spindlebench.studies.study import load_study
 
-REPO = Path(__file__).resolve().parents[1]
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 EXAMPLE = REPO / "scenarios" / "studies" / "season_sweep.toml"
 

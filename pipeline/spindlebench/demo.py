@@ -17,12 +17,14 @@ from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import FMU_NAME
 from spindlebench.modelica.frontend import model_source
+from spindlebench.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file
 from spindlebench.recordings import read_recording
 from spindlebench.testbench.overview import plot_recording
 from spindlebench.testbench.simulate import plan_batch
 
-COMMITTED_FMU = Path("fmus") / f"{FMU_NAME}.fmu"
+#: The FMU the repository (or the installed package) ships, shown as a user would type it.
+COMMITTED_FMU = Path(shown(DEFAULT_FMU))
 #: The scenarios the paper stage needs: it trains on exp1 and predicts exp2 … exp5.
 PAPER_EXPERIMENTS = tuple(f"exp{i}" for i in range(1, 6))
 
@@ -35,9 +37,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("--out", default="results", help="results folder (default: results)")
-    parser.add_argument("--models", default="models", help="Modelica folder (default: models)")
-    parser.add_argument("--scenarios", default="scenarios/paper",
-                        help="scenario folder (default: scenarios/paper)")
+    models, scenarios = shown(MODELS_DIR), shown(SCENARIOS_DIR / "paper")
+    parser.add_argument("--models", default=models, help=f"Modelica folder (default: {models})")
+    parser.add_argument("--scenarios", default=scenarios,
+                        help=f"scenario folder (default: {scenarios})")
     parser.set_defaults(func=run)
 
 

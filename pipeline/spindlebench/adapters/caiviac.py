@@ -39,8 +39,8 @@ import numpy as np
 import pandas as pd
 
 from spindlebench import atomic
-from spindlebench.adapters import shared_recordings_dir
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import shared_recordings_dir
 from spindlebench.provenance import file_entry, provenance
 
 DATASET = "caiviac-fl-thermal"

@@ -17,11 +17,10 @@ import numpy as np
 import pandas as pd
 
 from spindlebench import atomic
+from spindlebench.names import KELVIN_OFFSET
+from spindlebench.paths import DATA_ROOT, DEFAULT_FMU
 
-KELVIN_OFFSET = 273.15
-REPO_ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_FMU = REPO_ROOT / "fmus" / "SpindleBench.fmu"
-DEFAULT_FIGURE = REPO_ROOT / "docs" / "figures" / "model_cold_start.png"
+DEFAULT_FIGURE = DATA_ROOT / "docs" / "figures" / "model_cold_start.png"
 FIGURE_SENSORS = ("T1_C", "T6_C", "T8_C", "T10_C", "T13_C", "T16_C")
 
 

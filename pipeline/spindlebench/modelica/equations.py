@@ -23,8 +23,8 @@ from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import DEFAULT_SEGMENTS
 from spindlebench.modelica.causalise import solve_explicitly
 from spindlebench.modelica.frontend import TranslatedModel, translate
+from spindlebench.names import KELVIN_OFFSET
 
-KELVIN_OFFSET = 273.15
 SENSOR_PREFIX = "sensor_"
 NODE_PREFIX = "node_"
 

@@ -8,9 +8,10 @@ import sys
 from pathlib import Path
 
 from spindlebench.listflags import split_list_flag
+from spindlebench.names import GROUP_LABELS
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study.report import check_out_dir, write_outputs
-from spindlebench.paper_study.study import GROUP_LABELS, run_study
+from spindlebench.paper_study.study import run_study
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -34,14 +34,12 @@ from typing import Any
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.listflags import split_list_flag
+from spindlebench.names import DEFAULT_SIMILARITY, PAPER_SIX, SENSORS, SIMILARITIES
 
-PAPER_SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
-PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
 AUTO_SIX = "auto"
 #: A recordings folder's own study file (the CAIVIAC adapter writes one); ``spindlebench paper``
 #: uses it when no --config is given.
 CONFIG_NAME = "paper_study.toml"
-SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 #: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
 MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
 TIME_COLUMN = "time_s"
@@ -58,10 +56,10 @@ class StudyConfig:
     target: str = "drift_um"
     train: str = "exp1"
     tests: tuple[str, ...] = ("exp2", "exp3", "exp4", "exp5")
-    sensors_all: tuple[str, ...] = PAPER_SENSORS
+    sensors_all: tuple[str, ...] = SENSORS
     six: tuple[str, ...] | str = PAPER_SIX
     clusters: tuple[int, ...] = (2, 3, 4)
-    similarity: str = "abs-pearson"
+    similarity: str = DEFAULT_SIMILARITY
     missing: str = "error"
     source: str = field(default="defaults", compare=False)
 

@@ -13,7 +13,8 @@ from matplotlib.figure import Figure
 from scipy.cluster.hierarchy import dendrogram
 
 from spindlebench import atomic
-from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+from spindlebench.names import GROUP_LABELS
+from spindlebench.paper_study.study import StudyResult
 from spindlebench.selection import linkage_from_similarity
 
 DPI = 110

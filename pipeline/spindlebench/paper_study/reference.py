@@ -8,11 +8,11 @@ plus their 15 differences). The paper writes differences as ``T1~T10``; we write
 
 from __future__ import annotations
 
-GROUPS: tuple[str, ...] = ("all_raw", "six_raw", "six_diff")
 CLUSTERS: tuple[int, ...] = (2, 3, 4)
 #: Table 6 trains on experiment 1 and predicts experiments 2-5.
 TRAIN_EXPERIMENT = "exp1"
 TEST_EXPERIMENTS: tuple[str, ...] = ("exp2", "exp3", "exp4", "exp5")
+#: Group keys of the tables below: ``spindlebench.names.GROUPS``.
 
 #: Table 4: selected points and their ψ, per number of clusters (the paper prints |ψ|-sized,
 #: positive values; the order is the paper's row order).

@@ -18,8 +18,9 @@ import numpy as np
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import GROUP_LABELS
 from spindlebench.paper_study import figures, reference, tables
-from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+from spindlebench.paper_study.study import StudyResult
 from spindlebench.provenance import file_entry, provenance, sidecar_mismatch
 
 

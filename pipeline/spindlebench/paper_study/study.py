@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import ALL_RAW, GROUPS, SIX_DIFF
 from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import evaluate
@@ -29,12 +30,6 @@ from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.similarity import constant_columns, similarity_matrix
 
-GROUPS: tuple[str, ...] = ("all_raw", "six_raw", "six_diff")
-GROUP_LABELS: dict[str, str] = {
-    "all_raw": "all raw",
-    "six_raw": "six raw",
-    "six_diff": "six + differences",
-}
 AUTO_SIX_RULE = (
     "six = auto: the fuzzy equivalence hierarchy (same similarity, t(R)) of all raw sensors on "
     "the training experiment cut into 6 clusters; from each cluster the sensor with the largest "
@@ -85,9 +80,9 @@ class StudyResult:
 
     def group_sensors(self, group: str) -> tuple[list[str], bool]:
         """(raw sensors, with differences?) of a group."""
-        if group == "all_raw":
+        if group == ALL_RAW:
             return list(self.config.sensors_all), False
-        return list(self.six), group == "six_diff"
+        return list(self.six), group == SIX_DIFF
 
     def closure(self, group: str) -> tuple[list[str], np.ndarray]:
         """Candidate names and t(R) of a group on the training experiment (the same at every

@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pandas as pd
 
+from spindlebench.names import GROUP_LABELS, GROUPS
 from spindlebench.paper_study import reference
-from spindlebench.paper_study.study import GROUP_LABELS, StudyResult
+from spindlebench.paper_study.study import StudyResult
 
 
 def _fmt(value: float, digits: int) -> str:
@@ -70,7 +71,7 @@ def table5_frame(result: StudyResult) -> pd.DataFrame:
         for group in result.groups:
             row[group] = result.cell(group, k).r2
         if trains_like_paper(result):
-            for group in reference.GROUPS:
+            for group in GROUPS:
                 row[f"paper_{group}"] = reference.R2.get(k, {}).get(group, float("nan"))
         rows.append(row)
     return pd.DataFrame(rows)
@@ -149,7 +150,7 @@ def table4_markdown(result: StudyResult) -> str:
     lines = []
     header = ["k", *(f"{GROUP_LABELS[g]} (ours)" for g in result.groups)]
     with_paper = trains_like_paper(result)
-    paper_groups = reference.GROUPS if with_paper else ()
+    paper_groups = GROUPS if with_paper else ()
     header += [f"{GROUP_LABELS[g]} (paper)" for g in paper_groups]
     body = []
     for k in result.config.clusters:
@@ -188,7 +189,7 @@ def table4_markdown(result: StudyResult) -> str:
 def table5_markdown(result: StudyResult) -> str:
     """Training R² of each model, ours beside the paper's."""
     frame = table5_frame(result)
-    paper_groups = reference.GROUPS if trains_like_paper(result) else ()
+    paper_groups = GROUPS if trains_like_paper(result) else ()
     header = ["k", *(f"{GROUP_LABELS[g]} (ours)" for g in result.groups)]
     header += [f"{GROUP_LABELS[g]} (paper)" for g in paper_groups]
     body = [

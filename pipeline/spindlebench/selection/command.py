@@ -19,6 +19,7 @@ import pandas as pd
 
 from spindlebench import atomic, provenance
 from spindlebench.listflags import split_list_flag
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
@@ -57,7 +58,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--differences", action="store_true", help="add every pairwise difference A-B"
     )
-    parser.add_argument("--similarity", choices=SIMILARITIES, default="abs-pearson")
+    parser.add_argument("--similarity", choices=SIMILARITIES, default=DEFAULT_SIMILARITY)
     parser.add_argument(
         "--closure", choices=CLOSURES, default="fast", help="closure algorithm (same result)"
     )

@@ -44,6 +44,7 @@ from sklearn.utils.validation import (
     validate_data,
 )
 
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.differences import difference_names, pairwise_differences
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.regression import fit_ols
@@ -154,7 +155,8 @@ class FuzzyClusterSelector(SelectorMixin, BaseEstimator):
         R and t(R) over the non-constant columns ``kept_``.
     """
 
-    def __init__(self, n_clusters: int = 2, similarity: str = "abs-pearson", closure: str = "fast"):
+    def __init__(self, n_clusters: int = 2, similarity: str = DEFAULT_SIMILARITY,
+                 closure: str = "fast"):
         self.n_clusters = n_clusters
         self.similarity = similarity
         self.closure = closure
@@ -219,7 +221,7 @@ class RiseRegressor(RegressorMixin, BaseEstimator):
 def make_selection_pipeline(
     n_clusters: int = 2,
     differences: bool = False,
-    similarity: str = "abs-pearson",
+    similarity: str = DEFAULT_SIMILARITY,
     closure: str = "fast",
 ) -> Pipeline:
     """The paper's model as a Pipeline; feed it rises (``rises(X, groups)``)."""

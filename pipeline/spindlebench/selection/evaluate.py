@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.recordings import (
     MissingValueError,
     default_sensors,
@@ -362,7 +363,7 @@ def evaluate(
     sensors: Sequence[str] | None = None,
     k: int = 2,
     differences: bool = False,
-    similarity: str = "abs-pearson",
+    similarity: str = DEFAULT_SIMILARITY,
     closure: str = "fast",
     missing: str = "error",
 ) -> Evaluation:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning, check_names
@@ -79,7 +80,7 @@ def select_sensitive_points(
     X: np.ndarray,
     y: np.ndarray,
     n_clusters: int,
-    similarity: str = "abs-pearson",
+    similarity: str = DEFAULT_SIMILARITY,
     closure: str = "fast",
     names: Sequence[str] | None = None,
 ) -> Selection:

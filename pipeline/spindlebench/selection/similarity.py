@@ -19,14 +19,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
 from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,
     check_names,
     column_list,
 )
-
-SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 
 #: A column is constant when its peak-to-peak range is below this fraction of the data's
 #: scale: differences of two sensors with a constant offset vary only by rounding.
@@ -81,7 +80,7 @@ def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
 
 
 def similarity_matrix(
-    X: np.ndarray, method: str = "abs-pearson", names: Sequence[str] | None = None
+    X: np.ndarray, method: str = DEFAULT_SIMILARITY, names: Sequence[str] | None = None
 ) -> np.ndarray:
     """Fuzzy similarity R (n_candidates x n_candidates) of the columns of ``X``.
 

@@ -20,9 +20,9 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from spindlebench.names import SENSORS
 from spindlebench.studies.experiments import Condition, Experiment, sensor_model
 from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, score_all
-from spindlebench.studies.study import SENSORS
 from spindlebench.testbench.scenario import Scenario
 from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.simulate import record

@@ -1,7 +1,7 @@
 """The methods a sweep compares, each trained on one experiment and scored on the others.
 
-- The paper's three candidate groups through ``spindlebench.selection.evaluate``: ``raw20``
-  (all 20 sensors), ``raw6`` (T1, T6, T8, T10, T13, T16) and ``raw6+diff`` (those six plus
+- The paper's three candidate groups through ``spindlebench.selection.evaluate``: ``all_raw``
+  (all 20 sensors), ``six_raw`` (T1, T6, T8, T10, T13, T16) and ``six_diff`` (those six plus
   their 15 pairwise differences), each at k clusters.
 - ``top-k-correlated``: what a practitioner tries first: the k raw sensors (of all 20) whose
   rises correlate most strongly with the error, then the same OLS on rises. Same k as the
@@ -39,6 +39,7 @@ from sklearn.model_selection import KFold
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
+from spindlebench.names import ALL_RAW, PAPER_SIX, SENSORS, SIX_DIFF, SIX_RAW
 from spindlebench.selection import (
     PairwiseDifferences,
     correlation_with,
@@ -48,7 +49,7 @@ from spindlebench.selection import (
     rmse,
 )
 from spindlebench.studies.executor import one_line_error
-from spindlebench.studies.study import PAPER_SIX, SENSORS, Methods
+from spindlebench.studies.study import Methods
 
 TARGET = "drift_um"
 #: Column of each prepared frame holding the true drift rise (um), for ``rmse_true_um``.
@@ -56,7 +57,7 @@ TRUTH = "true_drift_rise_um"
 RIDGE_ALPHAS = np.logspace(-4, 4, 17)
 
 ORACLE = "oracle"
-GROUP_SENSORS = {"raw20": SENSORS, "raw6": PAPER_SIX, "raw6+diff": PAPER_SIX}
+GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
 
 
 @dataclass(frozen=True)

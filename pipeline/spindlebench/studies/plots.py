@@ -11,14 +11,15 @@ import matplotlib.pyplot as plt
 import pandas as pd
 
 from spindlebench.atomic import atomic_path
+from spindlebench.names import GROUPS
 from spindlebench.studies.seasons import MONTHS
 
-METHOD_ORDER = ("raw20", "raw6", "raw6+diff", "top-k-correlated", "ridge", "oracle")
-COLOURS = {"raw20": "#8c8c8c", "raw6": "#5b8fc9", "raw6+diff": "#d9622b",
+METHOD_ORDER = (*GROUPS, "top-k-correlated", "ridge", "oracle")
+COLOURS = {"all_raw": "#8c8c8c", "six_raw": "#5b8fc9", "six_diff": "#d9622b",
            "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f0c419",
            "measured": "#4c72b0", "noise-free": "#d0d0d0"}
 #: Drawn over every box: black contrasts with each fill above (an orange median vanished on
-#: the orange raw6+diff boxes).
+#: the orange six_diff boxes).
 MEDIAN = {"color": "black", "linewidth": 1.5}
 #: Methods without a k (fitted on all candidates): drawn once, in their own panel.
 NO_K = ("ridge", "oracle")

@@ -13,8 +13,10 @@ from typing import Any
 
 import pandas as pd
 
+from spindlebench.names import SIX_RAW
 from spindlebench.studies.experiments import Experiment
 from spindlebench.studies.study import NO_FAULT, SweepStudy
+from spindlebench.studies.summary import RAW
 
 CRITERIA = {
     "iqr": "interquartile range over held-out runs",
@@ -57,13 +59,13 @@ def verdict_sentences(verdict: pd.DataFrame, kind: str) -> list[str]:
     for _, row in verdict[verdict["data"] == kind].iterrows():
         k = row["k"]
         lower = "**holds**" if row["lower"] else "**fails**"
-        raws = [r for r in ("raw20", "raw6") if f"win_rate_vs_{r}" in row]
+        raws = [r for r in RAW if f"win_rate_vs_{r}" in row]
         medians = ", ".join(f"{r} {_fmt(row[f'median_{r}_um'])}" for r in raws)
         wins = ", ".join(f"{_pct(row[f'win_rate_vs_{r}'])} of paired cases vs {r}"
                          for r in raws)
         lines.append(
             f"- k = {k}, *lower*: {lower}: median {_fmt(row['median_diff_um'])} with "
-            f"differences vs {medians} (raw6+diff wins {wins}).")
+            f"differences vs {medians} (six_diff wins {wins}).")
         held = [name for name in CRITERIA if row.get(f"{name}_holds") is True]
         failed = [name for name in CRITERIA if row.get(f"{name}_holds") is False]
         parts = [f"{CRITERIA[n]} {_fmt(row[f'{n}_diff_um'])} vs {_fmt(row[f'{n}_best_raw_um'])}"
@@ -133,7 +135,7 @@ def duration_text(seconds: float) -> str:
 
 
 def failure_slices(slices: pd.DataFrame, versus: str) -> list[str]:
-    """A table: per axis value and k, median(raw6+diff) / median(reference), ✓ if below 1."""
+    """A table: per axis value and k, median(six_diff) / median(reference), ✓ if below 1."""
     if slices.empty or slices[slices["versus"] == versus].empty:
         return ["(The study varies no axis with more than one value: nothing to slice.)"]
     slices = slices[slices["versus"] == versus]
@@ -195,7 +197,7 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
         f"- {len(results)} result rows (replica × condition × method × k × held-out run), "
         f"{n_failed} without a score (see *Failures*).",
         "",
-        "Methods: `raw20`, `raw6`, `raw6+diff` are the paper's candidate groups (all 20 "
+        "Methods: `all_raw`, `six_raw`, `six_diff` are the paper's candidate groups (all 20 "
         "sensors; T1, T6, T8, T10, T13, T16; those six plus their 15 differences), selected "
         "by fuzzy clustering into k clusters and fitted by OLS on rises. `top-k-correlated` "
         "keeps the k raw sensors most correlated with the error (no clustering). `ridge` "
@@ -225,13 +227,13 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
     slices = tables["claim_by_slice"]
     out += ["### Where the claim fails", "",
             "The *lower* test repeated within each value of each study axis (measured data). "
-            "Each cell is the median RMSE of raw6+diff divided by that of the reference in "
+            "Each cell is the median RMSE of six_diff divided by that of the reference in "
             "the slice: below 1 (✓) the differences win, above 1 (✗) they lose.", "",
             "Against the better of the two raw groups (named in brackets):", "",
             *failure_slices(slices, "best-raw"), "",
-            "Against the same six sensors without differences (raw6), the paper's "
+            "Against the same six sensors without differences (six_raw), the paper's "
             "like-for-like comparison:", "",
-            *failure_slices(slices, "raw6"), ""]
+            *failure_slices(slices, SIX_RAW), ""]
     best = tables["best"]
     out += ["### Against the baselines", ""]
     for _, row in best.iterrows():

@@ -10,12 +10,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import SEASONS_DIR
 from spindlebench.studies.schema import Table, load_toml
 
 MONTHS = ("Jan", "Feb", "Mar", "Apr", "May", "Jun",
           "Jul", "Aug", "Sep", "Oct", "Nov", "Dec")
 
-SEASONS_DIR = Path(__file__).resolve().parents[3] / "scenarios" / "seasons"
 
 
 @dataclass(frozen=True)

@@ -20,19 +20,13 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import DEFAULT_SIMILARITY, GROUPS, SENSORS, SIMILARITIES
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import sha256_file
 from spindlebench.studies.schema import Table, load_toml, non_negative, positive
 from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import MAX_FEED_MM_PER_MIN, MAX_RPM, step_count_problem
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_FMU = REPO_ROOT / "fmus" / "SpindleBench.fmu"
-
-SENSORS = tuple(f"T{i}" for i in range(1, 21))
-#: The paper's six-sensor subset (spindle front, headstock, motor, ambient, X motor, Y motor).
-PAPER_SIX = ("T1", "T6", "T8", "T10", "T13", "T16")
-
-GROUPS = ("raw20", "raw6", "raw6+diff")
 BASELINES = ("top-k-correlated", "ridge")
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
@@ -425,8 +419,8 @@ def _methods(t: Table) -> Methods:
     baselines = t.get_list("baselines", str, default=list(BASELINES), allow_empty=True,
                            check=lambda v: None if v in BASELINES
                            else f"must be one of {', '.join(BASELINES)}")
-    similarity = t.get("similarity", str, default="abs-pearson",
-                       check=lambda v: None if v in ("abs-pearson", "literal")
+    similarity = t.get("similarity", str, default=DEFAULT_SIMILARITY,
+                       check=lambda v: None if v in SIMILARITIES
                        else "must be 'abs-pearson' or 'literal'")
     ground_truth = t.get("ground_truth", bool, default=True)
     t.finish()

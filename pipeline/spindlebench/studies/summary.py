@@ -2,10 +2,10 @@
 
 The paper's claim has two halves, and each is measured, not assumed:
 
-- *lower*: with the six sensors plus their differences (``raw6+diff``) the held-out RMSE is
-  lower than with raw sensors (``raw20``, ``raw6``). Measured by the median RMSE per k, and
+- *lower*: with the six sensors plus their differences (``six_diff``) the held-out RMSE is
+  lower than with raw sensors (``all_raw``, ``six_raw``). Measured by the median RMSE per k, and
   by the paired win rate: on the same replica, condition, training and held-out run, how
-  often ``raw6+diff`` beats each raw group.
+  often ``six_diff`` beats each raw group.
 - *more stable*: its error varies less: across held-out runs (interquartile range, worst
   case), across the number of clusters k (the spread max−min over k of the same case), and
   across seasons (max−min of the per-season medians).
@@ -20,8 +20,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-DIFF = "raw6+diff"
-RAW = ("raw20", "raw6")
+from spindlebench.names import ALL_RAW, SIX_DIFF, SIX_RAW
+
+DIFF = SIX_DIFF
+RAW = (ALL_RAW, SIX_RAW)
 CASE = ["data", "replica", "noise", "fault", "train_experiment", "test_experiment"]
 SLICES = ("noise", "fault", "test_season", "test_month", "test_speed_rpm", "test_programme",
           "test_cooling", "train_experiment")
@@ -101,7 +103,7 @@ def paired(results: pd.DataFrame) -> pd.DataFrame:
 
 
 def verdict(results: pd.DataFrame, summary: pd.DataFrame, stable: pd.DataFrame) -> pd.DataFrame:
-    """Per data kind and k: does ``raw6+diff`` beat both raw groups, on each criterion?"""
+    """Per data kind and k: does ``six_diff`` beat both raw groups, on each criterion?"""
     rows = []
     wide = paired(results)
     for (kind, k), at in summary[summary["method"].isin([DIFF, *RAW])].groupby(
@@ -141,9 +143,9 @@ def verdict(results: pd.DataFrame, summary: pd.DataFrame, stable: pd.DataFrame) 
 
 
 def claim_by_slice(results: pd.DataFrame) -> pd.DataFrame:
-    """Within each value of each axis, per k: median of ``raw6+diff`` against the better raw
+    """Within each value of each axis, per k: median of ``six_diff`` against the better raw
     group (``versus = best-raw``) and against the same six sensors without differences
-    (``versus = raw6``, the paper's like-for-like comparison)."""
+    (``versus = six_raw``, the paper's like-for-like comparison)."""
     rows = []
     data = ok_rows(results)
     data = data[(data["data"] == "measured") & data["method"].isin([DIFF, *RAW])]
@@ -160,7 +162,7 @@ def claim_by_slice(results: pd.DataFrame) -> pd.DataFrame:
             if isinstance(value, float):
                 value = f"{value:g}"
             for versus, reference in (("best-raw", raws.idxmin() if len(raws) else None),
-                                      ("raw6", "raw6" if "raw6" in raws else None)):
+                                      (SIX_RAW, SIX_RAW if SIX_RAW in raws else None)):
                 if reference is None:
                     continue
                 rows.append({"axis": axis, "value": value, "k": int(k), "versus": versus,

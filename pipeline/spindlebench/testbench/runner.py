@@ -32,14 +32,13 @@ from fmpy.fmi3 import FMU3Model, fmi3Float64, fmi3ValueReference
 from fmpy.model_description import ModelDescription, ScalarVariable, ValidationError
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import KELVIN_OFFSET, SENSORS
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
 
-#: The project's default FMU, built from models/ by ``spindlebench build``.
-DEFAULT_FMU = Path(__file__).resolve().parents[3] / "fmus" / "SpindleBench.fmu"
 #: The paper's sensors as FMU outputs.
-SENSOR_OUTPUTS = tuple(f"T{i}_C" for i in range(1, 21))
-KELVIN_OFFSET = 273.15
+SENSOR_OUTPUTS = tuple(f"{name}_C" for name in SENSORS)
 #: CVode's relative tolerance; absolute tolerance = nominal × this (K for temperatures).
 RELATIVE_TOLERANCE = 1e-6
 #: Cooling settings of the scenario map onto these FMU parameters.

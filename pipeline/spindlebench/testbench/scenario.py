@@ -19,13 +19,12 @@ from pathlib import Path
 from typing import Any, Literal
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import SENSORS
 
 #: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
 KELVIN_SUSPECT_C = 60.0
 #: Coldest ambient a workshop scenario may ask for (°C).
 COLDEST_AMBIENT_C = -40.0
-#: The paper's sensors, the only ones a fault can target.
-SENSOR_NAMES = tuple(f"T{i}" for i in range(1, 21))
 #: Fastest spindle a scenario may ask for (rev/min): the studies' limit; high-speed spindles
 #: of machining centres reach 30 000-40 000 rpm, the model's bearing losses are not meant beyond.
 MAX_RPM = 40_000.0
@@ -584,7 +583,7 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
     )
     faults = []
     for ft in t.tables("faults", []):
-        sensor = ft.string("sensor", choices=SENSOR_NAMES)
+        sensor = ft.string("sensor", choices=SENSORS)
         kind = ft.string("kind", choices=("dropout", "stuck", "offset"))
         start_s = ft.number("start_s", 0.0, minimum=0.0)
         if start_s >= duration_s:

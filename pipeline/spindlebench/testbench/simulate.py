@@ -19,11 +19,11 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
 from spindlebench.testbench.recording import recording_frame, write_recording
 from spindlebench.testbench.runner import (
-    DEFAULT_FMU,
     SENSOR_OUTPUTS,
     Simulation,
     check_scenario,

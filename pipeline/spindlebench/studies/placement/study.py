@@ -29,11 +29,11 @@ from typing import Any
 from fmpy import read_model_description
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
 from spindlebench.studies.schema import Table, load_toml
 from spindlebench.studies.study import NO_FAULT, SweepStudy, check_fmu, load_study
 
 METHODS = ("fuzzy", "greedy", "exhaustive")
-SIMILARITIES = ("abs-pearson", "literal")
 #: FMU outputs of the temperature field: ``node_<part>_C``.
 NODE_PREFIX, NODE_SUFFIX = "node_", "_C"
 DEFAULT_EXHAUSTIVE_LIMIT = 500_000
@@ -125,7 +125,7 @@ def load_placement_study(path: str | Path) -> PlacementStudy:
     measured = table.get("measured", bool, default=True)
     limit = table.get("exhaustive_limit", int, default=DEFAULT_EXHAUSTIVE_LIMIT,
                       check=lambda v: None if 0 <= v <= 10**9 else "must be in [0, 1e9]")
-    similarity = table.get("similarity", str, default="abs-pearson",
+    similarity = table.get("similarity", str, default=DEFAULT_SIMILARITY,
                            check=lambda v: None if v in SIMILARITIES
                            else f"must be one of {', '.join(SIMILARITIES)}")
     excluded = table.get_list("exclude_nodes", str, default=[], allow_empty=True)
