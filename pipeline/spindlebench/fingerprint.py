@@ -18,7 +18,8 @@ Rises are ``dT = T - T[0]`` and ``e = y - y[0]``; ``smooth`` is a centred moving
 signal over the last ``max(1, n // 20)`` samples. Sensors whose rise has zero variance are left
 out. ``t63(x)`` is the time of the first sample whose smoothed rise reaches 63.2 % of the final
 rise; for a falling signal "reaches" is taken in the direction of the rise (the definition read
-literally would give the first sample for every falling signal).
+literally would give the first sample for every falling signal). In ``t63_ratio`` the times are
+counted from the first sample, so a recording whose clock does not start at 0 gets the same ratio.
 """
 
 from __future__ import annotations
@@ -148,13 +149,14 @@ def fingerprint(time_s: np.ndarray, temps_2d: np.ndarray, error: np.ndarray) -> 
         best_pair = _best_pair_r2(rises, e)
     else:
         best_diff = best_pair = math.nan
+    elapsed = time_s - time_s[0]  # a ratio of t63s is one of durations, wherever the clock began
     sensor_t63 = [
-        t63(time_s, rises[:, j])
+        t63(elapsed, rises[:, j])
         for j in range(m)
         if abs(final(rises[:, j]) - smooth(rises[:, j])[0]) >= MIN_SENSOR_RISE_K
     ]
     sensor_t63 = [value for value in sensor_t63 if math.isfinite(value)]
-    error_t63 = t63(time_s, e)
+    error_t63 = t63(elapsed, e)
     median_t63 = float(np.median(sensor_t63)) if sensor_t63 else math.nan
     t63_ratio = error_t63 / median_t63 if median_t63 > 0 else math.nan
     smoothed = smooth(e)

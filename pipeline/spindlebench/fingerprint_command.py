@@ -1,0 +1,261 @@
+"""``spindlebench fingerprint``: does this testbench look like my machine?
+
+For each recording (synthetic or real) the fingerprint statistics of
+:mod:`spindlebench.fingerprint` (best raw and difference ψ, best single and pair R², the
+error's t63 against the sensors', overshoot, early fraction), one row each plus their median,
+printed as a table and written as JSON with provenance (``--json``). With a figure
+(``--figure``, or ``--json OUT.json`` → ``OUT.png``) the recordings are drawn next to the
+default machine's paper experiments, error and sensor rises normalised to their final values,
+and the table gets the default machine's median as a last row; where those experiments come
+from is :mod:`spindlebench.fingerprint_reference` (``--reference DIR`` or a cache simulated
+once with the committed FMU).
+
+The error column is ``--target``; without it ``drift_um`` when the recording has it, else the
+``axial_target`` its JSON sidecar names (``adapt caiviac`` writes one). Sensors are
+``--sensors`` or every temperature column (:func:`spindlebench.recordings.default_sensors`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from spindlebench import atomic, provenance
+from spindlebench.errors import SpindlebenchError
+from spindlebench.fingerprint import KEYS, fingerprint
+from spindlebench.fingerprint_reference import (
+    REFERENCE_TARGET,
+    Reference,
+    cached_reference,
+    explicit_reference,
+)
+from spindlebench.listflags import split_list_flag
+from spindlebench.recordings import (
+    TIME_COLUMN,
+    default_sensors,
+    read_recording,
+    recording_name,
+    require_columns,
+)
+from spindlebench.testbench.recording import sidecar_path
+
+#: The error column of a recording that has it and no ``--target`` is given.
+DEFAULT_TARGET = "drift_um"
+
+
+@dataclass(frozen=True)
+class Fingerprinted:
+    """One recording's fingerprint and the columns it was computed from."""
+
+    path: Path
+    target: str
+    time_column: str
+    sensors: list[str]
+    time: np.ndarray
+    rises: np.ndarray  # n x m sensor rises (K)
+    error: np.ndarray  # n error rise
+    stats: dict[str, float]
+
+    def row(self) -> dict[str, Any]:
+        """The JSON row: which file and columns, then the statistics (NaN as null)."""
+        return {"recording": str(self.path), "target": self.target,
+                "time_column": self.time_column, "sensors": list(self.sensors),
+                "samples": int(self.time.size), **json_stats(self.stats)}
+
+
+def json_stats(stats: dict[str, float]) -> dict[str, float | None]:
+    """Statistics for JSON: a value that is undefined for the recording (NaN) is null."""
+    return {key: (None if not math.isfinite(stats[key]) else float(stats[key])) for key in KEYS}
+
+
+def median_stats(rows: list[dict[str, float]]) -> dict[str, float]:
+    """Per statistic, the median over recordings where it is defined (NaN if nowhere)."""
+    out = {}
+    for key in KEYS:
+        values = [row[key] for row in rows if math.isfinite(row[key])]
+        out[key] = float(np.median(values)) if values else math.nan
+    return out
+
+
+def fingerprint_recording(path: Path, target: str | None = None,
+                          time_column: str = TIME_COLUMN,
+                          sensors: list[str] | None = None) -> Fingerprinted:
+    """Read one recording and compute its fingerprint, or raise one error line."""
+    columns = None
+    if sensors is not None:  # read and check only the columns used
+        targets = [target] if target else [DEFAULT_TARGET, _sidecar_target(path) or ""]
+        columns = [time_column, *sensors, *targets]
+    frame = read_recording(path, columns=columns)
+    target = target or _default_target(path, frame)
+    require_columns(frame, [time_column], "--time-column")
+    require_columns(frame, [target], "--target")
+    time = frame[time_column].to_numpy(dtype=float)
+    if time_column != TIME_COLUMN and np.any(np.diff(time) <= 0):
+        line = int(np.flatnonzero(np.diff(time) <= 0)[0]) + 3
+        raise SpindlebenchError(f"recording {path}, line {line}: --time-column "
+                                f"'{time_column}' does not increase")
+    if sensors is None:
+        names = [name for name in default_sensors(frame, target) if name != time_column]
+    else:
+        require_columns(frame, sensors, "--sensors")
+        names = list(sensors)
+    if target in names or time_column in names:
+        raise SpindlebenchError(f"recording {path}: --sensors must not hold the target "
+                                f"'{target}' or the time column '{time_column}'")
+    if not names:
+        raise SpindlebenchError(f"recording {recording_name(frame)}: no sensor column (give "
+                                "--sensors)")
+    temps = frame[names].to_numpy(dtype=float)
+    error = frame[target].to_numpy(dtype=float)
+    try:
+        stats = fingerprint(time, temps, error)
+    except SpindlebenchError as exc:
+        raise SpindlebenchError(f"recording {path}: {exc}") from exc
+    return Fingerprinted(path, target, time_column, names, time, temps - temps[0],
+                         error - error[0], stats)
+
+
+def _default_target(path: Path, frame: pd.DataFrame) -> str:
+    """``drift_um`` if present, else the sidecar's ``axial_target``, else one error line."""
+    if DEFAULT_TARGET in frame:
+        return DEFAULT_TARGET
+    named = _sidecar_target(path)
+    if named is not None and named in frame:
+        return named
+    raise SpindlebenchError(
+        f"recording {path}: no --target given, no '{DEFAULT_TARGET}' column and no "
+        f"axial_target in {sidecar_path(path).name} (columns are: "
+        f"{', '.join(map(str, frame.attrs.get('header', frame.columns)))})")
+
+
+def _sidecar_target(path: Path) -> str | None:
+    """The ``axial_target`` a recording's JSON sidecar names, if it has one."""
+    try:
+        named = json.loads(sidecar_path(path).read_text(encoding="utf-8")).get("axial_target")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return named if isinstance(named, str) else None
+
+
+# --------------------------------------------------------------------------- table
+
+
+def table(rows: list[tuple[str, dict[str, float]]]) -> str:
+    """A fixed-width text table: one line per (label, statistics)."""
+    width = max(len("recording"), *(len(label) for label, _ in rows))
+    head = f"{'recording':<{width}}  " + "  ".join(f"{key:>14}" for key in KEYS)
+    lines = [head]
+    for label, stats in rows:
+        cells = "  ".join(
+            f"{'-':>14}" if not math.isfinite(stats[key]) else f"{stats[key]:>14.3f}"
+            for key in KEYS)
+        lines.append(f"{label:<{width}}  {cells}")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``fingerprint`` sub-command."""
+    parser = subparsers.add_parser(
+        "fingerprint",
+        help="shape statistics of recordings (does this testbench look like my machine?)",
+        description="The fingerprint statistics (best raw/difference psi, best single/pair "
+        "R2, t63 ratio, overshoot, early fraction; definitions in docs and "
+        "spindlebench.fingerprint) of each recording and their median, next to the default "
+        "machine's paper experiments.",
+    )
+    parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING",
+                        help="recording CSV(s)")
+    parser.add_argument("--target", help=f"error column (default: {DEFAULT_TARGET}, else the "
+                        "axial_target of the recording's JSON sidecar)")
+    parser.add_argument("--time-column", default=TIME_COLUMN, metavar="COL",
+                        help=f"time column (default: {TIME_COLUMN}); t63 is in its unit")
+    parser.add_argument("--sensors", nargs="+", metavar="NAME",
+                        help="temperature columns, space- or comma-separated (default: every "
+                        "temperature column)")
+    parser.add_argument("--json", type=Path, metavar="OUT.json", help="write the result here")
+    parser.add_argument("--figure", type=Path, metavar="OUT.png",
+                        help="write the comparison figure here (default: OUT.png beside "
+                        "--json; none without either)")
+    parser.add_argument("--reference", type=Path, metavar="DIR",
+                        help="recordings of the default machine to compare with (default: "
+                        "the paper experiments simulated once with the committed FMU into "
+                        "results/fingerprint_reference/)")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fingerprint every recording, print the table, write JSON and figure if asked."""
+    sensors = split_list_flag("--sensors", args.sensors, what="name")
+    for out, suffix in ((args.json, ".json"), (args.figure, ".png")):
+        if out is not None and out.suffix.lower() != suffix:
+            raise SpindlebenchError(f"{out}: must be a {suffix} file")
+        if out is not None and out.is_dir():
+            raise SpindlebenchError(f"{out}: is a directory")
+    results = [fingerprint_recording(path, args.target, args.time_column, sensors)
+               for path in args.recordings]
+    figure = args.figure or (args.json.with_suffix(".png") if args.json else None)
+    reference: Reference | None = None
+    ref_results: list[Fingerprinted] = []
+    if figure is not None or args.reference is not None:
+        reference = (explicit_reference(args.reference) if args.reference is not None
+                     else cached_reference())
+        ref_results = [fingerprint_recording(path, REFERENCE_TARGET)
+                       for path in reference.recordings]
+    median = median_stats([item.stats for item in results])
+    rows = [(str(item.path), item.stats) for item in results]
+    rows.append(("median", median))
+    ref_median = None
+    if ref_results:
+        ref_median = median_stats([item.stats for item in ref_results])
+        rows.append(("default machine (median)", ref_median))
+    text = None
+    if args.json is not None:
+        text = _json_text(results, median, reference, ref_results, ref_median, figure, args,
+                          sensors)
+    if figure is not None:
+        from spindlebench.fingerprint_figure import write_figure  # matplotlib only when drawn
+        write_figure(figure, results, ref_results)
+    print(table(rows))
+    if text is not None:
+        atomic.write_text(args.json, text)
+        print(f"wrote {args.json}")
+    if figure is not None:
+        print(f"wrote {figure}")
+    return 0
+
+
+def _json_text(results: list[Fingerprinted], median: dict[str, float],
+               reference: Reference | None, ref_results: list[Fingerprinted],
+               ref_median: dict[str, float] | None, figure: Path | None,
+               args: argparse.Namespace, sensors: list[str] | None) -> str:
+    record: dict[str, Any] = {
+        "recordings": [item.row() for item in results],
+        "median": json_stats(median),
+    }
+    if reference is not None and ref_median is not None:
+        record["reference"] = {
+            "recordings": [item.row() for item in ref_results],
+            "median": json_stats(ref_median),
+        }
+    record["figure"] = None if figure is None else str(figure)
+    record["provenance"] = provenance.provenance(
+        command="fingerprint",
+        recordings=[provenance.file_entry(path) for path in args.recordings],
+        target=args.target,
+        time_column=args.time_column,
+        sensors=sensors,
+        reference=None if reference is None else {
+            **reference.source,
+            "files": [provenance.file_entry(path) for path in reference.recordings]},
+    )
+    return json.dumps(record, indent=2, allow_nan=False) + "\n"

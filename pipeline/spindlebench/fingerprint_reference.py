@@ -1,0 +1,100 @@
+"""The default machine's paper experiments, as the reference a fingerprint is compared with.
+
+``spindlebench fingerprint`` puts a user's recordings next to the five paper experiments
+(``scenarios/paper/exp1..5.toml``) simulated on the default machine. They come from one of two
+places:
+
+- ``--reference DIR``: any folder of recordings, e.g. ``results/paper`` from ``make run``
+  (every ``*.csv`` in it is used, with ``drift_um`` as the error);
+- otherwise a cache, ``results/fingerprint_reference/``: the five experiments simulated with
+  the committed FMU the first time they are needed (a few seconds each), reused while the
+  FMU and the scenario files (``scenarios/paper/*.toml`` and ``scenarios/machines/*.toml``
+  when present) have the hashes recorded in its ``reference.json``. Anything else (a changed
+  FMU or scenario, a missing or damaged file) resimulates. ``reference.json`` is written
+  last, so an interrupted simulation is never taken for a complete cache.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from spindlebench import atomic
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
+from spindlebench.testbench.recording import write_recording
+from spindlebench.testbench.runner import DEFAULT_FMU
+from spindlebench.testbench.simulate import check_batch, plan_batch, record
+
+REPO_ROOT = DEFAULT_FMU.parents[1]
+PAPER_SCENARIOS = REPO_ROOT / "scenarios" / "paper"
+MACHINES = REPO_ROOT / "scenarios" / "machines"
+DEFAULT_CACHE = Path("results") / "fingerprint_reference"
+KEY_FILE = "reference.json"
+#: The error column of a synthetic recording.
+REFERENCE_TARGET = "drift_um"
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Where the reference recordings are and what made them (for provenance)."""
+
+    recordings: list[Path]
+    source: dict[str, Any]
+
+
+def inputs_key(fmu: Path = DEFAULT_FMU, scenarios: Path = PAPER_SCENARIOS,
+               machines: Path = MACHINES) -> dict[str, Any]:
+    """The hashes that decide whether a cached reference is still the default machine's."""
+    files = sorted(scenarios.glob("*.toml")) + sorted(machines.glob("*.toml"))
+    return {
+        "fmu": {"path": str(fmu), "sha256": sha256_file(fmu)},
+        "scenarios": {str(path.relative_to(REPO_ROOT) if path.is_relative_to(REPO_ROOT)
+                          else path): sha256_file(path) for path in files},
+    }
+
+
+def explicit_reference(folder: Path) -> Reference:
+    """``--reference DIR``: its ``*.csv`` recordings, or one error line."""
+    if not folder.is_dir():
+        raise SpindlebenchError(f"--reference {folder}: no such folder (give a folder of "
+                                "recordings, e.g. results/paper from 'make run')")
+    recordings = sorted(folder.glob("*.csv"))
+    if not recordings:
+        raise SpindlebenchError(f"--reference {folder}: holds no .csv recording")
+    return Reference(recordings, {"kind": "folder", "path": str(folder)})
+
+
+def cached_reference(cache: Path = DEFAULT_CACHE, fmu: Path = DEFAULT_FMU,
+                     scenarios: Path = PAPER_SCENARIOS, machines: Path = MACHINES,
+                     say=print) -> Reference:
+    """The paper experiments on the default machine, simulated once into ``cache``."""
+    if not fmu.is_file():
+        raise SpindlebenchError(f"reference: FMU {fmu} not found (run 'spindlebench build', "
+                                "or pass --reference DIR)")
+    files = sorted(scenarios.glob("*.toml"))
+    if not files:
+        raise SpindlebenchError(f"reference: no scenario in {scenarios} (pass --reference DIR)")
+    key = inputs_key(fmu, scenarios, machines)
+    targets = [cache / f"{path.stem}.csv" for path in files]
+    if _cache_matches(cache / KEY_FILE, key) and all(path.is_file() for path in targets):
+        return Reference(targets, {"kind": "cache", "path": str(cache), **key})
+    say(f"simulating the default machine's {len(files)} paper experiments ({scenarios}, "
+        f"{fmu.name}) into {cache} once")
+    plan = plan_batch(files, targets)
+    check_batch(plan, fmu)
+    (cache / KEY_FILE).unlink(missing_ok=True)
+    for i in plan.order:
+        frame, sidecar = record(plan.scenarios[i], fmu)
+        write_recording(targets[i], frame, sidecar)
+    atomic.write_text(cache / KEY_FILE, json.dumps(key, indent=2, sort_keys=True) + "\n")
+    return Reference(targets, {"kind": "cache", "path": str(cache), **key})
+
+
+def _cache_matches(path: Path, key: dict[str, Any]) -> bool:
+    try:
+        return json.loads(path.read_text(encoding="utf-8")) == key
+    except (OSError, ValueError):
+        return False
