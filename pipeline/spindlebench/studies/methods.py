@@ -35,7 +35,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 from sklearn.linear_model import Ridge
-from sklearn.model_selection import KFold
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
@@ -48,13 +47,13 @@ from spindlebench.selection import (
     rises,
     rmse,
 )
+from spindlebench.selection.regressors import blocked_cv_alpha
 from spindlebench.studies.executor import one_line_error
 from spindlebench.studies.study import Methods
 
 TARGET = "drift_um"
 #: Column of each prepared frame holding the true drift rise (um), for ``rmse_true_um``.
 TRUTH = "true_drift_rise_um"
-RIDGE_ALPHAS = np.logspace(-4, 4, 17)
 
 ORACLE = "oracle"
 GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
@@ -149,29 +148,6 @@ def _top_k_correlated(spec: MethodSpec, train: pd.DataFrame,
     predictions = {name: fit.predict(_raw_rises(frame)[:, chosen])
                    for name, frame in tests.items()}
     return _scores(tests, predictions, ";".join(SENSORS[i] for i in chosen))
-
-
-def blocked_cv_alpha(X: np.ndarray, y: np.ndarray, alphas: np.ndarray = RIDGE_ALPHAS,
-                     n_folds: int = 5) -> float:
-    """The ridge penalty with the lowest K-fold error over contiguous time blocks.
-
-    Blocks, not shuffled rows: neighbouring samples of a heating curve are nearly equal, so a
-    shuffled split would reward fitting noise. One SVD per fold serves every alpha, which
-    makes this some fifty times faster than a grid search refitting per alpha.
-    """
-    X = np.asarray(X, dtype=float)
-    y = np.asarray(y, dtype=float)
-    errors = np.zeros(len(alphas))
-    for train, valid in KFold(n_folds).split(X):
-        scaler = StandardScaler().fit(X[train])
-        Xt, Xv = scaler.transform(X[train]), scaler.transform(X[valid])
-        y_mean = y[train].mean()
-        U, s, Vt = np.linalg.svd(Xt, full_matrices=False)
-        Uty = U.T @ (y[train] - y_mean)
-        for i, alpha in enumerate(alphas):
-            coef = Vt.T @ (s / (s**2 + alpha) * Uty)
-            errors[i] += np.sum((Xv @ coef + y_mean - y[valid]) ** 2)
-    return float(alphas[int(np.argmin(errors))])
 
 
 def _ridge(train: pd.DataFrame, tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:

@@ -1,0 +1,447 @@
+"""Selectors beside the paper's: clustering variants, grey choice, and selection without clusters.
+
+All are scikit-learn ``SelectorMixin`` estimators, fitted on rises (candidates) and the thermal
+error, so each composes before any regressor in a ``Pipeline``:
+
+- ``ClusterSelector``: cluster the candidates (``clustering``: the paper's closure, fuzzy
+  c-means, k-means, average/complete/Ward linkage; see ``selection.clustering``), then keep
+  one per cluster: the largest |psi| (``within="psi"``, the paper's eq. 4) or the largest grey
+  relational grade (``within="grey"``, ``selection.grey``).
+- ``TopCorrelatedSelector``: the k candidates with the largest |psi|, no clustering.
+- ``LassoPathSelector``: the first k candidates to enter the LASSO (``l1_ratio=1``) or
+  elastic-net path of the standardised candidates.
+- ``StabilitySelector``: how often each candidate is among those k over random half-samples
+  of the rows (Meinshausen and Buehlmann's stability selection); keep the k most frequent.
+- ``GreedyForwardSelector``: greedy forward selection by cross-experiment RMSE
+  (``selection.forward.greedy_forward``, the placement study's search): train on the first
+  experiment of ``groups``, score on the others; without ``groups`` the rows are cut into
+  ``n_blocks`` contiguous time blocks and the first block trains.
+
+Constant candidates are never selected (a ``ClusterSelector`` drops them with a
+``SelectionWarning``, as the paper's selector does). Seeds (``random_state``) are ints so that
+results are reproducible and the callers can record them.
+"""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Integral, Real
+from typing import ClassVar
+
+import numpy as np
+from sklearn.base import BaseEstimator, _fit_context
+from sklearn.feature_selection import SelectorMixin
+from sklearn.linear_model import enet_path
+from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from spindlebench.selection.closure import CLOSURES
+from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
+from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
+from spindlebench.selection.forward import Block, greedy_forward
+from spindlebench.selection.grey import DEFAULT_RHO, NORMALISATIONS, grey_relational_grade
+from spindlebench.selection.regression import check_groups
+from spindlebench.selection.similarity import SIMILARITIES, constant_columns, correlation_with
+
+WITHIN: tuple[str, ...] = ("psi", "grey")
+#: Points on the LASSO / elastic-net path (log-spaced down to 1e-4 of the largest alpha).
+PATH_ALPHAS = 200
+PATH_EPS = 1e-4
+
+
+def _budget(k: int, n_features: int) -> None:
+    if k > n_features:
+        raise SelectionError(f"cannot select {k} from {n_features} feature(s): the budget is "
+                             "larger than the number of candidates")
+
+
+def _abs_psi(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """|psi| of every column, -1 for constant ones (ranked last)."""
+    out = np.full(X.shape[1], -1.0)
+    varying = ~constant_columns(X)
+    if varying.any():
+        out[varying] = np.abs(correlation_with(X[:, varying], y))
+    return out
+
+
+class _Selector(SelectorMixin, BaseEstimator):
+    """``selected_`` (input columns, in the order the method chose them) -> support mask."""
+
+    def _get_support_mask(self):
+        check_is_fitted(self)
+        mask = np.zeros(self.n_features_in_, dtype=bool)
+        mask[self.selected_] = True
+        return mask
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        return tags
+
+    def _data(self, X, y):
+        X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
+        if constant_columns(y[:, None])[0]:
+            raise SelectionError("the target (thermal error) is constant; nothing to select")
+        return X, y
+
+
+class ClusterSelector(_Selector):
+    """Cluster the candidates, keep one per cluster (|psi| or grey relational grade).
+
+    Parameters
+    ----------
+    n_clusters : int, default=2
+        Number of clusters k, hence of selected candidates.
+    clustering : {"closure", "fcm", "kmeans", "average", "complete", "ward"}, default="closure"
+        How candidates are clustered (``spindlebench.selection.clustering``).
+    within : {"psi", "grey"}, default="psi"
+        Choice inside a cluster: largest |Pearson r| with the error, or largest grey
+        relational grade.
+    similarity : {"abs-pearson", "literal"}, default="abs-pearson"
+        Reading of eq. 1 (for ``closure``, ``average`` and ``complete``).
+    closure : {"fast", "squaring"}, default="fast"
+        Implementation of t(R) (same result).
+    normalisation : {"interval", "mean"}, default="interval"
+        Normalisation of the grey grade.
+    rho : float, default=0.5
+        Distinguishing coefficient of the grey grade.
+    random_state : int, default=0
+        Seed of ``fcm`` and ``kmeans``.
+
+    Attributes
+    ----------
+    clusters_ : list of ndarray
+        Input column indices of each cluster, ordered by first member.
+    selected_ : ndarray
+        The input column kept from each cluster (same order).
+    psi_ : ndarray of shape (n_features_in_,)
+        Correlation with the error (NaN for dropped constant columns).
+    scores_ : ndarray of shape (n_features_in_,)
+        What ``within`` ranks by: |psi| or the grey grade (NaN for constant columns).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 60)
+    >>> X = np.column_stack([t, t + 0.02 * t**2, np.sin(9 * t), np.sin(9 * t) + 0.05 * t])
+    >>> y = 2 * t + np.sin(9 * t)
+    >>> selector = ClusterSelector(2, clustering="kmeans", within="grey").fit(X, y)
+    >>> [members.tolist() for members in selector.clusters_]
+    [[0, 1], [2, 3]]
+    >>> selector.get_support().tolist()
+    [False, True, False, True]
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "n_clusters": [Interval(Integral, 1, None, closed="left")],
+        "clustering": [StrOptions(set(CLUSTERINGS))],
+        "within": [StrOptions(set(WITHIN))],
+        "similarity": [StrOptions(set(SIMILARITIES))],
+        "closure": [StrOptions(set(CLOSURES))],
+        "normalisation": [StrOptions(set(NORMALISATIONS))],
+        "rho": [Interval(Real, 0, 1, closed="right")],
+        "random_state": [Interval(Integral, 0, None, closed="left")],
+    }
+
+    def __init__(self, n_clusters: int = 2, clustering: str = "closure", within: str = "psi",
+                 similarity: str = "abs-pearson", closure: str = "fast",
+                 normalisation: str = "interval", rho: float = DEFAULT_RHO,
+                 random_state: int = 0):
+        self.n_clusters = n_clusters
+        self.clustering = clustering
+        self.within = within
+        self.similarity = similarity
+        self.closure = closure
+        self.normalisation = normalisation
+        self.rho = rho
+        self.random_state = random_state
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Cluster the columns of ``X`` and keep the best of each cluster."""
+        X, y = self._data(X, y)
+        names = getattr(self, "feature_names_in_", None)
+        names = None if names is None else [str(n) for n in names]
+        _budget(self.n_clusters, X.shape[1])
+        constant = constant_columns(X)
+        kept = np.flatnonzero(~constant)
+        if constant.any():
+            warnings.warn(f"dropping {int(constant.sum())} constant candidate(s) (zero "
+                          f"variance): {column_list(np.flatnonzero(constant), names)}",
+                          SelectionWarning, stacklevel=2)
+        if self.n_clusters > kept.size:
+            raise SelectionError(f"cannot make {self.n_clusters} clusters: only {kept.size} "
+                                 "candidate(s) vary")
+        kept_names = None if names is None else [names[i] for i in kept]
+        members = cluster_candidates(X[:, kept], self.n_clusters, self.clustering,
+                                     self.similarity, self.closure, self.random_state,
+                                     kept_names)
+        self.psi_ = np.full(X.shape[1], np.nan)
+        self.psi_[kept] = correlation_with(X[:, kept], y, kept_names)
+        self.scores_ = np.full(X.shape[1], np.nan)
+        if self.within == "psi":
+            self.scores_[kept] = np.abs(self.psi_[kept])
+        else:
+            self.scores_[kept] = grey_relational_grade(X[:, kept], y, self.normalisation,
+                                                       self.rho, kept_names)
+        self.clusters_ = [kept[m] for m in members]
+        self.selected_ = np.array([c[int(np.argmax(self.scores_[c]))] for c in self.clusters_],
+                                  dtype=np.intp)
+        return self
+
+
+class TopCorrelatedSelector(_Selector):
+    """The ``n_features_to_select`` candidates most correlated (|psi|) with the error.
+
+    Parameters
+    ----------
+    n_features_to_select : int, default=2
+
+    Attributes
+    ----------
+    selected_ : ndarray
+        Input columns, strongest first.
+    scores_ : ndarray of shape (n_features_in_,)
+        |psi| (-1 for constant columns).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 30)
+    >>> X = np.column_stack([np.sin(5 * t), t, t**3])
+    >>> TopCorrelatedSelector(1).fit(X, 2 * t).selected_.tolist()
+    [1]
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    def __init__(self, n_features_to_select: int = 2):
+        self.n_features_to_select = n_features_to_select
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Rank the columns of ``X`` by |psi|."""
+        X, y = self._data(X, y)
+        _budget(self.n_features_to_select, X.shape[1])
+        self.scores_ = _abs_psi(X, y)
+        self.selected_ = np.argsort(-self.scores_, kind="stable")[: self.n_features_to_select]
+        return self
+
+
+def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndarray:
+    """The first ``k`` columns to enter the elastic-net path of standardised ``X``.
+
+    Walking down the path from the largest alpha, the first point with at least k active
+    candidates decides: its active candidates ranked by when they entered, then by |coef|
+    there. If the path never has k active ones (collinear data), the rest are filled by |psi|.
+    """
+    mean, scale = X.mean(axis=0), X.std(axis=0)
+    varying = scale > 0
+    Z = np.zeros_like(X)
+    Z[:, varying] = (X[:, varying] - mean[varying]) / scale[varying]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # convergence warnings at tiny alphas
+        _, coefs, _ = enet_path(Z, y - y.mean(), l1_ratio=l1_ratio, eps=PATH_EPS,
+                                alphas=PATH_ALPHAS)
+    active = coefs != 0  # p x n_alphas, alphas decreasing
+    entry = np.where(active.any(axis=1), np.argmax(active, axis=1), active.shape[1])
+    counts = active.sum(axis=0)
+    reached = np.flatnonzero(counts >= k)
+    step = int(reached[0]) if reached.size else active.shape[1] - 1
+    magnitude = np.abs(coefs[:, step])
+    ranked = np.lexsort((-_abs_psi(X, y), -magnitude, entry))  # entry first, then |coef|
+    ranked = [int(i) for i in ranked if varying[i]]
+    return np.asarray(ranked[:k], dtype=np.intp)
+
+
+class LassoPathSelector(_Selector):
+    """The first k candidates to enter the LASSO or elastic-net path.
+
+    Parameters
+    ----------
+    n_features_to_select : int, default=2
+    l1_ratio : float, default=1.0
+        1 is the LASSO; below 1 an elastic net (scikit-learn's ``enet_path``).
+
+    Attributes
+    ----------
+    selected_ : ndarray
+        Input columns in order of entry into the path.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.normal(size=(80, 5))
+    >>> y = 3 * X[:, 2] - 2 * X[:, 4] + 0.1 * rng.normal(size=80)
+    >>> LassoPathSelector(2).fit(X, y).selected_.tolist()
+    [2, 4]
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "l1_ratio": [Interval(Real, 0, 1, closed="right")],
+    }
+
+    def __init__(self, n_features_to_select: int = 2, l1_ratio: float = 1.0):
+        self.n_features_to_select = n_features_to_select
+        self.l1_ratio = l1_ratio
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Compute the path on standardised ``X`` and keep its first k entries."""
+        X, y = self._data(X, y)
+        _budget(self.n_features_to_select, X.shape[1])
+        self.selected_ = path_order(X, y, self.n_features_to_select, self.l1_ratio)
+        if self.selected_.size < self.n_features_to_select:
+            raise SelectionError(f"only {self.selected_.size} candidate(s) vary; cannot select "
+                                 f"{self.n_features_to_select}")
+        return self
+
+
+class StabilitySelector(_Selector):
+    """Stability selection: the k candidates most often on the LASSO path's first k over
+    random half-samples of the rows.
+
+    Parameters
+    ----------
+    n_features_to_select : int, default=2
+    n_subsamples : int, default=50
+    sample_fraction : float, default=0.5
+        Fraction of the rows drawn (without replacement) per subsample.
+    l1_ratio : float, default=1.0
+    random_state : int, default=0
+
+    Attributes
+    ----------
+    frequency_ : ndarray of shape (n_features_in_,)
+        Fraction of subsamples that selected each candidate.
+    selected_ : ndarray
+        The most frequent ones (ties: order on the full data's path).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.normal(size=(80, 5))
+    >>> y = 3 * X[:, 2] - 2 * X[:, 4] + 0.1 * rng.normal(size=80)
+    >>> sorted(StabilitySelector(2, n_subsamples=10).fit(X, y).selected_.tolist())
+    [2, 4]
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "n_subsamples": [Interval(Integral, 1, None, closed="left")],
+        "sample_fraction": [Interval(Real, 0, 1, closed="right")],
+        "l1_ratio": [Interval(Real, 0, 1, closed="right")],
+        "random_state": [Interval(Integral, 0, None, closed="left")],
+    }
+
+    def __init__(self, n_features_to_select: int = 2, n_subsamples: int = 50,
+                 sample_fraction: float = 0.5, l1_ratio: float = 1.0, random_state: int = 0):
+        self.n_features_to_select = n_features_to_select
+        self.n_subsamples = n_subsamples
+        self.sample_fraction = sample_fraction
+        self.l1_ratio = l1_ratio
+        self.random_state = random_state
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Count, over subsamples, how often each candidate is among the path's first k."""
+        X, y = self._data(X, y)
+        k = self.n_features_to_select
+        _budget(k, X.shape[1])
+        rng = np.random.default_rng(self.random_state)
+        size = max(2, round(self.sample_fraction * X.shape[0]))
+        counts = np.zeros(X.shape[1])
+        for _ in range(self.n_subsamples):
+            rows = np.sort(rng.choice(X.shape[0], size=size, replace=False))
+            if constant_columns(y[rows, None])[0]:
+                continue
+            counts[path_order(X[rows], y[rows], k, self.l1_ratio)] += 1
+        self.frequency_ = counts / self.n_subsamples
+        full = path_order(X, y, X.shape[1], self.l1_ratio)
+        tie_rank = np.full(X.shape[1], X.shape[1])
+        tie_rank[full] = np.arange(full.size)
+        varying = ~constant_columns(X)
+        order = [int(i) for i in np.lexsort((tie_rank, -self.frequency_)) if varying[i]]
+        if len(order) < k:
+            raise SelectionError(f"only {len(order)} candidate(s) vary; cannot select {k}")
+        self.selected_ = np.asarray(order[:k], dtype=np.intp)
+        return self
+
+
+class GreedyForwardSelector(_Selector):
+    """Greedy forward selection by cross-experiment RMSE of an OLS on the chosen rises.
+
+    Parameters
+    ----------
+    n_features_to_select : int, default=2
+    n_blocks : int, default=2
+        Without ``groups`` at fit: the rows are cut into this many contiguous time blocks, the
+        first trains and the others are the "other experiments" that score a candidate set.
+
+    Attributes
+    ----------
+    selected_ : ndarray
+        Input columns in the order greedy search added them.
+    scores_ : ndarray
+        Mean validation RMSE after each addition.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 60)
+    >>> X = np.column_stack([t**2, np.sin(3 * t), t])
+    >>> GreedyForwardSelector(1).fit(X, 5 * t).selected_.tolist()
+    [2]
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "n_blocks": [Interval(Integral, 2, None, closed="left")],
+    }
+
+    def __init__(self, n_features_to_select: int = 2, n_blocks: int = 2):
+        self.n_features_to_select = n_features_to_select
+        self.n_blocks = n_blocks
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y, groups=None):
+        """Greedy search: train on the first experiment (or block), score on the rest."""
+        X, y = self._data(X, y)
+        k = self.n_features_to_select
+        _budget(k, X.shape[1])
+        if groups is not None:
+            groups = check_groups(groups, X.shape[0])
+            labels = list(dict.fromkeys(groups.tolist()))
+            if len(labels) < 2:
+                raise SelectionError("greedy forward selection needs at least 2 experiments in "
+                                     "groups (one trains, the others score)")
+            is_train = groups == labels[0]
+            valid_rows = np.concatenate([np.flatnonzero(groups == g) for g in labels[1:]])
+            starts = np.cumsum([0] + [int((groups == g).sum()) for g in labels[1:-1]])
+        else:
+            if X.shape[0] < 2 * self.n_blocks:
+                raise SelectionError(f"greedy forward selection needs at least "
+                                     f"{2 * self.n_blocks} samples for {self.n_blocks} blocks, "
+                                     f"got {X.shape[0]}")
+            edges = np.linspace(0, X.shape[0], self.n_blocks + 1).round().astype(int)
+            is_train = np.arange(X.shape[0]) < edges[1]
+            valid_rows = np.arange(edges[1], X.shape[0])
+            starts = edges[1:-1] - edges[1]
+        train = Block(X[is_train], y[is_train], np.array([0]))
+        valid = Block(X[valid_rows], y[valid_rows], np.asarray(starts, dtype=np.intp))
+        if train.X.shape[0] < k + 2:
+            raise SelectionError(f"greedy forward selection: {train.X.shape[0]} training "
+                                 f"sample(s) cannot fit {k} input(s)")
+        path = greedy_forward(train, valid, k)
+        if len(path.chosen) < k:
+            raise SelectionError(f"greedy forward selection found only {len(path.chosen)} "
+                                 f"independent candidate(s) on the training part; cannot "
+                                 f"select {k}")
+        self.selected_ = np.asarray(path.chosen, dtype=np.intp)
+        self.scores_ = np.asarray(path.scores)
+        return self

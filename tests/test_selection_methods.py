@@ -1,0 +1,219 @@
+"""The methods practitioners compare: clustering variants, grey grade, selection without
+clusters, ridge/PLS; hand-computed small cases, scikit-learn estimator checks, doctests."""
+
+import doctest
+import warnings
+
+import numpy as np
+import pytest
+from selection_data import synthetic_experiment
+from sklearn.pipeline import Pipeline
+from sklearn.utils.estimator_checks import parametrize_with_checks
+from spindlebench.selection import (
+    SelectionError,
+    SelectionWarning,
+    clustering,
+    grey,
+    regressors,
+    rises,
+    selectors,
+)
+from spindlebench.selection.clustering import (
+    CLUSTERINGS,
+    cluster_candidates,
+    clusters_from_labels,
+    hierarchical_labels,
+)
+from spindlebench.selection.estimators import RiseRegressor
+from spindlebench.selection.grey import grey_relational_grade
+from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
+from spindlebench.selection.selectors import (
+    ClusterSelector,
+    GreedyForwardSelector,
+    LassoPathSelector,
+    StabilitySelector,
+    TopCorrelatedSelector,
+)
+
+SIX = ["T1", "T6", "T8", "T10", "T13", "T16"]
+
+
+@parametrize_with_checks(
+    [ClusterSelector(), ClusterSelector(2, "fcm", "grey"), ClusterSelector(2, "kmeans"),
+     ClusterSelector(2, "average"), ClusterSelector(2, "complete", "grey"),
+     ClusterSelector(2, "ward"), TopCorrelatedSelector(), LassoPathSelector(),
+     LassoPathSelector(2, l1_ratio=0.5), StabilitySelector(n_subsamples=5),
+     GreedyForwardSelector(), RidgeRiseRegressor(), PLSRiseRegressor()]
+)
+def test_sklearn_estimator_checks(estimator, check):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SelectionWarning)
+        check(estimator)
+
+
+@pytest.mark.parametrize("module", [clustering, grey, regressors, selectors])
+def test_docstring_examples_run(module):
+    failed, attempted = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert attempted > 0 and failed == 0
+
+
+def test_grey_grade_by_hand_interval():
+    # y -> [0, .5, 1]; x1 == y; x2 = [0, 2, 2] -> [0, 1, 1]; x3 = [4, 2, 0] -> [1, .5, 0]
+    y = np.array([0.0, 1.0, 2.0])
+    X = np.column_stack([y, [0.0, 2.0, 2.0], [4.0, 2.0, 0.0]])
+    # deltas: x1 [0, 0, 0], x2 [0, .5, 0], x3 [1, 0, 1]; min 0, max 1, rho 0.5
+    # xi = 0.5 / (delta + 0.5): x2 [1, 1/2, 1] -> 5/6; x3 [1/3, 1, 1/3] -> 5/9
+    np.testing.assert_allclose(grey_relational_grade(X, y), [1.0, 5 / 6, 5 / 9])
+    # rho = 1: xi = 1 / (delta + 1): x2 [1, 2/3, 1] -> 8/9; x3 [1/2, 1, 1/2] -> 2/3
+    np.testing.assert_allclose(grey_relational_grade(X, y, rho=1.0), [1.0, 8 / 9, 2 / 3])
+
+
+def test_grey_grade_by_hand_mean():
+    # y = [1, 2, 3] -> /2 -> [.5, 1, 1.5]; x = [2, 2, 2]+[0, 1, 2]... x2 = [1, 1, 4] -> /2 ->
+    # [.5, .5, 2]; deltas x1 (== 2y -> same normalised) [0, 0, 0], x2 [0, .5, .5]
+    y = np.array([1.0, 2.0, 3.0])
+    X = np.column_stack([2 * y, [1.0, 1.0, 4.0]])
+    # min 0, max .5; xi = .25 / (delta + .25): x2 [1, 1/3, 1/3] -> 5/9
+    np.testing.assert_allclose(grey_relational_grade(X, y, "mean"), [1.0, 5 / 9])
+    with pytest.raises(SelectionError, match="mean 0 in column 1"):
+        grey_relational_grade(np.column_stack([y, [-1.0, 0.0, 1.0]]), y, "mean")
+    with pytest.raises(SelectionError, match="rho must be"):
+        grey_relational_grade(X, y, rho=0.0)
+    with pytest.raises(SelectionError, match="unknown grey normalisation"):
+        grey_relational_grade(X, y, "initial")
+
+
+def test_hierarchical_linkages_by_hand():
+    # Points on a line at 0, 1, 2.1, 3.3, 4.6 (gaps 1, 1.1, 1.2, 1.3). By hand:
+    # single: merges 0-1 (1), +2 (1.1), +3 (1.2), +4 (1.3): a chain.
+    # complete: 0-1 (1); then {01}-2 = 2.1, 2-3 = 1.2, 3-4 = 1.3 -> 2-3 (1.2); then
+    #   {01}-{23} = 3.3, {23}-4 = 2.5, {01}-4 = 4.6 -> {23}+4 (2.5); last {01}+{234}.
+    # average: 0-1 (1); {01}-2 = 1.6 -> 2-3 (1.2); {01}-{23} = 2.2, {23}-4 = 1.9 -> {234}.
+    positions = np.array([0.0, 1.0, 2.1, 3.3, 4.6])
+    D = np.abs(positions[:, None] - positions[None, :])
+
+    def cut(method, k):
+        return [c.tolist() for c in clusters_from_labels(hierarchical_labels(D, k, method))]
+
+    assert cut("single", 2) == [[0, 1, 2, 3], [4]]
+    assert cut("single", 3) == [[0, 1, 2], [3], [4]]
+    for method in ("complete", "average"):
+        assert cut(method, 2) == [[0, 1], [2, 3, 4]]
+        assert cut(method, 3) == [[0, 1], [2, 3], [4]]
+
+
+def _two_families(n: int = 60) -> np.ndarray:
+    t = np.linspace(0.0, 1.0, n)
+    return np.column_stack([t, t + 0.02 * t**2, np.sin(9 * t), np.sin(9 * t) + 0.05 * t,
+                            t + 0.01 * np.cos(3 * t)])
+
+
+@pytest.mark.parametrize("method", CLUSTERINGS)
+def test_every_clustering_finds_two_obvious_families(method):
+    clusters = cluster_candidates(_two_families(), 2, method)
+    assert [c.tolist() for c in clusters] == [[0, 1, 4], [2, 3]]
+
+
+def test_kmeans_and_ward_keep_the_sign_closure_does_not():
+    # a series and its mirror image: |r| = 1 (same cluster for the closure and the linkages
+    # on 1 - R), but opposite points for k-means, fcm and Ward
+    t = np.linspace(0.0, 1.0, 40)
+    X = np.column_stack([t, -t + 1e-3 * t**2, np.sin(7 * t)])
+    assert [c.tolist() for c in cluster_candidates(X, 2, "closure")] == [[0, 1], [2]]
+    assert [c.tolist() for c in cluster_candidates(X, 2, "average")] == [[0, 1], [2]]
+    for method in ("kmeans", "ward", "fcm"):
+        clusters = cluster_candidates(X, 2, method)
+        assert not any({0, 1} <= set(c.tolist()) for c in clusters), method
+
+
+def test_fcm_and_kmeans_are_seeded():
+    X = np.random.default_rng(3).normal(size=(30, 12)).cumsum(axis=0)
+    for method in ("fcm", "kmeans"):
+        first = cluster_candidates(X, 3, method, random_state=7)
+        again = cluster_candidates(X, 3, method, random_state=7)
+        assert [c.tolist() for c in first] == [c.tolist() for c in again]
+
+
+def test_cluster_selector_grey_and_psi_choices():
+    data = synthetic_experiment(0)
+    X = rises(data[SIX].to_numpy())
+    y = data["drift_um"].to_numpy()
+    psi = ClusterSelector(3).fit(X, y)
+    grey_choice = ClusterSelector(3, within="grey").fit(X, y)
+    assert [c.tolist() for c in psi.clusters_] == [c.tolist() for c in grey_choice.clusters_]
+    for members, chosen in zip(grey_choice.clusters_, grey_choice.selected_, strict=True):
+        grades = grey_relational_grade(X[:, members], y)
+        assert chosen == members[int(np.argmax(grades))]
+    np.testing.assert_allclose(psi.scores_, np.abs(psi.psi_))
+
+
+def test_cluster_selector_drops_constant_columns_with_a_warning():
+    X = _two_families()
+    X = np.column_stack([X, np.full(X.shape[0], 3.0)])
+    with pytest.warns(SelectionWarning, match="constant candidate"):
+        selector = ClusterSelector(2, "kmeans").fit(X, X[:, 0] + X[:, 2])
+    assert 5 not in selector.selected_ and np.isnan(selector.psi_[5])
+
+
+def test_lasso_and_greedy_find_the_drivers():
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(120, 8))  # independent inputs: the path's first two are the drivers
+    y = 2.0 * X[:, 3] - 1.0 * X[:, 6] + 0.05 * rng.normal(size=120)
+    assert sorted(LassoPathSelector(2).fit(X, y).selected_.tolist()) == [3, 6]
+    assert sorted(LassoPathSelector(2, l1_ratio=0.5).fit(X, y).selected_.tolist()) == [3, 6]
+    assert sorted(StabilitySelector(2, n_subsamples=20).fit(X, y).selected_.tolist()) == [3, 6]
+    greedy = GreedyForwardSelector(2).fit(X, y)
+    assert sorted(greedy.selected_.tolist()) == [3, 6]
+    assert greedy.scores_[1] < greedy.scores_[0]
+
+
+def test_greedy_with_groups_scores_on_the_other_experiments():
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(90, 5)).cumsum(axis=0)
+    y = X[:, 1] + 0.01 * rng.normal(size=90)
+    groups = np.repeat(["a", "b", "c"], 30)
+    chosen = GreedyForwardSelector(1).fit(X, y, groups=groups).selected_.tolist()
+    assert chosen == [1]
+    with pytest.raises(SelectionError, match="at least 2 experiments"):
+        GreedyForwardSelector(1).fit(X, y, groups=np.repeat("a", 90))
+
+
+def test_stability_frequencies_are_fractions():
+    rng = np.random.default_rng(4)
+    X = rng.normal(size=(60, 6))
+    y = X[:, 0] + 0.5 * rng.normal(size=60)
+    model = StabilitySelector(1, n_subsamples=10, random_state=3).fit(X, y)
+    assert model.frequency_.sum() == pytest.approx(1.0)
+    assert model.frequency_[0] == model.frequency_.max()
+
+
+def test_budget_larger_than_candidates_is_one_line():
+    X = _two_families()
+    for selector in (ClusterSelector(9), LassoPathSelector(9), GreedyForwardSelector(9)):
+        with pytest.raises(SelectionError, match="from 5 feature"):
+            selector.fit(X, X[:, 0])
+
+
+def test_regressors_report_coefficients_in_input_units():
+    data = synthetic_experiment(1)
+    X = rises(data[SIX].to_numpy())
+    y = data["drift_um"].to_numpy()
+    for model in (RidgeRiseRegressor(), PLSRiseRegressor(3), RiseRegressor()):
+        model.fit(X, y)
+        np.testing.assert_allclose(model.predict(X), model.intercept_ + X @ model.coef_,
+                                   atol=1e-9)
+        assert model.r2_ > 0.95
+    assert PLSRiseRegressor(9).fit(X[:, :2], y).n_components_ == 2
+
+
+@pytest.mark.parametrize("selector", [ClusterSelector(2, "ward", "grey"),
+                                      LassoPathSelector(2), GreedyForwardSelector(2)])
+@pytest.mark.parametrize("regressor", [RiseRegressor(), RidgeRiseRegressor(),
+                                       PLSRiseRegressor()])
+def test_every_selector_composes_with_every_regressor(selector, regressor):
+    data = synthetic_experiment(2)
+    X = rises(data[SIX].to_numpy())
+    y = data["drift_um"].to_numpy()
+    model = Pipeline([("select", selector), ("regress", regressor)]).fit(X, y)
+    assert model.predict(X).shape == y.shape
+    assert model[:-1].get_feature_names_out(SIX).size == 2
