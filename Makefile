@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench clean-venv
+.PHONY: run test lint bench notebooks clean-venv
 
 $(STAMP): requirements.txt pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -20,6 +20,10 @@ run: $(STAMP)
 test: $(STAMP)
 	$(VENV)/bin/ruff check pipeline tests bench
 	$(PY) -m pytest
+
+## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
+notebooks: $(STAMP)
+	$(PY) -m spindlebench.course results/notebooks
 
 bench: $(STAMP)
 	for script in bench/*.py; do $(PY) $$script || exit 1; done
