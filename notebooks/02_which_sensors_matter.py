@@ -38,6 +38,7 @@ from scipy.cluster.hierarchy import dendrogram
 from spindlebench import course
 from spindlebench.cli import main as spindlebench
 from spindlebench.paper_study.figures import cut_height
+from spindlebench.paths import SCENARIOS_DIR
 from spindlebench.recordings import read_recording
 from spindlebench.selection import (
     correlation_with,
@@ -55,7 +56,7 @@ work = course.start("02")
 def quick_copy(name: str) -> str:
     """The paper's scenario with a 30 s communication step instead of 1 s (the same
     experiment, ~30 times faster; the drift differs by well under 1 µm)."""
-    text = (course.REPO / "scenarios" / "paper" / f"{name}.toml").read_text()
+    text = (SCENARIOS_DIR / "paper" / f"{name}.toml").read_text()
     path = work / f"{name}.toml"
     path.write_text(text.replace("step_s = 1.0", "step_s = 30.0"))
     return str(path)

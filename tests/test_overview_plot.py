@@ -1,7 +1,6 @@
 """The recording figure (``spindlebench plot``, ``simulate --plot``, the README hero figure)."""
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -9,15 +8,14 @@ import pytest
 from matplotlib.colors import to_rgba
 from spindlebench import cli
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import MODELS_DIR, SCENARIOS_DIR
 from spindlebench.testbench.overview import (
     overview_figure,
     plot_recording,
     recordings_figure,
     spread_labels,
 )
-from spindlebench.testbench.sensor_parts import PARTS, SENSORS, part_of
-
-REPO = Path(__file__).resolve().parents[1]
+from spindlebench.testbench.sensor_parts import LOCATIONS, PARTS, part_of
 
 
 def full_frame(hours: float = 1.0) -> pd.DataFrame:
@@ -69,7 +67,7 @@ def test_twenty_sensors_are_grouped_by_part_and_named_at_their_line_ends():
         for part in PARTS:
             shades = {labels[s][1] for s in part.sensors}
             assert len(shades) == len(part.sensors)
-            others = {labels[s][1] for s in SENSORS if s not in part.sensors}
+            others = {labels[s][1] for s in LOCATIONS if s not in part.sensors}
             assert not shades & others
         assert labels["T10"][1] == to_rgba("black")
         assert drift.get_ylabel() == "drift (µm)"
@@ -114,11 +112,11 @@ def test_spread_labels_keeps_order_and_gap_and_moves_as_little_as_needed():
 
 
 def test_the_part_table_matches_the_models_sensor_connections():
-    source = (REPO / "models" / "SpindleBench.mo").read_text(encoding="utf-8")
+    source = (MODELS_DIR / "SpindleBench.mo").read_text(encoding="utf-8")
     connected = {m[1]: m[2].removesuffix(".port")
                  for m in re.finditer(r"connect\(sensor_(T\d+)\.port,\s*([\w.]+)\)", source)}
-    assert connected == {s: node for s, (node, _) in SENSORS.items()} | {"T10": "ambient"}
-    assert sorted(s for part in PARTS for s in part.sensors) == sorted(SENSORS)
+    assert connected == {s: node for s, (node, _) in LOCATIONS.items()} | {"T10": "ambient"}
+    assert sorted(s for part in PARTS for s in part.sensors) == sorted(LOCATIONS)
     assert part_of("t1_C") is None
 
 
@@ -151,7 +149,7 @@ def test_plot_command_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys,
 
 def test_simulate_plot_writes_the_figure_beside_the_recording(tmp_path, capsys):
     out = tmp_path / "quick.csv"
-    assert cli.main(["simulate", str(REPO / "scenarios/examples/quick.toml"), "-o", str(out),
+    assert cli.main(["simulate", str(SCENARIOS_DIR / "examples/quick.toml"), "-o", str(out),
                      "--plot"]) == 0
     assert "quick.png" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["quick.csv", "quick.json",

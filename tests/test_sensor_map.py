@@ -4,13 +4,13 @@ import itertools
 import math
 
 from spindlebench.studies.placement.sensor_map import FRONT, side_positions, write_sensor_map
-from spindlebench.testbench.sensor_parts import SENSORS
+from spindlebench.testbench.sensor_parts import LOCATIONS
 
 
 def test_every_sensor_is_on_both_views_and_no_two_markers_overlap():
     side = side_positions()
     for view in (FRONT, side):
-        assert set(view) == set(SENSORS)
+        assert set(view) == set(LOCATIONS)
         for (a, pa), (b, pb) in itertools.combinations(view.items(), 2):
             assert math.dist(pa, pb) >= 0.1, (a, b)
 

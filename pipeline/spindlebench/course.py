@@ -9,8 +9,8 @@ same way, so the course cannot rot. ``make notebooks`` calls::
     python -m spindlebench.course results/notebooks
 
 Each notebook runs in its own working folder (``<out>/work/<notebook>/``), where it writes
-its recordings and figures; it finds the repository's scenarios and FMU through
-``spindlebench.course.REPO``.
+its recordings and figures; it finds the shipped scenarios and the FMU through
+``spindlebench.paths``.
 """
 
 from __future__ import annotations
@@ -21,9 +21,10 @@ from pathlib import Path
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[2]
-NOTEBOOKS = REPO / "notebooks"
+#: The notebooks live in the checkout, beside the package (not in an installed wheel).
+NOTEBOOKS = (REPO_ROOT or Path.cwd()) / "notebooks"
 #: Seconds one cell may take before the run is stopped as hung.
 CELL_TIMEOUT_S = 600
 

@@ -1,7 +1,7 @@
 """Where the paper's 20 sensors sit: the machine part of each, and the node its probe touches.
 
 One home for "which part is T7 on", so the recording plot (one colour family per part), the
-sensor map and the notebooks say the same thing. The first field of ``SENSORS`` is what
+sensor map and the notebooks say the same thing. The first field of ``LOCATIONS`` is what
 the probe is connected to in ``models/SpindleBench.mo`` (``connect(sensor_Tk.port, X)``: a
 lumped node by its component name, a port of a segmented part as ``part.port_k``; a test
 reads the model and checks this table against it). The ambient probe T10 hangs in the air.
@@ -33,8 +33,9 @@ PARTS: tuple[SensorPart, ...] = (
 #: The paper's ambient air probe: a reference, not a machine temperature.
 AMBIENT_SENSOR = "T10"
 
-#: Sensor → (what its probe is connected to in the model, where it is: the paper's Table 1).
-SENSORS: dict[str, tuple[str, str]] = {
+#: Sensor (``names.SENSORS``) → (what its probe is connected to in the model, where it is
+#: on the machine: the paper's Table 1, in more detail).
+LOCATIONS: dict[str, tuple[str, str]] = {
     "T1": ("front_bearing", "front bearing cap"),
     "T2": ("housing.port_a", "housing flange at the bearing seat"),
     "T3": ("front_bearing", "labyrinth ring (poor contact)"),

@@ -25,7 +25,7 @@ from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from spindlebench.atomic import atomic_path
 from spindlebench.studies.placement.schematic import LUMPED, SEGMENTED, draw_machine
-from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, SENSORS, sensor_colours
+from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, LOCATIONS, PARTS, sensor_colours
 
 #: Fraction along the housing axis of the housing ports the sensors use (``x1``, ``x3`` of
 #: ``housing`` in the model; ``port_a`` is its front bearing seat end).
@@ -69,7 +69,7 @@ FRONT = {
 def side_positions() -> dict[str, tuple[float, float]]:
     """Side-view position of every sensor: its model node's place on the schematic, nudged."""
     positions = {}
-    for sensor, (node, _) in SENSORS.items():
+    for sensor, (node, _) in LOCATIONS.items():
         if sensor == AMBIENT_SENSOR:
             positions[sensor] = AMBIENT_SIDE
             continue
@@ -148,7 +148,7 @@ def sensor_map_figure(nodes: list[str]) -> Figure:
                      color=colours[part.sensors[-1]], va="top", transform=listing.transAxes)
         for row, sensor in enumerate(part.sensors, start=1):
             listing.text(column / len(PARTS), 1.0 - 0.17 * row,
-                         f"{sensor}: {SENSORS[sensor][1]}", fontsize=6.5, va="top",
+                         f"{sensor}: {LOCATIONS[sensor][1]}", fontsize=6.5, va="top",
                          color="#222222", transform=listing.transAxes)
     fig.suptitle("Where the paper's 20 temperature sensors sit on the synthetic machine "
                  "(schematic, not to scale)", fontsize=10)
@@ -158,8 +158,8 @@ def sensor_map_figure(nodes: list[str]) -> Figure:
 def write_sensor_map(path: str | Path, nodes: list[str] | None = None) -> Path:
     """Draw the sensor map into ``path`` atomically; ``nodes`` default to the FMU's."""
     if nodes is None:
+        from spindlebench.paths import DEFAULT_FMU
         from spindlebench.studies.placement.study import fmu_nodes
-        from spindlebench.testbench.runner import DEFAULT_FMU
 
         nodes = fmu_nodes(DEFAULT_FMU)
     fig = sensor_map_figure(nodes)
