@@ -12,7 +12,7 @@ import pytest
 from spindlebench import cli
 from spindlebench.fingerprint import KEYS, fingerprint
 from spindlebench.fingerprint_reference import KEY_FILE, cached_reference
-from spindlebench.testbench.runner import DEFAULT_FMU
+from spindlebench.paths import DEFAULT_FMU
 
 # The hand-made recording: 11 samples, one a minute.
 #   T1 (fast) rises 0, 5, 8, then stays at 10        (offset 20 °C)

@@ -23,14 +23,13 @@ from typing import Any
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file
 from spindlebench.testbench.recording import write_recording
-from spindlebench.testbench.runner import DEFAULT_FMU
 from spindlebench.testbench.simulate import check_batch, plan_batch, record
 
-REPO_ROOT = DEFAULT_FMU.parents[1]
-PAPER_SCENARIOS = REPO_ROOT / "scenarios" / "paper"
-MACHINES = REPO_ROOT / "scenarios" / "machines"
+PAPER_SCENARIOS = SCENARIOS_DIR / "paper"
+MACHINES = SCENARIOS_DIR / "machines"
 DEFAULT_CACHE = Path("results") / "fingerprint_reference"
 KEY_FILE = "reference.json"
 #: The error column of a synthetic recording.
@@ -51,7 +50,7 @@ def inputs_key(fmu: Path = DEFAULT_FMU, scenarios: Path = PAPER_SCENARIOS,
     files = sorted(scenarios.glob("*.toml")) + sorted(machines.glob("*.toml"))
     return {
         "fmu": {"path": str(fmu), "sha256": sha256_file(fmu)},
-        "scenarios": {str(path.relative_to(REPO_ROOT) if path.is_relative_to(REPO_ROOT)
+        "scenarios": {str(path.relative_to(DATA_ROOT) if path.is_relative_to(DATA_ROOT)
                           else path): sha256_file(path) for path in files},
     }
 
@@ -81,8 +80,8 @@ def cached_reference(cache: Path = DEFAULT_CACHE, fmu: Path = DEFAULT_FMU,
     targets = [cache / f"{path.stem}.csv" for path in files]
     if _cache_matches(cache / KEY_FILE, key) and all(path.is_file() for path in targets):
         return Reference(targets, {"kind": "cache", "path": str(cache), **key})
-    say(f"simulating the default machine's {len(files)} paper experiments ({scenarios}, "
-        f"{fmu.name}) into {cache} once")
+    say(f"simulating the default machine's {len(files)} paper experiments ({shown(scenarios)}, "
+        f"{shown(fmu)}) into {cache} once")
     plan = plan_batch(files, targets)
     check_batch(plan, fmu)
     (cache / KEY_FILE).unlink(missing_ok=True)
