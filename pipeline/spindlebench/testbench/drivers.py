@@ -18,6 +18,7 @@ from spindlebench.testbench.scenario import (
     ConstantSpeed,
     FeedProgramme,
     FeedWithSpindle,
+    IndoorAmbient,
     MeasuredAmbient,
     Scenario,
     SeasonAmbient,
@@ -118,15 +119,59 @@ def season_fraction(hour: np.ndarray, trough_hour: float, peak_hour: float) -> n
     return np.where(rising, up, down)
 
 
+#: Spacing (s) of the weather anomaly's knots; between knots it is interpolated linearly, so
+#: the weather of a run does not depend on its communication step.
+WEATHER_KNOT_S = 3600.0
+
+
+def weather_anomaly_K(model: IndoorAmbient, t: np.ndarray) -> np.ndarray:  # noqa: N802
+    """The outdoor weather anomaly (K) at times ``t`` (s, may be negative), from the seed.
+
+    An Ornstein-Uhlenbeck process sampled exactly on hourly knots from ``t = -1 day`` on
+    (stationary start, ``w[k+1] = a w[k] + sqrt(1 - a²) sd ε``, ``a = exp(-1 h / tau)``),
+    drawn in time order from ``numpy.random.default_rng(weather_seed)``: the same seed gives
+    the same weather whatever the run's length or step, a longer run only adds knots.
+    """
+    t = np.asarray(t, dtype=float)
+    if model.weather_sd_K == 0.0 or t.size == 0:
+        return np.zeros(t.shape)
+    origin_s = -86400.0
+    last = int(np.ceil((float(t.max()) - origin_s) / WEATHER_KNOT_S)) + 1
+    if float(t.min()) < origin_s:
+        raise ValueError(f"weather is defined from {origin_s:g} s on, asked at {t.min():g} s")
+    rng = np.random.default_rng(model.weather_seed)
+    shocks = rng.standard_normal(last + 1)
+    a = float(np.exp(-WEATHER_KNOT_S / (model.weather_tau_h * 3600.0)))
+    knots = np.empty(last + 1)
+    knots[0] = shocks[0]
+    scale = np.sqrt(1.0 - a * a)
+    for k in range(1, last + 1):
+        knots[k] = a * knots[k - 1] + scale * shocks[k]
+    times = origin_s + WEATHER_KNOT_S * np.arange(last + 1)
+    return model.weather_sd_K * np.interp(t, times, knots)
+
+
+def _daily_cycle_C(low_C: float, high_C: float, start_hour: float, trough_hour: float,  # noqa: N802
+                   peak_hour: float, t: np.ndarray) -> np.ndarray:
+    hour = start_hour + t / 3600.0
+    return low_C + (high_C - low_C) * season_fraction(hour, trough_hour, peak_hour)
+
+
 def ambient_C(model: AmbientModel, t: np.ndarray) -> np.ndarray:  # noqa: N802
     """Ambient air temperature (°C) at times ``t`` (s from the start of the run)."""
     t = np.asarray(t, dtype=float)
     if isinstance(model, ConstantAmbient):
         return np.full(t.shape, model.temperature_C)
     if isinstance(model, SeasonAmbient):
-        hour = model.start_hour + t / 3600.0
-        fraction = season_fraction(hour, model.trough_hour, model.peak_hour)
-        return model.low_C + (model.high_C - model.low_C) * fraction
+        return _daily_cycle_C(model.low_C, model.high_C, model.start_hour, model.trough_hour,
+                              model.peak_hour, t)
+    if isinstance(model, IndoorAmbient):
+        late = t - model.lag_h * 3600.0
+        outdoor = _daily_cycle_C(model.outdoor_low_C, model.outdoor_high_C, model.start_hour,
+                                 model.trough_hour, model.peak_hour, late)
+        outdoor = outdoor + weather_anomaly_K(model, late)
+        mean = 0.5 * (model.outdoor_low_C + model.outdoor_high_C)
+        return mean + model.building_offset_K + model.attenuation * (outdoor - mean)
     if isinstance(model, MeasuredAmbient):
         return np.interp(t, np.asarray(model.times_s), np.asarray(model.values_C))
     raise TypeError(f"unknown ambient model {model!r}")

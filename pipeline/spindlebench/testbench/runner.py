@@ -153,11 +153,16 @@ STATE_RANGE_K = (200.0, 600.0)
 
 
 def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> dict[str, float]:
-    """Initial value (K) of every state: a cold soak, or a previous run's end state."""
+    """Initial value (K) of every state: a cold soak, a soak history (``testbench.soak``), or
+    a previous run's end state."""
     initial = scenario.initial
     if initial.kind == "cold":
         start_C = ambient0_C if initial.temperature_C is None else initial.temperature_C
         return dict.fromkeys(fmu.state_names, start_C + KELVIN_OFFSET)
+    if initial.kind == "soak":
+        from spindlebench.testbench.soak import soak_state
+
+        return soak_state(scenario, fmu.path)
     return saved_state(scenario, fmu)
 
 

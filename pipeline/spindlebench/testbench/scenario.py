@@ -37,6 +37,9 @@ MIN_STEP_S = 1e-3
 #: Most communication steps of one run: 90 days at 1 s; the driver arrays (4 inputs × 8 bytes
 #: a step) and the run time stay bounded.
 MAX_STEPS = 10_000_000
+#: Longest soak history (days) before a run: the slowest node (the floor slab, about a day)
+#: has long forgotten its cold start by then.
+MAX_SOAK_DAYS = 60
 
 _MISSING = object()
 
@@ -158,7 +161,37 @@ class MeasuredAmbient:
     kind: Literal["csv"] = "csv"
 
 
-AmbientModel = ConstantAmbient | SeasonAmbient | MeasuredAmbient
+@dataclass(frozen=True)
+class IndoorAmbient:
+    """Workshop air inside a building: an attenuated, lagged copy of the outdoor day.
+
+    The outdoor air follows the season's daily cycle (``outdoor_low_C`` … ``outdoor_high_C``,
+    the same curve as :class:`SeasonAmbient`) plus a random weather anomaly (an
+    Ornstein-Uhlenbeck process, ``weather_sd_K`` around 0 with correlation time
+    ``weather_tau_h``, drawn from ``weather_seed``). The building passes the deviation from the
+    outdoor daily mean through with the factor ``attenuation`` and ``lag_h`` hours late, and
+    adds ``building_offset_K`` (heat of machines, lights and people; heating in winter)::
+
+        indoor(t) = mean + offset + attenuation · (outdoor(t - lag) - mean)
+
+    Defaults are in scenarios/README.md (chosen typical values, not measured on one building).
+    """
+
+    outdoor_low_C: float  # noqa: N815
+    outdoor_high_C: float  # noqa: N815
+    start_hour: float = 8.0
+    trough_hour: float = 6.0
+    peak_hour: float = 15.0
+    attenuation: float = 0.5
+    lag_h: float = 2.0
+    building_offset_K: float = 2.0  # noqa: N815
+    weather_sd_K: float = 3.0  # noqa: N815
+    weather_tau_h: float = 36.0
+    weather_seed: int = 0
+    kind: Literal["indoor"] = "indoor"
+
+
+AmbientModel = ConstantAmbient | SeasonAmbient | MeasuredAmbient | IndoorAmbient
 
 
 @dataclass(frozen=True)
@@ -188,20 +221,35 @@ class SensorFault:
     offset_C: float | None = None  # noqa: N815
 
 
+#: Temperature noise processes: independent per sample, AR(1), or a random walk.
+NOISE_KINDS = ("white", "ar1", "random_walk")
+
+
 @dataclass(frozen=True)
 class SensorModel:
-    """How the virtual data logger turns true temperatures and drift into measurements."""
+    """How the virtual data logger turns true temperatures and drift into measurements.
+
+    ``noise_kind`` is the temperature noise process (see ``testbench.sensors``): ``white``
+    (``noise_C`` per sample), ``ar1`` (stationary ``noise_C``, lag-1 autocorrelation
+    ``noise_lag1`` between samples) or ``random_walk`` (``noise_C`` after one hour). The
+    probe's zero wanders as a random walk (``probe_drift_um_per_sqrt_h``, 1 sigma after one
+    hour) and creeps at ``probe_drift_rate_um_per_h``.
+    """
 
     noise_C: float = 0.05  # noqa: N815
     quantum_C: float = 0.1  # noqa: N815
     probe_noise_um: float = 0.2
     probe_quantum_um: float = 0.1
     faults: tuple[SensorFault, ...] = ()
+    noise_kind: Literal["white", "ar1", "random_walk"] = "white"
+    noise_lag1: float = 0.86
+    probe_drift_um_per_sqrt_h: float = 0.0
+    probe_drift_rate_um_per_h: float = 0.0
 
 
 @dataclass(frozen=True)
 class InitialState:
-    """Cold start (every node at one temperature) or continue from a saved end state.
+    """Cold start (every node at one temperature), continue from a saved end state, or soak.
 
     ``cold`` uses ``temperature_C`` or, if absent, the ambient at the start of the run;
     ``continue`` reads the end state from a previous run's JSON sidecar (``from_file``).
@@ -210,10 +258,15 @@ class InitialState:
     that folder (a scenario file cannot know where its sibling's output will be written).
     """
 
-    kind: Literal["cold", "continue"] = "cold"
+    kind: Literal["cold", "continue", "soak"] = "cold"
     temperature_C: float | None = None  # noqa: N815
     from_file: Path | None = None
     from_scenario: str | None = None
+    #: ``soak``: days of the climate's daily cycle with the machine standing idle before the
+    #: run (``testbench.soak``); ``soak_ambient`` is that cycle, None for the run's own
+    #: ambient without its random weather.
+    days: int = 7
+    soak_ambient: AmbientModel | None = None
 
 
 @dataclass(frozen=True)
@@ -465,11 +518,41 @@ def _hour(t: _Table, name: str, default: float) -> float:
     return t.number(name, default, minimum=0.0, maximum=24.0)
 
 
-def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float) -> AmbientModel:
+def _read_indoor(t: _Table, seed: int) -> IndoorAmbient:
+    """``[ambient] kind = "indoor"``: the outdoor cycle, the building and the weather."""
+    low = t.temperature("outdoor_low_C")
+    high = t.temperature("outdoor_high_C")
+    if high < low:
+        raise t.fail("outdoor_high_C", f"daily high {high:g} °C is below the daily low "
+                     f"{low:g} °C")
+    trough = _hour(t, "trough_hour", 6.0)
+    peak = _hour(t, "peak_hour", 15.0)
+    if math.isclose(trough % 24, peak % 24):
+        raise t.fail("peak_hour", "must differ from trough_hour")
+    defaults = IndoorAmbient(low, high)
+    return IndoorAmbient(
+        outdoor_low_C=low, outdoor_high_C=high, start_hour=_hour(t, "start_hour", 8.0),
+        trough_hour=trough, peak_hour=peak,
+        attenuation=t.number("attenuation", defaults.attenuation, minimum=0.0, maximum=1.0),
+        lag_h=t.number("lag_h", defaults.lag_h, minimum=0.0, maximum=12.0),
+        building_offset_K=t.number("building_offset_K", defaults.building_offset_K,
+                                   minimum=-30.0, maximum=30.0),
+        weather_sd_K=t.number("weather_sd_K", defaults.weather_sd_K, minimum=0.0,
+                              maximum=15.0),
+        weather_tau_h=t.number("weather_tau_h", defaults.weather_tau_h, minimum=1.0,
+                               maximum=720.0),
+        weather_seed=t.integer("weather_seed", seed, minimum=0),
+    )
+
+
+def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float,
+                  seed: int = 0) -> AmbientModel:
     t = top.table("ambient", required=True)
-    kind = _kind(t, ("constant", "season", "csv"))
-    if kind == "constant":
-        model: AmbientModel = ConstantAmbient(temperature_C=t.temperature("temperature_C"))
+    kind = _kind(t, ("constant", "season", "csv", "indoor"))
+    if kind == "indoor":
+        model: AmbientModel = _read_indoor(t, seed)
+    elif kind == "constant":
+        model = ConstantAmbient(temperature_C=t.temperature("temperature_C"))
     elif kind == "season":
         low = t.temperature("low_C")
         high = t.temperature("high_C")
@@ -581,6 +664,14 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
     probe_quantum = t.number(
         "probe_quantum_um", defaults.probe_quantum_um, minimum=0.0, maximum=100.0
     )
+    noise_kind = t.string("noise_kind", defaults.noise_kind, choices=NOISE_KINDS)
+    # the lag-1 coefficient belongs to the AR(1) process only: elsewhere it is an unknown key
+    lag1 = (t.number("noise_lag1", defaults.noise_lag1, minimum=0.0, maximum=0.9999)
+            if noise_kind == "ar1" else defaults.noise_lag1)
+    drift_walk = t.number("probe_drift_um_per_sqrt_h", defaults.probe_drift_um_per_sqrt_h,
+                          minimum=0.0, maximum=100.0)
+    drift_rate = t.number("probe_drift_rate_um_per_h", defaults.probe_drift_rate_um_per_h,
+                          minimum=-100.0, maximum=100.0)
     faults = []
     for ft in t.tables("faults", []):
         sensor = ft.string("sensor", choices=SENSORS)
@@ -597,14 +688,22 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
         ft.finish()
         faults.append(SensorFault(sensor, kind, start_s, end_s, value, offset))  # type: ignore[arg-type]
     t.finish()
-    return SensorModel(noise, quantum, probe_noise, probe_quantum, tuple(faults))
+    return SensorModel(noise, quantum, probe_noise, probe_quantum, tuple(faults),
+                       noise_kind=noise_kind, noise_lag1=lag1,  # type: ignore[arg-type]
+                       probe_drift_um_per_sqrt_h=drift_walk,
+                       probe_drift_rate_um_per_h=drift_rate)
 
 
 def _read_initial(top: _Table, scenario_dir: Path) -> InitialState:
     t = top.table("initial")
-    kind = t.string("kind", "cold", choices=("cold", "continue"))
+    kind = t.string("kind", "cold", choices=("cold", "continue", "soak"))
     if kind == "cold":
         initial = InitialState(temperature_C=t.temperature("temperature_C", None))
+    elif kind == "soak":
+        days = t.integer("days", InitialState().days, minimum=1)
+        if days > MAX_SOAK_DAYS:
+            raise t.fail("days", f"must be <= {MAX_SOAK_DAYS}, got {days}")
+        initial = InitialState(kind="soak", days=days)
     else:
         name = t.string("from")
         if not name.strip():
@@ -723,11 +822,15 @@ def load_scenario(path: str | Path) -> Scenario:
         seed=seed,
         speed=_read_speed(top, duration_s),
         feed=_read_feed(top, duration_s),
-        ambient=_read_ambient(top, scenario_dir, duration_s),
+        ambient=_read_ambient(top, scenario_dir, duration_s, seed),
         cooling=_read_cooling(top),
         sensors=_read_sensors(top, duration_s),
         initial=_read_initial(top, scenario_dir),
         parameters=_read_parameters(top),
     )
     top.finish()
+    if scenario.initial.kind == "soak" and isinstance(scenario.ambient, MeasuredAmbient):
+        raise top.fail("initial", "kind = \"soak\" repeats the ambient's daily cycle; a "
+                       "measured series has none (use a season or indoor ambient, or "
+                       "kind = \"cold\")")
     return scenario

@@ -11,13 +11,22 @@ zero before the run. Faults make a sensor misbehave over a time window:
 - ``stuck``: the reading freezes at ``value_C`` or, if not given, at the last good reading.
 - ``offset``: a constant bias (a loose sensor, a calibration error).
 
+Real logger residuals are not white: in the CAIVIAC recording the lag-1 autocorrelation is
+about 0.86 for the temperatures and 0.985 for the displacement. ``noise_kind = "ar1"`` makes
+each channel's noise an AR(1) process with that lag-1 coefficient (same stationary sigma as the
+white noise); ``"random_walk"`` lets it wander (1 sigma ``noise_C`` after one hour). The probe's
+zero can drift slowly: a random walk (``probe_drift_um_per_sqrt_h``) plus a constant creep
+(``probe_drift_rate_um_per_h``), both zero at the first sample like the probe itself.
+
 All randomness comes from one ``numpy.random.Generator`` seeded by the scenario's seed, drawn in
-a fixed order (temperatures, then probe), so a seed always gives the same recording.
+a fixed order (temperatures, then probe noise, then probe drift when there is one), so a seed
+always gives the same recording, and white noise without drift is what it always was.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import lfilter
 
 from spindlebench.testbench.scenario import SensorFault, SensorModel
 
@@ -41,6 +50,39 @@ def _window(fault: SensorFault, time_s: np.ndarray) -> np.ndarray:
     return window
 
 
+def _sample_step_s(time_s: np.ndarray) -> float:
+    return float(time_s[1] - time_s[0]) if time_s.size > 1 else 0.0
+
+
+def coloured_noise(model: SensorModel, shocks: np.ndarray, time_s: np.ndarray) -> np.ndarray:
+    """Noise (°C) of each channel from standard-normal ``shocks`` (n × m), per ``noise_kind``.
+
+    ``ar1``: ``x[0] = sd ε[0]``, ``x[k] = φ x[k-1] + sqrt(1 - φ²) sd ε[k]`` (stationary, sd =
+    ``noise_C``, φ = ``noise_lag1``). ``random_walk``: the cumulative sum of increments with
+    sd ``noise_C · sqrt(Δt / 1 h)``, starting at ``noise_C · sqrt(Δt / 1 h) · ε[0]``.
+    """
+    if model.noise_kind == "white":
+        return shocks * model.noise_C
+    if model.noise_kind == "ar1":
+        phi = model.noise_lag1
+        scaled = shocks * model.noise_C
+        scaled[1:] *= np.sqrt(1.0 - phi * phi)
+        return lfilter([1.0], [1.0, -phi], scaled, axis=0)
+    step = model.noise_C * np.sqrt(_sample_step_s(time_s) / 3600.0)
+    return np.cumsum(shocks * step, axis=0)
+
+
+def probe_drift_um(model: SensorModel, rng: np.random.Generator,
+                   time_s: np.ndarray) -> np.ndarray:
+    """The probe zero's slow drift (µm), 0 at the first sample; draws only if it wanders."""
+    drift = model.probe_drift_rate_um_per_h * (time_s - time_s[0]) / 3600.0
+    if model.probe_drift_um_per_sqrt_h > 0.0:
+        steps = np.sqrt(np.diff(time_s) / 3600.0) * model.probe_drift_um_per_sqrt_h
+        walk = np.concatenate(([0.0], np.cumsum(rng.standard_normal(steps.size) * steps)))
+        drift = drift + walk
+    return drift
+
+
 def measure(
     model: SensorModel,
     time_s: np.ndarray,
@@ -52,8 +94,9 @@ def measure(
     """Measured temperatures ``(n, len(sensor_names))`` and measured drift ``(n,)``."""
     rng = np.random.default_rng(seed)
     n, m = true_temperatures_C.shape
-    temperature_noise = rng.standard_normal((n, m)) * model.noise_C
+    temperature_noise = coloured_noise(model, rng.standard_normal((n, m)), time_s)
     probe_noise = rng.standard_normal(n) * model.probe_noise_um
+    probe_noise = probe_noise + probe_drift_um(model, rng, time_s)
 
     raw = true_temperatures_C + temperature_noise
     for fault in model.faults:

@@ -1,0 +1,135 @@
+"""Initial state from a soak history: the machine standing idle for days before a run.
+
+A cold start puts every node, floor slab included, at the morning air; a real workshop machine
+has lived through the previous days' cycle, so its slow parts (bed, column, slab) lag the air
+and sit near the daily mean. ``initial.kind = "soak"`` simulates ``days`` days of the climate's
+daily cycle with the spindle and the feed axes standing and the cooling unit off, starting
+from a cold soak at the cycle's first temperature, and starts the run from the end state.
+Idle is standstill as the FMU models it, not power off: the servo motors' holding losses
+(``P_x_motor_idle``, ``P_y_motor_idle``) stay on, as they do in a machine left powered; the
+scenario's ``[parameters]`` apply to the history as to the run. The history
+ends at the run's clock time (``start_hour``), so a 08:00 run starts from a morning state.
+
+The daily cycle is ``initial.soak_ambient`` or the run's own ambient without its random
+weather (a season or an indoor ambient; a constant ambient soaks to that constant; a measured
+series has no cycle to repeat and is refused). Weather is left out on purpose: the soak then
+depends only on the FMU, the parameters, the cycle and the number of days, so every run of one
+month of a sweep (each speed, programme, replica) shares one soak.
+
+Soaks are cached twice: in memory for the process, and as JSON files in the folder
+``SPINDLEBENCH_SOAK_CACHE`` (default ``results/cache/soak``), named by a SHA-256 of everything
+the soak depends on (the FMU's hash included), written atomically, so parallel workers and
+later runs reuse them and a stale entry cannot be hit.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from spindlebench import atomic
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
+from spindlebench.testbench.scenario import (
+    ConstantFeed,
+    ConstantSpeed,
+    Cooling,
+    IndoorAmbient,
+    InitialState,
+    MeasuredAmbient,
+    Scenario,
+    SensorModel,
+)
+
+#: Communication step (s) of the soak: the machine is idle and the air changes over hours.
+SOAK_STEP_S = 300.0
+CACHE_ENV = "SPINDLEBENCH_SOAK_CACHE"
+DEFAULT_CACHE = Path("results") / "cache" / "soak"
+#: Bumped when the soak's recipe changes, so old cache files are not reused.
+RECIPE = 1
+
+_memory: dict[str, dict[str, float]] = {}
+
+
+def cache_dir() -> Path:
+    """Where soak states are kept (``$SPINDLEBENCH_SOAK_CACHE`` or ``results/cache/soak``)."""
+    return Path(os.environ.get(CACHE_ENV) or DEFAULT_CACHE)
+
+
+def soak_scenario(scenario: Scenario) -> Scenario:
+    """The idle history before ``scenario``: ``days`` of its daily cycle, machine standing."""
+    initial = scenario.initial
+    cycle = initial.soak_ambient or scenario.ambient
+    if isinstance(cycle, MeasuredAmbient):
+        raise SpindlebenchError(f"{scenario.path}: key 'initial.kind': a soak repeats a daily "
+                                "cycle; a measured ambient series has none (give "
+                                "initial.soak_ambient, or use kind = \"cold\")")
+    if isinstance(cycle, IndoorAmbient):
+        cycle = replace(cycle, weather_sd_K=0.0)
+    duration_s = initial.days * 86400.0
+    return replace(
+        scenario,
+        name=f"{scenario.name} soak",
+        duration_s=duration_s,
+        step_s=SOAK_STEP_S,
+        sample_interval_s=duration_s,
+        speed=ConstantSpeed(rpm=0.0),
+        feed=ConstantFeed(0.0, 0.0),
+        ambient=cycle,
+        cooling=Cooling(),
+        sensors=SensorModel(),
+        initial=InitialState(),
+    )
+
+
+def soak_key(history: Scenario, fmu_path: Path) -> str:
+    """SHA-256 of everything the soak's end state depends on."""
+    what: dict[str, Any] = {
+        "recipe": RECIPE,
+        "fmu_sha256": sha256_file(fmu_path),
+        "duration_s": history.duration_s,
+        "step_s": history.step_s,
+        "ambient": history.to_dict()["ambient"],
+        "parameters": dict(sorted(history.parameters.items())),
+    }
+    text = json.dumps(what, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def soak_state(scenario: Scenario, fmu_path: str | Path) -> dict[str, float]:
+    """The end state (K by state name) of the soak before ``scenario``; cached."""
+    from spindlebench.testbench.runner import co_simulate  # the runner calls this module
+
+    fmu_path = Path(fmu_path)
+    history = soak_scenario(scenario)
+    key = soak_key(history, fmu_path)
+    if key in _memory:
+        return dict(_memory[key])
+    file = cache_dir() / f"{key}.json"
+    states = _read_cached(file)
+    if states is None:
+        states = dict(co_simulate(history, fmu_path).end_state_K)
+        record = {"soak_key": key, "days": scenario.initial.days,
+                  "ambient": history.to_dict()["ambient"], "fmu": str(fmu_path),
+                  "states_K": states}
+        with contextlib.suppress(OSError):  # an unwritable cache costs time, not correctness
+            atomic.write_text(file, json.dumps(record, indent=1, sort_keys=True) + "\n")
+    _memory[key] = dict(states)
+    return dict(states)
+
+
+def _read_cached(file: Path) -> dict[str, float] | None:
+    """A cache file's states, or None when it is missing or damaged (then it is redone)."""
+    try:
+        states = json.loads(file.read_text(encoding="utf-8"))["states_K"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if not isinstance(states, dict) or not all(
+            isinstance(v, float) and 200.0 <= v <= 600.0 for v in states.values()):
+        return None
+    return {str(k): float(v) for k, v in states.items()}
