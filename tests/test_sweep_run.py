@@ -302,7 +302,7 @@ def test_command_line(tmp_path, capsys, reference):
     bad.write_text(TINY.read_text().replace("replicas = 2", "replicas = -1"))
     assert cli.main(["sweep", str(bad), "-o", str(tmp_path / "x"), "--no-progress"]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
-        f"error: {bad}: key 'study.replicas': must be between 1 and 10000"]
+        f"error: {bad}: key 'study.replicas': must be in [1, 10000], got -1"]
     assert not (tmp_path / "x").exists()
 
 

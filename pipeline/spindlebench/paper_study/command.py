@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from spindlebench.listflags import split_list_flag
-from spindlebench.names import GROUP_LABELS
+from spindlebench.names import GROUP_LABELS, SIMILARITIES
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study.report import check_out_dir, write_outputs
 from spindlebench.paper_study.study import run_study
@@ -47,7 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "(default T1 T6 T8 T10 T13 T16)")
     parser.add_argument("--clusters", default=None, nargs="+", metavar="K",
                         help="k values, space- or comma-separated (default 2 3 4)")
-    parser.add_argument("--similarity", default=None, choices=study_config.SIMILARITIES,
+    parser.add_argument("--similarity", default=None, choices=SIMILARITIES,
                         help="reading of eq. 1 (default abs-pearson)")
     parser.add_argument("--missing", default=None, choices=study_config.MISSING_MODES,
                         help="missing (empty/NaN) values in the columns the study uses "

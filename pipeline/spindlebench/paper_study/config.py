@@ -27,12 +27,12 @@ with the largest temperature range (the most active point of that thermal region
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import Table, load_toml
 from spindlebench.listflags import split_list_flag
 from spindlebench.names import DEFAULT_SIMILARITY, PAPER_SIX, SENSORS, SIMILARITIES
 
@@ -71,54 +71,49 @@ class StudyConfig:
     def checked(self) -> StudyConfig:
         """Self, after checks that need no data; one-line errors naming the key."""
         where = self.source
+
+        def fail(key: str, message: str) -> SpindlebenchError:
+            return SpindlebenchError(f"{where}: key '{key}': {message}")
+
         for key, names in (("train", (self.train,)), ("tests", self.tests)):
             for name in names:
                 if not _plain_name(name):
-                    raise SpindlebenchError(
-                        f"{where}: {key}: {name!r} is not an experiment name (the stem of a "
-                        "CSV in --recordings: no folder separators, '.' or '..')"
-                    )
+                    raise fail(key, f"{name!r} is not an experiment name (the stem of a CSV "
+                                    "in --recordings: no folder separators, '.' or '..')")
         if self.target == TIME_COLUMN:
-            raise SpindlebenchError(f"{where}: target: {TIME_COLUMN} is the time axis, not a "
-                                    "thermal error")
+            raise fail("target", f"{TIME_COLUMN} is the time axis, not a thermal error")
         if TIME_COLUMN in self.sensors_all:
-            raise SpindlebenchError(f"{where}: sensors_all: {TIME_COLUMN} is the time axis, "
-                                    "not a sensor")
+            raise fail("sensors_all", f"{TIME_COLUMN} is the time axis, not a sensor")
         if self.target in self.sensors_all:
-            raise SpindlebenchError(f"{where}: target: {self.target!r} is also in sensors_all "
-                                    "(a model would predict it from itself)")
+            raise fail("target", f"{self.target!r} is also in sensors_all (a model would "
+                                 "predict it from itself)")
         if not self.tests:
-            raise SpindlebenchError(f"{where}: tests: at least one experiment to predict")
+            raise fail("tests", "at least one experiment to predict")
         if self.train in self.tests:
-            raise SpindlebenchError(f"{where}: tests: {self.train!r} is also the training run")
+            raise fail("tests", f"{self.train!r} is also the training run")
         if len(set(self.tests)) != len(self.tests):
-            raise SpindlebenchError(f"{where}: tests: an experiment is listed twice")
+            raise fail("tests", "an experiment is listed twice")
         if len(self.sensors_all) < 2 or len(set(self.sensors_all)) != len(self.sensors_all):
-            raise SpindlebenchError(f"{where}: sensors_all: need two or more distinct sensors")
+            raise fail("sensors_all", "need two or more distinct sensors")
         if isinstance(self.six, str):
             if self.six != AUTO_SIX:
-                raise SpindlebenchError(f"{where}: six: {self.six!r} is neither a list nor 'auto'")
+                raise fail("six", f"{self.six!r} is neither a list nor 'auto'")
         else:
             if len(self.six) < 2 or len(set(self.six)) != len(self.six):
-                raise SpindlebenchError(f"{where}: six: need two or more distinct sensors")
+                raise fail("six", "need two or more distinct sensors")
             unknown = [s for s in self.six if s not in self.sensors_all]
             if unknown:
-                raise SpindlebenchError(
-                    f"{where}: six: {', '.join(unknown)} not among sensors_all"
-                )
+                raise fail("six", f"{', '.join(unknown)} not among sensors_all")
         if not self.clusters or any(k < 1 for k in self.clusters):
-            raise SpindlebenchError(f"{where}: clusters: need one or more integers >= 1")
+            raise fail("clusters", "need one or more integers >= 1")
         repeated = sorted({k for k in self.clusters if self.clusters.count(k) > 1})
         if repeated:
-            raise SpindlebenchError(f"{where}: clusters: k = {repeated[0]} is listed twice")
+            raise fail("clusters", f"k = {repeated[0]} is listed twice")
         if self.similarity not in SIMILARITIES:
-            raise SpindlebenchError(
-                f"{where}: similarity: {self.similarity!r} is not one of {', '.join(SIMILARITIES)}"
-            )
+            raise fail("similarity",
+                       f"{self.similarity!r} is not one of {', '.join(SIMILARITIES)}")
         if self.missing not in MISSING_MODES:
-            raise SpindlebenchError(
-                f"{where}: missing: {self.missing!r} is not one of {', '.join(MISSING_MODES)}"
-            )
+            raise fail("missing", f"{self.missing!r} is not one of {', '.join(MISSING_MODES)}")
         return self
 
     def to_dict(self) -> dict[str, Any]:
@@ -132,58 +127,59 @@ class StudyConfig:
         }
 
 
-def split_list(text: str, key: str = "list", where: str = "command line") -> tuple[str, ...]:
-    """``"a, b,c"`` -> ``("a", "b", "c")`` (for comma-separated flags); an empty item
-    (``"2,,3"``) is an error, not silently dropped: it is usually a name left out."""
-    return tuple(split_list_flag(f"{where}: {key}", text) or ())
-
-
 def _plain_name(name: str) -> bool:
     """Whether ``name`` names a file directly in the recordings folder (no path out of it)."""
     return bool(name) and "/" not in name and "\\" not in name and name not in (".", "..")
 
 
-def _names(value: Any, key: str, where: str) -> tuple[str, ...]:
+def _split(table: Table, key: str, text: str) -> list[str]:
+    """``"a, b,c"`` -> ``["a", "b", "c"]``; an empty item (``"2,,3"``) is an error."""
+    return split_list_flag(f"{table.source}: key '{key}'", text) or []
+
+
+def _names(table: Table, key: str) -> tuple[str, ...]:
+    value = table.raw(key)
     if isinstance(value, str):
-        return split_list(value, key, where)
+        return tuple(_split(table, key, value))
     if isinstance(value, list) and all(isinstance(item, str) and item.strip() for item in value):
         return tuple(value)
-    raise SpindlebenchError(f"{where}: {key}: expected a list of non-empty names")
+    raise table.error(key, "expected a list of non-empty names")
 
 
-def _ints(value: Any, key: str, where: str) -> tuple[int, ...]:
+def _ints(table: Table, key: str) -> tuple[int, ...]:
+    value = table.raw(key)
     if isinstance(value, str):
         try:
-            return tuple(int(item) for item in split_list(value, key, where))
+            return tuple(int(item) for item in _split(table, key, value))
         except ValueError:
-            raise SpindlebenchError(f"{where}: {key}: expected integers, got {value!r}") from None
+            raise table.error(key, f"expected integers, got {value!r}") from None
     if isinstance(value, list) and all(isinstance(i, int) and not isinstance(i, bool)
                                        for i in value):
         return tuple(value)
-    raise SpindlebenchError(f"{where}: {key}: expected a list of integers")
+    raise table.error(key, "expected a list of integers")
 
 
-def updated(config: StudyConfig, values: dict[str, Any], where: str) -> StudyConfig:
-    """``config`` with the given keys replaced (from TOML or flags), each value checked."""
-    unknown = sorted(set(values) - set(_KEYS))
-    if unknown:
-        raise SpindlebenchError(f"{where}: unknown key(s) {', '.join(unknown)}")
+def updated(config: StudyConfig, table: Table) -> StudyConfig:
+    """``config`` with the keys of ``table`` replaced (from TOML or flags), each checked."""
     changes: dict[str, Any] = {}
-    for key, value in values.items():
-        if value is None:
+    for key in _KEYS:
+        if table.raw(key, None) is None:
             continue
         if key in ("title", "target", "train", "similarity", "missing"):
+            value = table.raw(key)
             if not isinstance(value, str) or not value:
-                raise SpindlebenchError(f"{where}: {key}: expected a non-empty string")
+                raise table.error(key, "expected a non-empty string")
             changes[key] = value
         elif key in ("tests", "sensors_all"):
-            changes[key] = _names(value, key, where)
+            changes[key] = _names(table, key)
         elif key == "six":
-            changes[key] = AUTO_SIX if value == AUTO_SIX else _names(value, key, where)
+            changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
         else:
-            changes[key] = _ints(value, key, where)
+            changes[key] = _ints(table, key)
+    table.finish()
     if not changes:
         return config
+    where = table.source
     source = where if config.source == "defaults" else f"{config.source} + {where}"
     return replace(config, source=source, **changes)
 
@@ -192,17 +188,7 @@ def load(path: str | Path | None, overrides: dict[str, Any] | None = None) -> St
     """Defaults, then the TOML file (if any), then flag overrides; checked."""
     config = StudyConfig()
     if path is not None:
-        path = Path(path)
-        try:
-            values = tomllib.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise SpindlebenchError(f"{path}: config file not found") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise SpindlebenchError(f"{path}: not valid TOML ({exc})") from None
-        except UnicodeDecodeError as exc:
-            raise SpindlebenchError(f"{path}: not valid TOML (not UTF-8 text, byte "
-                                    f"{exc.start})") from None
-        config = updated(config, values, str(path))
+        config = updated(config, Table(load_toml(path, "config"), path))
     if overrides:
-        config = updated(config, overrides, "command line")
+        config = updated(config, Table(overrides, "command line"))
     return config.checked()

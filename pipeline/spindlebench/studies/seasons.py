@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import Table, load_toml, one_of
 from spindlebench.paths import SEASONS_DIR
-from spindlebench.studies.schema import Table, load_toml
 
 MONTHS = ("Jan", "Feb", "Mar", "Apr", "May", "Jun",
           "Jul", "Aug", "Sep", "Oct", "Nov", "Dec")
@@ -64,12 +64,12 @@ def load_climate(path: str | Path) -> Climate:
     if not path.exists():
         shipped = ", ".join(available_climates()) or "none"
         raise SpindlebenchError(f"{path}: climate file not found (shipped climates: {shipped})")
-    root = Table(load_toml(path), path)
+    root = Table(load_toml(path, "climate"), path)
     info = root.table("climate")
     name = info.get("name", str)
     source = info.get("source", str)
     info.get("hemisphere", str, default="north",
-             check=lambda v: None if v in ("north", "south") else "must be 'north' or 'south'")
+             check=lambda v: one_of(v, ("north", "south")))
     info.finish()
 
     month_table = root.table("months")

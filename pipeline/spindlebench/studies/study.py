@@ -20,13 +20,32 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import (
+    Table,
+    in_range,
+    load_toml,
+    non_negative,
+    one_of,
+    positive,
+    range_problem,
+)
 from spindlebench.names import DEFAULT_SIMILARITY, GROUPS, SENSORS, SIMILARITIES
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import sha256_file
-from spindlebench.studies.schema import Table, load_toml, non_negative, positive
 from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_climate_path
-from spindlebench.testbench.scenario import MAX_FEED_MM_PER_MIN, MAX_RPM, step_count_problem
+from spindlebench.testbench.scenario import (
+    FOLLOW_AMBIENT_MAX_K,
+    MAX_FEED_MM_PER_MIN,
+    MAX_NOISE_C,
+    MAX_OFFSET_C,
+    MAX_PROBE_NOISE_UM,
+    MAX_RPM,
+    step_count_problem,
+    temperature_problem,
+)
 
+#: Most replicas and clusters a study may ask for.
+MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
 BASELINES = ("top-k-correlated", "ridge")
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
@@ -136,15 +155,14 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     ``[placement]``); they are let through instead of rejected as unknown keys.
     """
     path = Path(path)
-    root = Table(load_toml(path), path)
+    root = Table(load_toml(path, "study"), path)
     here = path.resolve().parent
 
     head = root.table("study")
     name = head.get("name", str, default=path.stem)
     description = head.get("description", str, default="")
     seed = head.get("seed", int, check=non_negative)
-    replicas = head.get("replicas", int, check=lambda v: None if 1 <= v <= 10_000
-                        else "must be between 1 and 10000")
+    replicas = head.get("replicas", int, check=in_range(1, MAX_REPLICAS))
     climate_name = head.get("climate", str)
     climate_path = resolve_climate_path(climate_name, here)
     if not climate_path.exists():
@@ -176,10 +194,9 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     start_hour = exp.get("start_hour", float, default=8.0,
                          check=lambda v: None if 0 <= v < 24 else "must be in [0, 24)")
     weather_sd = exp.get("weather_sd_C", float, default=1.0,
-                         check=lambda v: None if 0 <= v <= 10 else "must be in [0, 10] K")
+                         check=in_range(0, 10, "K"))
     feed = exp.get("feed", str, default="constant",
-                   check=lambda v: None if v in ("constant", "with_spindle")
-                   else "must be 'constant' or 'with_spindle'")
+                   check=lambda v: one_of(v, ("constant", "with_spindle")))
     feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=_feed)
     feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=_feed)
     exp.finish()
@@ -194,8 +211,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     axes = root.table("axes")
     months = tuple(axes.get_list("months", str, check=lambda m: None if m in MONTHS
                                  else f"not a month (use {', '.join(MONTHS)})"))
-    speeds = tuple(axes.get_list("speeds_rpm", float, check=lambda v: None if 0 < v <= MAX_RPM
-                                 else f"must be > 0 and at most {MAX_RPM:g} rpm"))
+    speeds = tuple(axes.get_list("speeds_rpm", float,
+                                 check=in_range(maximum=MAX_RPM, unit="rev/min", positive=True)))
     programme_names = axes.get_list("programmes", str, default=["constant"])
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
@@ -241,9 +258,7 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
 def _feed(value: float) -> str | None:
     """A scenario's feed limit (like its step-count and speed limits, imported from
     ``testbench.scenario``): a study's experiments are scenarios."""
-    if 0 <= value <= MAX_FEED_MM_PER_MIN:
-        return None
-    return f"must be in [0, {MAX_FEED_MM_PER_MIN:g}] mm/min"
+    return range_problem(value, 0.0, MAX_FEED_MM_PER_MIN, "mm/min")
 
 
 def _fmu_parameters(head: Table, fmu: Path) -> frozenset[str]:
@@ -299,8 +314,7 @@ def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Progr
     if name == "constant" and not table.has(name):
         return Programme(name, "constant")
     t = _definition(table, axes, "programmes", name)
-    kind = t.get("kind", str, check=lambda v: None if v in PROGRAMME_KINDS
-                 else f"must be one of {', '.join(PROGRAMME_KINDS)}")
+    kind = t.get("kind", str, check=lambda v: one_of(v, PROGRAMME_KINDS))
     if kind == "constant":
         programme = Programme(name, kind)
     elif kind == "cycles":
@@ -312,8 +326,8 @@ def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Progr
         programme = Programme(name, kind, on_s=on_s, off_s=off_s)
     else:
         at_h = t.get_list("at_h", float, check=non_negative)
-        fractions = t.get_list("fraction", float, check=lambda v: None if 0 <= v <= 1.5
-                               else "must be in [0, 1.5] (a fraction of the axis speed)")
+        fractions = t.get_list("fraction", float,
+                               check=in_range(0, 1.5, "(a fraction of the axis speed)"))
         if len(at_h) != len(fractions):
             raise t.error("fraction", f"has {len(fractions)} values but at_h has {len(at_h)}")
         if at_h != sorted(at_h) or at_h[-1] * 3600.0 >= duration_s:
@@ -328,16 +342,14 @@ def _cooling(table: Table, axes: Table, name: str) -> CoolingMode:
     if name == "off" and not table.has(name):
         return CoolingMode(name, "off")
     t = _definition(table, axes, "cooling", name)
-    mode = t.get("mode", str, check=lambda v: None if v in COOLING_MODES
-                 else f"must be one of {', '.join(COOLING_MODES)}")
+    mode = t.get("mode", str, check=lambda v: one_of(v, COOLING_MODES))
     setpoint = 0.0
     if mode == "absolute":
-        setpoint = t.get("setpoint_C", float, check=lambda v: None if 0 <= v <= 60
-                         else "must be an absolute setpoint in degC (0-60)")
+        setpoint = t.get("setpoint_C", float, check=temperature_problem)
     elif mode == "follow_ambient":
         setpoint = t.get("setpoint_C", float, default=0.0,
-                         check=lambda v: None if -20 <= v <= 20
-                         else "must be an offset from ambient in K (-20..20)")
+                         check=in_range(-FOLLOW_AMBIENT_MAX_K, FOLLOW_AMBIENT_MAX_K,
+                                        "K from ambient"))
     t.finish()
     return CoolingMode(name, mode, setpoint)
 
@@ -347,15 +359,14 @@ def _noise(table: Table, axes: Table, name: str) -> NoiseLevel:
         return NoiseLevel(name, 0.05, 0.1, 0.3, 0.1)
     t = _definition(table, axes, "noise", name)
 
-    def bounded(limit: float):
-        return lambda v: None if 0 <= v <= limit else f"must be in [0, {limit:g}]"
-
     level = NoiseLevel(
         name,
-        noise_C=t.get("noise_C", float, check=bounded(5.0)),
-        quantum_C=t.get("quantum_C", float, default=0.1, check=bounded(5.0)),
-        probe_noise_um=t.get("probe_noise_um", float, default=0.3, check=bounded(100.0)),
-        probe_quantum_um=t.get("probe_quantum_um", float, default=0.1, check=bounded(100.0)),
+        noise_C=t.get("noise_C", float, check=in_range(0, MAX_NOISE_C)),
+        quantum_C=t.get("quantum_C", float, default=0.1, check=in_range(0, MAX_NOISE_C)),
+        probe_noise_um=t.get("probe_noise_um", float, default=0.3,
+                             check=in_range(0, MAX_PROBE_NOISE_UM)),
+        probe_quantum_um=t.get("probe_quantum_um", float, default=0.1,
+                               check=in_range(0, MAX_PROBE_NOISE_UM)),
     )
     t.finish()
     return level
@@ -367,28 +378,24 @@ def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | N
             raise table.error(name, f"'{NO_FAULT}' is reserved for 'no fault'")
         return None
     t = _definition(table, axes, "faults", name)
-    sensor = t.get("sensor", str, check=lambda v: None if v in SENSORS
-                   else "must be one of T1..T20")
-    kind = t.get("kind", str, check=lambda v: None if v in FAULT_KINDS
-                 else f"must be one of {', '.join(FAULT_KINDS)}")
+    sensor = t.get("sensor", str, check=lambda v: one_of(v, SENSORS))
+    kind = t.get("kind", str, check=lambda v: one_of(v, FAULT_KINDS))
     start_s = t.get("start_h", float, default=0.0, check=non_negative) * 3600.0
     if start_s >= duration_s:
         raise t.error("start_h", "must be within the experiment's duration")
     value = offset = None
     if kind == "stuck" and t.has("value_C"):
-        value = t.get("value_C", float, check=lambda v: None if -40 <= v <= 60
-                      else "must be a temperature in degC")
+        value = t.get("value_C", float, check=temperature_problem)
     if kind == "offset":
-        offset = t.get("offset_C", float, check=lambda v: None if v != 0 and abs(v) <= 50
-                       else "must be non-zero and at most 50 K")
+        offset = t.get("offset_C", float, check=lambda v: "must be non-zero" if v == 0 else
+                       range_problem(v, -MAX_OFFSET_C, MAX_OFFSET_C, "K"))
     t.finish()
     return Fault(name, sensor, kind, start_s, value, offset)
 
 
 def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
               programmes: list[str], cooling: list[str], climate: Climate) -> Training:
-    rule = t.get("rule", str, default="one", check=lambda v: None if v in TRAINING_RULES
-                 else f"must be one of {', '.join(TRAINING_RULES)}")
+    rule = t.get("rule", str, default="one", check=lambda v: one_of(v, TRAINING_RULES))
     month = t.get("month", str, default=months[0],
                   check=lambda v: None if v in months else
                   f"must be one of the study's months ({', '.join(months)})")
@@ -412,16 +419,13 @@ def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
 
 def _methods(t: Table) -> Methods:
     clusters = t.get_list("clusters", int, default=[2, 3, 4],
-                          check=lambda v: None if 1 <= v <= 6 else "must be between 1 and 6")
+                          check=in_range(1, MAX_CLUSTERS))
     groups = t.get_list("groups", str, default=list(GROUPS), allow_empty=True,
-                        check=lambda v: None if v in GROUPS
-                        else f"must be one of {', '.join(GROUPS)}")
+                        check=lambda v: one_of(v, GROUPS))
     baselines = t.get_list("baselines", str, default=list(BASELINES), allow_empty=True,
-                           check=lambda v: None if v in BASELINES
-                           else f"must be one of {', '.join(BASELINES)}")
+                           check=lambda v: one_of(v, BASELINES))
     similarity = t.get("similarity", str, default=DEFAULT_SIMILARITY,
-                       check=lambda v: None if v in SIMILARITIES
-                       else "must be 'abs-pearson' or 'literal'")
+                       check=lambda v: one_of(v, SIMILARITIES))
     ground_truth = t.get("ground_truth", bool, default=True)
     t.finish()
     if not groups and not baselines:

@@ -9,20 +9,23 @@ file and the dotted key, so a user never has to read a traceback to fix a typo.
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 import math
-import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import REQUIRED, Table, load_toml, range_problem
 from spindlebench.names import SENSORS
 
 #: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
 KELVIN_SUSPECT_C = 60.0
+#: Largest sensor noise and quantisation step (°C), probe noise and step (µm), offset fault (K).
+MAX_NOISE_C, MAX_PROBE_NOISE_UM, MAX_OFFSET_C = 5.0, 100.0, 50.0
+#: Largest offset (K) of a cooling setpoint that follows the ambient.
+FOLLOW_AMBIENT_MAX_K = 20.0
 #: Coldest ambient a workshop scenario may ask for (°C).
 COLDEST_AMBIENT_C = -40.0
 #: Fastest spindle a scenario may ask for (rev/min): the studies' limit; high-speed spindles
@@ -41,7 +44,6 @@ MAX_STEPS = 10_000_000
 #: has long forgotten its cold start by then.
 MAX_SOAK_DAYS = 60
 
-_MISSING = object()
 
 
 # --------------------------------------------------------------------------- dataclasses
@@ -326,154 +328,78 @@ def _jsonable(value: Any) -> Any:
 # --------------------------------------------------------------------------- reading helpers
 
 
-class _Table:
-    """One TOML table being read: typed getters, and a check that no key was left unread."""
-
-    def __init__(self, path: Path, data: Mapping[str, Any], prefix: str = "") -> None:
-        self.path = path
-        self.data = data
-        self.prefix = prefix
-        self.used: set[str] = set()
-
-    def key(self, name: str) -> str:
-        return f"{self.prefix}{name}"
-
-    def fail(self, name: str, message: str) -> SpindlebenchError:
-        return SpindlebenchError(f"{self.path}: key '{self.key(name)}': {message}")
-
-    def _raw(self, name: str, default: Any) -> Any:
-        self.used.add(name)
-        if name in self.data:
-            return self.data[name]
-        if default is _MISSING:
-            near = difflib.get_close_matches(name, [str(k) for k in self.data], n=1)
-            hint = f"; is {self.key(near[0])!r} a misspelling of it?" if near else ""
-            raise self.fail(name, f"missing (required){hint}")
-        return default
-
-    def number(
-        self,
-        name: str,
-        default: Any = _MISSING,
-        *,
-        minimum: float | None = None,
-        maximum: float | None = None,
-        positive: bool = False,
-        unit: str = "",
-    ) -> float:
-        value = self._raw(name, default)
-        if value is default and default is not _MISSING:
-            return value
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(name, f"must be a number{unit and ' in ' + unit}, got {value!r}")
-        value = float(value)
-        if not math.isfinite(value):
-            raise self.fail(name, f"must be finite, got {value!r}")
-        if positive and value <= 0:
-            raise self.fail(name, f"must be > 0, got {value:g}")
-        if minimum is not None and value < minimum:
-            raise self.fail(name, f"must be >= {minimum:g}, got {value:g}")
-        if maximum is not None and value > maximum:
-            raise self.fail(name, f"must be <= {maximum:g}, got {value:g}")
+def _temperature(t: Table, name: str, default: Any = REQUIRED) -> float:
+    """A temperature in °C, rejecting values that look like kelvin or are absurd."""
+    value = t.number(name, default)
+    if value is None:
         return value
-
-    def temperature(self, name: str, default: Any = _MISSING) -> float:
-        """A temperature in °C, rejecting values that look like kelvin or are absurd."""
-        value = self.number(name, default)
-        if value is None:
-            return value
-        if value > KELVIN_SUSPECT_C:
-            raise self.fail(
-                name, f"{value:g} °C is implausible for a workshop (looks like kelvin?); "
-                "give degrees Celsius",
-            )
-        if value < COLDEST_AMBIENT_C:
-            raise self.fail(name, f"{value:g} °C is colder than {COLDEST_AMBIENT_C:g} °C")
-        return value
-
-    def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None) -> int:
-        value = self._raw(name, default)
-        if value is default and default is not _MISSING:
-            return value
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.fail(name, f"must be an integer, got {value!r}")
-        if minimum is not None and value < minimum:
-            raise self.fail(name, f"must be >= {minimum}, got {value}")
-        return value
-
-    def string(self, name: str, default: Any = _MISSING, *, choices: tuple[str, ...] = ()) -> str:
-        value = self._raw(name, default)
-        if not isinstance(value, str):
-            raise self.fail(name, f"must be a string, got {value!r}")
-        if choices and value not in choices:
-            raise self.fail(name, f"must be one of {', '.join(choices)}; got {value!r}")
-        return value
-
-    def table(self, name: str, *, required: bool = False) -> _Table:
-        value = self._raw(name, _MISSING if required else {})
-        if not isinstance(value, Mapping):
-            raise self.fail(name, f"must be a table, got {value!r}")
-        return _Table(self.path, value, f"{self.key(name)}.")
-
-    def tables(self, name: str, default: Any = _MISSING) -> list[_Table]:
-        value = self._raw(name, default)
-        if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
-            raise self.fail(name, "must be an array of tables ([[...]] or [{...}, ...])")
-        return [_Table(self.path, v, f"{self.key(name)}[{i}].") for i, v in enumerate(value)]
-
-    def finish(self) -> None:
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            near = difflib.get_close_matches(unknown[0], sorted(self.used), n=1)
-            hint = f"did you mean {near[0]!r}? " if near else ""
-            raise SpindlebenchError(
-                f"{self.path}: key '{self.key(unknown[0])}': unknown key ({hint}"
-                f"allowed here: {', '.join(sorted(self.used)) or 'none'})"
-            )
+    problem = temperature_problem(value)
+    if problem:
+        raise t.error(name, problem)
+    return value
 
 
-def _kind(table: _Table, choices: tuple[str, ...], default: str | None = None) -> str:
-    return table.string("kind", _MISSING if default is None else default, choices=choices)
+def temperature_problem(value_C: float) -> str | None:
+    """Why ``value_C`` is no workshop temperature in °C (None when it is one): the one rule for
+    ambient and absolute cooling setpoints, in scenarios and studies."""
+    if value_C > KELVIN_SUSPECT_C:
+        return (f"{value_C:g} °C is implausible for a workshop (looks like kelvin?); "
+                "give degrees Celsius")
+    if value_C < COLDEST_AMBIENT_C:
+        return f"{value_C:g} °C is colder than {COLDEST_AMBIENT_C:g} °C"
+    return None
+
+
+def _kind(table: Table, choices: tuple[str, ...], default: str | None = None) -> str:
+    return table.string("kind", REQUIRED if default is None else default, choices=choices)
 
 
 # --------------------------------------------------------------------------- sections
 
 
-def _rpm(t: _Table) -> float:
+def _rpm(t: Table) -> float:
     return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit="rev/min")
 
 
-def _feed(t: _Table, name: str) -> float:
+def _feed(t: Table, name: str) -> float:
     return t.number(name, minimum=0.0, maximum=MAX_FEED_MM_PER_MIN, unit="mm/min")
 
 
-def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
-    t = top.table("speed", required=True)
+def _steps(t: Table, duration_s: float) -> Iterator[tuple[float, Table]]:
+    """The ``[[steps]]`` of a speed or feed programme: (start time, step table) in increasing
+    time order within the run; the caller reads the values, each step is then finished."""
+    previous = None
+    steps = t.tables("steps")
+    if not steps:
+        raise t.error("steps", "needs at least one step")
+    for step in steps:
+        at_s = step.number("at_s", minimum=0.0)
+        if at_s >= duration_s:
+            raise step.error("at_s", f"step at {at_s:g} s is not within the duration "
+                             f"({duration_s:g} s)")
+        if previous is not None and at_s <= previous:
+            raise step.error("at_s", "steps must be in increasing time order")
+        previous = at_s
+        yield at_s, step
+        step.finish()
+
+
+def _read_speed(top: Table, duration_s: float) -> SpeedProgramme:
+    t = top.table("speed")
     kind = _kind(t, ("constant", "steps", "cycles"))
     if kind == "constant":
         programme: SpeedProgramme = ConstantSpeed(rpm=_rpm(t))
     elif kind == "steps":
-        steps = []
-        for step in t.tables("steps"):
-            at_s = step.number("at_s", minimum=0.0)
-            if at_s >= duration_s:
-                raise step.fail("at_s", f"step at {at_s:g} s is not within the duration "
-                                f"({duration_s:g} s)")
-            if steps and at_s <= steps[-1].at_s:
-                raise step.fail("at_s", "steps must be in increasing time order")
-            steps.append(SpeedStep(at_s=at_s, rpm=_rpm(step)))
-            step.finish()
-        if not steps:
-            raise t.fail("steps", "needs at least one step")
-        programme = SteppedSpeed(steps=tuple(steps))
+        programme = SteppedSpeed(steps=tuple(
+            SpeedStep(at_s=at_s, rpm=_rpm(step)) for at_s, step in _steps(t, duration_s)))
     else:
         start_s = t.number("start_s", 0.0, minimum=0.0)
         if start_s >= duration_s:
-            raise t.fail("start_s", f"{start_s:g} s is not within the duration ({duration_s:g} s)")
+            raise t.error("start_s", f"{start_s:g} s is not within the duration ({duration_s:g} s)")
         on_s = t.number("on_s", positive=True)
         off_s = t.number("off_s", positive=True)
         if on_s + off_s > duration_s:
-            raise t.fail("on_s", f"one cycle ({on_s + off_s:g} s) is longer than the duration "
+            raise t.error("on_s", f"one cycle ({on_s + off_s:g} s) is longer than the duration "
                          f"({duration_s:g} s)")
         programme = SpeedCycles(
             rpm=_rpm(t), on_s=on_s, off_s=off_s, start_s=start_s,
@@ -483,8 +409,8 @@ def _read_speed(top: _Table, duration_s: float) -> SpeedProgramme:
     return programme
 
 
-def _read_feed(top: _Table, duration_s: float) -> FeedProgramme:
-    t = top.table("feed", required=True)
+def _read_feed(top: Table, duration_s: float) -> FeedProgramme:
+    t = top.table("feed")
     kind = _kind(t, ("constant", "with_spindle", "steps"))
     if kind in ("constant", "with_spindle"):
         x = _feed(t, "x_mm_per_min")
@@ -493,42 +419,29 @@ def _read_feed(top: _Table, duration_s: float) -> FeedProgramme:
             ConstantFeed(x, y) if kind == "constant" else FeedWithSpindle(x, y)
         )
     else:
-        steps: list[FeedStep] = []
-        for step in t.tables("steps"):
-            at_s = step.number("at_s", minimum=0.0)
-            if at_s >= duration_s:
-                raise step.fail("at_s", f"step at {at_s:g} s is not within the duration "
-                                f"({duration_s:g} s)")
-            if steps and at_s <= steps[-1].at_s:
-                raise step.fail("at_s", "steps must be in increasing time order")
-            steps.append(FeedStep(
-                at_s=at_s,
-                x_mm_per_min=_feed(step, "x_mm_per_min"),
-                y_mm_per_min=_feed(step, "y_mm_per_min"),
-            ))
-            step.finish()
-        if not steps:
-            raise t.fail("steps", "needs at least one step")
-        programme = SteppedFeed(steps=tuple(steps))
+        programme = SteppedFeed(steps=tuple(
+            FeedStep(at_s=at_s, x_mm_per_min=_feed(step, "x_mm_per_min"),
+                     y_mm_per_min=_feed(step, "y_mm_per_min"))
+            for at_s, step in _steps(t, duration_s)))
     t.finish()
     return programme
 
 
-def _hour(t: _Table, name: str, default: float) -> float:
+def _hour(t: Table, name: str, default: float) -> float:
     return t.number(name, default, minimum=0.0, maximum=24.0)
 
 
-def _read_indoor(t: _Table, seed: int) -> IndoorAmbient:
+def _read_indoor(t: Table, seed: int) -> IndoorAmbient:
     """``[ambient] kind = "indoor"``: the outdoor cycle, the building and the weather."""
-    low = t.temperature("outdoor_low_C")
-    high = t.temperature("outdoor_high_C")
+    low = _temperature(t, "outdoor_low_C")
+    high = _temperature(t, "outdoor_high_C")
     if high < low:
-        raise t.fail("outdoor_high_C", f"daily high {high:g} °C is below the daily low "
+        raise t.error("outdoor_high_C", f"daily high {high:g} °C is below the daily low "
                      f"{low:g} °C")
     trough = _hour(t, "trough_hour", 6.0)
     peak = _hour(t, "peak_hour", 15.0)
     if math.isclose(trough % 24, peak % 24):
-        raise t.fail("peak_hour", "must differ from trough_hour")
+        raise t.error("peak_hour", "must differ from trough_hour")
     defaults = IndoorAmbient(low, high)
     return IndoorAmbient(
         outdoor_low_C=low, outdoor_high_C=high, start_hour=_hour(t, "start_hour", 8.0),
@@ -545,23 +458,23 @@ def _read_indoor(t: _Table, seed: int) -> IndoorAmbient:
     )
 
 
-def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float,
+def _read_ambient(top: Table, scenario_dir: Path, duration_s: float,
                   seed: int = 0) -> AmbientModel:
-    t = top.table("ambient", required=True)
+    t = top.table("ambient")
     kind = _kind(t, ("constant", "season", "csv", "indoor"))
     if kind == "indoor":
         model: AmbientModel = _read_indoor(t, seed)
     elif kind == "constant":
-        model = ConstantAmbient(temperature_C=t.temperature("temperature_C"))
+        model = ConstantAmbient(temperature_C=_temperature(t, "temperature_C"))
     elif kind == "season":
-        low = t.temperature("low_C")
-        high = t.temperature("high_C")
+        low = _temperature(t, "low_C")
+        high = _temperature(t, "high_C")
         if high < low:
-            raise t.fail("high_C", f"daily high {high:g} °C is below the daily low {low:g} °C")
+            raise t.error("high_C", f"daily high {high:g} °C is below the daily low {low:g} °C")
         trough = _hour(t, "trough_hour", 6.0)
         peak = _hour(t, "peak_hour", 15.0)
         if math.isclose(trough % 24, peak % 24):
-            raise t.fail("peak_hour", "must differ from trough_hour")
+            raise t.error("peak_hour", "must differ from trough_hour")
         model = SeasonAmbient(
             low_C=low, high_C=high, start_hour=_hour(t, "start_hour", 8.0),
             trough_hour=trough, peak_hour=peak,
@@ -573,7 +486,7 @@ def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float,
         file = (scenario_dir / file_name).resolve()
         times, values = _read_ambient_csv(t, file, time_column, value_column)
         if times[0] > 0.0 or times[-1] < duration_s:
-            raise t.fail("file", f"{file} covers {times[0]:g}–{times[-1]:g} s but the run needs "
+            raise t.error("file", f"{file} covers {times[0]:g}–{times[-1]:g} s but the run needs "
                          f"0–{duration_s:g} s")
         model = MeasuredAmbient(
             file=file, time_column=time_column, value_column=value_column,
@@ -584,21 +497,21 @@ def _read_ambient(top: _Table, scenario_dir: Path, duration_s: float,
 
 
 def _read_ambient_csv(
-    t: _Table, file: Path, time_column: str, value_column: str
+    t: Table, file: Path, time_column: str, value_column: str
 ) -> tuple[list[float], list[float]]:
     """Read and check a measured ambient series; errors name the CSV file and line.
 
     Lines starting with ``#`` are comments (a place for the series' origin and units).
     """
     if not file.is_file():
-        raise t.fail("file", f"no such file: {file}")
+        raise t.error("file", f"no such file: {file}")
     times: list[float] = []
     values: list[float] = []
     header: list[str] | None = None
     try:
         text = file.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise t.fail("file", f"{file} is not UTF-8 text (byte {exc.start})") from None
+        raise t.error("file", f"{file} is not UTF-8 text (byte {exc.start})") from None
     with io.StringIO(text, newline="") as handle:
         for line_no, line in enumerate(handle, start=1):
             if not line.strip() or line.startswith("#"):
@@ -612,7 +525,7 @@ def _read_ambient_csv(
                                             "appears more than once in the header")
                 for column, key in ((time_column, "time_column"), (value_column, "value_column")):
                     if column not in header:
-                        raise t.fail(key, f"column {column!r} not in {file} "
+                        raise t.error(key, f"column {column!r} not in {file} "
                                      f"(it has {', '.join(header)})")
                 i_time, i_value = header.index(time_column), header.index(value_column)
                 continue
@@ -635,34 +548,36 @@ def _read_ambient_csv(
             times.append(time_s)
             values.append(value)
     if len(times) < 2:
-        raise t.fail("file", f"{file} needs at least two samples")
+        raise t.error("file", f"{file} needs at least two samples")
     return times, values
 
 
-def _read_cooling(top: _Table) -> Cooling:
-    t = top.table("cooling")
+def _read_cooling(top: Table) -> Cooling:
+    t = top.table("cooling", required=False)
     mode = t.string("mode", "off", choices=("off", "absolute", "follow_ambient"))
     if mode == "off":
         cooling = Cooling()
     elif mode == "absolute":
-        cooling = Cooling(mode="absolute", setpoint_C=t.temperature("setpoint_C"))
+        cooling = Cooling(mode="absolute", setpoint_C=_temperature(t, "setpoint_C"))
     else:
         cooling = Cooling(
             mode="follow_ambient",
-            setpoint_C=t.number("setpoint_C", minimum=-20.0, maximum=20.0, unit="K from ambient"),
+            setpoint_C=t.number("setpoint_C", minimum=-FOLLOW_AMBIENT_MAX_K,
+                                maximum=FOLLOW_AMBIENT_MAX_K, unit="K from ambient"),
         )
     t.finish()
     return cooling
 
 
-def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
-    t = top.table("sensors")
+def _read_sensors(top: Table, duration_s: float) -> SensorModel:
+    t = top.table("sensors", required=False)
     defaults = SensorModel()
-    noise = t.number("noise_C", defaults.noise_C, minimum=0.0, maximum=5.0)
-    quantum = t.number("quantum_C", defaults.quantum_C, minimum=0.0, maximum=5.0)
-    probe_noise = t.number("probe_noise_um", defaults.probe_noise_um, minimum=0.0, maximum=100.0)
+    noise = t.number("noise_C", defaults.noise_C, minimum=0.0, maximum=MAX_NOISE_C)
+    quantum = t.number("quantum_C", defaults.quantum_C, minimum=0.0, maximum=MAX_NOISE_C)
+    probe_noise = t.number("probe_noise_um", defaults.probe_noise_um, minimum=0.0,
+                           maximum=MAX_PROBE_NOISE_UM)
     probe_quantum = t.number(
-        "probe_quantum_um", defaults.probe_quantum_um, minimum=0.0, maximum=100.0
+        "probe_quantum_um", defaults.probe_quantum_um, minimum=0.0, maximum=MAX_PROBE_NOISE_UM
     )
     noise_kind = t.string("noise_kind", defaults.noise_kind, choices=NOISE_KINDS)
     # the lag-1 coefficient belongs to the AR(1) process only: elsewhere it is an unknown key
@@ -678,13 +593,14 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
         kind = ft.string("kind", choices=("dropout", "stuck", "offset"))
         start_s = ft.number("start_s", 0.0, minimum=0.0)
         if start_s >= duration_s:
-            raise ft.fail("start_s", f"{start_s:g} s is not within the duration "
+            raise ft.error("start_s", f"{start_s:g} s is not within the duration "
                           f"({duration_s:g} s)")
         end_s = ft.number("end_s", None, minimum=0.0)  # None: until the end of the run
         if end_s is not None and end_s <= start_s:
-            raise ft.fail("end_s", f"must be after start_s ({start_s:g} s), got {end_s:g}")
-        value = ft.temperature("value_C", None) if kind == "stuck" else None
-        offset = ft.number("offset_C", minimum=-50.0, maximum=50.0) if kind == "offset" else None
+            raise ft.error("end_s", f"must be after start_s ({start_s:g} s), got {end_s:g}")
+        value = _temperature(ft, "value_C", None) if kind == "stuck" else None
+        offset = (ft.number("offset_C", minimum=-MAX_OFFSET_C, maximum=MAX_OFFSET_C)
+                  if kind == "offset" else None)
         ft.finish()
         faults.append(SensorFault(sensor, kind, start_s, end_s, value, offset))  # type: ignore[arg-type]
     t.finish()
@@ -694,23 +610,21 @@ def _read_sensors(top: _Table, duration_s: float) -> SensorModel:
                        probe_drift_rate_um_per_h=drift_rate)
 
 
-def _read_initial(top: _Table, scenario_dir: Path) -> InitialState:
-    t = top.table("initial")
+def _read_initial(top: Table, scenario_dir: Path) -> InitialState:
+    t = top.table("initial", required=False)
     kind = t.string("kind", "cold", choices=("cold", "continue", "soak"))
     if kind == "cold":
-        initial = InitialState(temperature_C=t.temperature("temperature_C", None))
+        initial = InitialState(temperature_C=_temperature(t, "temperature_C", None))
     elif kind == "soak":
-        days = t.integer("days", InitialState().days, minimum=1)
-        if days > MAX_SOAK_DAYS:
-            raise t.fail("days", f"must be <= {MAX_SOAK_DAYS}, got {days}")
+        days = t.integer("days", InitialState().days, minimum=1, maximum=MAX_SOAK_DAYS)
         initial = InitialState(kind="soak", days=days)
     else:
         name = t.string("from")
         if not name.strip():
-            raise t.fail("from", "is empty; give a scenario name (\"day1_warmup\") or a "
+            raise t.error("from", "is empty; give a scenario name (\"day1_warmup\") or a "
                          "recording's .json")
         if Path(name).suffix.lower() == ".toml":
-            raise t.fail("from", f"{name!r} is a scenario file; name the scenario without "
+            raise t.error("from", f"{name!r} is a scenario file; name the scenario without "
                          f".toml ({Path(name).stem!r}) or give its recording's .json")
         if is_scenario_reference(name):
             initial = InitialState(kind="continue", from_scenario=name)
@@ -746,8 +660,8 @@ def resolve_initial(scenario: Scenario, output_dir: str | Path) -> Scenario:
     return replace(scenario, initial=replace(initial, from_file=source))
 
 
-def _read_parameters(top: _Table) -> dict[str, float]:
-    t = top.table("parameters")
+def _read_parameters(top: Table) -> dict[str, float]:
+    t = top.table("parameters", required=False)
     values = {name: t.number(name) for name in sorted(t.data)}
     t.finish()
     return values
@@ -759,8 +673,9 @@ def step_count_problem(duration_s: float, step_s: float) -> str | None:
     Checked before any array is made: a tiny step would otherwise fail deep in numpy
     ("Maximum allowed size exceeded") or run for hours.
     """
-    if not step_s >= MIN_STEP_S:
-        return f"must be at least {MIN_STEP_S:g} s, got {step_s:g}"
+    too_small = range_problem(step_s, minimum=MIN_STEP_S, unit="s")
+    if too_small:
+        return too_small
     steps = duration_s / step_s
     if steps > MAX_STEPS:
         return (f"{step_s:g} s gives {steps:.3g} communication steps over {duration_s:g} s; at "
@@ -768,10 +683,10 @@ def step_count_problem(duration_s: float, step_s: float) -> str | None:
     return None
 
 
-def _check_grid(top: _Table, name: str, value: float, unit_name: str, unit_s: float) -> None:
+def _check_grid(top: Table, name: str, value: float, unit_name: str, unit_s: float) -> None:
     ratio = value / unit_s
     if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio):
-        raise top.fail(name, f"{value:g} s is not a multiple of {unit_name} ({unit_s:g} s)")
+        raise top.error(name, f"{value:g} s is not a multiple of {unit_name} ({unit_s:g} s)")
 
 
 # --------------------------------------------------------------------------- entry point
@@ -780,34 +695,22 @@ def _check_grid(top: _Table, name: str, value: float, unit_name: str, unit_s: fl
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file; raise ``SpindlebenchError`` on any problem."""
     path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        raise SpindlebenchError(f"{path}: no such scenario file") from None
-    except IsADirectoryError:
-        raise SpindlebenchError(f"{path}: is a directory, expected a scenario .toml file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SpindlebenchError(f"{path}: not valid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise SpindlebenchError(f"{path}: not valid TOML: not UTF-8 text (byte "
-                                f"{exc.start})") from None
-    top = _Table(path, data)
+    top = Table(load_toml(path, "scenario"), path)
     scenario_dir = path.resolve().parent
     name = top.string("name", path.stem)
     description = top.string("description", "")
     duration_s = top.number("duration_s", positive=True, maximum=90 * 86400.0)
     step_s = top.number("step_s", positive=True, minimum=MIN_STEP_S)
     if step_s > duration_s:
-        raise top.fail("step_s", f"communication step {step_s:g} s is larger than the duration "
+        raise top.error("step_s", f"communication step {step_s:g} s is larger than the duration "
                        f"({duration_s:g} s)")
     _check_grid(top, "duration_s", duration_s, "step_s", step_s)
     too_many = step_count_problem(duration_s, step_s)
     if too_many:
-        raise top.fail("step_s", too_many)
+        raise top.error("step_s", too_many)
     sample_interval_s = top.number("sample_interval_s", positive=True)
     if sample_interval_s > duration_s:
-        raise top.fail("sample_interval_s", f"{sample_interval_s:g} s is larger than the "
+        raise top.error("sample_interval_s", f"{sample_interval_s:g} s is larger than the "
                        f"duration ({duration_s:g} s)")
     _check_grid(top, "sample_interval_s", sample_interval_s, "step_s", step_s)
     _check_grid(top, "duration_s", duration_s, "sample_interval_s", sample_interval_s)
@@ -830,7 +733,7 @@ def load_scenario(path: str | Path) -> Scenario:
     )
     top.finish()
     if scenario.initial.kind == "soak" and isinstance(scenario.ambient, MeasuredAmbient):
-        raise top.fail("initial", "kind = \"soak\" repeats the ambient's daily cycle; a "
+        raise top.error("initial", "kind = \"soak\" repeats the ambient's daily cycle; a "
                        "measured series has none (use a season or indoor ambient, or "
                        "kind = \"cold\")")
     return scenario

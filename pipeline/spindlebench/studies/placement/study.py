@@ -29,14 +29,15 @@ from typing import Any
 from fmpy import read_model_description
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import Table, in_range, load_toml, one_of
 from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
-from spindlebench.studies.schema import Table, load_toml
 from spindlebench.studies.study import NO_FAULT, SweepStudy, check_fmu, load_study
 
 METHODS = ("fuzzy", "greedy", "exhaustive")
 #: FMU outputs of the temperature field: ``node_<part>_C``.
 NODE_PREFIX, NODE_SUFFIX = "node_", "_C"
 DEFAULT_EXHAUSTIVE_LIMIT = 500_000
+MAX_EXHAUSTIVE_LIMIT = 10**9
 MAX_BUDGET = 10
 
 
@@ -110,24 +111,23 @@ def load_placement_study(path: str | Path) -> PlacementStudy:
     """Read and validate a placement study; every error names the file and the key."""
     path = Path(path)
     family = load_study(path, extra_tables=("placement",))
-    data = load_toml(path)
+    data = load_toml(path, "study")
     _reject_sweep_only(data, family)
     if not isinstance(data.get("placement"), dict):
         raise SpindlebenchError(f"{path}: key 'placement': missing table (required)")
     table = Table(data["placement"], path, "placement")
     budgets = tuple(sorted(table.get_list(
         "budgets", int, default=[2, 3, 4, 5, 6],
-        check=lambda v: None if 1 <= v <= MAX_BUDGET else f"must be between 1 and {MAX_BUDGET}")))
+        check=in_range(1, MAX_BUDGET))))
     methods = tuple(table.get_list(
         "methods", str, default=list(METHODS),
-        check=lambda v: None if v in METHODS else f"must be one of {', '.join(METHODS)}"))
+        check=lambda v: one_of(v, METHODS)))
     with_differences = _bool_or_list(table, "with_differences")
     measured = table.get("measured", bool, default=True)
     limit = table.get("exhaustive_limit", int, default=DEFAULT_EXHAUSTIVE_LIMIT,
-                      check=lambda v: None if 0 <= v <= 10**9 else "must be in [0, 1e9]")
+                      check=in_range(0, MAX_EXHAUSTIVE_LIMIT))
     similarity = table.get("similarity", str, default=DEFAULT_SIMILARITY,
-                           check=lambda v: None if v in SIMILARITIES
-                           else f"must be one of {', '.join(SIMILARITIES)}")
+                           check=lambda v: one_of(v, SIMILARITIES))
     excluded = table.get_list("exclude_nodes", str, default=[], allow_empty=True)
     table.finish()
 
