@@ -11,7 +11,7 @@ from spindlebench import cli
 from spindlebench.selection import SelectionWarning, evaluate
 
 KEYS = ["selected", "psi", "eta", "clusters", "coefficients", "r2", "rmse_um", "mean_rmse_um",
-        "provenance"]
+        "method", "provenance"]
 
 
 @pytest.fixture

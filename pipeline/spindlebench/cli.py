@@ -24,6 +24,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.modelica.build",
     "spindlebench.paper_study.command",
     "spindlebench.selection.command",
+    "spindlebench.selection.methods_command",
     "spindlebench.studies.placement.run",
     "spindlebench.studies.sweep",
     "spindlebench.testbench.plot",

@@ -30,3 +30,45 @@ DEFAULT_SIMILARITY = SIMILARITIES[0]
 
 #: Degrees Celsius to kelvin.
 KELVIN_OFFSET = 273.15
+
+#: The selection methods every command, study file and report knows, with one line each
+#: (``spindlebench methods`` prints them; ``selection.registry`` builds the estimators). The
+#: first is the paper's. Cluster methods pick one candidate per cluster (``WITHIN``); the others
+#: choose k candidates directly.
+CLUSTER_METHODS: dict[str, str] = {
+    "closure": "the paper's fuzzy equivalence closure t(R) cut into k clusters "
+               "(single linkage on 1 - R)",
+    "fcm": "fuzzy c-means (scikit-fuzzy cmeans, fuzzifier 2) on the standardised series; "
+           "each candidate to its largest membership",
+    "kmeans": "k-means (scikit-learn, 10 starts) on the standardised series",
+    "average": "hierarchical clustering, average linkage on 1 - R (SciPy)",
+    "complete": "hierarchical clustering, complete linkage on 1 - R (SciPy)",
+    "ward": "hierarchical clustering, Ward linkage on the standardised series (SciPy)",
+}
+DIRECT_METHODS: dict[str, str] = {
+    "top-k-correlated": "the k candidates with the largest |psi|, no clustering",
+    "lasso": "the first k candidates to enter the LASSO path (standardised rises)",
+    "elastic-net": "the first k candidates to enter the elastic-net path (l1_ratio 0.5)",
+    "stability": "stability selection: the k most frequent on the LASSO path's first k over "
+                 "50 random half-samples",
+    "greedy": "greedy forward selection by cross-experiment RMSE of OLS (train on the first "
+              "half of the run, score on the second)",
+}
+METHODS: dict[str, str] = {**CLUSTER_METHODS, **DIRECT_METHODS}
+DEFAULT_METHOD = "closure"
+#: The choice of one candidate inside a cluster.
+WITHIN: dict[str, str] = {
+    "psi": "largest |psi|, the Pearson correlation with the error (the paper's eq. 4)",
+    "grey": "largest grey relational grade with the error (Deng; interval normalisation, "
+            "rho = 0.5)",
+}
+DEFAULT_WITHIN = "psi"
+#: The regression after the selector (all on rises, all linear).
+REGRESSORS: dict[str, str] = {
+    "ols": "ordinary least squares with intercept (the paper's MLR)",
+    "ridge": "ridge on standardised rises, penalty by 5-fold CV over contiguous time blocks",
+    "pls": "partial least squares (scikit-learn PLSRegression, up to 2 components)",
+}
+DEFAULT_REGRESSOR = "ols"
+#: The seed of the seeded methods (fcm, kmeans, stability) unless a command is given another.
+DEFAULT_METHOD_SEED = 0

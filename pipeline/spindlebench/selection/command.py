@@ -19,11 +19,21 @@ import pandas as pd
 
 from spindlebench import atomic, provenance
 from spindlebench.listflags import split_list_flag
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.names import (
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    DEFAULT_REGRESSOR,
+    DEFAULT_SIMILARITY,
+    DEFAULT_WITHIN,
+    METHODS,
+    REGRESSORS,
+    WITHIN,
+)
 from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import MISSING_MODES, Evaluation, RecordingLike, evaluate
+from spindlebench.selection.registry import MethodChoice
 from spindlebench.selection.similarity import SIMILARITIES
 
 #: The same hint ``evaluate`` gives when it reads a file itself.
@@ -53,8 +63,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "are ignored (default: see above, every column is checked)",
     )
     parser.add_argument(
-        "--clusters", required=True, type=int, metavar="K", help="number of clusters k"
+        "--clusters", required=True, type=int, metavar="K",
+        help="number of clusters k (for a method without clusters: the number of inputs)"
     )
+    parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
+                        help="selection method (default: the paper's closure; "
+                        "'spindlebench methods' lists them)")
+    parser.add_argument("--within", choices=list(WITHIN), default=DEFAULT_WITHIN,
+                        help="choice inside a cluster (cluster methods only)")
+    parser.add_argument("--regressor", choices=list(REGRESSORS), default=DEFAULT_REGRESSOR,
+                        help="regression on the selected rises")
+    parser.add_argument("--seed", type=int, default=DEFAULT_METHOD_SEED,
+                        help="seed of fcm, kmeans and stability (recorded in --json)")
     parser.add_argument(
         "--differences", action="store_true", help="add every pairwise difference A-B"
     )
@@ -91,6 +111,7 @@ def _read_used(path: Path, columns: list[str], missing: str) -> pd.DataFrame:
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
     sensors = parse_sensor_list(args.sensors)
+    choice = MethodChoice(args.method, args.within, args.regressor)  # checked before reading
     train: RecordingLike = args.train
     tests: list[RecordingLike] = [str(path) for path in args.test]
     if sensors is not None:  # read and check only the columns used
@@ -108,6 +129,8 @@ def run(args: argparse.Namespace) -> int:
             similarity=args.similarity,
             closure=args.closure,
             missing=args.missing,
+            method=choice,
+            seed=args.seed,
         )
     messages = [str(item.message) for item in caught]
     text = None if args.json is None else _json_text(result, args, messages)
@@ -135,6 +158,8 @@ def _json_text(result: Evaluation, args: argparse.Namespace, messages: list[str]
         similarity=args.similarity,
         closure=args.closure,
         missing=args.missing,
+        method=result.method.to_dict(),
+        seed=args.seed,
         warnings=messages,
     )
     try:

@@ -45,11 +45,14 @@ from spindlebench.selection.errors import (
     SelectionWarning,
     column_list,
 )
-from spindlebench.selection.regression import LinearFit, fit_ols, rises, rmse
+from spindlebench.selection.registry import MethodChoice, fit_with, select_with
+from spindlebench.selection.regression import LinearFit, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
 from spindlebench.selection.similarity import constant_columns
 
 RecordingLike = str | os.PathLike[str] | pd.DataFrame
+#: Methods whose result depends on ``seed``.
+SEEDED_METHODS = ("fcm", "kmeans", "stability")
 
 #: How ``evaluate`` treats missing (NaN) values: one-line error, or drop incomplete samples.
 MISSING_MODES = ("error", "drop-rows")
@@ -125,6 +128,10 @@ class Evaluation:
     #: hold those samples only.
     train_rows: np.ndarray = field(default_factory=lambda: np.arange(0))
     test_rows: dict[str, np.ndarray] = field(default_factory=dict)
+    #: The selection method, choice inside clusters and regressor (default: the paper's).
+    method: MethodChoice = field(default_factory=MethodChoice)
+    #: Seed of the seeded methods (fcm, kmeans, stability); recorded, used by those only.
+    seed: int = 0
 
     @property
     def selected(self) -> list[str]:
@@ -158,12 +165,13 @@ class Evaluation:
         return {
             "selected": self.selected,
             "psi": self.psi,
-            "eta": float(self.selection.eta),
+            "eta": _finite_or_none(float(self.selection.eta)),
             "clusters": self.clusters,
             "coefficients": self.coefficients,
             "r2": _finite_or_none(self.fit.r2),
             "rmse_um": {name: float(value) for name, value in self.rmse_um.items()},
             "mean_rmse_um": self.mean_rmse_um,
+            "method": {**self.method.to_dict(), "label": self.method.label, "seed": self.seed},
         }
 
     def summary(self) -> str:
@@ -171,7 +179,11 @@ class Evaluation:
         lines = [
             f"train: {self.train}   target: {self.target}   "
             f"candidates: {len(self.candidates)} ({len(self.selection.dropped)} constant dropped)",
-            f"clusters: {len(self.selection.clusters)} at eta = {self.selection.eta:.6f}",
+            f"method: {self.method.label}"
+            + (f" (seed {self.seed})" if self.method.method in SEEDED_METHODS else ""),
+            f"clusters: {len(self.selection.clusters)}"
+            + (f" at eta = {self.selection.eta:.6f}" if math.isfinite(self.selection.eta)
+               else ""),
         ]
         for number, (members, chosen, psi) in enumerate(
             zip(self.clusters, self.selected, self.psi, strict=True), start=1
@@ -366,6 +378,10 @@ def evaluate(
     similarity: str = DEFAULT_SIMILARITY,
     closure: str = "fast",
     missing: str = "error",
+    method: str | MethodChoice = "closure",
+    within: str = "psi",
+    regressor: str = "ols",
+    seed: int = 0,
 ) -> Evaluation:
     """Select ``k`` points on ``train``, fit the rise model, and score it on every test.
 
@@ -375,6 +391,9 @@ def evaluate(
     ``default_sensors`` of the training file, and every test file must then have exactly the
     same sensor columns; with explicit ``sensors`` the files only need to contain them.
     ``missing`` is ``"error"`` or ``"drop-rows"`` (see the module docstring).
+    ``method``, ``within`` and ``regressor`` choose the method (``names.METHODS`` ...; the
+    default is the paper's); ``method`` may also be a ``MethodChoice``. ``seed`` seeds fcm,
+    kmeans and stability selection.
     Warnings (``SelectionWarning``): constant candidates dropped, ties in the cut, and with
     ``"drop-rows"`` incomplete samples dropped and sparse sensors left out.
     Errors (``SelectionError``, one line naming the file): missing target or sensor columns,
@@ -385,6 +404,8 @@ def evaluate(
         raise SelectionError(
             f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
         )
+    choice = method if isinstance(method, MethodChoice) else \
+        MethodChoice(method, within, regressor)
     if isinstance(tests, (str, os.PathLike, pd.DataFrame)):
         tests = [tests]  # one test recording; a string would otherwise be read per character
     train_name, train_frame = _load(train, "train", missing)
@@ -416,13 +437,15 @@ def evaluate(
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
     with _naming(train_name):
-        selection = select_sensitive_points(
-            _finite(candidates.matrix(train_frame), names), y_train, k, similarity, closure,
-            names=names,
-        )
+        matrix = _finite(candidates.matrix(train_frame), names)
+        if choice.is_paper:  # the paper's method, with the chosen closure implementation
+            selection = select_sensitive_points(matrix, y_train, k, similarity, closure,
+                                                names=names)
+        else:
+            selection = select_with(choice, matrix, y_train, k, similarity, names, seed)
         selected_names = [names[i] for i in selection.selected]
-        fit = fit_ols(candidates.matrix(train_frame, selection.selected), y_train,
-                      names=selected_names)
+        fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
+                       names=selected_names)
     used = [*candidates.sensors_of(selection.selected), target]
     predictions, measured, errors, test_rows = {}, {}, {}, {}
     for name, frame in test_frames.items():
@@ -449,4 +472,6 @@ def evaluate(
         rmse_um=errors,
         train_rows=train_rows,
         test_rows=test_rows,
+        method=choice,
+        seed=seed,
     )

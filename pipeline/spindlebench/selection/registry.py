@@ -1,0 +1,219 @@
+"""The one front door from a method's name to its scikit-learn estimators.
+
+A method choice is a selection method (``names.METHODS``), the choice inside a cluster
+(``names.WITHIN``, cluster methods only) and a regressor (``names.REGRESSORS``). Written as
+one label, ``method[+within][+regressor]`` with the defaults (psi, ols) left out, e.g.
+``closure`` (the paper's method), ``kmeans+grey``, ``lasso+ridge``, ``ward+grey+pls``: that
+label is what study files list and what report tables use as a column name.
+
+Examples
+--------
+>>> choice = parse_method("kmeans+grey+pls")
+>>> choice.method, choice.within, choice.regressor, choice.label
+('kmeans', 'grey', 'pls', 'kmeans+grey+pls')
+>>> make_pipeline(choice, k=2, differences=True).named_steps.keys()
+dict_keys(['differences', 'select', 'regress'])
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sklearn.base import BaseEstimator
+from sklearn.pipeline import Pipeline
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.names import (
+    CLUSTER_METHODS,
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    DEFAULT_REGRESSOR,
+    DEFAULT_SIMILARITY,
+    DEFAULT_WITHIN,
+    METHODS,
+    REGRESSORS,
+    WITHIN,
+)
+from spindlebench.selection.errors import SelectionError
+
+
+@dataclass(frozen=True)
+class MethodChoice:
+    """A selection method, the choice inside its clusters and the regressor after it."""
+
+    method: str = DEFAULT_METHOD
+    within: str = DEFAULT_WITHIN
+    regressor: str = DEFAULT_REGRESSOR
+
+    def __post_init__(self) -> None:
+        for value, known, what in ((self.method, METHODS, "method"),
+                                   (self.within, WITHIN, "within"),
+                                   (self.regressor, REGRESSORS, "regressor")):
+            if value not in known:
+                raise SelectionError(f"unknown {what} {value!r}; choose one of "
+                                     f"{', '.join(known)} (see 'spindlebench methods')")
+        if self.within != DEFAULT_WITHIN and not self.clustered:
+            raise SelectionError(f"method {self.method!r} has no clusters; 'within' "
+                                 f"({self.within!r}) applies to {', '.join(CLUSTER_METHODS)}")
+
+    @property
+    def clustered(self) -> bool:
+        return self.method in CLUSTER_METHODS
+
+    @property
+    def is_paper(self) -> bool:
+        """The paper's method exactly (closure, |psi|, OLS)."""
+        return self == MethodChoice()
+
+    @property
+    def label(self) -> str:
+        parts = [self.method]
+        if self.within != DEFAULT_WITHIN:
+            parts.append(self.within)
+        if self.regressor != DEFAULT_REGRESSOR:
+            parts.append(self.regressor)
+        return "+".join(parts)
+
+    def to_dict(self) -> dict[str, str]:
+        return {"method": self.method, "within": self.within, "regressor": self.regressor}
+
+
+def parse_method(label: str) -> MethodChoice:
+    """``method[+within][+regressor]`` -> ``MethodChoice``; one-line error otherwise."""
+    if not isinstance(label, str) or not label.strip():
+        raise SelectionError(f"a method label must be a non-empty string, got {label!r}")
+    parts = [part.strip() for part in label.split("+")]
+    method, rest = parts[0], parts[1:]
+    within, regressor = DEFAULT_WITHIN, DEFAULT_REGRESSOR
+    seen_within = seen_regressor = False
+    for part in rest:
+        if part in WITHIN and not seen_within and not seen_regressor:
+            within, seen_within = part, True
+        elif part in REGRESSORS and not seen_regressor:
+            regressor, seen_regressor = part, True
+        else:
+            raise SelectionError(
+                f"method {label!r}: {part!r} is not a choice inside clusters "
+                f"({', '.join(WITHIN)}) or a regressor ({', '.join(REGRESSORS)}), or comes "
+                "twice or out of order (method+within+regressor)")
+    return MethodChoice(method, within, regressor)
+
+
+def check_labels(labels, where: str) -> tuple[str, ...]:
+    """Study-file list of method labels, each parsed (one line naming ``where``), canonical
+    and without repeats."""
+    out: list[str] = []
+    for label in labels:
+        try:
+            canonical = parse_method(label).label
+        except SelectionError as exc:
+            raise SpindlebenchError(f"{where}: {exc}") from None
+        if canonical in out:
+            raise SpindlebenchError(f"{where}: {canonical!r} is listed twice")
+        out.append(canonical)
+    return tuple(out)
+
+
+def make_selector(choice: MethodChoice, k: int, similarity: str = DEFAULT_SIMILARITY,
+                  random_state: int = DEFAULT_METHOD_SEED) -> BaseEstimator:
+    """The selector of ``choice`` keeping ``k`` candidates."""
+    from spindlebench.selection import selectors
+
+    if choice.clustered:
+        return selectors.ClusterSelector(k, clustering=choice.method, within=choice.within,
+                                         similarity=similarity, random_state=random_state)
+    if choice.method == "top-k-correlated":
+        return selectors.TopCorrelatedSelector(k)
+    if choice.method == "lasso":
+        return selectors.LassoPathSelector(k, l1_ratio=1.0)
+    if choice.method == "elastic-net":
+        return selectors.LassoPathSelector(k, l1_ratio=0.5)
+    if choice.method == "stability":
+        return selectors.StabilitySelector(k, random_state=random_state)
+    return selectors.GreedyForwardSelector(k)
+
+
+def make_regressor(choice: MethodChoice) -> BaseEstimator:
+    """The regressor of ``choice``."""
+    from spindlebench.selection.estimators import RiseRegressor
+    from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
+
+    return {"ols": RiseRegressor, "ridge": RidgeRiseRegressor,
+            "pls": PLSRiseRegressor}[choice.regressor]()
+
+
+def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
+                  similarity: str = DEFAULT_SIMILARITY,
+                  random_state: int = DEFAULT_METHOD_SEED) -> Pipeline:
+    """differences (optional) -> selector -> regressor; feed it rises (``rises(X, groups)``)."""
+    from spindlebench.selection.estimators import PairwiseDifferences
+
+    steps = [("differences", PairwiseDifferences())] if differences else []
+    steps += [("select", make_selector(choice, k, similarity, random_state)),
+              ("regress", make_regressor(choice))]
+    return Pipeline(steps)
+
+
+def listing() -> str:
+    """What ``spindlebench methods`` prints: every name with its line."""
+    width = max(len(name) for name in (*METHODS, *WITHIN, *REGRESSORS))
+    lines = ["selection methods (--method; cluster methods first, the paper's is closure):"]
+    lines += [f"  {name:<{width}}  {text}" for name, text in METHODS.items()]
+    lines += ["choice inside a cluster (--within; cluster methods only):"]
+    lines += [f"  {name:<{width}}  {text}" for name, text in WITHIN.items()]
+    lines += ["regressors (--regressor):"]
+    lines += [f"  {name:<{width}}  {text}" for name, text in REGRESSORS.items()]
+    lines += ["In study files a combination is one label, method[+within][+regressor], "
+              "defaults (psi, ols) left out: closure, kmeans+grey, lasso+ridge."]
+    return "\n".join(lines)
+
+
+def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SIMILARITY,
+                names=None, random_state: int = DEFAULT_METHOD_SEED):
+    """Steps 2-5 by any method: a ``select.Selection`` over the columns of ``X``.
+
+    Constant candidates are dropped with a ``SelectionWarning`` first, as the paper's
+    selector does, so every method sees the same candidates. Fields a method does not have
+    are empty: ``similarity``/``closure`` (0 x 0) and ``eta`` (NaN); the clusters of a method
+    without clusters are its selected candidates, one each.
+    """
+    import warnings
+
+    import numpy as np
+
+    from spindlebench.selection.errors import SelectionWarning, column_list
+    from spindlebench.selection.select import Selection, _check_inputs, select_sensitive_points
+    from spindlebench.selection.similarity import constant_columns, correlation_with
+
+    if choice.method == DEFAULT_METHOD and choice.within == DEFAULT_WITHIN:
+        return select_sensitive_points(X, y, k, similarity, names=names)
+    X, y = _check_inputs(X, y, k)
+    constant = constant_columns(X)
+    kept, dropped = np.flatnonzero(~constant), np.flatnonzero(constant)
+    if dropped.size:
+        warnings.warn(f"dropping {dropped.size} constant candidate(s) (zero variance): "
+                      f"{column_list(dropped, names)}", SelectionWarning, stacklevel=2)
+    if k > kept.size:
+        raise SelectionError(f"cannot select {k}: only {kept.size} candidate(s) vary "
+                             f"({dropped.size} constant one(s) dropped)")
+    kept_names = None if names is None else [str(names[i]) for i in kept]
+    selector = make_selector(choice, k, similarity, random_state).fit(X[:, kept], y)
+    selected = kept[np.asarray(selector.selected_, dtype=np.intp)]
+    psi = np.full(X.shape[1], np.nan)
+    psi[kept] = correlation_with(X[:, kept], y, kept_names)
+    clusters = [kept[c] for c in selector.clusters_] if choice.clustered else \
+        [np.array([i]) for i in selected]
+    empty = np.empty((0, 0))
+    return Selection(kept=kept, dropped=dropped, similarity=empty, closure=empty,
+                     eta=float("nan"), clusters=clusters, psi=psi, selected=selected)
+
+
+def fit_with(choice: MethodChoice, X, y, names=None):
+    """The regression of ``choice`` on rises ``X`` as a ``regression.LinearFit``."""
+    from spindlebench.selection.regression import LinearFit, fit_ols
+
+    if choice.regressor == DEFAULT_REGRESSOR:
+        return fit_ols(X, y, names=names)
+    model = make_regressor(choice).fit(X, y)
+    return LinearFit(intercept=float(model.intercept_), coefficients=model.coef_,
+                     r2=float(model.r2_))
