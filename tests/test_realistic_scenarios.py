@@ -277,3 +277,68 @@ def test_shipped_realistic_example_loads():
     assert isinstance(scenario.ambient, IndoorAmbient) and scenario.initial.kind == "soak"
     assert scenario.sensors.noise_kind == "ar1"
     assert not isinstance(scenario.ambient, SeasonAmbient)
+
+
+# --------------------------------------------------------------------------- sweep studies
+
+
+def _tiny(tmp_path: Path, old: str, new: str) -> Path:
+    text = (Path(__file__).parents[1] / "scenarios" / "studies" / "tiny_sweep.toml").read_text()
+    assert old in text
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+def test_a_sweep_soaks_once_per_month_and_draws_indoor_weather_per_run(tmp_path):
+    from spindlebench.studies import experiments as ex
+    from spindlebench.studies.study import load_study
+
+    study = load_study(_tiny(
+        tmp_path, "weather_sd_C = 1.0\n",
+        'initial = "soak"\nsoak_days = 3\n\n[experiment.indoor]\nattenuation = 0.4\n'))
+    runs = [(replica, experiment) for replica in ex.replicas(study)
+            for experiment in ex.experiments(study)]
+    keys: dict[str, set[str]] = {}
+    seeds = set()
+    for replica, experiment in runs:
+        scenario = ex.scenario_for(study, replica, experiment)
+        assert isinstance(scenario.ambient, IndoorAmbient)
+        assert scenario.ambient.attenuation == 0.4 and scenario.initial.days == 3
+        seeds.add(scenario.ambient.weather_seed)
+        key = soak.soak_key(soak.soak_scenario(scenario), DEFAULT_FMU)
+        keys.setdefault(experiment.month, set()).add(key)
+    assert {month: len(k) for month, k in keys.items()} == {"Jan": 1, "Jul": 1}
+    assert keys["Jan"] != keys["Jul"]
+    assert len(seeds) == len(runs)  # every run its own weather
+
+
+def test_a_sweep_noise_level_carries_the_noise_process(tmp_path):
+    from spindlebench.studies import experiments as ex
+    from spindlebench.studies.study import load_study
+
+    study = load_study(_tiny(tmp_path, "[noise.lab]\nnoise_C = 0.05\n",
+                             '[noise.lab]\nnoise_C = 0.05\nnoise_kind = "ar1"\n'
+                             "noise_lag1 = 0.7\nprobe_drift_rate_um_per_h = 0.2\n"))
+    model = ex.sensor_model(study.noise[0], None)
+    assert (model.noise_kind, model.noise_lag1, model.probe_drift_rate_um_per_h) == (
+        "ar1", 0.7, 0.2)
+    scenario = ex.scenario_for(study, 1, ex.experiments(study)[0])
+    assert scenario.initial.kind == "cold" and isinstance(scenario.ambient, SeasonAmbient)
+
+
+@pytest.mark.parametrize(("old", "new", "key"), [
+    ("weather_sd_C = 1.0\n", "weather_sd_C = 1.0\nsoak_days = 3\n", "experiment.soak_days"),
+    ("weather_sd_C = 1.0\n", 'weather_sd_C = 1.0\ninitial = "warm"\n', "experiment.initial"),
+    ("weather_sd_C = 1.0\n", 'initial = "soak"\nsoak_days = 90\n', "experiment.soak_days"),
+    ("weather_sd_C = 1.0\n", "weather_sd_C = 1.0\n[experiment.indoor]\n",
+     "experiment.weather_sd_C"),
+    ("weather_sd_C = 1.0\n", "[experiment.indoor]\nlag_h = 30\n", "experiment.indoor.lag_h"),
+    ("[noise.lab]\nnoise_C = 0.05\n", "[noise.lab]\nnoise_C = 0.05\nnoise_lag1 = 0.5\n",
+     "noise.lab.noise_lag1"),
+])
+def test_bad_realism_study_keys_are_one_line(tmp_path, old, new, key):
+    from spindlebench.studies.study import load_study
+
+    with pytest.raises(SpindlebenchError, match=f"key '{key}'"):
+        load_study(_tiny(tmp_path, old, new))

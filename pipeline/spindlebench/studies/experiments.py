@@ -10,13 +10,14 @@ depends only on (replica, experiment); each condition re-measures its noise-free
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from spindlebench.studies.seeds import derive_seed
 from spindlebench.studies.study import NO_FAULT, Fault, NoiseLevel, Programme, SweepStudy
 from spindlebench.testbench.scenario import (
+    AmbientModel,
     ConstantFeed,
     ConstantSpeed,
     Cooling,
@@ -140,7 +141,39 @@ def sensor_model(noise: NoiseLevel, fault: Fault | None) -> SensorModel:
                               fault.value_C, fault.offset_C),)
     return SensorModel(noise_C=noise.noise_C, quantum_C=noise.quantum_C,
                        probe_noise_um=noise.probe_noise_um,
-                       probe_quantum_um=noise.probe_quantum_um, faults=faults)
+                       probe_quantum_um=noise.probe_quantum_um, faults=faults,
+                       noise_kind=noise.noise_kind,  # type: ignore[arg-type]
+                       noise_lag1=noise.noise_lag1,
+                       probe_drift_um_per_sqrt_h=noise.probe_drift_um_per_sqrt_h,
+                       probe_drift_rate_um_per_h=noise.probe_drift_rate_um_per_h)
+
+
+def ambient_for(study: SweepStudy, replica: int, experiment: Experiment) -> AmbientModel:
+    """The run's air: the replica's day of the season curve, or indoor air of the month's
+    normals with its own weather (seeded per replica and experiment, like ``day_weather``)."""
+    if study.indoor is None:
+        low, high = day_weather(study, replica, experiment)
+        return SeasonAmbient(low_C=low, high_C=high, start_hour=study.start_hour)
+    normal = study.climate.months[experiment.month]
+    return replace(study.indoor, outdoor_low_C=normal.low_C, outdoor_high_C=normal.high_C,
+                   start_hour=study.start_hour,
+                   weather_seed=derive_seed(study.seed, "weather", replica, experiment.id))
+
+
+def initial_for(study: SweepStudy, experiment: Experiment) -> InitialState:
+    """A cold start, or the soak of the month's *normal* daily cycle (no replica's weather):
+    every run of one month shares it, so the soak is simulated once per month."""
+    if study.soak_days is None:
+        return InitialState()
+    normal = study.climate.months[experiment.month]
+    if study.indoor is None:
+        cycle: AmbientModel = SeasonAmbient(low_C=normal.low_C, high_C=normal.high_C,
+                                            start_hour=study.start_hour)
+    else:
+        cycle = replace(study.indoor, outdoor_low_C=normal.low_C,
+                        outdoor_high_C=normal.high_C, start_hour=study.start_hour,
+                        weather_sd_K=0.0)
+    return InitialState(kind="soak", days=study.soak_days, soak_ambient=cycle)
 
 
 def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Scenario:
@@ -151,7 +184,6 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
     """
     programme = next(p for p in study.programmes if p.name == experiment.programme)
     cooling = next(c for c in study.cooling if c.name == experiment.cooling)
-    low, high = day_weather(study, replica, experiment)
     feed_cls = ConstantFeed if study.feed == "constant" else FeedWithSpindle
     return Scenario(
         path=study.path,
@@ -163,9 +195,9 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         seed=sensor_seed(study, replica, experiment),
         speed=_speed(programme, experiment.speed_rpm),
         feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
-        ambient=SeasonAmbient(low_C=low, high_C=high, start_hour=study.start_hour),
+        ambient=ambient_for(study, replica, experiment),
         cooling=Cooling(mode=cooling.mode, setpoint_C=cooling.setpoint_C),  # type: ignore[arg-type]
         sensors=sensor_model(study.noise[0], None),
-        initial=InitialState(),
+        initial=initial_for(study, experiment),
         parameters=dict(study.parameters),
     )

@@ -15,7 +15,7 @@ Every problem becomes one line naming the study file and the dotted key.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -36,10 +36,17 @@ from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_
 from spindlebench.testbench.scenario import (
     FOLLOW_AMBIENT_MAX_K,
     MAX_FEED_MM_PER_MIN,
+    MAX_LAG1,
     MAX_NOISE_C,
     MAX_OFFSET_C,
+    MAX_PROBE_DRIFT_UM,
     MAX_PROBE_NOISE_UM,
     MAX_RPM,
+    MAX_SOAK_DAYS,
+    NOISE_KINDS,
+    IndoorAmbient,
+    InitialState,
+    read_building,
     step_count_problem,
     temperature_problem,
 )
@@ -82,6 +89,10 @@ class NoiseLevel:
     quantum_C: float  # noqa: N815
     probe_noise_um: float
     probe_quantum_um: float
+    noise_kind: str = "white"
+    noise_lag1: float = 0.86
+    probe_drift_um_per_sqrt_h: float = 0.0
+    probe_drift_rate_um_per_h: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -142,6 +153,12 @@ class SweepStudy:
     training: Training
     methods: Methods
     parameters: dict[str, float] = field(default_factory=dict)
+    #: ``initial = "soak"``: every run starts from ``soak_days`` idle days of its month's
+    #: normal daily cycle (one soak per month, shared by all its runs); None: a cold start.
+    soak_days: int | None = None
+    #: ``[experiment.indoor]``: the indoor ambient's building and weather (outdoor cycle and
+    #: seed are filled in per run); None: the season curve of the replica's day.
+    indoor: IndoorAmbient | None = None
 
     @property
     def sha256(self) -> str:
@@ -199,6 +216,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
                    check=lambda v: one_of(v, ("constant", "with_spindle")))
     feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=_feed)
     feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=_feed)
+    soak_days = _soak_days(exp)
+    indoor = _indoor(exp)
     exp.finish()
 
     definitions = {
@@ -251,8 +270,33 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
         sample_interval_s=sample_interval_s, start_hour=start_hour, weather_sd_C=weather_sd,
         feed=feed, feed_x_mm_per_min=feed_x, feed_y_mm_per_min=feed_y, months=months,
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
-        training=training, methods=methods, parameters=parameters,
+        training=training, methods=methods, parameters=parameters, soak_days=soak_days,
+        indoor=indoor,
     )
+
+
+def _soak_days(exp: Table) -> int | None:
+    """``initial = "cold"`` (default) or ``"soak"`` with ``soak_days`` (1-60, default 7)."""
+    initial = exp.get("initial", str, default="cold",
+                      check=lambda v: one_of(v, ("cold", "soak")))
+    if initial == "cold":
+        return None  # soak_days is then an unknown key
+    return exp.get("soak_days", int, default=InitialState().days,
+                   check=in_range(1, MAX_SOAK_DAYS))
+
+
+def _indoor(exp: Table) -> IndoorAmbient | None:
+    """The optional ``[experiment.indoor]`` table: the building and weather of an indoor
+    ambient (scenario keys and defaults); the outdoor cycle is each month's normals."""
+    if not exp.has("indoor"):
+        return None
+    if exp.has("weather_sd_C"):
+        raise exp.error("weather_sd_C", "with [experiment.indoor] the weather is the indoor "
+                        "model's (weather_sd_K there); remove weather_sd_C")
+    t = exp.table("indoor")
+    template = IndoorAmbient(outdoor_low_C=0.0, outdoor_high_C=0.0, **read_building(t))
+    t.finish()
+    return template
 
 
 def _feed(value: float) -> str | None:
@@ -367,7 +411,17 @@ def _noise(table: Table, axes: Table, name: str) -> NoiseLevel:
                              check=in_range(0, MAX_PROBE_NOISE_UM)),
         probe_quantum_um=t.get("probe_quantum_um", float, default=0.1,
                                check=in_range(0, MAX_PROBE_NOISE_UM)),
+        noise_kind=t.get("noise_kind", str, default="white",
+                         check=lambda v: one_of(v, NOISE_KINDS)),
+        probe_drift_um_per_sqrt_h=t.get("probe_drift_um_per_sqrt_h", float, default=0.0,
+                                        check=in_range(0, MAX_PROBE_DRIFT_UM)),
+        probe_drift_rate_um_per_h=t.get("probe_drift_rate_um_per_h", float, default=0.0,
+                                        check=in_range(-MAX_PROBE_DRIFT_UM,
+                                                       MAX_PROBE_DRIFT_UM)),
     )
+    if level.noise_kind == "ar1":  # the coefficient of the AR(1) process only
+        level = replace(level, noise_lag1=t.get("noise_lag1", float, default=level.noise_lag1,
+                                                check=in_range(0, MAX_LAG1)))
     t.finish()
     return level
 

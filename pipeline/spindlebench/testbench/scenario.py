@@ -225,6 +225,10 @@ class SensorFault:
 
 #: Temperature noise processes: independent per sample, AR(1), or a random walk.
 NOISE_KINDS = ("white", "ar1", "random_walk")
+#: Largest AR(1) lag-1 coefficient (1 would be a random walk, which has its own kind).
+MAX_LAG1 = 0.9999
+#: Largest probe drift (µm per √h for the walk, µm/h for the creep).
+MAX_PROBE_DRIFT_UM = 100.0
 
 
 @dataclass(frozen=True)
@@ -442,20 +446,29 @@ def _read_indoor(t: Table, seed: int) -> IndoorAmbient:
     peak = _hour(t, "peak_hour", 15.0)
     if math.isclose(trough % 24, peak % 24):
         raise t.error("peak_hour", "must differ from trough_hour")
-    defaults = IndoorAmbient(low, high)
     return IndoorAmbient(
         outdoor_low_C=low, outdoor_high_C=high, start_hour=_hour(t, "start_hour", 8.0),
-        trough_hour=trough, peak_hour=peak,
-        attenuation=t.number("attenuation", defaults.attenuation, minimum=0.0, maximum=1.0),
-        lag_h=t.number("lag_h", defaults.lag_h, minimum=0.0, maximum=12.0),
-        building_offset_K=t.number("building_offset_K", defaults.building_offset_K,
-                                   minimum=-30.0, maximum=30.0),
-        weather_sd_K=t.number("weather_sd_K", defaults.weather_sd_K, minimum=0.0,
-                              maximum=15.0),
-        weather_tau_h=t.number("weather_tau_h", defaults.weather_tau_h, minimum=1.0,
-                               maximum=720.0),
-        weather_seed=t.integer("weather_seed", seed, minimum=0),
+        trough_hour=trough, peak_hour=peak, weather_seed=t.integer("weather_seed", seed,
+                                                                   minimum=0),
+        **read_building(t),
     )
+
+
+#: Ranges of the building and weather keys of an indoor ambient, in scenario and study files.
+BUILDING_LIMITS: dict[str, tuple[float, float]] = {
+    "attenuation": (0.0, 1.0),
+    "lag_h": (0.0, 12.0),
+    "building_offset_K": (-30.0, 30.0),
+    "weather_sd_K": (0.0, 15.0),
+    "weather_tau_h": (1.0, 720.0),
+}
+
+
+def read_building(t: Table) -> dict[str, float]:
+    """The building and weather keys of an indoor ambient (defaults: ``IndoorAmbient``'s)."""
+    fields = IndoorAmbient.__dataclass_fields__
+    return {name: t.number(name, fields[name].default, minimum=low, maximum=high)
+            for name, (low, high) in BUILDING_LIMITS.items()}
 
 
 def _read_ambient(top: Table, scenario_dir: Path, duration_s: float,
@@ -581,12 +594,12 @@ def _read_sensors(top: Table, duration_s: float) -> SensorModel:
     )
     noise_kind = t.string("noise_kind", defaults.noise_kind, choices=NOISE_KINDS)
     # the lag-1 coefficient belongs to the AR(1) process only: elsewhere it is an unknown key
-    lag1 = (t.number("noise_lag1", defaults.noise_lag1, minimum=0.0, maximum=0.9999)
+    lag1 = (t.number("noise_lag1", defaults.noise_lag1, minimum=0.0, maximum=MAX_LAG1)
             if noise_kind == "ar1" else defaults.noise_lag1)
     drift_walk = t.number("probe_drift_um_per_sqrt_h", defaults.probe_drift_um_per_sqrt_h,
-                          minimum=0.0, maximum=100.0)
+                          minimum=0.0, maximum=MAX_PROBE_DRIFT_UM)
     drift_rate = t.number("probe_drift_rate_um_per_h", defaults.probe_drift_rate_um_per_h,
-                          minimum=-100.0, maximum=100.0)
+                          minimum=-MAX_PROBE_DRIFT_UM, maximum=MAX_PROBE_DRIFT_UM)
     faults = []
     for ft in t.tables("faults", []):
         sensor = ft.string("sensor", choices=SENSORS)

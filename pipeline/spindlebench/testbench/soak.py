@@ -69,8 +69,8 @@ def soak_scenario(scenario: Scenario) -> Scenario:
         raise SpindlebenchError(f"{scenario.path}: key 'initial.kind': a soak repeats a daily "
                                 "cycle; a measured ambient series has none (give "
                                 "initial.soak_ambient, or use kind = \"cold\")")
-    if isinstance(cycle, IndoorAmbient):
-        cycle = replace(cycle, weather_sd_K=0.0)
+    if isinstance(cycle, IndoorAmbient):  # the cycle without weather: no seed matters
+        cycle = replace(cycle, weather_sd_K=0.0, weather_seed=0)
     duration_s = initial.days * 86400.0
     return replace(
         scenario,
