@@ -216,7 +216,7 @@ def soak_cache(tmp_path, monkeypatch):
 
 def test_soak_under_a_constant_ambient_is_the_idle_machine_s_steady_state(tmp_path,
                                                                          soak_cache):
-    """Idle is standstill, not power off: only the servo motors' holding losses heat it."""
+    """Idle is standstill, not power off: only the feed servos' holding losses heat it."""
     scenario = load_scenario(write(tmp_path, "c.toml", BASE + SEASON))
     scenario = replace(scenario, ambient=ConstantAmbient(14.0),
                        initial=InitialState(kind="soak", days=2))
@@ -225,8 +225,9 @@ def test_soak_under_a_constant_ambient_is_the_idle_machine_s_steady_state(tmp_pa
                              DEFAULT_FMU)
     ambient_K = 14.0 + KELVIN_OFFSET
     assert min(states.values()) >= ambient_K - 1e-6  # heat sources only, no sink
-    assert max(states, key=states.get) in ("x_motor_T", "y_motor_T")
-    assert states["front_bearing_T"] == pytest.approx(ambient_K, abs=0.01)  # spindle stands
+    assert "motor" in max(states, key=states.get)  # a feed servo holding its axis
+    # the standing spindle is far from them: its bearing is within 0.1 K of the air
+    assert states["front_bearing_T"] == pytest.approx(ambient_K, abs=0.1)
     assert max(abs(states[n] - longer[n]) for n in states) < 0.01  # steady after 2 days
 
 
