@@ -64,10 +64,10 @@ def test_warnings_are_one_line_each(capsys):
     """A warning from a sub-command prints as one 'warning:' line, not Python's source echo."""
     import warnings
 
-    from spindlebench.cli import _print_warning
+    from spindlebench.cli import print_warning
 
     with warnings.catch_warnings():
-        warnings.showwarning = _print_warning
+        warnings.showwarning = print_warning
         warnings.warn("cluster ties:\n  exactly 3 clusters impossible", UserWarning, stacklevel=1)
     err = capsys.readouterr().err
     assert err == "warning: cluster ties: exactly 3 clusters impossible\n"

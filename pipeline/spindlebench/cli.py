@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
-from spindlebench import __version__
+from spindlebench import __version__, interrupts
 from spindlebench.errors import SpindlebenchError
 
 COMMAND_MODULES: tuple[str, ...] = (
@@ -84,7 +84,7 @@ def _one_line(text: str) -> str:
     return " ".join(text.split())
 
 
-def _print_warning(message: Warning | str, category: type[Warning], filename: str,
+def print_warning(message: Warning | str, category: type[Warning], filename: str,
                    lineno: int, file=None, line: str | None = None) -> None:
     """A warning as one ``warning:`` line, like errors (not Python's two lines of source)."""
     print(f"warning: {_one_line(str(message))}", file=sys.stderr)
@@ -93,10 +93,21 @@ def _print_warning(message: Warning | str, category: type[Warning], filename: st
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: run a sub-command; user errors become one ``error:`` line and status 2,
     warnings one ``warning:`` line each."""
-    args = parse_args(build_parser(), argv)
+    interrupts.install()
+    try:
+        args = parse_args(build_parser(), argv)  # imports every command: Ctrl-C can land here
+    except KeyboardInterrupt as exc:
+        return _interrupted(exc)
     with warnings.catch_warnings():
-        warnings.showwarning = _print_warning
+        warnings.showwarning = print_warning
         return _run(args)
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    name = exc.args[0] if isinstance(exc, interrupts.Interrupted) else "SIGINT"
+    print(f"error: interrupted by {name}; the unfinished output was not written",
+          file=sys.stderr)
+    return interrupts.EXIT_STATUS
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -110,9 +121,8 @@ def _run(args: argparse.Namespace) -> int:
         where = f"{name}: " if name else ""
         print(f"error: {_one_line(f'{where}{exc.strerror or exc}')}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM (spindlebench.interrupts)
+        return _interrupted(exc)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,9 @@ import difflib
 import json
 import shutil
 import sys
-import time as wallclock
+import tempfile
+import zipfile
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +33,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Model, fmi3Float64, fmi3ValueReference
 from fmpy.model_description import ModelDescription, ScalarVariable, ValidationError
 
+from spindlebench import interrupts
 from spindlebench.errors import SpindlebenchError
 from spindlebench.names import KELVIN_OFFSET, SENSORS
 from spindlebench.paths import DEFAULT_FMU
@@ -65,6 +68,10 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
     if not fmu_path.is_file():
         hint = " (build it with `spindlebench build`)" if fmu_path == DEFAULT_FMU else ""
         raise SpindlebenchError(f"{fmu_path}: no such FMU{hint}")
+    damaged = _damaged_member(fmu_path)
+    if damaged:
+        raise SpindlebenchError(f"{fmu_path}: damaged FMU: {damaged} (rebuild it with "
+                                "`spindlebench build` or copy it again)")
     try:
         md = read_model_description(str(fmu_path))
     except ValidationError as exc:
@@ -101,6 +108,46 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
         state_vrs=tuple(v.valueReference for v in states),
         parameters=parameters,
     )
+
+
+def _damaged_member(fmu_path: Path) -> str | None:
+    """What is wrong with the FMU's zip container (None when every member checks out).
+
+    Checked up front (CRC of every member, and a shared library must not be empty) so a
+    damaged file is one line before anything runs, not a ``BadZipFile`` or "file too short"
+    traceback from the middle of extracting or loading it.
+    """
+    try:
+        with zipfile.ZipFile(fmu_path) as archive:
+            for info in archive.infolist():
+                if info.filename.startswith("binaries/") and not info.is_dir() \
+                        and info.file_size == 0:
+                    return f"member {info.filename} is empty (0 bytes)"
+                try:
+                    with archive.open(info) as member:
+                        while member.read(1 << 20):
+                            pass
+                except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
+                    return f"member {info.filename} is corrupt ({exc})"
+    except zipfile.BadZipFile:
+        return None  # not a zip at all: reading its model description says so
+    except OSError as exc:
+        return f"cannot read the archive ({exc.strerror or exc})"
+    return None
+
+
+def extract_fmu(fmu: FmuInterface) -> Path:
+    """Unzip the FMU into a new temporary folder; on any failure the folder is removed."""
+    unzip_dir = Path(tempfile.mkdtemp(prefix="spindlebench-fmu-"))
+    try:
+        extract(str(fmu.path), unzipdir=str(unzip_dir))
+    except (zipfile.BadZipFile, OSError, EOFError, zlib.error) as exc:
+        shutil.rmtree(unzip_dir, ignore_errors=True)
+        raise SpindlebenchError(f"{fmu.path}: cannot unpack the FMU: {exc}") from None
+    except BaseException:
+        shutil.rmtree(unzip_dir, ignore_errors=True)
+        raise
+    return unzip_dir
 
 
 @dataclass(frozen=True)
@@ -255,6 +302,7 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
 # --------------------------------------------------------------------------- the loop
 
 
+@interrupts.deferring  # Ctrl-C inside CVode's ctypes callbacks would be swallowed
 def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                 progress: bool = False) -> Simulation:
     """Run a scenario through the FMU and return the noise-free sampled outputs."""
@@ -275,7 +323,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     n_out = len(fmu_info.output_vrs)
     samples = np.empty((n_samples, n_out))
 
-    unzip_dir = extract(str(fmu_info.path))
+    unzip_dir = extract_fmu(fmu_info)
     identifier = md.modelExchange.modelIdentifier
     binary = Path(unzip_dir, "binaries", platform_tuple, identifier + sharedLibraryExtension)
     if not binary.is_file():
@@ -283,13 +331,12 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         raise SpindlebenchError(f"{fmu_info.path}: has no binary for {platform_tuple}; "
                                 "rebuild it here with `spindlebench build`")
     try:
-        fmu = FMU3Model(guid=md.guid, unzipDirectory=unzip_dir,
+        fmu = FMU3Model(guid=md.guid, unzipDirectory=str(unzip_dir),
                         modelIdentifier=identifier, instanceName="spindlebench")
     except OSError as exc:  # a binary that does not load here
         shutil.rmtree(unzip_dir, ignore_errors=True)
         raise SpindlebenchError(f"{fmu_info.path}: cannot load its binary for {platform_tuple} "
                                 f"({exc}); rebuild it here with `spindlebench build`") from None
-    started = wallclock.perf_counter()
     bar = _progress_bar(scenario.duration_s, progress, scenario.name)
     instantiated = False
     try:
@@ -342,6 +389,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             t_next = (k + 1) * step_s
             set_stop_time(solver.cvode_mem, t_next)
             _, _, t = solver.step(t, t_next)
+            interrupts.check()  # a Ctrl-C that arrived during the step ends the run here
             if abs(t - t_next) > 1e-9 * max(1.0, t_next):
                 raise SpindlebenchError(f"{fmu_info.path}: CVode stopped at t={t:g} s "
                                         f"instead of {t_next:g} s")
@@ -371,7 +419,6 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         if instantiated:
             fmu.freeInstance()
         shutil.rmtree(unzip_dir, ignore_errors=True)
-    wall_s = wallclock.perf_counter() - started
 
     sample_rows = np.arange(n_samples) * every
     sampled = DriverSignals(*(getattr(signals, f)[sample_rows]
@@ -389,7 +436,6 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             "communication_step_s": scenario.step_s,
             "input_hold": "zero-order hold, set at the start of each communication step",
             "restarts_at_input_jumps": int(jumps.sum()),
-            "wall_time_s": round(wall_s, 3),
         },
     )
 
