@@ -1,8 +1,14 @@
-"""Atomic file output: a reader never sees a half-written file, a crash leaves the old one."""
+"""Atomic file output: a reader never sees a half-written file, a crash leaves the old one.
+
+The temporary file beside the target is named ``.<target>.<pid>.<random>.part``: a process
+killed with SIGKILL cannot remove it, so the next write of the same target removes every
+part file of that target whose writer process no longer exists.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 from collections.abc import Iterator
@@ -24,7 +30,9 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    remove_stale_parts(target)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".part",
+                                    dir=target.parent)
     os.close(fd)
     tmp = Path(tmp_name)
     # mkstemp makes the file private (0600); give it the mode a plain open() would.
@@ -32,6 +40,10 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     try:
         yield tmp
         os.replace(tmp, target)
+    except OSError as exc:
+        if exc.filename is None and exc.errno:  # the disk refused a write (full, quota, size)
+            exc.filename = str(target)  # say which file: "No space left on device" alone
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -47,3 +59,30 @@ def write_bytes(target: str | os.PathLike[str], data: bytes) -> None:
     """Write ``data`` to ``target`` atomically."""
     with atomic_path(target) as tmp:
         tmp.write_bytes(data)
+
+
+def _process_exists(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's live process
+        return True
+    return True
+
+
+def remove_stale_parts(target: str | os.PathLike[str]) -> list[Path]:
+    """Remove the part files of ``target`` left by writers that were killed; return them.
+
+    A part file of a live process (a concurrent writer) is left alone.
+    """
+    target = Path(target)
+    removed = []
+    for part in target.parent.glob(f".{glob.escape(target.name)}.*.part"):
+        pid_text = part.name[len(target.name) + 2:].split(".", 1)[0]
+        if pid_text.isdigit() and not _process_exists(int(pid_text)):
+            with contextlib.suppress(FileNotFoundError):
+                part.unlink()
+                removed.append(part)
+    return removed
+
