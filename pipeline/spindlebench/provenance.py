@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import os
 import platform
-from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -38,14 +37,14 @@ def package_versions() -> dict[str, str]:
 
 
 def provenance(**fields: Any) -> dict[str, Any]:
-    """A provenance dict: the caller's fields plus package versions and a creation time.
+    """A provenance dict: the caller's fields plus package versions.
 
-    The creation time is informational; everything that determines the numbers is in the
-    other fields, so two runs with equal fields give equal data.
+    No creation time and no wall-clock durations: the same inputs and seed give the same
+    bytes in every output (a timestamp would make every rerun differ); a file's time is in
+    the file system, timings are printed to the log.
     """
     record: dict[str, Any] = dict(fields)
     record["package_versions"] = package_versions()
-    record["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
     return record
 
 

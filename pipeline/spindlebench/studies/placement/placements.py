@@ -228,14 +228,14 @@ def placements_table(study: PlacementStudy, placements: Sequence[Placement],
             for season, at in test.groupby("season", sort=False):
                 row[f"test_{season}_rmse_um"] = at["rmse_um"].mean()
             row["test_mean_rmse_true_um"] = test["rmse_true_um"].mean()
-        row.update({"search_score_um": placement.search_score_um,
-                    "seconds": placement.seconds, "note": placement.note})
+        # no search time here: the table is reproducible bytes; timings go to the log
+        row.update({"search_score_um": placement.search_score_um, "note": placement.note})
         rows.append(row)
     table = pd.DataFrame(rows)
     order = ["label", "method", "differences", "m", "variables", "sensors", "n_sensors",
              "design_rmse_um", "test_mean_rmse_um", "test_worst_rmse_um",
              *[f"test_{s}_rmse_um" for s in seasons], "test_mean_rmse_true_um",
-             "search_score_um", "seconds", "note"]
+             "search_score_um", "note"]
     for column in order:
         if column not in table:
             table[column] = np.nan

@@ -199,11 +199,6 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
                 skipped.iterrows()]
         out.append("")
     out += fuzzy_table(outcome.placements)
-    timing = table[table["variables"] != ""].groupby("label", sort=False)["seconds"].agg(
-        lambda s: s.iloc[0] if s.nunique() == 1 else s.sum())
-    out += ["Search time on this machine: " + ", ".join(
-        f"{label} {seconds:.2f} s" for label, seconds in timing.items())
-        + f" (all searches and scoring: {outcome.search_seconds:.1f} s).", ""]
     if figures:
         out += ["## Figures", ""]
         for name, path in figures.items():
