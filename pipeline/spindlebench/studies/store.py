@@ -6,12 +6,28 @@ does only the rest. ``state.json`` pins the inputs: the study's *content* (its p
 canonicalised tables, so a comment, blank line or reordered key does not count as a change)
 and the FMU's hash. Resuming with different inputs would mix incompatible results, so it is
 refused with one line naming what differs.
+
+A finished unit counts as done only while it is intact: every file the store writes has its
+SHA-256 in ``manifest.json`` (a recording's CSV is checked against its sidecar's
+``recording_sha256``), so a damaged, truncated or edited piece is named in a warning and
+redone instead of read (random bytes in a stored CSV were a ``UnicodeDecodeError``).
+
+Only one study process may work in a folder at a time: ``claim`` takes an exclusive lock
+(``.lock``, an ``flock`` the system drops when the process ends, even by ``kill -9``); a
+second process is refused with one line naming the process that holds it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import json
+import os
+import socket
+import sys
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,8 +35,11 @@ import pandas as pd
 
 from spindlebench.atomic import atomic_path, write_text
 from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
 
 STATE_FILE = "state.json"
+MANIFEST_FILE = "manifest.json"
+LOCK_FILE = ".lock"
 CONTENT_KEY = "study_content_sha256"
 #: How a refusal names each pinned input (``study_sha256``: the raw file hash that state files
 #: of earlier versions pinned).
@@ -84,24 +103,85 @@ def differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
     return out
 
 
+class DamagedResultWarning(UserWarning):
+    """A stored piece of a study no longer matches what was written; it is redone."""
+
+
 class ResultStore:
-    """Files under ``root``, addressed by relative paths."""
+    """Files under ``root``, addressed by relative paths, each checked to be intact."""
 
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root)
+        self._manifest: dict[str, str] | None = None
+        self._verified: dict[str, bool] = {}
+        self._lock: int | None = None
 
     def path(self, relative: str | Path) -> Path:
         return self.root / relative
 
     def exists(self, relative: str | Path) -> bool:
-        return self.path(relative).is_file()
+        """Whether the piece is there and intact; a damaged one is named and counts as
+        missing (so the caller redoes it)."""
+        return self.path(relative).is_file() and self.intact(relative)
+
+    def intact(self, relative: str | Path) -> bool:
+        """Whether the file still has the bytes the store (or the recording writer) wrote;
+        a file written before the store kept hashes is taken on trust."""
+        key = Path(relative).as_posix()
+        if key not in self._verified:
+            problem = self._damage(key)
+            if problem:
+                warnings.warn(f"{self.path(key)}: {problem}; redoing it",
+                              DamagedResultWarning, stacklevel=3)
+            self._verified[key] = problem is None
+        return self._verified[key]
+
+    def _damage(self, key: str) -> str | None:
+        actual = sha256_file(self.path(key))
+        expected = self.manifest().get(key)
+        sidecar = self.path(key).with_suffix(".json")
+        if expected is None and key.endswith(".csv") and sidecar.exists():  # a recording
+            try:
+                expected = json.loads(sidecar.read_text(encoding="utf-8")).get(
+                    "recording_sha256")
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+                return f"damaged (its sidecar {sidecar.name} is unreadable)"
+        if expected is None or expected == actual:
+            return None
+        return (f"damaged (sha256 {actual[:12]}… is not the {expected[:12]}… it was "
+                "written with)")
+
+    def manifest(self) -> dict[str, str]:
+        """Relative path → SHA-256 of every file this store wrote."""
+        if self._manifest is None:
+            try:
+                loaded = json.loads(self.path(MANIFEST_FILE).read_text(encoding="utf-8"))
+                self._manifest = {str(k): str(v) for k, v in loaded.items()}
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+                self._manifest = {}  # lost or damaged: every piece is taken on trust
+        return self._manifest
+
+    def _written(self, relative: str | Path) -> None:
+        key = Path(relative).as_posix()
+        self.manifest()[key] = sha256_file(self.path(key))
+        self._verified[key] = True
+        self._save_manifest()
+
+    def _save_manifest(self) -> None:
+        write_text(self.path(MANIFEST_FILE),
+                   json.dumps(dict(sorted(self.manifest().items())), indent=1) + "\n")
 
     def remove(self, relative: str | Path) -> None:
-        self.path(relative).unlink(missing_ok=True)
+        key = Path(relative).as_posix()
+        self.path(key).unlink(missing_ok=True)
+        self._verified.pop(key, None)
+        if self.manifest().pop(key, None) is not None:
+            self._save_manifest()
 
     def write_json(self, relative: str | Path, data: Any) -> Path:
         target = self.path(relative)
         write_text(target, json.dumps(data, indent=2, ensure_ascii=False, default=str) + "\n")
+        self._written(relative)
         return target
 
     def read_json(self, relative: str | Path) -> Any:
@@ -111,10 +191,56 @@ class ResultStore:
         target = self.path(relative)
         with atomic_path(target) as tmp:
             frame.to_csv(tmp, index=False, lineterminator="\n")
+        self._written(relative)
         return target
 
     def read_frame(self, relative: str | Path) -> pd.DataFrame:
         return pd.read_csv(self.path(relative), keep_default_na=True)
+
+    def lock(self) -> None:
+        """Take the folder's exclusive lock for the life of this process, or refuse in one
+        line naming the process that holds it."""
+        if self._lock is not None:
+            return
+        self._refuse_foreign_folder()  # no lock file in a folder that is not ours
+        self.root.mkdir(parents=True, exist_ok=True)
+        path = self.path(LOCK_FILE)
+        handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(handle, 400).decode("utf-8", "replace").strip() or "another process"
+            os.close(handle)
+            raise SpindlebenchError(f"{self.root}: in use by {holder}; wait for it to finish "
+                                    "or use another output folder") from None
+        os.ftruncate(handle, 0)
+        command = " ".join(["spindlebench", *sys.argv[1:3]]) if sys.argv else "python"
+        os.write(handle, f"process {os.getpid()} on {socket.gethostname()} "
+                         f"({command})\n".encode())
+        self._lock = handle  # kept open: the lock lasts as long as this process
+
+    def unlock(self) -> None:
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[ResultStore]:
+        """Hold the folder's lock for the block (re-entrant: an outer holder keeps it)."""
+        if self._lock is not None:
+            yield self
+            return
+        self.lock()
+        try:
+            yield self
+        finally:
+            self.unlock()
+
+    def _refuse_foreign_folder(self) -> None:
+        if not self.path(STATE_FILE).is_file() and self.root.exists() and any(
+                p.name != LOCK_FILE for p in self.root.iterdir()):
+            raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
+                                    "choose an empty or new folder")
 
     def claim(self, content: dict[str, Any], hashes: dict[str, str],
               legacy: dict[str, str] | None = None) -> bool:
@@ -130,6 +256,7 @@ class ResultStore:
         content = canonical(content)
         inputs = {CONTENT_KEY: content_sha256(content), **hashes}
         state_path = self.path(STATE_FILE)
+        self.lock()  # held until unlock(), the end of ``locked()`` or of the process
         if state_path.is_file():
             try:
                 state = json.loads(state_path.read_text(encoding="utf-8"))
@@ -147,9 +274,6 @@ class ResultStore:
                     raise self._refusal(key, recorded.get(key), value, state.get("content"),
                                         content)
             return True
-        if self.root.exists() and any(self.root.iterdir()) and not state_path.is_file():
-            raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
-                                    "choose an empty or new folder")
         self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
         return False
 

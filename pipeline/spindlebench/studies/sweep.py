@@ -171,6 +171,11 @@ class Sweep:
     # ----------------------------------------------------------------- running
 
     def run(self, runner: TaskRunner) -> SweepOutcome:
+        """Simulate and evaluate what is not done yet, holding the folder's lock."""
+        with self.store.locked():
+            return self._run(runner)
+
+    def _run(self, runner: TaskRunner) -> SweepOutcome:
         fmu_sha256 = sha256_file(self.fmu)
         resumed = self.store.claim(pinned_content(self.study), {"fmu_sha256": fmu_sha256},
                                    legacy={"study_sha256": self.study.sha256,
@@ -267,7 +272,8 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
     sweep = Sweep(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="job")
-    with runner.connected():  # an unreachable scheduler fails before the folder is made
+    # an unreachable scheduler fails before the folder is made (and locked)
+    with runner.connected(), sweep.store.locked():
         outcome = sweep.run(runner)
         write_outputs(sweep, outcome, runner)
     return outcome
