@@ -20,6 +20,8 @@ import concurrent.futures as cf
 import multiprocessing
 import os
 import re
+import select
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
@@ -121,22 +123,67 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def single_threaded_worker() -> None:
-    """Worker initializer: one BLAS thread per process.
+def single_threaded_worker(parent_pid: int | None = None) -> None:
+    """Worker initializer: one BLAS thread per process, one-line warnings, and exit when the
+    study process dies.
 
     The workers already fill the cores; a multi-threaded BLAS in each of them oversubscribes
     the machine, and OpenBLAS's spinning threads then make two workers slower than one.
+    A worker is a child of the forkserver, not of the study process, and waits on its task
+    queue forever: after a ``kill -9`` of the study it would live on, reparented to PID 1
+    (and keep the forkserver and resource tracker alive with it), so it watches
+    ``parent_pid`` and exits as soon as that process is gone.
     """
+    import warnings
+
     from threadpoolctl import threadpool_limits
 
+    from spindlebench.cli import print_warning
+
     threadpool_limits(limits=1)
+    warnings.showwarning = print_warning  # one line, as in the study process, no source line
+    if parent_pid is not None:
+        threading.Thread(target=_exit_with, args=(parent_pid,), daemon=True,
+                         name="exit-with-parent").start()
+
+
+def _exit_with(pid: int) -> None:
+    """Block until process ``pid`` ends, then end this process at once."""
+    try:
+        handle = os.pidfd_open(pid)  # readable when the process ends (Linux >= 5.3)
+    except (AttributeError, OSError):
+        handle = None
+    if handle is not None:
+        select.select([handle], [], [])
+    else:
+        while _alive(pid):
+            time.sleep(1.0)
+    os._exit(1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
     # forkserver: forking a process that runs threads (tqdm, Dask) can deadlock the child.
     context = multiprocessing.get_context("forkserver")
     return cf.ProcessPoolExecutor(max_workers=workers, mp_context=context,
-                                  initializer=single_threaded_worker)
+                                  initializer=single_threaded_worker, initargs=(os.getpid(),))
+
+
+def _stop_workers(executor: cf.Executor) -> None:
+    """End a local pool's workers now (Ctrl-C: do not wait for their running simulations)."""
+    processes = getattr(executor, "_processes", None) or {}
+    for process in list(processes.values()):
+        if process.is_alive():
+            process.terminate()
 
 
 @contextmanager
@@ -291,6 +338,10 @@ class TaskRunner:
                             finish(Outcome(task, error=one_line_error(exc), detail=repr(exc)))
                             continue
                         finish(Outcome(task, value, error, detail, seconds))
+            except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
+                if not isinstance(executor, InlineExecutor) and not self.dask_address:
+                    _stop_workers(executor)
+                raise
             finally:
                 if not isinstance(executor, InlineExecutor) and not self.dask_address:
                     executor.shutdown(wait=True, cancel_futures=True)
