@@ -102,8 +102,12 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
     needed = [config.target, *config.sensors_all]
     for name in config.experiments:
         path = directory / f"{name}.csv"
+        if path.exists() and not path.is_file():
+            raise SpindlebenchError(f"{path}: experiment {name!r} is a folder, not a "
+                                    "recording CSV")
         if not path.is_file():
-            found = ", ".join(sorted(p.stem for p in directory.glob("*.csv"))) or "none"
+            found = ", ".join(sorted(p.stem for p in directory.glob("*.csv")
+                                     if p.is_file())) or "none"
             hint = ""
             own = directory / CONFIG_NAME
             if own.is_file() and not _uses(config, own):

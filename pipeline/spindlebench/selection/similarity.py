@@ -35,15 +35,18 @@ CONSTANT_RTOL = 1e-12
 def constant_columns(X: np.ndarray) -> np.ndarray:
     """Boolean mask of columns that are constant up to floating-point rounding.
 
-    The scale of a column is the larger of its own magnitude and the largest range of any
-    column, so a rounding-noise column of rises (values ~1e-15 around 0, from two sensors with
-    a constant offset) counts as constant next to rises of a few kelvin.
+    The scale of a column is the larger of its own magnitude and the median range of all
+    columns, so a rounding-noise column of rises (values ~1e-15 around 0, from two sensors with
+    a constant offset) counts as constant next to rises of a few kelvin. The median, not the
+    largest range: one outlier cell (a logger's 9.9e37 sentinel) in one column must not make
+    every other column look constant.
     """
     X = np.asarray(X, dtype=float)
     if X.shape[0] == 0:
         return np.ones(X.shape[1], dtype=bool)
     spread = np.ptp(X, axis=0)
-    scale = np.maximum(np.max(np.abs(X), axis=0), spread.max(initial=0.0))
+    typical = float(np.median(spread)) if spread.size else 0.0
+    scale = np.maximum(np.max(np.abs(X), axis=0), typical)
     return spread <= CONSTANT_RTOL * scale
 
 

@@ -543,6 +543,9 @@ def _read_ambient_csv(
                 i_time, i_value = header.index(time_column), header.index(value_column)
                 continue
             where = f"{file}: line {line_no}"
+            if len(cells) != len(header):  # an extra field shifts what the columns mean
+                raise SpindlebenchError(f"{where}: {len(cells)} field(s), the header has "
+                                        f"{len(header)}")
             try:
                 time_s = float(cells[i_time])
                 value = float(cells[i_value])
