@@ -169,16 +169,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "fingerprint",
         help="shape statistics of recordings (does this testbench look like my machine?)",
         description="The fingerprint statistics (best raw/difference psi, best single/pair "
-        "R2, t63 ratio, overshoot, early fraction; definitions in docs and "
-        "spindlebench.fingerprint) of each recording and their median, next to the default "
-        "machine's paper experiments.",
+        "R2, t63 ratio, overshoot, early fraction; defined in the spindlebench.fingerprint "
+        "docstring, explained in README) of each recording and their median, next to the "
+        "default machine's paper experiments.",
     )
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING",
                         help="recording CSV(s)")
     parser.add_argument("--target", help=f"error column (default: {DEFAULT_TARGET}, else the "
                         "axial_target of the recording's JSON sidecar)")
     parser.add_argument("--time-column", default=TIME_COLUMN, metavar="COL",
-                        help=f"time column (default: {TIME_COLUMN}); t63 is in its unit")
+                        help=f"time column, strictly increasing (default: {TIME_COLUMN}, "
+                        "drawn in hours; another column is drawn in its own unit)")
     parser.add_argument("--sensors", nargs="+", metavar="NAME",
                         help="temperature columns, space- or comma-separated (default: every "
                         "temperature column)")
