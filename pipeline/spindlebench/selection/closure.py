@@ -100,14 +100,17 @@ def maximum_spanning_tree(R: np.ndarray) -> SpanningTree:
 
 
 def closure_minimax(R: np.ndarray) -> np.ndarray:
-    """Fast t(R): minimax-path (bottleneck) similarity over a maximum spanning tree.
+    """Fast t(R): minimax-path (bottleneck) similarity over a maximum spanning tree."""
+    return closure_from_tree(maximum_spanning_tree(check_similarity(R)))
+
+
+def closure_from_tree(tree: SpanningTree) -> np.ndarray:
+    """t(R) from a maximum spanning tree of R alone (R itself is not needed).
 
     Vertices are visited in Prim order; each new vertex is a leaf hanging from its parent, so
     its closure with every earlier vertex u is min(edge similarity, t(parent, u)).
     """
-    R = check_similarity(R)
-    tree = maximum_spanning_tree(R)
-    n = R.shape[0]
+    n = tree.order.size
     position = np.empty(n, dtype=np.intp)
     position[tree.order] = np.arange(n)
     ordered = np.empty((n, n))  # closure in Prim order, kept symmetric as it grows

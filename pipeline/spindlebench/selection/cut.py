@@ -17,7 +17,11 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-from spindlebench.selection.closure import check_similarity, maximum_spanning_tree
+from spindlebench.selection.closure import (
+    SpanningTree,
+    check_similarity,
+    maximum_spanning_tree,
+)
 from spindlebench.selection.errors import SelectionError, SelectionWarning
 
 
@@ -70,7 +74,11 @@ def cut_for_clusters(T: np.ndarray, n_clusters: int) -> Cut:
     so and the finer partition (more clusters) is returned.
     """
     T = check_similarity(T)
-    n = T.shape[0]
+    _check_n_clusters(n_clusters, T.shape[0])
+    return cut_tree_for_clusters(maximum_spanning_tree(T), n_clusters)
+
+
+def _check_n_clusters(n_clusters: int, n: int) -> None:
     if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
         raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
     if n_clusters < 1:
@@ -80,7 +88,14 @@ def cut_for_clusters(T: np.ndarray, n_clusters: int) -> Cut:
             f"cannot make {n_clusters} clusters from {n} candidate(s): "
             f"n_clusters is larger than the number of candidates"
         )
-    child, parent, weight = maximum_spanning_tree(T).edges()
+
+
+def cut_tree_for_clusters(tree: SpanningTree, n_clusters: int) -> Cut:
+    """``cut_for_clusters`` from a maximum spanning tree of R alone (no n x n matrix): the
+    selection over sensors and all their differences builds the tree row by row."""
+    n = tree.order.size
+    _check_n_clusters(n_clusters, n)
+    child, parent, weight = tree.edges()
     levels = np.unique(np.append(weight, 1.0))  # distinct values of t(R), ascending
     sorted_weights = np.sort(weight)
     counts = 1 + np.searchsorted(sorted_weights, levels, side="left")
@@ -98,6 +113,6 @@ def cut_for_clusters(T: np.ndarray, n_clusters: int) -> Cut:
             f"tied similarities: no threshold gives exactly {n_clusters} clusters; "
             f"using eta={eta:.6g} with {len(clusters)} clusters",
             SelectionWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
     return Cut(eta=eta, clusters=clusters)

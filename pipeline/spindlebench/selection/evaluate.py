@@ -45,6 +45,7 @@ from spindlebench.selection.errors import (
     SelectionWarning,
     column_list,
 )
+from spindlebench.selection.pairs import ROW_WISE_ABOVE, select_among_pairs
 from spindlebench.selection.registry import MethodChoice, fit_with, select_with
 from spindlebench.selection.regression import LinearFit, rises, rmse
 from spindlebench.selection.select import Selection, select_sensitive_points
@@ -210,6 +211,15 @@ def _naming(name: str) -> Iterator[None]:
         yield
     except SelectionOverflowError as exc:
         raise SelectionOverflowError(f"recording {name}: {exc}") from exc
+
+
+def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
+    """Whether the selection runs row-wise (``selection.pairs``): sensors plus differences,
+    more than ``ROW_WISE_ABOVE`` candidates, |Pearson r| and the fast closure. Smaller sets
+    keep the matrix path (results unchanged to the last bit); the row-wise path gives the same
+    clusters and psi, and eta to rounding."""
+    return (candidates.differences and len(candidates.names) > ROW_WISE_ABOVE
+            and similarity == "abs-pearson" and closure == "fast")
 
 
 def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:
@@ -437,12 +447,16 @@ def evaluate(
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
     with _naming(train_name):
-        matrix = _finite(candidates.matrix(train_frame), names)
-        if choice.is_paper:  # the paper's method, with the chosen closure implementation
-            selection = select_sensitive_points(matrix, y_train, k, similarity, closure,
-                                                names=names)
+        if choice.is_paper and row_wise(candidates, similarity, closure):
+            raw = _finite(candidates.matrix(train_frame, range(len(chosen))), chosen)
+            selection = select_among_pairs(raw, y_train, k, names=names)
         else:
-            selection = select_with(choice, matrix, y_train, k, similarity, names, seed)
+            matrix = _finite(candidates.matrix(train_frame), names)
+            if choice.is_paper:  # the paper's method, with the chosen closure implementation
+                selection = select_sensitive_points(matrix, y_train, k, similarity, closure,
+                                                    names=names)
+            else:
+                selection = select_with(choice, matrix, y_train, k, similarity, names, seed)
         selected_names = [names[i] for i in selection.selected]
         fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
                        names=selected_names)

@@ -11,20 +11,24 @@ sensors with a constant offset) have no correlation: they are dropped with a
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
-from spindlebench.selection.cut import cut_for_clusters
+from spindlebench.selection.cut import Cut, cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning, check_names
 from spindlebench.selection.similarity import (
     constant_columns,
     correlation_with,
     similarity_matrix,
 )
+
+#: R or t(R), or a function that forms it on request (the row-wise selection over sensors
+#: and their differences never forms the n x n matrices unless asked).
+MatrixSource = np.ndarray | Callable[[], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -33,12 +37,24 @@ class Selection:
 
     kept: np.ndarray  #: non-constant candidates, in input order (rows/cols of R and t(R))
     dropped: np.ndarray  #: constant candidates, removed with a warning
-    similarity: np.ndarray  #: R over ``kept``
-    closure: np.ndarray  #: t(R) over ``kept``
+    similarity_source: MatrixSource = field(repr=False, compare=False)
+    closure_source: MatrixSource = field(repr=False, compare=False)
     eta: float  #: threshold of the cut
     clusters: list[np.ndarray]  #: input column indices, ordered by first member
     psi: np.ndarray  #: correlation of every input column with the error (NaN if dropped)
     selected: np.ndarray  #: per cluster, the input column with the largest |psi|
+
+    @property
+    def similarity(self) -> np.ndarray:
+        """R over ``kept`` (formed on request by the row-wise selection)."""
+        source = self.similarity_source
+        return source if isinstance(source, np.ndarray) else source()
+
+    @property
+    def closure(self) -> np.ndarray:
+        """t(R) over ``kept`` (formed on request by the row-wise selection)."""
+        source = self.closure_source
+        return source if isinstance(source, np.ndarray) else source()
 
     @property
     def selected_psi(self) -> np.ndarray:
@@ -58,22 +74,73 @@ def _check_inputs(X: np.ndarray, y: np.ndarray, n_clusters: int) -> tuple[np.nda
     y = np.asarray(y, dtype=float).ravel()
     if X.ndim != 2:
         raise SelectionError(f"candidates must be a 2-D array, got shape {X.shape}")
-    if X.shape[0] != y.shape[0]:
-        raise SelectionError(f"{X.shape[0]} candidate samples but {y.shape[0]} target samples")
-    if X.shape[0] < 2:
-        raise SelectionError(f"selection needs at least 2 samples, got {X.shape[0]} sample(s)")
+    check_counts(X.shape[0], X.shape[1], y, n_clusters)
     if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
         raise SelectionError("candidates and target must be finite (no NaN or inf)")
+    return X, y
+
+
+def check_counts(n_samples: int, n_candidates: int, y: np.ndarray, n_clusters: int) -> None:
+    """Samples, target length and the cluster count k, checked against each other."""
+    if n_samples != y.shape[0]:
+        raise SelectionError(f"{n_samples} candidate samples but {y.shape[0]} target samples")
+    if n_samples < 2:
+        raise SelectionError(f"selection needs at least 2 samples, got {n_samples} sample(s)")
     if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
         raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
     if n_clusters < 1:
         raise SelectionError(f"the number of clusters must be at least 1, got {n_clusters}")
-    if n_clusters > X.shape[1]:
+    if n_clusters > n_candidates:
         raise SelectionError(
-            f"cannot make {n_clusters} clusters from {X.shape[1]} feature(s): "
+            f"cannot make {n_clusters} clusters from {n_candidates} feature(s): "
             f"n_clusters is larger than the number of candidates"
         )
-    return X, y
+
+
+def split_constant(
+    constant: np.ndarray, names: Sequence[str] | None, n_clusters: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(kept, dropped) candidate indices; dropping warns, too few kept is an error."""
+    kept = np.flatnonzero(~constant)
+    dropped = np.flatnonzero(constant)
+    if dropped.size:
+        labels = [str(names[i]) if names is not None else f"column {i}" for i in dropped[:11]]
+        shown = ", ".join(labels[:10])
+        if dropped.size > 10:
+            shown += f" and {dropped.size - 10} more"
+        warnings.warn(
+            f"dropping {dropped.size} constant candidate(s) (zero variance): {shown}",
+            SelectionWarning,
+            stacklevel=3,
+        )
+    if n_clusters > kept.size:
+        raise SelectionError(
+            f"cannot make {n_clusters} clusters: only {kept.size} candidate(s) vary "
+            f"({dropped.size} constant one(s) dropped)"
+        )
+    return kept, dropped
+
+
+def assemble(
+    kept: np.ndarray,
+    dropped: np.ndarray,
+    similarity: MatrixSource,
+    closure: MatrixSource,
+    cut: Cut,
+    psi: np.ndarray,
+) -> Selection:
+    """The ``Selection`` of a cut over ``kept`` (cut indices are positions in ``kept``)."""
+    clusters = [kept[members] for members in cut.clusters]
+    return Selection(
+        kept=kept,
+        dropped=dropped,
+        similarity_source=similarity,
+        closure_source=closure,
+        eta=cut.eta,
+        clusters=clusters,
+        psi=psi,
+        selected=strongest_per_cluster(psi, clusters),
+    )
 
 
 def select_sensitive_points(
@@ -87,44 +154,18 @@ def select_sensitive_points(
     """Steps 2-5 on candidates ``X`` (n_samples x n_candidates) and thermal error ``y``.
 
     ``names`` (one per column of ``X``) only serve messages: the warning about dropped
-    constant candidates and the error about values too large to correlate.
+    constant candidates and the error about values too large to correlate. For raw sensors
+    plus all their pairwise differences, ``select_among_pairs``
+    (``spindlebench.selection.pairs``) gives the same result without the n x n matrix.
     """
     X, y = _check_inputs(X, y, n_clusters)
     if names is not None:
         names = [str(name) for name in names]
         check_names(names, X.shape[1])
-    constant = constant_columns(X)
-    kept = np.flatnonzero(~constant)
-    dropped = np.flatnonzero(constant)
-    if dropped.size:
-        labels = [str(names[i]) if names is not None else f"column {i}" for i in dropped]
-        shown = ", ".join(labels[:10])
-        if len(labels) > 10:
-            shown += f" and {len(labels) - 10} more"
-        warnings.warn(
-            f"dropping {len(labels)} constant candidate(s) (zero variance): {shown}",
-            SelectionWarning,
-            stacklevel=2,
-        )
-    if n_clusters > kept.size:
-        raise SelectionError(
-            f"cannot make {n_clusters} clusters: only {kept.size} candidate(s) vary "
-            f"({dropped.size} constant one(s) dropped)"
-        )
+    kept, dropped = split_constant(constant_columns(X), names, n_clusters)
     kept_names = None if names is None else [names[i] for i in kept]
     R = similarity_matrix(X[:, kept], similarity, kept_names)
     T = transitive_closure(R, closure)
-    cut = cut_for_clusters(T, n_clusters)
     psi = np.full(X.shape[1], np.nan)
     psi[kept] = correlation_with(X[:, kept], y, kept_names)
-    clusters = [kept[members] for members in cut.clusters]
-    return Selection(
-        kept=kept,
-        dropped=dropped,
-        similarity=R,
-        closure=T,
-        eta=cut.eta,
-        clusters=clusters,
-        psi=psi,
-        selected=strongest_per_cluster(psi, clusters),
-    )
+    return assemble(kept, dropped, R, T, cut_for_clusters(T, n_clusters), psi)

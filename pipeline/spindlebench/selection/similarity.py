@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
 from spindlebench.selection.errors import (
@@ -30,6 +31,12 @@ from spindlebench.selection.errors import (
 #: A column is constant when its peak-to-peak range is below this fraction of the data's
 #: scale: differences of two sensors with a constant offset vary only by rounding.
 CONSTANT_RTOL = 1e-12
+#: The ``literal`` reading is not linear in the data (|a - mean(a)| |b - mean(b)|), so it
+#: needs the n x n matrix (several 8 n^2-byte arrays while it is formed, ~1.2 GB here).
+LITERAL_MAX_CANDIDATES = 6000
+#: Threaded OpenBLAS has crashed (SIGSEGV) on ``Z.T @ Z`` with ~15 500 columns and more;
+#: above this many the product runs single-threaded.
+SINGLE_THREAD_ABOVE = 8000
 
 
 def constant_columns(X: np.ndarray) -> np.ndarray:
@@ -103,11 +110,21 @@ def similarity_matrix(
         raise SelectionError(
             f"similarity needs finite values; NaN or inf in {column_list(bad, names)}"
         )
+    if method == "literal" and X.shape[1] > LITERAL_MAX_CANDIDATES:
+        raise SelectionError(
+            f"the literal similarity needs the n x n matrix: at most "
+            f"{LITERAL_MAX_CANDIDATES} candidates, got {X.shape[1]}; use abs-pearson (which "
+            f"runs row-wise for sensors plus differences) or fewer sensors"
+        )
     Z = standardized(X, names)
     if method == "literal":
         Z = np.abs(Z)
-        return _symmetric_unit(Z.T @ Z)
-    return _symmetric_unit(np.abs(Z.T @ Z))
+    if Z.shape[1] > SINGLE_THREAD_ABOVE:
+        with threadpool_limits(limits=1, user_api="blas"):
+            product = Z.T @ Z
+    else:
+        product = Z.T @ Z
+    return _symmetric_unit(product if method == "literal" else np.abs(product))
 
 
 def correlation_with(

@@ -1,0 +1,280 @@
+"""Selection over raw sensors and all their pairwise differences, without the n x n matrix.
+
+With m raw sensors the paper's candidate set has n = m + m(m-1)/2 members (500 sensors:
+125 250), and R alone would take 8 n^2 bytes (125 GB). But every candidate is linear in the
+raw rises: after centring, candidate b = (i, k) is the column Xc (e_i - e_k) (a raw sensor is
+(i, none)). With the QR factorisation Xc = Q G (G is m x m), that column is s_b = G (e_i - e_k)
+in an orthonormal basis, so
+
+    corr(a, b) = (s_a / |s_a|) . s_b / |s_b| = (u_i - u_k) / |s_b|,   u = G^T s_a / |s_a|,
+
+and the row of R for candidate a costs one m x m product plus O(n). Prim's algorithm on the
+complete graph asks for each row once, so the maximum spanning tree (which is all the closure
+and the cut need, see ``closure`` and ``cut``) takes O(n^2 + n m^2) time and O(n) memory.
+
+Precision: a difference of coefficient columns loses eps |x_i| / |x_i - x_k| like the explicit
+difference of two data columns does; forming the m x m covariance instead would square that
+factor. The values of R differ from the matrix path's only by rounding (~1e-15).
+
+Constant candidates and overflowing differences are found from the candidate columns
+themselves, in chunks, with the matrix path's rule, so the same ones are dropped or refused.
+psi follows from the raw sensors' covariances with the target like R's rows do.
+
+The inner loop over the n candidates is compiled with Numba; the m x m product is BLAS, kept
+single-threaded (a 500 x 500 product per row gains nothing from threads on a shared machine).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from spindlebench.selection.closure import SpanningTree, closure_from_tree
+from spindlebench.selection.cut import cut_tree_for_clusters
+from spindlebench.selection.differences import pair_indices
+from spindlebench.selection.errors import (
+    SelectionError,
+    SelectionOverflowError,
+    check_names,
+    column_list,
+)
+from spindlebench.selection.select import Selection, assemble, check_counts, split_constant
+from spindlebench.selection.similarity import CONSTANT_RTOL, constant_columns, standardized
+
+#: Candidate columns formed at once for the per-column steps (bytes of one chunk).
+CHUNK_BYTES = 8 * 2**20
+#: ``evaluate`` selects row-wise above this many candidates (R would take over 32 MB) and
+#: forms R below, where the matrix path's results stay exactly as they were.
+ROW_WISE_ABOVE = 2000
+#: R and t(R) of the row-wise selection are formed on request only up to this many
+#: candidates (two 8 n^2-byte matrices).
+MAX_FORMED_CANDIDATES = 6000
+
+
+@dataclass(frozen=True)
+class PairCandidates:
+    """Raw rises (n_samples x m) and, implicitly, the candidates made of them: the raw
+    columns (if ``include_raw``) followed by every difference A-B in ``pair_indices`` order,
+    exactly the columns ``CandidateSet.matrix`` and ``PairwiseDifferences`` form."""
+
+    raw: np.ndarray
+    include_raw: bool = True
+
+    @cached_property
+    def _pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(first, second) sensor of every candidate; second == m for a raw sensor."""
+        m = self.raw.shape[1]
+        first, second = pair_indices(m)
+        if not self.include_raw:
+            return first, second
+        return np.concatenate([np.arange(m), first]), np.concatenate([np.full(m, m), second])
+
+    @property
+    def n_sensors(self) -> int:
+        return self.raw.shape[1]
+
+    @property
+    def n_candidates(self) -> int:
+        return self._pairs[0].size
+
+    @cached_property
+    def _padded_rows(self) -> np.ndarray:
+        """The raw rises as rows, and a row of zeros (x - 0.0 is exactly x: a raw candidate)."""
+        return np.vstack([self.raw.T, np.zeros((1, self.raw.shape[0]))])
+
+    def rows(self, index: np.ndarray) -> np.ndarray:
+        """Values of candidates ``index`` as rows (len(index) x n_samples): gathering rows is
+        contiguous, so the per-column statistics run on this layout."""
+        first, second = self._pairs
+        return self._padded_rows[first[index]] - self._padded_rows[second[index]]
+
+    def columns(self, index: np.ndarray) -> np.ndarray:
+        """Values of candidates ``index`` as C-ordered columns (n_samples x len(index)), the
+        layout the matrix path correlates (same layout, same rounding)."""
+        return np.ascontiguousarray(self.rows(index).T)
+
+    def chunks(self, index: np.ndarray | None = None) -> Iterator[np.ndarray]:
+        """``index`` (default: every candidate) in pieces of at most ``CHUNK_BYTES`` columns."""
+        index = np.arange(self.n_candidates) if index is None else index
+        width = max(1, CHUNK_BYTES // (8 * max(1, self.raw.shape[0])))
+        for start in range(0, index.size, width):
+            yield index[start:start + width]
+
+
+def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) -> np.ndarray:
+    """The constant candidates (``similarity.constant_columns``: same rule, same result; the
+    scale is each column's magnitude or the largest range of any column), in one pass that
+    also refuses, naming them, candidates where two finite values subtract to inf."""
+    spread = np.empty(candidates.n_candidates)
+    magnitude = np.empty(candidates.n_candidates)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for index in candidates.chunks():
+            values = candidates.rows(index)
+            finite = np.isfinite(values).all(axis=1)
+            if not finite.all():
+                raise SelectionOverflowError(
+                    "values too large for rises and differences (overflow) in "
+                    f"{column_list(index[~finite], names)}"
+                )
+            high, low = values.max(axis=1), values.min(axis=1)
+            spread[index] = high - low
+            magnitude[index] = np.maximum(np.abs(high), np.abs(low))
+    scale = np.maximum(magnitude, spread.max(initial=0.0))
+    return spread <= CONSTANT_RTOL * scale
+
+
+@dataclass(frozen=True)
+class PairGeometry:
+    """The candidates as vectors in an orthonormal basis of the centred raw rises."""
+
+    factor: np.ndarray  #: G of Xc = Q G (r x m), r = min(n_samples, m)
+    first: np.ndarray  #: per candidate, its first sensor
+    second: np.ndarray  #: per candidate, its second sensor (m: none, a raw sensor)
+    inverse_norm: np.ndarray  #: 1 / |s_b| per candidate
+
+    @classmethod
+    def of(cls, candidates: PairCandidates, centred: np.ndarray) -> PairGeometry:
+        """G from the raw rises ``centred`` (``standardized_centre``), and the norms."""
+        with threadpool_limits(limits=1, user_api="blas"), np.errstate(all="ignore"):
+            factor = np.linalg.qr(centred, mode="r")
+        first, second = candidates._pairs
+        padded = np.hstack([factor, np.zeros((factor.shape[0], 1))])
+        norms = np.empty(first.size)
+        for index in candidates.chunks():
+            vectors = padded[:, first[index]] - padded[:, second[index]]
+            norms[index] = np.sqrt(np.einsum("ij,ij->j", vectors, vectors))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inverse = 1.0 / norms
+        return cls(factor, first, second, inverse)
+
+    def correlations(self, centred: np.ndarray, kept: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """psi of every candidate (NaN where not ``kept``): the correlation of a difference
+        is the difference of the raw sensors' covariances with the unit-norm target, over
+        the candidate's norm; the same as ``correlation_with`` on the column, to rounding."""
+        if constant_columns(y[:, None])[0]:
+            raise SelectionError("the target (thermal error) is constant; no correlation exists")
+        zy = standardized(y[:, None], ["the target"])[:, 0]
+        covariance = np.append(centred.T @ zy, 0.0)
+        psi = np.full(self.first.size, np.nan)
+        psi[kept] = np.clip((covariance[self.first[kept]] - covariance[self.second[kept]])
+                            * self.inverse_norm[kept], -1.0, 1.0)
+        return psi
+
+    def check_finite(self, kept: np.ndarray, names: Sequence[str] | None) -> None:
+        """Overflow error naming the candidates whose sum of squares is not finite (their
+        correlations would be silently 0), as ``standardized`` refuses them."""
+        norms_bad = ~(np.isfinite(self.inverse_norm[kept]) & (self.inverse_norm[kept] > 0))
+        if norms_bad.any():
+            raise SelectionOverflowError(
+                f"values too large to correlate (overflow) in "
+                f"{column_list(kept[norms_bad], names)}"
+            )
+
+    def similarity(self, kept: np.ndarray) -> np.ndarray:
+        """R over ``kept`` formed from the vectors (only for small candidate sets)."""
+        if kept.size > MAX_FORMED_CANDIDATES:
+            raise SelectionError(
+                f"R of {kept.size} candidates is not formed by the row-wise selection "
+                f"(at most {MAX_FORMED_CANDIDATES}, 8 n^2 bytes each); its tree, clusters and "
+                f"psi are available"
+            )
+        padded = np.hstack([self.factor, np.zeros((self.factor.shape[0], 1))])
+        vectors = (padded[:, self.first[kept]] - padded[:, self.second[kept]])
+        vectors *= self.inverse_norm[kept]
+        R = np.abs(vectors.T @ vectors)
+        upper = np.triu(R, k=1)
+        R = upper + upper.T
+        np.clip(R, 0.0, 1.0, out=R)
+        np.fill_diagonal(R, 1.0)
+        return R
+
+
+def standardized_centre(X: np.ndarray) -> np.ndarray:
+    """Columns centred twice, the centring ``standardized`` applies before scaling."""
+    centred = X - X.mean(axis=0)
+    centred -= centred.mean(axis=0)
+    return centred
+
+
+#: Vertices per compiled call: between calls Python can act on Ctrl-C.
+PRIM_BATCH = 512
+
+
+def maximum_spanning_tree_of_pairs(
+    geometry: PairGeometry, kept: np.ndarray, include_raw: bool
+) -> SpanningTree:
+    """Prim's algorithm over the ``kept`` candidates, one row of R at a time.
+
+    The same rules as ``closure.maximum_spanning_tree`` on the matrix (start at the first
+    candidate, take the largest link, the first one on ties, and a parent only changes on a
+    strictly larger similarity), so on exact ties it builds the same tree.
+    """
+    from spindlebench.selection.prim_kernel import prim_steps
+
+    n_all = geometry.first.size
+    inverse = np.full(n_all, np.nan)
+    inverse[kept] = geometry.inverse_norm[kept]
+    best = np.full(n_all, -np.inf)
+    parent = np.full(n_all, -1, dtype=np.int64)
+    order = np.empty(kept.size, dtype=np.int64)
+    weight = np.ones(n_all)
+    factor_rows = np.vstack([geometry.factor.T, np.zeros((1, geometry.factor.shape[0]))])
+    vertex = int(kept[0])
+    with threadpool_limits(limits=1, user_api="blas"):
+        for start in range(0, kept.size, PRIM_BATCH):
+            vertex = prim_steps(factor_rows, inverse, geometry.first, geometry.second,
+                                include_raw, best, parent, weight, order, start,
+                                min(start + PRIM_BATCH, kept.size), vertex)
+    local = np.full(n_all, -1, dtype=np.intp)
+    local[kept] = np.arange(kept.size)
+    tree_parent = np.full(kept.size, -1, dtype=np.intp)
+    tree_parent[local[order[1:]]] = local[parent[order[1:]]]
+    return SpanningTree(order=local[order], parent=tree_parent, weight=weight[kept])
+
+
+def select_among_pairs(
+    raw: np.ndarray,
+    y: np.ndarray,
+    n_clusters: int,
+    include_raw: bool = True,
+    names: Sequence[str] | None = None,
+) -> Selection:
+    """``select_sensitive_points`` (abs-pearson, fast closure) on the raw sensors ``raw``
+    (rises, n_samples x m) plus all their pairwise differences, without forming the
+    candidate matrix or R: the same clusters, eta (to rounding) and psi.
+
+    ``names`` name the candidates (``CandidateSet.names`` order) for the messages.
+    """
+    raw = np.asarray(raw, dtype=float)
+    y = np.asarray(y, dtype=float).ravel()
+    if raw.ndim != 2:
+        raise SelectionError(f"raw sensors must be a 2-D array, got shape {raw.shape}")
+    candidates = PairCandidates(raw, include_raw)
+    check_counts(raw.shape[0], candidates.n_candidates, y, n_clusters)
+    if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(y))):
+        raise SelectionError("candidates and target must be finite (no NaN or inf)")
+    if names is not None:
+        names = [str(name) for name in names]
+        check_names(names, candidates.n_candidates)
+    kept, dropped = split_constant(check_candidates(candidates, names), names, n_clusters)
+    centred = standardized_centre(raw)
+    geometry = PairGeometry.of(candidates, centred)
+    geometry.check_finite(kept, names)
+    psi = geometry.correlations(centred, kept, y)
+    tree = maximum_spanning_tree_of_pairs(geometry, kept, include_raw)
+    cut = cut_tree_for_clusters(tree, n_clusters)
+
+    def similarity() -> np.ndarray:
+        return geometry.similarity(kept)
+
+    def closure() -> np.ndarray:
+        if kept.size > MAX_FORMED_CANDIDATES:
+            geometry.similarity(kept)  # the same size error
+        return closure_from_tree(tree)
+
+    return assemble(kept, dropped, similarity, closure, cut, psi)
+
