@@ -1,29 +1,42 @@
-"""Benchmark: selection steps (similarity, closure, cut, psi) on synthetic candidate sets.
+"""Benchmark: selection over sensors plus all pairwise differences (issue 10's selection rows).
 
-Sizes from issue 3: 20 raw sensors + 190 differences on 360 samples, and 100 raw + 4 950
-differences on 1 440 samples. The fast closure (maximum spanning tree, O(n^2)) is timed against
-the paper's repeated max-min squaring (vectorised, chunked numpy, O(n^3 log n)) in the same
-process, on the sizes where the reference finishes in reasonable time; both results are
-checked to be identical.
+Each size runs in its own child process, so the peak memory (``resource.getrusage`` maxrss,
+which only grows) belongs to that size alone:
 
-Run: .venv/bin/python bench/bench_selection.py
+- ``row-wise``: ``selection.pairs.select_among_pairs`` (Prim's algorithm, each row of R from
+  the m x m factor of the raw rises; never forms the candidate matrix or R);
+- ``matrix``: today's way, ``select_sensitive_points`` on the formed candidate matrix (R,
+  t(R), n x n), timed in the SAME process right after, where its memory allows (8 n^2 bytes
+  per matrix; the 200-sensor set took 84 s and 10.4 GB single-threaded and crashed threaded
+  OpenBLAS; 500 sensors would need ~125 GB per matrix), so the ratio is one process's; the
+  clusters are checked to agree;
+- ``CLI``: ``spindlebench evaluate --differences`` on two 100-sensor recordings, wall time and
+  peak memory of the whole command.
+
+Also the fast closure against the paper's max-min squaring (identical results checked).
+Absolute times depend on the machine's load; the ratios are what to compare.
+
+Run: .venv/bin/python bench/bench_selection.py  (``make bench`` runs every bench script)
 """
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
-from spindlebench.selection.closure import closure_by_squaring, closure_minimax
-from spindlebench.selection.cut import cut_for_clusters
-from spindlebench.selection.differences import pairwise_differences
-from spindlebench.selection.similarity import correlation_with, similarity_matrix
 
-SIZES = [  # (raw sensors, samples, run the squaring reference?)
-    (20, 360, True),
-    (40, 720, True),
-    (100, 1440, False),
+SIZES = [  # (raw sensors, samples, clusters, time today's matrix way too?, goal s, goal MB)
+    (100, 1440, 4, True, 1.0, 300),
+    (200, 1440, 4, False, 5.0, 500),
+    (500, 1440, 4, False, 60.0, 1000),
 ]
+CLOSURE_SIZES = [(20, 360), (40, 720)]
 
 
 def synthetic_temperatures(n_sensors: int, n_samples: int, seed: int = 0) -> np.ndarray:
@@ -36,39 +49,123 @@ def synthetic_temperatures(n_sensors: int, n_samples: int, seed: int = 0) -> np.
     return ambient + gain * (1 - np.exp(-t / tau)) + rng.normal(0, 0.03, (n_samples, n_sensors))
 
 
-def timed(function, *args, repeat: int = 1):
-    """(best wall time in s, result) over ``repeat`` runs."""
-    best, result = np.inf, None
-    for _ in range(repeat):
+def drift(raw: np.ndarray, seed: int = 1) -> np.ndarray:
+    return 3.0 * (raw[:, 0] - raw[:, -1]) + np.random.default_rng(seed).normal(0, 0.3, len(raw))
+
+
+def peak_mb() -> float:
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def measure(n_sensors: int, n_samples: int, k: int, with_matrix: bool) -> dict:
+    """One size, in this (child) process: row-wise first, then today's matrix way."""
+    from spindlebench.selection.differences import pairwise_differences
+    from spindlebench.selection.pairs import select_among_pairs
+    from spindlebench.selection.select import select_sensitive_points
+
+    raw = synthetic_temperatures(n_sensors, n_samples)
+    raw = raw - raw[0]
+    y = drift(raw)
+    select_among_pairs(raw[:, :4], y, 2)  # load the compiled kernel (cached on disk)
+    start, cpu = time.perf_counter(), time.process_time()
+    rows = select_among_pairs(raw, y, k)
+    out = {"row_s": time.perf_counter() - start, "row_cpu_s": time.process_time() - cpu,
+           "row_peak_MB": peak_mb()}
+    if with_matrix:
         start = time.perf_counter()
-        result = function(*args)
-        best = min(best, time.perf_counter() - start)
-    return best, result
+        matrix = select_sensitive_points(np.hstack([raw, pairwise_differences(raw)]), y, k)
+        out["matrix_s"] = time.perf_counter() - start
+        out["matrix_peak_MB"] = peak_mb()
+        out["same_clusters"] = all(
+            np.array_equal(a, b) for a, b in zip(matrix.clusters, rows.clusters, strict=True))
+    return out
+
+
+def child(*args: str) -> dict:
+    result = subprocess.run([sys.executable, __file__, *args], capture_output=True, text=True,
+                            check=True)
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def write_recording(path: Path, raw: np.ndarray, y: np.ndarray) -> None:
+    import pandas as pd
+
+    frame = pd.DataFrame(raw, columns=[f"S{i:03d}" for i in range(raw.shape[1])])
+    frame.insert(0, "time_s", np.arange(len(raw)) * 60.0)
+    frame["drift_um"] = y - y[0]
+    frame.to_csv(path, index=False)
+
+
+def cli_run(n_sensors: int = 100, n_samples: int = 1440) -> tuple[float, float]:
+    """(wall s, peak MB) of ``spindlebench evaluate --differences`` on two recordings."""
+    with tempfile.TemporaryDirectory() as folder:
+        paths = []
+        for seed in (0, 1):
+            raw = synthetic_temperatures(n_sensors, n_samples, seed)
+            paths.append(Path(folder, f"run{seed}.csv"))
+            write_recording(paths[-1], raw, drift(raw - raw[0], seed))
+        command = [str(Path(sys.executable).with_name("spindlebench")), "evaluate",
+                   "--train", str(paths[0]), "--test", str(paths[1]),
+                   "--target", "drift_um", "--clusters", "4", "--differences"]
+        subprocess.run(command, capture_output=True, check=True)  # warm the disk caches
+        start = time.perf_counter()
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        _, status, usage = os.wait4(process.pid, 0)
+        seconds = time.perf_counter() - start
+        if status != 0:
+            raise SystemExit(f"CLI failed: {process.stderr.read().decode()}")
+        return seconds, usage.ru_maxrss / 1024
+
+
+def closure_rows() -> None:
+    from spindlebench.selection.closure import closure_by_squaring, closure_minimax
+    from spindlebench.selection.differences import pairwise_differences
+    from spindlebench.selection.similarity import similarity_matrix
+
+    print(f"{'closure':>10} {'candidates':>12} {'fast':>9} {'squaring':>9} {'ratio':>7}")
+    for n_sensors, n_samples in CLOSURE_SIZES:
+        raw = synthetic_temperatures(n_sensors, n_samples)
+        R = similarity_matrix(np.hstack([raw, pairwise_differences(raw)]))
+        start = time.perf_counter()
+        fast = closure_minimax(R)
+        t_fast = time.perf_counter() - start
+        start = time.perf_counter()
+        reference = closure_by_squaring(R)
+        t_ref = time.perf_counter() - start
+        if not np.array_equal(fast, reference):
+            raise SystemExit("fast closure differs from the squaring reference")
+        print(f"{'':>10} {R.shape[0]:>12} {t_fast:8.3f}s {t_ref:8.3f}s {t_ref / t_fast:6.0f}x",
+              flush=True)
 
 
 def main() -> None:
-    print(f"{'candidates':>16} {'samples':>7} {'similarity':>10} {'closure':>9} {'cut':>7} "
-          f"{'psi':>7} {'squaring':>9} {'ratio':>7}")
-    for n_sensors, n_samples, with_reference in SIZES:
-        raw = synthetic_temperatures(n_sensors, n_samples)
-        X = np.hstack([raw, pairwise_differences(raw)])
-        y = 3.0 * (raw[:, 0] - raw[:, -1]) + np.random.default_rng(1).normal(0, 0.3, n_samples)
-        repeat = 3 if X.shape[1] < 1000 else 1
-        t_sim, R = timed(similarity_matrix, X, repeat=repeat)
-        t_fast, T = timed(closure_minimax, R, repeat=repeat)
-        t_cut, _ = timed(cut_for_clusters, T, 4, repeat=repeat)
-        t_psi, _ = timed(correlation_with, X, y, repeat=repeat)
-        reference = ratio = "-"
-        if with_reference:
-            t_ref, T_ref = timed(closure_by_squaring, R)
-            if not np.array_equal(T_ref, T):
-                raise SystemExit("fast closure differs from the squaring reference")
-            reference, ratio = f"{t_ref:8.3f}s", f"{t_ref / t_fast:6.0f}x"
-        label = f"{n_sensors}+{X.shape[1] - n_sensors}"
-        print(f"{label:>16} {n_samples:>7} {t_sim:9.3f}s {t_fast:8.3f}s {t_cut:6.3f}s "
-              f"{t_psi:6.3f}s {reference:>9} {ratio:>7}", flush=True)
-    print("ratio = squaring reference time / fast closure time (identical results checked)")
+    print("selection, sensors + all pairwise differences (row-wise vs today's matrix way)")
+    print(f"{'sensors':>7} {'candidates':>10} {'row-wise':>9} {'(cpu)':>8} {'peak':>8} "
+          f"{'goal':>16} {'matrix':>9} {'peak':>8} {'ratio':>7}")
+    for n_sensors, n_samples, k, with_matrix, goal_s, goal_mb in SIZES:
+        result = child("--measure", str(n_sensors), str(n_samples), str(k), str(with_matrix))
+        n = n_sensors * (n_sensors + 1) // 2
+        if with_matrix:
+            if not result["same_clusters"]:
+                raise SystemExit(f"{n_sensors} sensors: row-wise clusters differ from the matrix")
+            old = f"{result['matrix_s']:8.2f}s {result['matrix_peak_MB']:6.0f}MB " \
+                  f"{result['matrix_s'] / result['row_s']:6.1f}x"
+        else:
+            old = f"not run: R alone is {8 * n * n / 1e9:.0f} GB"
+        goal = f"<= {goal_s:g} s, {goal_mb} MB"
+        print(f"{n_sensors:>7} {n:>10} {result['row_s']:8.2f}s {result['row_cpu_s']:7.2f}s "
+              f"{result['row_peak_MB']:6.0f}MB {goal:>16} {old}", flush=True)
+    seconds, peak = cli_run()
+    print(f"CLI `spindlebench evaluate --differences`, 100 sensors + 4950 differences, "
+          f"1440 samples: {seconds:.2f} s, {peak:.0f} MB peak (goal <= 1 s, <= 300 MB)")
+    closure_rows()
 
 
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:2] == ["--measure"]:
+        m, samples, k, with_matrix = sys.argv[2:6]
+        print(json.dumps(measure(int(m), int(samples), int(k), with_matrix == "True")))
+    else:
+        main()
