@@ -269,6 +269,9 @@ def test_a_soaked_run_starts_from_the_history_reproducibly(tmp_path, soak_cache)
     start = np.array(list(sidecar["initial_state"]["states_K"].values()))
     assert start.max() - start.min() > 0.5  # not one uniform cold-start temperature
     assert sidecar["scenario_parsed"]["initial"]["kind"] == "soak"
+    history = sidecar["initial_state_soak"]
+    assert history["days"] == 2 and history["ambient"]["weather_sd_K"] == 0.0
+    assert (soak_cache / f"{history['soak_key']}.json").is_file()
     assert sidecar["scenario_parsed"]["ambient"]["weather_seed"] == 3
 
 

@@ -37,6 +37,7 @@ from spindlebench.testbench.scenario import (
     resolve_initial,
 )
 from spindlebench.testbench.sensors import measure
+from spindlebench.testbench.soak import soak_provenance
 
 
 def sidecar_record(scenario: Scenario, fmu_path: Path, seed: int,
@@ -47,6 +48,8 @@ def sidecar_record(scenario: Scenario, fmu_path: Path, seed: int,
         extra["ambient_file"] = file_entry(scenario.ambient.file)
     if scenario.initial.kind == "continue":
         extra["initial_state_from"] = file_entry(scenario.initial.from_file)
+    if scenario.initial.kind == "soak":
+        extra["initial_state_soak"] = soak_provenance(scenario, fmu_path)
     return provenance(
         kind="spindlebench synthetic recording",
         scenario=file_entry(scenario.path),

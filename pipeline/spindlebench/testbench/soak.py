@@ -101,6 +101,14 @@ def soak_key(history: Scenario, fmu_path: Path) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+def soak_provenance(scenario: Scenario, fmu_path: str | Path) -> dict[str, Any]:
+    """What a soaked recording's sidecar says about its start: the history and its cache key."""
+    history = soak_scenario(scenario)
+    return {"days": scenario.initial.days, "step_s": history.step_s,
+            "ambient": history.to_dict()["ambient"],
+            "soak_key": soak_key(history, Path(fmu_path))}
+
+
 def soak_state(scenario: Scenario, fmu_path: str | Path) -> dict[str, float]:
     """The end state (K by state name) of the soak before ``scenario``; cached."""
     from spindlebench.testbench.runner import co_simulate  # the runner calls this module
