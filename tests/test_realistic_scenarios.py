@@ -50,6 +50,10 @@ def test_weather_is_reproducible_from_the_seed_and_independent_of_step_and_lengt
     longer = ambient_C(model, np.arange(0.0, 12 * HOUR + 1, 60.0))
     np.testing.assert_array_equal(fine[::60], coarse)
     np.testing.assert_array_equal(longer[: coarse.size], coarse)
+    # one time at a time (a continuous-input solver asks so) gives the same values
+    points = [0.0, 1234.5, 6 * HOUR]
+    assert [float(ambient_C(model, np.array(p))) for p in points] == list(
+        ambient_C(model, np.array(points)))
     other = ambient_C(replace(model, weather_seed=6), np.arange(0.0, 6 * HOUR + 1, 60.0))
     assert np.abs(other - coarse).max() > 0.05
 

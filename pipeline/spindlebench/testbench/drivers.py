@@ -7,9 +7,11 @@ per-step Python work out of the co-simulation loop.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 
 from spindlebench.testbench.scenario import (
     AmbientModel,
@@ -135,20 +137,31 @@ def weather_anomaly_K(model: IndoorAmbient, t: np.ndarray) -> np.ndarray:  # noq
     t = np.asarray(t, dtype=float)
     if model.weather_sd_K == 0.0 or t.size == 0:
         return np.zeros(t.shape)
-    origin_s = -86400.0
-    last = int(np.ceil((float(t.max()) - origin_s) / WEATHER_KNOT_S)) + 1
-    if float(t.min()) < origin_s:
-        raise ValueError(f"weather is defined from {origin_s:g} s on, asked at {t.min():g} s")
-    rng = np.random.default_rng(model.weather_seed)
-    shocks = rng.standard_normal(last + 1)
-    a = float(np.exp(-WEATHER_KNOT_S / (model.weather_tau_h * 3600.0)))
-    knots = np.empty(last + 1)
-    knots[0] = shocks[0]
-    scale = np.sqrt(1.0 - a * a)
-    for k in range(1, last + 1):
-        knots[k] = a * knots[k - 1] + scale * shocks[k]
-    times = origin_s + WEATHER_KNOT_S * np.arange(last + 1)
+    if float(t.min()) < WEATHER_ORIGIN_S:
+        raise ValueError(f"weather is defined from {WEATHER_ORIGIN_S:g} s on, asked at "
+                         f"{t.min():g} s")
+    needed = int(np.ceil((float(t.max()) - WEATHER_ORIGIN_S) / WEATHER_KNOT_S)) + 2
+    count = 1 << max(6, (needed - 1).bit_length())  # cached in doublings: one draw per run
+    knots = _weather_knots(model.weather_seed, model.weather_tau_h, count)
+    times = WEATHER_ORIGIN_S + WEATHER_KNOT_S * np.arange(count)
     return model.weather_sd_K * np.interp(t, times, knots)
+
+
+#: Time (s) of the first weather knot: a day before the run, so a lagged indoor air has weather.
+WEATHER_ORIGIN_S = -86400.0
+
+
+@functools.lru_cache(maxsize=32)
+def _weather_knots(seed: int, tau_h: float, count: int) -> np.ndarray:
+    """The first ``count`` knots of the unit-variance OU process of ``seed`` (read-only); a
+    longer ``count`` repeats the shorter one's knots, as the draws are taken in order."""
+    shocks = np.random.default_rng(seed).standard_normal(count)
+    a = float(np.exp(-WEATHER_KNOT_S / (tau_h * 3600.0)))
+    drive = shocks * np.sqrt(1.0 - a * a)
+    drive[0] = shocks[0]  # stationary start
+    knots = lfilter([1.0], [1.0, -a], drive)
+    knots.flags.writeable = False
+    return knots
 
 
 def _daily_cycle_C(low_C: float, high_C: float, start_hour: float, trough_hour: float,  # noqa: N802
