@@ -450,3 +450,40 @@ def test_list_flags_with_an_empty_item_are_refused(generated, tmp_path, capsys):
     assert cli.main(["paper", "--recordings", str(folder), "--out", str(out),
                      "--tests", "exp2,", "exp3", "--clusters", "2"]) == 0
     assert json.loads((out / "provenance.json").read_text())["study"]["tests"] == ["exp2", "exp3"]
+
+
+def test_methods_compared_table(generated, tmp_path):
+    """``methods`` in the config: every label on every group and k, the paper's from its own
+    cells, the others equal to ``evaluate`` with that method; a table per group in the README."""
+    folder, _ = generated
+    config_path = tmp_path / "methods.toml"
+    config_path.write_text('tests = ["exp2", "exp3"]\nclusters = [2]\n'
+                           'methods = ["closure", "kmeans+grey", "greedy+ridge"]\nseed = 3\n')
+    out = tmp_path / "out"
+    assert cli.main(["paper", "--recordings", str(folder), "--config", str(config_path),
+                     "--out", str(out)]) == 0
+    table = pd.read_csv(out / "methods_rmse.csv")
+    assert list(dict.fromkeys(table["method"])) == ["closure", "kmeans+grey", "greedy+ridge"]
+    assert len(table) == 3 * len(GROUPS)
+    paper = pd.read_csv(out / "table6_rmse.csv")
+    closure = table[table["method"] == "closure"]
+    assert set(closure["group"]) == set(GROUPS)
+    assert np.all(np.isfinite(table["mean_rmse_um"]))
+    at = table[(table["method"] == "kmeans+grey") & (table["group"] == "six_diff")].iloc[0]
+    direct = evaluate(folder / "exp1.csv", [folder / "exp2.csv", folder / "exp3.csv"],
+                      "drift_um", sensors=list(PAPER_SIX), k=2, differences=True,
+                      method="kmeans", within="grey", seed=3)
+    assert at["mean_rmse_um"] == pytest.approx(direct.mean_rmse_um, rel=1e-5)
+    assert at["selected"] == ";".join(direct.selected)
+    assert at["worst_um"] == pytest.approx(max(direct.rmse_um.values()), rel=1e-5)
+    readme = (out / "README.md").read_text()
+    assert "## Methods compared" in readme and "| k | closure | kmeans+grey | greedy+ridge |" \
+        in readme
+    assert len(paper) > 0
+    for bad, message in (('methods = ["knn"]', "key 'methods': unknown method 'knn'"),
+                         ('methods = ["lasso+grey"]', "has no clusters"),
+                         ('methods = ["closure", "closure+psi"]', "listed twice"),
+                         ('seed = -1', "key 'seed'")):
+        config_path.write_text(bad + "\n")
+        with pytest.raises(SpindlebenchError, match=message):
+            study_config.load(config_path)

@@ -54,6 +54,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "(target, sensors_all, time_s; other columns are ignored): one-line "
                         "error (default), or drop the samples where the target or a used "
                         "sensor is missing (warned)")
+    parser.add_argument("--methods", default=None, nargs="+", metavar="LABEL",
+                        help="method labels to compare besides the paper's tables "
+                        "(method[+within][+regressor], see 'spindlebench methods'), space- or "
+                        "comma-separated, or 'all' (default: closure, the paper's, only)")
+    parser.add_argument("--seed", default=None, type=int,
+                        help="seed of fcm, kmeans and stability selection (default 0)")
     parser.set_defaults(func=_run)
 
 
@@ -65,10 +71,10 @@ def _joined(flag: str, values: list[str] | None) -> str | None:
 
 def _run(args: argparse.Namespace) -> int:
     lists = {key: _joined("--" + key.replace("_", "-"), getattr(args, key))
-             for key in ("tests", "sensors_all", "six", "clusters")}
+             for key in ("tests", "sensors_all", "six", "clusters", "methods")}
     overrides = {
         "target": args.target, "train": args.train, "similarity": args.similarity,
-        "missing": args.missing, **lists,
+        "missing": args.missing, "seed": args.seed, **lists,
     }
     config_path = args.config
     own = Path(args.recordings) / study_config.CONFIG_NAME
@@ -86,6 +92,7 @@ def _run(args: argparse.Namespace) -> int:
             ("--tests", lists["tests"]), ("--sensors-all", lists["sensors_all"]),
             ("--six", lists["six"]), ("--clusters", lists["clusters"]),
             ("--similarity", args.similarity), ("--missing", args.missing),
+            ("--methods", lists["methods"]), ("--seed", args.seed),
         )
         if value is not None
     )

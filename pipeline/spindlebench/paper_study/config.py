@@ -18,6 +18,9 @@ TOML keys (all optional)::
     similarity = "abs-pearson"             # or "literal"
     missing = "error"                      # or "drop-rows": drop samples with a missing
                                            # target/used sensor (sensor dropout), warned
+    methods = ["closure", "kmeans+grey"]   # method labels (spindlebench methods), or "all";
+                                           # every one runs on every group and k
+    seed = 0                               # seed of fcm, kmeans and stability selection
 
 ``six = "auto"`` picks the subset by a rule that does not look at the thermal error (the paper
 chose its six by location, one per region of the machine): cut the fuzzy equivalence hierarchy
@@ -34,7 +37,15 @@ from typing import Any
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.tables import Table, load_toml
 from spindlebench.listflags import split_list_flag
-from spindlebench.names import DEFAULT_SIMILARITY, PAPER_SIX, SENSORS, SIMILARITIES
+from spindlebench.names import (
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    DEFAULT_SIMILARITY,
+    METHODS,
+    PAPER_SIX,
+    SENSORS,
+    SIMILARITIES,
+)
 
 AUTO_SIX = "auto"
 #: A recordings folder's own study file (the CAIVIAC adapter writes one); ``spindlebench paper``
@@ -45,7 +56,9 @@ MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
 TIME_COLUMN = "time_s"
 
 _KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
-         "missing")
+         "missing", "methods", "seed")
+#: ``methods = "all"``: every selection method with its defaults (psi, ols).
+ALL_METHODS = "all"
 
 
 @dataclass(frozen=True)
@@ -61,6 +74,10 @@ class StudyConfig:
     clusters: tuple[int, ...] = (2, 3, 4)
     similarity: str = DEFAULT_SIMILARITY
     missing: str = "error"
+    #: Method labels (``selection.registry``); the first is the paper's, whose cells feed the
+    #: paper's tables; the others add the "methods compared" tables.
+    methods: tuple[str, ...] = (DEFAULT_METHOD,)
+    seed: int = DEFAULT_METHOD_SEED
     source: str = field(default="defaults", compare=False)
 
     @property
@@ -114,7 +131,14 @@ class StudyConfig:
                        f"{self.similarity!r} is not one of {', '.join(SIMILARITIES)}")
         if self.missing not in MISSING_MODES:
             raise fail("missing", f"{self.missing!r} is not one of {', '.join(MISSING_MODES)}")
-        return self
+        from spindlebench.selection.registry import check_labels
+
+        labels = check_labels(self.methods, f"{where}: key 'methods'")
+        if not labels:
+            raise fail("methods", "need one or more method labels")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise fail("seed", f"must be an integer >= 0, got {self.seed!r}")
+        return replace(self, methods=labels)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain values, for provenance and the README."""
@@ -123,7 +147,8 @@ class StudyConfig:
             "tests": list(self.tests), "sensors_all": list(self.sensors_all),
             "six": self.six if isinstance(self.six, str) else list(self.six),
             "clusters": list(self.clusters), "similarity": self.similarity,
-            "missing": self.missing, "source": self.source,
+            "missing": self.missing, "methods": list(self.methods), "seed": self.seed,
+            "source": self.source,
         }
 
 
@@ -174,6 +199,16 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
             changes[key] = _names(table, key)
         elif key == "six":
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
+        elif key == "methods":
+            names = _names(table, key)
+            changes[key] = tuple(METHODS) if names == (ALL_METHODS,) else names
+        elif key == "seed":
+            value = table.raw(key)
+            if isinstance(value, str) and value.isdigit():
+                value = int(value)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise table.error(key, f"expected an integer >= 0, got {value!r}")
+            changes[key] = value
         else:
             changes[key] = _ints(table, key)
     table.finish()

@@ -18,7 +18,7 @@ import numpy as np
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
-from spindlebench.names import GROUP_LABELS
+from spindlebench.names import DEFAULT_METHOD, GROUP_LABELS
 from spindlebench.paper_study import figures, reference, tables
 from spindlebench.paper_study.study import StudyResult
 from spindlebench.provenance import file_entry, provenance, sidecar_mismatch
@@ -92,6 +92,24 @@ _MISSING_TEXT = {
 }
 
 
+def _methods_section(result: StudyResult) -> str:
+    """The "methods compared" section, when the study lists methods beyond the paper's."""
+    if tuple(result.config.methods) == (DEFAULT_METHOD,):
+        return ""
+    seeded = f" Seed of fcm, kmeans and stability: {result.config.seed}."
+    return f"""
+## Methods compared (not in the paper)
+
+The same protocol (train on {result.config.train}, predict the others, rises, the same
+candidate groups) with every method of `methods` (`spindlebench methods` says what each
+label means; `closure` is the paper's method, the tables above).{seeded}
+
+{tables.methods_markdown(result)}
+
+All of it is in `methods_rmse.csv`.
+"""
+
+
 def readme_text(result: StudyResult, figure_paths: dict[str, Path], command: str) -> str:
     """The results page: set-up, the three tables (the paper's beside ours where they answer
     the same question), the figures."""
@@ -148,7 +166,7 @@ Ours first, then the paper's Table 6 in the same row where it predicted the same
 (see the line below the table). {paper_note}
 
 {tables.table6_markdown(result)}
-
+{_methods_section(result)}
 ## Figures
 
 - Thermal error of every experiment (paper Fig. 3): ![error curves]({fig["error_curves"]})
@@ -275,6 +293,9 @@ def _write_all(result: StudyResult, out_dir: Path, command: str) -> dict[str, Pa
         "table5_csv": _write_csv(out_dir / "table5_r2.csv", tables.table5_frame(result)),
         "table6_csv": _write_csv(out_dir / "table6_rmse.csv", tables.table6_frame(result)),
     }
+    if tuple(result.config.methods) != (DEFAULT_METHOD,):
+        paths["methods_csv"] = _write_csv(out_dir / "methods_rmse.csv",
+                                          tables.methods_frame(result))
     for number, render in ((4, tables.table4_markdown), (5, tables.table5_markdown),
                            (6, tables.table6_markdown)):
         target = out_dir / f"table{number}.md"

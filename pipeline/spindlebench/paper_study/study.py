@@ -14,6 +14,7 @@ gap. The ``six = "auto"`` rule uses the training samples where every raw sensor 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,12 +23,13 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.names import ALL_RAW, GROUPS, SIX_DIFF
+from spindlebench.names import ALL_RAW, DEFAULT_METHOD, GROUPS, SIX_DIFF
 from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
 from spindlebench.recordings import MissingValueError, read_recording
-from spindlebench.selection import evaluate
+from spindlebench.selection import SelectionWarning, evaluate
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
+from spindlebench.selection.registry import parse_method
 from spindlebench.selection.similarity import constant_columns, similarity_matrix
 
 AUTO_SIX_RULE = (
@@ -60,6 +62,32 @@ class Cell:
 
 
 @dataclass
+class MethodCell:
+    """One method (label) on one group at one k: the held-out scores, or why it failed."""
+
+    method: str
+    group: str
+    k: int
+    selected: list[str]
+    rmse_um: dict[str, float]
+    error: str = ""
+
+    @property
+    def mean_rmse_um(self) -> float:
+        return float(np.mean(list(self.rmse_um.values()))) if self.rmse_um else float("nan")
+
+    @property
+    def spread_um(self) -> float:
+        """Standard deviation of the per-run RMSE across the held-out runs."""
+        values = list(self.rmse_um.values())
+        return float(np.std(values)) if values else float("nan")
+
+    @property
+    def worst_um(self) -> float:
+        return float(max(self.rmse_um.values())) if self.rmse_um else float("nan")
+
+
+@dataclass
 class StudyResult:
     """All cells plus what they were computed from."""
 
@@ -70,6 +98,8 @@ class StudyResult:
     paths: dict[str, Path]
     cells: list[Cell]
     groups: tuple[str, ...] = GROUPS
+    #: Every method of ``config.methods`` on every group and k (the paper's from ``cells``).
+    method_cells: list[MethodCell] = field(default_factory=list)
 
     def cell(self, group: str, k: int) -> Cell:
         """The cell of ``group`` at ``k`` clusters."""
@@ -223,4 +253,32 @@ def run_study(directory: str | Path, config: StudyConfig) -> StudyResult:
         for group in GROUPS:
             sensors, differences = result.group_sensors(group)
             result.cells.append(_cell(config, frames, group, k, sensors, differences))
+    for label in config.methods:
+        for k in config.clusters:
+            for group in GROUPS:
+                result.method_cells.append(_method_cell(result, frames, label, group, k))
     return result
+
+
+def _method_cell(result: StudyResult, frames: Mapping[str, pd.DataFrame], label: str,
+                 group: str, k: int) -> MethodCell:
+    """``label`` on ``group`` at ``k``; a method that cannot run there (too few candidates,
+    too few samples to split) is recorded with its one-line message, not raised."""
+    config = result.config
+    if label == DEFAULT_METHOD:
+        cell = result.cell(group, k)
+        return MethodCell(label, group, k, cell.selected, dict(cell.rmse_um))
+    sensors, differences = result.group_sensors(group)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SelectionWarning)  # as the paper's cells warn once
+            evaluation = evaluate(frames[config.train],
+                                  {name: frames[name] for name in config.tests},
+                                  target=config.target, sensors=sensors, k=k,
+                                  differences=differences, similarity=config.similarity,
+                                  missing=config.missing, method=parse_method(label),
+                                  seed=config.seed)
+    except SpindlebenchError as exc:
+        return MethodCell(label, group, k, [], {}, error=" ".join(str(exc).split()))
+    return MethodCell(label, group, k, evaluation.selected,
+                      {name: float(v) for name, v in evaluation.rmse_um.items()})

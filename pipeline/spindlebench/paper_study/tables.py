@@ -237,3 +237,51 @@ def measured_rms(result: StudyResult) -> dict[str, float]:
         test: float(np.sqrt(np.nanmean(result.frames[test][result.config.target].to_numpy() ** 2)))
         for test in result.config.tests
     }
+
+
+def methods_frame(result: StudyResult) -> pd.DataFrame:
+    """Every method x group x k: mean, spread (SD across held-out runs) and worst RMSE."""
+    rows = []
+    for cell in result.method_cells:
+        rows.append({"method": cell.method, "group": cell.group, "k": cell.k,
+                     "mean_rmse_um": cell.mean_rmse_um, "spread_um": cell.spread_um,
+                     "worst_um": cell.worst_um, "selected": ";".join(cell.selected),
+                     **{f"rmse_{name}_um": cell.rmse_um.get(name, np.nan)
+                        for name in result.config.tests},
+                     "error": cell.error})
+    return pd.DataFrame(rows)
+
+
+def methods_markdown(result: StudyResult) -> str:
+    """Per group: rows k, one column per method (mean held-out RMSE); then every method x k
+    with mean / spread / worst per group. A method that could not run shows its reason below."""
+    frame = methods_frame(result)
+    methods = list(dict.fromkeys(frame["method"]))
+    parts = []
+    for group in GROUPS:
+        at = frame[frame["group"] == group]
+        body = [[str(k), *(_fmt(at[(at["k"] == k) & (at["method"] == m)]["mean_rmse_um"]
+                                .iloc[0], 2) for m in methods)]
+                for k in result.config.clusters]
+        parts.append(f"Mean held-out RMSE (µm), {GROUP_LABELS[group]}:\n\n"
+                     + _markdown(pd.DataFrame(body, columns=["k", *methods])))
+    header = ["method", "k", *(f"{GROUP_LABELS[g]}: mean / spread / worst" for g in GROUPS)]
+    body = []
+    for method in methods:
+        for k in result.config.clusters:
+            row = [method, str(k)]
+            for group in GROUPS:
+                at = frame[(frame["method"] == method) & (frame["group"] == group)
+                           & (frame["k"] == k)].iloc[0]
+                row.append(" / ".join(_fmt(at[c], 2)
+                                      for c in ("mean_rmse_um", "spread_um", "worst_um")))
+            body.append(row)
+    parts.append("Every method × k (µm; spread = standard deviation of the per-run RMSE across "
+                 "the held-out runs, worst = the largest per-run RMSE):\n\n"
+                 + _markdown(pd.DataFrame(body, columns=header)))
+    failed = frame[frame["error"] != ""]
+    if len(failed):
+        parts.append("Could not run (shown as –):\n\n" + "\n".join(
+            f"- {row.method}, {GROUP_LABELS[row.group]}, k = {row.k}: {row.error}"
+            for row in failed.itertuples()))
+    return "\n\n".join(parts)
