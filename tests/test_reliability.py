@@ -338,3 +338,68 @@ def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_p
     assert all(line.startswith("warning: ") for line in stderr.splitlines())
     assert (out / "results.csv").read_bytes() == reference
     assert "ran" in stdout or "resumed" in stdout
+
+
+# --------------------------------------------------------------------------- case 5: bounds
+
+
+def bounded_copy(tmp_path: Path) -> Path:
+    """The default FMU whose model description declares min/max on two parameters (what the
+    model's Modelica min/max become); the binary is untouched."""
+    target = tmp_path / "bounded.fmu"
+    with zipfile.ZipFile(DEFAULT_FMU) as source, zipfile.ZipFile(target, "w") as out:
+        for info in source.infolist():
+            data = source.read(info)
+            if info.filename == "modelDescription.xml":
+                text = data.decode("utf-8")
+                text = text.replace('name="front_bearing_C"', 'min="1e-06" name="front_bearing_C"')
+                text = text.replace('name="h_nat"', 'max="100" min="0" name="h_nat"')
+                data = text.encode("utf-8")
+            out.writestr(info, data)
+    return target
+
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("front_bearing_C = 0", "must be ≥ 1e-06, got 0"),
+    ("front_bearing_C = -1850", "must be ≥ 1e-06, got -1850"),
+    ("h_nat = -100", "must be ≥ 0, got -100"),
+    ("h_nat = 1e6", "must be ≤ 100, got 1e+06"),
+])
+def test_a_scenario_parameter_outside_the_fmus_declared_bounds_is_refused(
+        tmp_path, setting, message):
+    fmu = bounded_copy(tmp_path)
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(QUICK + f"\n[parameters]\n{setting}\n", encoding="utf-8")
+    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"), "--fmu", str(fmu))
+    _, stderr = child.communicate(timeout=120)
+    assert child.returncode == 2
+    name = setting.split()[0]
+    assert one_error_line(stderr) == f"error: {scenario}: key 'parameters.{name}': {message}"
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_study_parameter_outside_the_declared_bounds_is_refused(tmp_path):
+    fmu = bounded_copy(tmp_path)
+    text = TINY.read_text(encoding="utf-8")
+    study = tmp_path / "study.toml"
+    study.write_text(text.replace("[study]", f"[study]\nfmu = {str(fmu)!r}", 1)
+                     + "\n[parameters]\nh_nat = -100\n", encoding="utf-8")
+    child = spindlebench("sweep", str(study), "-o", str(tmp_path / "out"), "--workers", "0")
+    _, stderr = child.communicate(timeout=120)
+    assert child.returncode == 2
+    line = one_error_line(stderr)
+    assert f"{study}: key 'parameters.h_nat': must be ≥ 0, got -100" in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_diverging_simulation_names_the_scenario_and_the_parameters_it_changes(tmp_path):
+    scenario = tmp_path / "hot.toml"
+    scenario.write_text(QUICK + "\n[parameters]\nfront_bearing_friction_f0 = 1e6\n",
+                        encoding="utf-8")
+    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"))
+    _, stderr = child.communicate(timeout=120)
+    assert child.returncode == 2
+    line = one_error_line(stderr)
+    assert f"{scenario}: the simulation diverged" in line
+    assert "front_bearing_friction_f0 = 1e+06" in line
+    assert not (tmp_path / "out").exists()

@@ -15,6 +15,7 @@ Every problem becomes one line naming the study file and the dotted key.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -305,8 +306,8 @@ def _feed(value: float) -> str | None:
     return range_problem(value, 0.0, MAX_FEED_MM_PER_MIN, "mm/min")
 
 
-def _fmu_parameters(head: Table, fmu: Path) -> frozenset[str]:
-    """The FMU's settable parameter names; an unreadable FMU fails here, at load time.
+def _fmu_parameters(head: Table, fmu: Path) -> Mapping[str, Any]:
+    """The FMU's settable parameters by name; an unreadable FMU fails here, at load time.
 
     Checked now, not in the workers, so a wrong FMU or a misspelt parameter is one line
     before any results folder exists, not the same error once per simulation afterwards.
@@ -314,17 +315,18 @@ def _fmu_parameters(head: Table, fmu: Path) -> frozenset[str]:
     from spindlebench.testbench.runner import inspect_fmu
 
     try:
-        return frozenset(inspect_fmu(fmu).parameters)
+        return inspect_fmu(fmu).parameters
     except SpindlebenchError as exc:
         raise head.error("fmu", str(exc)) from None
 
 
-def _check_parameters(params: Table, parameters: dict[str, float], known: frozenset[str],
+def _check_parameters(params: Table, parameters: dict[str, float], known: Mapping[str, Any],
                       fmu: Path) -> None:
-    """Every ``[parameters]`` name must be one the FMU lets the runner set (as for a scenario)."""
+    """Every ``[parameters]`` name must be one the FMU lets the runner set, within the min/max
+    its model description declares (as for a scenario)."""
     import difflib
 
-    from spindlebench.testbench.runner import COOLING_PARAMETERS
+    from spindlebench.testbench.runner import COOLING_PARAMETERS, bound_problem
 
     for name in parameters:
         if name in COOLING_PARAMETERS:
@@ -334,6 +336,9 @@ def _check_parameters(params: Table, parameters: dict[str, float], known: frozen
             near = difflib.get_close_matches(name, sorted(known), n=1)
             hint = f" (did you mean {near[0]!r}?)" if near else ""
             raise params.error(name, f"the FMU {fmu.name} has no parameter {name!r}{hint}")
+        problem = bound_problem(known[name], parameters[name])
+        if problem:
+            raise params.error(name, problem)
 
 
 def _duration_s(exp: Table) -> tuple[float, str]:

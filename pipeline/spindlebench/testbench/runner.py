@@ -166,6 +166,48 @@ class Simulation:
 # --------------------------------------------------------------------------- set-up helpers
 
 
+def declared_bounds(variable: ScalarVariable) -> tuple[float | None, float | None]:
+    """The ``min`` and ``max`` the model description declares for a variable (None: none)."""
+    def number(text: Any) -> float | None:
+        return None if text is None else float(text)
+
+    return number(variable.min), number(variable.max)
+
+
+def bound_problem(variable: ScalarVariable, value: float) -> str | None:
+    """Why ``value`` lies outside the FMU's declared ``min``/``max`` of ``variable`` (None
+    when inside): the FMI way to keep a parameter physical (capacities > 0, conductances
+    >= 0), declared once in the Modelica source and read here from the FMU."""
+    low, high = declared_bounds(variable)
+    if low is not None and not value >= low:
+        return f"must be ≥ {low:g}, got {value:g}"
+    if high is not None and not value <= high:
+        return f"must be ≤ {high:g}, got {value:g}"
+    return None
+
+
+#: Sensor outputs outside this range (°C) mean the simulation left physics: a machine tool
+#: does not reach 1000 °C nor fall below -100 °C.
+PHYSICAL_RANGE_C = (-100.0, 1000.0)
+
+
+def check_physical(simulation: Simulation, scenario: Scenario) -> None:
+    """Refuse a simulation whose temperatures left the physical range, naming the scenario and
+    the parameters it changed from the model's defaults (the likely cause)."""
+    low, high = PHYSICAL_RANGE_C
+    for name in SENSOR_OUTPUTS:
+        values = np.asarray(simulation.outputs[name])
+        outside = np.flatnonzero(~((values >= low) & (values <= high)))
+        if outside.size:
+            i = int(outside[0])
+            changed = ", ".join(f"{k} = {v:g}" for k, v in scenario.parameters.items())
+            likely = (f"; likely the parameters it changes: {changed}" if changed
+                      else "; it changes no parameter (check the drivers and the FMU)")
+            raise SpindlebenchError(
+                f"{scenario.path}: the simulation diverged: {name} = {values[i]:g} °C at "
+                f"t = {simulation.time_s[i]:g} s is outside {low:g}..{high:g} °C{likely}")
+
+
 def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
     """Scenario parameters and cooling settings as FMU parameter values; unknown names fail."""
     values: dict[str, float] = {}
@@ -178,6 +220,9 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
             hint = f" (did you mean {near[0]!r}?)" if near else ""
             raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': the FMU "
                                     f"{fmu.path.name} has no parameter {name!r}{hint}")
+        problem = bound_problem(fmu.parameters[name], value)
+        if problem:
+            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': {problem}")
         values[name] = value
     cooling = scenario.cooling
     wanted = {
@@ -411,8 +456,10 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
         fmu.terminate()
     except (RuntimeError, FMICallException) as exc:  # CVode or the FMU gave up
+        changed = ", ".join(f"{k} = {v:g}" for k, v in scenario.parameters.items())
+        likely = f" (likely the parameters it changes: {changed})" if changed else ""
         raise SpindlebenchError(f"{fmu_info.path}: simulation failed in scenario "
-                                f"{scenario.path}: {exc}") from None
+                                f"{scenario.path}{likely}: {exc}") from None
     finally:
         if bar is not None:
             bar.close()

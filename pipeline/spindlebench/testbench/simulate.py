@@ -26,6 +26,7 @@ from spindlebench.testbench.recording import recording_frame, write_recording
 from spindlebench.testbench.runner import (
     SENSOR_OUTPUTS,
     Simulation,
+    check_physical,
     check_scenario,
     co_simulate,
     inspect_fmu,
@@ -74,6 +75,7 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
     fmu = Path(DEFAULT_FMU if fmu_path is None else fmu_path)
     seed = scenario.seed if seed is None else seed
     simulation = co_simulate(scenario, fmu, progress=progress)
+    check_physical(simulation, scenario)
     truth = simulation.outputs
     measured_C, measured_drift = measure(
         scenario.sensors,
