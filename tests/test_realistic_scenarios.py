@@ -279,8 +279,13 @@ def test_a_soaked_run_starts_from_the_history_reproducibly(tmp_path, soak_cache)
     assert sidecar["scenario_parsed"]["ambient"]["weather_seed"] == 3
 
 
-def test_shipped_realistic_example_loads():
+def test_shipped_realistic_example_and_study_load():
+    from spindlebench.studies.study import load_study
+
     root = Path(__file__).parents[1]
+    study = load_study(root / "scenarios" / "studies" / "season_sweep_realistic.toml")
+    assert study.soak_days == 7 and study.indoor is not None
+    assert {level.noise_kind for level in study.noise} == {"ar1"}
     scenario = load_scenario(root / "scenarios" / "examples" / "realistic_day.toml")
     assert isinstance(scenario.ambient, IndoorAmbient) and scenario.initial.kind == "soak"
     assert scenario.sensors.noise_kind == "ar1"
