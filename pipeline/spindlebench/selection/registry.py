@@ -204,7 +204,7 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
     clusters = [kept[c] for c in selector.clusters_] if choice.clustered else \
         [np.array([i]) for i in selected]
     empty = np.empty((0, 0))
-    return Selection(kept=kept, dropped=dropped, similarity=empty, closure=empty,
+    return Selection(kept=kept, dropped=dropped, similarity_source=empty, closure_source=empty,
                      eta=float("nan"), clusters=clusters, psi=psi, selected=selected)
 
 
