@@ -161,10 +161,12 @@ def test_target_from_the_sidecar(tmp_path, capsys):
     (["{r}", "--sensors", "T3"], "no temperature column rises"),
     (["{r}", "--json", "{d}/x.txt"], "must be a .json file"),
     (["{r}", "--reference", "{d}/nowhere"], "--reference"),
+    (["{d}/empty"], "folder holds no .csv recording"),
     (["{plain}"], "no --target given"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, message):
     recording = hand_made(tmp_path / "r.csv")
+    (tmp_path / "empty").mkdir()
     plain = tmp_path / "plain.csv"
     pd.read_csv(recording).rename(columns={"drift_um": "z_um"}).to_csv(plain, index=False)
     argv = [arg.format(r=recording, d=tmp_path, plain=plain) for arg in args]
@@ -225,10 +227,11 @@ def test_runs_on_the_caiviac_runs(tmp_path, capsys):
     out = tmp_path / "caiviac.json"
     files = sorted(str(path) for path in runs.glob("*.csv"))
     reference = reference_folder(tmp_path)
-    assert cli.main(["fingerprint", *files, "--json", str(out), "--reference",
-                     str(reference)]) == 0
+    assert cli.main(["fingerprint", str(runs), "--json", str(out), "--reference",
+                     str(reference)]) == 0  # a folder is its recordings
     assert (tmp_path / "caiviac.png").is_file()
     record = json.loads(out.read_text(encoding="utf-8"))
+    assert [row["recording"] for row in record["recordings"]] == files
     assert [row["target"] for row in record["recordings"]] == ["ch3_um"] * len(files)
     assert all(len(row["sensors"]) == 16 for row in record["recordings"])
     median = record["median"]

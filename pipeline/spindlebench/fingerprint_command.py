@@ -174,7 +174,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "default machine's paper experiments.",
     )
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING",
-                        help="recording CSV(s)")
+                        help="recording CSV(s), or folders of them (every *.csv inside)")
     parser.add_argument("--target", help=f"error column (default: {DEFAULT_TARGET}, else the "
                         "axial_target of the recording's JSON sidecar)")
     parser.add_argument("--time-column", default=TIME_COLUMN, metavar="COL",
@@ -194,6 +194,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def recording_files(paths: list[Path]) -> list[Path]:
+    """The recordings named: files as given, a folder as its ``*.csv`` in name order."""
+    files: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            found = sorted(path.glob("*.csv"))
+            if not found:
+                raise SpindlebenchError(f"{path}: folder holds no .csv recording")
+            files.extend(found)
+        else:
+            files.append(path)
+    return files
+
+
 def run(args: argparse.Namespace) -> int:
     """Fingerprint every recording, print the table, write JSON and figure if asked."""
     sensors = split_list_flag("--sensors", args.sensors, what="name")
@@ -202,6 +216,7 @@ def run(args: argparse.Namespace) -> int:
             raise SpindlebenchError(f"{out}: must be a {suffix} file")
         if out is not None and out.is_dir():
             raise SpindlebenchError(f"{out}: is a directory")
+    args.recordings = recording_files(args.recordings)
     results = [fingerprint_recording(path, args.target, args.time_column, sensors)
                for path in args.recordings]
     figure = args.figure or (args.json.with_suffix(".png") if args.json else None)
