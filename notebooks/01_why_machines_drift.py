@@ -36,10 +36,9 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 from IPython.display import Image, display
-
-from spindlebench.cli import main as spindlebench
 from spindlebench import course
-from spindlebench.recordings import read_recording
+from spindlebench.cli import main as spindlebench
+from spindlebench.formats.recording import read_recording
 
 work = course.start("01")  # this notebook's own files go into work/01
 

@@ -34,12 +34,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import Image, display
 from scipy.cluster.hierarchy import dendrogram
-
 from spindlebench import course
 from spindlebench.cli import main as spindlebench
+from spindlebench.formats.recording import read_recording
 from spindlebench.paper_study.figures import cut_height
 from spindlebench.paths import SCENARIOS_DIR
-from spindlebench.recordings import read_recording
 from spindlebench.selection import (
     correlation_with,
     cut_for_clusters,

@@ -8,8 +8,8 @@ import pytest
 from spindlebench import cli
 from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import read_recording
 from spindlebench.provenance import sha256_file
-from spindlebench.recordings import read_recording
 
 # The schedule as SOURCE.md documents it (0-based rows): the adapter derives it from spindle_rpm.
 DOCUMENTED = [  # (first row, first idle row, next run's first row, speeds)

@@ -9,12 +9,12 @@ from scipy.cluster.hierarchy import fcluster
 from spindlebench import cli
 from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import read_recording
 from spindlebench.names import GROUPS, PAPER_SIX
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study import reference
 from spindlebench.paper_study.figures import cut_height
 from spindlebench.paper_study.study import choose_six, run_study
-from spindlebench.recordings import read_recording
 from spindlebench.selection import evaluate, linkage_from_similarity
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

@@ -6,8 +6,8 @@ import os
 import pandas as pd
 import pytest
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import write_recording
 from spindlebench.provenance import sha256_file
-from spindlebench.testbench.recording import write_recording
 
 FRAME = pd.DataFrame({"time_s": [0.0, 60.0], "T1": [20.0, 20.5]})
 

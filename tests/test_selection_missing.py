@@ -10,10 +10,10 @@ import pytest
 from conftest import REPO
 from spindlebench import cli
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import MissingValueError, read_recording
 from spindlebench.paper_study import config as study_config
 from spindlebench.paper_study.study import run_study
 from spindlebench.paths import DEFAULT_FMU
-from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import SelectionError, SelectionWarning, evaluate
 
 FAULT_EXAMPLE = REPO / "scenarios" / "examples" / "sensor_faults.toml"

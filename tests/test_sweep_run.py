@@ -18,7 +18,7 @@ import pytest
 from conftest import REPO
 from spindlebench import cli
 from spindlebench.errors import SpindlebenchError
-from spindlebench.recordings import read_recording
+from spindlebench.formats.recording import read_recording
 from spindlebench.studies.executor import TaskRunner
 from spindlebench.studies.jobs import measured_frame
 from spindlebench.studies.methods import method_specs

@@ -15,11 +15,11 @@ from pathlib import Path
 from spindlebench import atomic
 from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import read_recording
 from spindlebench.modelica import FMU_NAME
 from spindlebench.modelica.frontend import model_source
 from spindlebench.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file
-from spindlebench.recordings import read_recording
 from spindlebench.testbench.overview import plot_recording
 from spindlebench.testbench.simulate import plan_batch
 

@@ -12,7 +12,7 @@ once with the committed FMU).
 
 The error column is ``--target``; without it ``drift_um`` when the recording has it, else the
 ``axial_target`` its JSON sidecar names (``adapt caiviac`` writes one). Sensors are
-``--sensors`` or every temperature column (:func:`spindlebench.recordings.default_sensors`).
+``--sensors`` or every temperature column (:func:`spindlebench.formats.recording.default_sensors`).
 """
 
 from __future__ import annotations
@@ -36,18 +36,19 @@ from spindlebench.fingerprint_reference import (
     cached_reference,
     explicit_reference,
 )
-from spindlebench.listflags import split_list_flag
-from spindlebench.recordings import (
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
     TIME_COLUMN,
     default_sensors,
     read_recording,
     recording_name,
     require_columns,
+    sidecar_path,
 )
-from spindlebench.testbench.recording import sidecar_path
+from spindlebench.listflags import split_list_flag
 
 #: The error column of a recording that has it and no ``--target`` is given.
-DEFAULT_TARGET = "drift_um"
+DEFAULT_TARGET = DRIFT_COLUMN
 
 
 @dataclass(frozen=True)

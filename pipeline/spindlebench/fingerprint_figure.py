@@ -23,7 +23,7 @@ import numpy as np
 
 from spindlebench.atomic import atomic_path
 from spindlebench.fingerprint import MIN_SENSOR_RISE_K, final, smooth
-from spindlebench.recordings import TIME_COLUMN
+from spindlebench.formats.recording import TIME_COLUMN
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -23,9 +23,9 @@ from typing import Any
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import DRIFT_COLUMN, write_recording
 from spindlebench.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file
-from spindlebench.testbench.recording import write_recording
 from spindlebench.testbench.simulate import check_batch, plan_batch, record
 
 PAPER_SCENARIOS = SCENARIOS_DIR / "paper"
@@ -33,7 +33,7 @@ MACHINES = SCENARIOS_DIR / "machines"
 DEFAULT_CACHE = Path("results") / "fingerprint_reference"
 KEY_FILE = "reference.json"
 #: The error column of a synthetic recording.
-REFERENCE_TARGET = "drift_um"
+REFERENCE_TARGET = DRIFT_COLUMN
 
 
 @dataclass(frozen=True)

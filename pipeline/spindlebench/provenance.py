@@ -51,16 +51,3 @@ def provenance(**fields: Any) -> dict[str, Any]:
 def file_entry(path: str | os.PathLike[str]) -> dict[str, str]:
     """Name and hash of an input file, for a provenance record."""
     return {"path": str(Path(path)), "sha256": sha256_file(path)}
-
-
-def sidecar_mismatch(csv_sha256: str, sidecar: dict[str, Any]) -> str | None:
-    """Why a sidecar does not describe the CSV with hash ``csv_sha256`` (None when it does).
-
-    A sidecar written by spindlebench names its CSV's hash; an older one without the field is
-    taken on trust.
-    """
-    recorded = sidecar.get("recording_sha256")
-    if recorded is None or recorded == csv_sha256:
-        return None
-    return (f"its recording_sha256 {str(recorded)[:12]}… is not the CSV's "
-            f"{csv_sha256[:12]}… (the pair was not written together)")

@@ -20,13 +20,15 @@ import casadi as ca
 import numpy as np
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import node_of_output, node_output
 from spindlebench.modelica import DEFAULT_SEGMENTS
 from spindlebench.modelica.causalise import solve_explicitly
 from spindlebench.modelica.frontend import TranslatedModel, translate
 from spindlebench.names import KELVIN_OFFSET
 
 SENSOR_PREFIX = "sensor_"
-NODE_PREFIX = "node_"
+#: A temperature state's FMU name ends in this (``housing_3_T``).
+STATE_SUFFIX = "_T"
 
 
 @dataclass
@@ -76,7 +78,7 @@ def flat_name(path: str, index: int | None = None) -> str:
 
 def node_output_name(state_name: str) -> str:
     """Output with a node's temperature in degC: ``housing_3_T`` → ``node_housing_3_C``."""
-    return f"{NODE_PREFIX}{state_name.removesuffix('_T')}_C"
+    return node_output(state_name.removesuffix(STATE_SUFFIX))
 
 
 @dataclass
@@ -291,8 +293,9 @@ def _annotations(translated, states, inputs, params, tunable_index, output_names
     for i in tunable_index:
         declared(params.flat[i], params.bases[i])
     for name in output_names:
-        if name.startswith(NODE_PREFIX):
-            state = name.removeprefix(NODE_PREFIX).removesuffix("_C") + "_T"
+        node = node_of_output(name)
+        if node is not None:
+            state = node + STATE_SUFFIX
             units[name] = "degC"
             descriptions[name] = descriptions[state]
         else:

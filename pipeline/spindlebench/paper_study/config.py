@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN
 from spindlebench.formats.tables import Table, load_toml
 from spindlebench.listflags import split_list_flag
 from spindlebench.names import (
@@ -53,7 +54,6 @@ AUTO_SIX = "auto"
 CONFIG_NAME = "paper_study.toml"
 #: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
 MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
-TIME_COLUMN = "time_s"
 
 _KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
          "missing", "methods", "seed")
@@ -66,7 +66,7 @@ class StudyConfig:
     """One comparison: train on ``train``, predict ``tests``, for each group and k."""
 
     title: str = "paper set-up (exp1 … exp5)"
-    target: str = "drift_um"
+    target: str = DRIFT_COLUMN
     train: str = "exp1"
     tests: tuple[str, ...] = ("exp2", "exp3", "exp4", "exp5")
     sensors_all: tuple[str, ...] = SENSORS

@@ -18,10 +18,11 @@ import numpy as np
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import sidecar_mismatch
 from spindlebench.names import DEFAULT_METHOD, GROUP_LABELS
 from spindlebench.paper_study import figures, reference, tables
 from spindlebench.paper_study.study import StudyResult
-from spindlebench.provenance import file_entry, provenance, sidecar_mismatch
+from spindlebench.provenance import file_entry, provenance
 
 
 def _json(value: Any) -> Any:

@@ -23,9 +23,9 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import MissingValueError, read_recording
 from spindlebench.names import ALL_RAW, DEFAULT_METHOD, GROUPS, SIX_DIFF
 from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
-from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection import SelectionWarning, evaluate
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters

@@ -18,6 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from spindlebench import atomic, provenance
+from spindlebench.formats.recording import MissingValueError, read_recording
 from spindlebench.listflags import split_list_flag
 from spindlebench.names import (
     DEFAULT_METHOD,
@@ -29,7 +30,6 @@ from spindlebench.names import (
     REGRESSORS,
     WITHIN,
 )
-from spindlebench.recordings import MissingValueError, read_recording
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import MISSING_MODES, Evaluation, RecordingLike, evaluate

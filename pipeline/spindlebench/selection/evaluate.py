@@ -31,13 +31,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from spindlebench.names import DEFAULT_SIMILARITY
-from spindlebench.recordings import (
+from spindlebench.formats.recording import (
     MissingValueError,
     default_sensors,
     read_recording,
     recording_name,
 )
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.differences import difference_names, pair_indices
 from spindlebench.selection.errors import (
     SelectionError,

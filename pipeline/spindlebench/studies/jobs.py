@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from spindlebench.formats.recording import TIME_COLUMN, TRUTH_COLUMNS
 from spindlebench.names import SENSORS
 from spindlebench.studies.experiments import Condition, Experiment, sensor_model
 from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, score_all
@@ -28,7 +29,6 @@ from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.simulate import record
 
 #: Truth columns an evaluation needs from a recording.
-TRUTH_COLUMNS = ("time_s", *(f"true_{s}_C" for s in SENSORS), "true_drift_um")
 #: Pseudo-condition of the ground-truth rows.
 NOISE_FREE = "noise-free"
 
@@ -67,10 +67,10 @@ def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
     and the true drift rise for scoring.
     """
     truth = job.truths[experiment.id]
-    temperatures = truth[[f"true_{s}_C" for s in SENSORS]].to_numpy(float)
-    drift = truth["true_drift_um"].to_numpy(float)
-    time_s = truth["time_s"].to_numpy(float)
-    frame = pd.DataFrame({"time_s": time_s})
+    temperatures = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
+    drift = truth[TRUTH_COLUMNS[-1]].to_numpy(float)
+    time_s = truth[TIME_COLUMN].to_numpy(float)
+    frame = pd.DataFrame({TIME_COLUMN: time_s})
     if job.condition is None:
         frame[list(SENSORS)] = temperatures
         frame[TARGET] = drift - drift[0]

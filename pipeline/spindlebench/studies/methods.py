@@ -38,6 +38,7 @@ from sklearn.linear_model import Ridge
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
+from spindlebench.formats.recording import DRIFT_COLUMN
 from spindlebench.names import ALL_RAW, PAPER_SIX, SENSORS, SIX_DIFF, SIX_RAW
 from spindlebench.selection import (
     PairwiseDifferences,
@@ -51,7 +52,7 @@ from spindlebench.selection.regressors import blocked_cv_alpha
 from spindlebench.studies.executor import one_line_error
 from spindlebench.studies.study import Methods
 
-TARGET = "drift_um"
+TARGET = DRIFT_COLUMN
 #: Column of each prepared frame holding the true drift rise (um), for ``rmse_true_um``.
 TRUTH = "true_drift_rise_um"
 

@@ -22,8 +22,8 @@ import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import TRUTH_COLUMNS, read_recording, write_recording
 from spindlebench.provenance import file_entry, provenance, sha256_file
-from spindlebench.recordings import read_recording
 from spindlebench.studies.executor import (
     Outcome,
     RunStats,
@@ -44,7 +44,6 @@ from spindlebench.studies.experiments import (
 )
 from spindlebench.studies.jobs import (
     NOISE_FREE,
-    TRUTH_COLUMNS,
     EvaluationJob,
     evaluate_job,
     simulate_job,
@@ -58,7 +57,6 @@ from spindlebench.studies.study import (
     load_study,
     pinned_content,
 )
-from spindlebench.testbench.recording import write_recording
 
 RESULT_COLUMNS = (
     "replica", "data", "noise", "fault", "train_experiment", "test_experiment", "test_month",

@@ -33,7 +33,13 @@ from matplotlib.lines import Line2D
 
 from spindlebench.atomic import atomic_path
 from spindlebench.errors import SpindlebenchError
-from spindlebench.recordings import default_sensors, recording_name
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    TIME_COLUMN,
+    default_sensors,
+    recording_name,
+    true_column,
+)
 from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, part_of, sensor_colours
 
 AMBIENT_DRIVER = "ambient_C"
@@ -85,7 +91,7 @@ def _colours(sensors: Sequence[str]) -> dict[str, tuple]:
 
 
 def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | None = None, *,
-                      rises: bool = False, target: str = "drift_um",
+                      rises: bool = False, target: str = DRIFT_COLUMN,
                       suptitle: str | None = None) -> Figure:
     """Temperature panels by part, the thermal error ``target`` and the inputs, over hours.
 
@@ -114,7 +120,7 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
         for row, panel in enumerate(panels):
             axes[row, 0].set_ylabel("rise since start (K)" if rises else "temperature (°C)")
             _part_legend(axes[row, 0], panel)
-        axes[len(panels), 0].set_ylabel("drift (µm)" if target == "drift_um" else
+        axes[len(panels), 0].set_ylabel("drift (µm)" if target == DRIFT_COLUMN else
                                         f"{target.removesuffix('_um')} (µm)"
                                         if target.endswith("_um") else target)
         for ax in axes[-1, :]:
@@ -134,7 +140,7 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
 
 def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel],
                  colours: dict[str, tuple], rises: bool, target: str, has_inputs: bool) -> None:
-    hours = frame["time_s"].to_numpy(float) / 3600.0
+    hours = frame[TIME_COLUMN].to_numpy(float) / 3600.0
 
     def values(name: str) -> np.ndarray:
         data = frame[name].to_numpy(float)
@@ -154,11 +160,12 @@ def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel]
         ax.grid(alpha=0.3)
     error = axes[len(panels)]
     error.plot(hours, frame[target], lw=1.2, color="tab:brown", label="measured")
-    if target == "drift_um" and "true_drift_um" in frame:
-        true = frame["true_drift_um"] - frame["true_drift_um"].iloc[0]
+    truth = true_column(DRIFT_COLUMN)
+    if target == DRIFT_COLUMN and truth in frame:
+        true = frame[truth] - frame[truth].iloc[0]
         error.plot(hours, true, "k--", lw=0.9, label="noise-free")
     error.set_title("thermal error: axial drift, tool towards table, since the start"
-                    if target == "drift_um" else f"thermal error {target}",
+                    if target == DRIFT_COLUMN else f"thermal error {target}",
                     fontsize=8, loc="left", color="0.3")
     error.legend(fontsize=7, loc="upper left")
     error.grid(alpha=0.3)

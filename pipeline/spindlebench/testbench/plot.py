@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.recordings import read_recording
+from spindlebench.formats.recording import DRIFT_COLUMN, read_recording
 from spindlebench.testbench.overview import recordings_figure, save_figure
 
 
@@ -54,7 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "beside it)")
     parser.add_argument("--rises", action="store_true",
                         help="temperatures as rises since the first sample (default: °C)")
-    parser.add_argument("--target", default="drift_um",
+    parser.add_argument("--target", default=DRIFT_COLUMN,
                         help="thermal-error column (default: drift_um; e.g. ch3_um)")
     parser.add_argument("--title", default=None, help="title above the figure")
     parser.set_defaults(func=run)

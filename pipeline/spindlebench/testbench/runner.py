@@ -35,13 +35,12 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 
 from spindlebench import interrupts
 from spindlebench.errors import SpindlebenchError
-from spindlebench.names import KELVIN_OFFSET, SENSORS
+from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, read_end_state
+from spindlebench.names import KELVIN_OFFSET
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
 
-#: The paper's sensors as FMU outputs.
-SENSOR_OUTPUTS = tuple(f"{name}_C" for name in SENSORS)
 #: CVode's relative tolerance; absolute tolerance = nominal × this (K for temperatures).
 RELATIVE_TOLERANCE = 1e-6
 #: Cooling settings of the scenario map onto these FMU parameters.
@@ -92,7 +91,7 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
         inputs.append(var.valueReference)
     outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Float64"]
     names = {v.name for v in outputs}
-    for required in (*SENSOR_OUTPUTS, "drift_um"):
+    for required in (*SENSOR_OUTPUTS, DRIFT_COLUMN):
         if required not in names:
             raise SpindlebenchError(f"{fmu_path}: no output {required!r}")
     states = [d.variable.derivative for d in md.derivatives]
@@ -271,29 +270,11 @@ def saved_state(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
         raise SpindlebenchError(f"{where}: names the scenario {initial.from_scenario!r}, whose "
                                 "recording is looked up in the output folder; simulate with "
                                 "simulate_scenario() or resolve_initial() first")
-    try:
-        text = Path(source).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        if initial.from_scenario is not None:
-            raise SpindlebenchError(
-                f"{where}: no recording of scenario {initial.from_scenario!r} at {source} "
-                "(simulate it into the same output folder first)") from None
-        raise SpindlebenchError(f"{where}: no such file {source} (simulate the previous "
-                                "run first)") from None
-    except UnicodeDecodeError as exc:
-        raise SpindlebenchError(f"{where}: {source} is not UTF-8 text (byte {exc.start}), "
-                                "not a recording sidecar") from None
-    except OSError as exc:  # a directory, no permission
-        raise SpindlebenchError(f"{where}: cannot read {source}: "
-                                f"{exc.strerror or exc}") from None
-    try:
-        saved = json.loads(text)["end_state"]["states_K"]
-    except (json.JSONDecodeError, KeyError, TypeError):
-        raise SpindlebenchError(f"{where}: {source} is not a recording sidecar with an "
-                                "end_state") from None
-    if not isinstance(saved, dict):
-        raise SpindlebenchError(f"{where}: {source}: end_state.states_K must map state names "
-                                f"to kelvin, got a {type(saved).__name__}")
+    missing = None
+    if initial.from_scenario is not None:
+        missing = (f"no recording of scenario {initial.from_scenario!r} at {source} "
+                   "(simulate it into the same output folder first)")
+    saved = read_end_state(source, where, missing)
     missing = [n for n in fmu.state_names if n not in saved]
     extra = [n for n in saved if n not in fmu.state_names]
     if missing or extra:

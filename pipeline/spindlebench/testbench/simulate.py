@@ -19,12 +19,18 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    SENSOR_OUTPUTS,
+    recording_frame,
+    sensor_of_output,
+    write_recording,
+)
+from spindlebench.formats.recording import sidecar_record as recording_sidecar
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
-from spindlebench.testbench.recording import recording_frame, write_recording
 from spindlebench.testbench.runner import (
-    SENSOR_OUTPUTS,
     Simulation,
     check_physical,
     check_scenario,
@@ -51,17 +57,20 @@ def sidecar_record(scenario: Scenario, fmu_path: Path, seed: int,
         extra["initial_state_from"] = file_entry(scenario.initial.from_file)
     if scenario.initial.kind == "soak":
         extra["initial_state_soak"] = soak_provenance(scenario, fmu_path)
-    return provenance(
-        kind="spindlebench synthetic recording",
-        scenario=file_entry(scenario.path),
-        fmu=file_entry(fmu_path),
-        seed=seed,
-        **extra,
-        scenario_parsed=scenario.to_dict(),
-        parameters=dict(simulation.parameters),
-        solver=dict(simulation.solver),
-        initial_state={"time_s": 0.0, "states_K": dict(simulation.initial_state_K)},
-        end_state={"time_s": scenario.duration_s, "states_K": dict(simulation.end_state_K)},
+    return recording_sidecar(
+        provenance=provenance(
+            kind="spindlebench synthetic recording",
+            scenario=file_entry(scenario.path),
+            fmu=file_entry(fmu_path),
+            seed=seed,
+            **extra,
+            scenario_parsed=scenario.to_dict(),
+            parameters=dict(simulation.parameters),
+            solver=dict(simulation.solver),
+        ),
+        initial_state_K=simulation.initial_state_K,
+        end_time_s=scenario.duration_s,
+        end_state_K=simulation.end_state_K,
     )
 
 
@@ -81,8 +90,8 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
         scenario.sensors,
         simulation.time_s,
         _columns(truth, SENSOR_OUTPUTS),
-        truth["drift_um"],
-        tuple(name.removesuffix("_C") for name in SENSOR_OUTPUTS),
+        truth[DRIFT_COLUMN],
+        tuple(sensor_of_output(name) for name in SENSOR_OUTPUTS),
         seed,
     )
     drivers = {name: getattr(simulation.drivers, name) for name in INPUT_NAMES}

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, node_column, true_column
 from spindlebench.selection import CandidateSet
 from spindlebench.selection.differences import pair_indices
 from spindlebench.studies.experiments import Experiment, sensor_model
@@ -28,12 +29,7 @@ from spindlebench.studies.placement.study import PlacementStudy
 from spindlebench.studies.seeds import derive_seed
 from spindlebench.testbench.sensors import measure
 
-TARGET = "drift_um"
-
-
-def node_column(node: str) -> str:
-    """Recording column of a node's true temperature."""
-    return f"true_node_{node}_C"
+TARGET = DRIFT_COLUMN
 
 
 @dataclass(frozen=True)
@@ -64,10 +60,10 @@ def prepare_run(study: PlacementStudy, replica: int, experiment: Experiment,
         raise SpindlebenchError(f"recording of {experiment.id} (replica {replica}) lacks "
                                 f"{missing[0]}: was it made by another FMU?")
     true_C = frame.loc[:, columns].to_numpy(dtype=float)
-    true_drift = frame["true_drift_um"].to_numpy(dtype=float)
+    true_drift = frame[true_column(DRIFT_COLUMN)].to_numpy(dtype=float)
     if study.measured:
         model = sensor_model(study.family.noise[0], None)
-        values, _ = measure(model, frame["time_s"].to_numpy(float), true_C, true_drift,
+        values, _ = measure(model, frame[TIME_COLUMN].to_numpy(float), true_C, true_drift,
                             tuple(study.nodes), node_seed(study, replica, experiment))
     else:
         values = true_C

@@ -23,8 +23,8 @@ import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import read_recording, write_recording
 from spindlebench.provenance import file_entry, provenance, sha256_file
-from spindlebench.recordings import read_recording
 from spindlebench.selection import rmse
 from spindlebench.studies.executor import (
     Outcome,
@@ -53,7 +53,6 @@ from spindlebench.studies.placement.study import PlacementStudy, describe, load_
 from spindlebench.studies.store import ResultStore, content_sha256
 from spindlebench.studies.study import check_fmu, pinned_content
 from spindlebench.studies.sweep import failed_runs, failure_path, recording_path
-from spindlebench.testbench.recording import write_recording
 from spindlebench.testbench.simulate import record
 
 

@@ -29,13 +29,12 @@ from typing import Any
 from fmpy import read_model_description
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import node_of_output
 from spindlebench.formats.tables import Table, in_range, load_toml, one_of
 from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
 from spindlebench.studies.study import NO_FAULT, SweepStudy, check_fmu, load_study
 
 METHODS = ("fuzzy", "greedy", "exhaustive")
-#: FMU outputs of the temperature field: ``node_<part>_C``.
-NODE_PREFIX, NODE_SUFFIX = "node_", "_C"
 DEFAULT_EXHAUSTIVE_LIMIT = 500_000
 MAX_EXHAUSTIVE_LIMIT = 10**9
 MAX_BUDGET = 10
@@ -79,9 +78,9 @@ def fmu_nodes(fmu: Path) -> list[str]:
         description = read_model_description(str(fmu), validate=False)
     except Exception as exc:
         raise SpindlebenchError(f"{fmu}: not a readable FMU: {exc}") from None
-    return [v.name[len(NODE_PREFIX):-len(NODE_SUFFIX)] for v in description.modelVariables
-            if v.causality == "output" and v.name.startswith(NODE_PREFIX)
-            and v.name.endswith(NODE_SUFFIX)]
+    nodes = [node_of_output(v.name) for v in description.modelVariables
+             if v.causality == "output"]
+    return [node for node in nodes if node is not None]
 
 
 def _bool_or_list(table: Table, name: str) -> tuple[bool, ...]:

@@ -1,7 +1,16 @@
-"""Reading and validating canonical recordings (synthetic or real), one CSV per experiment.
+"""The recording format: one CSV per run plus its JSON sidecar, and every column-name rule.
 
-A canonical recording is a CSV with a header line and one numeric row per sample: ``time_s``,
-sensor temperatures, the measured thermal error, optionally drivers and ``true_*`` columns.
+A newcomer who renames or adds a recording column edits this module only.
+
+**Columns.** ``time_s``; the measured sensors ``T1`` … ``T20``; the measured thermal error
+``drift_um``; the driver inputs; then the noise-free FMU outputs, each as ``true_<output>``:
+sensors (``true_T1_C``), drift (``true_drift_um``), the temperature field
+(``true_node_<node>_C``) and heat flows (``true_Q_<part>_W``). ``default_sensors`` says which
+columns of any recording (also a real one) count as sensors when none are named.
+
+**Reading** (synthetic or real recordings, one CSV per experiment). A canonical recording
+is a CSV with a header line and one numeric row per sample: ``time_s``, sensor temperatures,
+the measured thermal error, optionally drivers and ``true_*`` columns.
 ``read_recording`` refuses anything it would otherwise have to guess about, with a one-line
 ``SpindlebenchError`` naming the file, line and column: a missing file, an empty file, repeated
 or empty column names, rows with the wrong number of fields, empty/NaN/non-numeric/infinite
@@ -18,33 +27,112 @@ the header and a missing ``time_s`` stay errors. Nothing is filled in either way
 ``read_recording(path, columns=[...])`` reads and checks only those columns (and ``time_s``):
 a caller that names the columns it uses (``evaluate --sensors``, the paper study) is not
 stopped by a gap or a note in a column it ignores.
+
+**Writing** the CSV and its JSON sidecar, each atomically, as a checkable pair. A recording
+is only useful with its provenance, so both files are written in full first and
+then moved into place one right after the other, the CSV first: a crash never leaves a half
+file, and a failed CSV move never leaves a new sidecar describing a CSV that is not there.
+Two renames cannot be one atomic step (a crash between them leaves a new CSV beside the old
+sidecar), so the sidecar also carries the CSV's SHA-256 (``recording_sha256``): a reader can
+tell a pair that does not belong together (see ``sidecar_mismatch``).
+
+**Sidecar.** The JSON beside the CSV: provenance, ``recording_sha256`` (see
+``sidecar_mismatch``) and ``end_state.states_K``, the state a ``continue`` run starts from
+(``read_end_state``).
 """
 
 from __future__ import annotations
 
 import csv
 import itertools
+import json
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from spindlebench.atomic import atomic_path
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import SENSORS
+from spindlebench.provenance import sha256_file
+
+# --------------------------------------------------------------------------- column names
 
 TIME_COLUMN = "time_s"
-#: UTF-8, with a leading byte-order mark (Excel's "CSV UTF-8" export) dropped: kept, it would
-#: glue itself to the first column name ("\ufefftime_s") and time_s would become a sensor.
-ENCODING = "utf-8-sig"
+#: The measured thermal error (the probe's reading), µm.
+DRIFT_COLUMN = "drift_um"
+#: Prefix of a noise-free FMU output's column.
+TRUE_PREFIX = "true_"
+#: FMU outputs: a sensor ``T1`` is output ``T1_C``; a field node ``housing_3`` is output
+#: ``node_housing_3_C``; a heat flow is ``Q_<part>_W``.
+TEMPERATURE_SUFFIX = "_C"
+NODE_PREFIX = "node_"
+HEAT_FLOW_PREFIX = "Q_"
+#: The paper's sensors as FMU outputs.
+SENSOR_OUTPUTS: tuple[str, ...] = tuple(f"{name}{TEMPERATURE_SUFFIX}" for name in SENSORS)
+
+
+def true_column(output_name: str) -> str:
+    """Recording column of a noise-free FMU output: ``T1_C`` → ``true_T1_C``."""
+    return f"{TRUE_PREFIX}{output_name}"
+
+
+def sensor_of_output(output_name: str) -> str:
+    """The sensor an FMU output measures: ``T1_C`` → ``T1``."""
+    return output_name.removesuffix(TEMPERATURE_SUFFIX)
+
+
+def node_output(node: str) -> str:
+    """FMU output of a field node's temperature: ``housing_3`` → ``node_housing_3_C``."""
+    return f"{NODE_PREFIX}{node}{TEMPERATURE_SUFFIX}"
+
+
+def node_of_output(output_name: str) -> str | None:
+    """The field node of an FMU output (``node_housing_3_C`` → ``housing_3``), or None."""
+    if output_name.startswith(NODE_PREFIX) and output_name.endswith(TEMPERATURE_SUFFIX):
+        return output_name[len(NODE_PREFIX):-len(TEMPERATURE_SUFFIX)]
+    return None
+
+
+def node_column(node: str) -> str:
+    """Recording column of a node's true temperature: ``true_node_<node>_C``."""
+    return true_column(node_output(node))
+
+
+#: Truth columns a study's evaluation needs from a recording.
+TRUTH_COLUMNS: tuple[str, ...] = (TIME_COLUMN, *(true_column(o) for o in SENSOR_OUTPUTS),
+                                  true_column(DRIFT_COLUMN))
+
+
+def _output_order(name: str) -> int:
+    """Sensors, drift, nodes, heat flows, anything else; FMU order within a group."""
+    for rank, prefix in enumerate(("T", DRIFT_COLUMN, NODE_PREFIX, HEAT_FLOW_PREFIX)):
+        if name.startswith(prefix):
+            return rank
+    return 4
+
 
 #: Columns that are never sensors by default: the synthetic testbench's driver inputs and
 #: noise-free truth, and, on any recording, thermal errors/displacements (``*_um``), speeds
-#: (``*_rpm``) and feed rates. ``ambient_C`` is the testbench's ambient *driver*; the measured
-#: ambient sensor is a T column.
+#: (``*_rpm``), feed rates and heat flows. ``ambient_C`` is the testbench's ambient *driver*;
+#: the measured ambient sensor is a T column.
 _NOT_SENSOR = re.compile(r"^(true_.*|.*_um|.*_rpm|feed_.*|.*_mm_per_min|.*_W|ambient_C)$")
 
+
+def is_default_sensor(name: str) -> bool:
+    """Whether a column counts as a sensor when none are named (see ``default_sensors``)."""
+    return name != TIME_COLUMN and not _NOT_SENSOR.match(name)
+
+
+# --------------------------------------------------------------------------- reading
+
+#: UTF-8, with a leading byte-order mark (Excel's "CSV UTF-8" export) dropped: kept, it would
+#: glue itself to the first column name ("\ufefftime_s") and time_s would become a sensor.
+ENCODING = "utf-8-sig"
 
 #: Cell spellings ``allow_missing`` reads as NaN (compared after stripping, case-insensitive).
 MISSING_SPELLINGS = ("", "nan")
@@ -267,11 +355,6 @@ def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> N
         )
 
 
-def is_default_sensor(name: str) -> bool:
-    """Whether a column counts as a sensor when none are named (see ``default_sensors``)."""
-    return name != TIME_COLUMN and not _NOT_SENSOR.match(name)
-
-
 def default_sensors(frame: pd.DataFrame, target: str) -> list[str]:
     """Sensor columns when none are given: every numeric column except the target,
     ``time_s``, ``true_*`` truth, driver/command columns (``ambient_C``, ``feed_*``,
@@ -285,3 +368,115 @@ def default_sensors(frame: pd.DataFrame, target: str) -> list[str]:
         and is_default_sensor(str(name))
         and pd.api.types.is_numeric_dtype(frame[name])
     ]
+
+
+# --------------------------------------------------------------------------- writing
+
+#: Text format of every float in the CSV: shortest round-trip repr (bit-exact, stable).
+FLOAT_FORMAT = None
+
+
+def sidecar_path(csv_path: str | os.PathLike[str]) -> Path:
+    """The JSON sidecar that belongs to a recording CSV: same name, ``.json`` suffix."""
+    return Path(csv_path).with_suffix(".json")
+
+
+def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
+                    sidecar: dict[str, Any]) -> Path:
+    """Write ``frame`` as CSV and ``sidecar`` as JSON beside it; return the CSV path."""
+    csv_path = Path(csv_path)
+    if csv_path.suffix.lower() != ".csv":
+        raise SpindlebenchError(f"{csv_path}: a recording must be written to a .csv file")
+    json_path = sidecar_path(csv_path)
+    for path in (csv_path, json_path):
+        if path.is_dir():
+            raise SpindlebenchError(f"{path}: is a directory, cannot write a recording there")
+    # the JSON context is the outer one, so the CSV is moved into place first: if that move
+    # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
+    with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
+        frame.to_csv(tmp_csv, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+        paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
+        text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+        tmp_json.write_text(text, encoding="utf-8")
+    return csv_path
+
+
+def read_sidecar(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Load a recording's sidecar (given the JSON or the CSV path)."""
+    path = Path(path)
+    if path.suffix == ".csv":
+        path = sidecar_path(path)
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def recording_frame(
+    time_s: np.ndarray,
+    measured_C: np.ndarray,
+    measured_drift_um: np.ndarray,
+    drivers: Mapping[str, np.ndarray],
+    truth: Mapping[str, np.ndarray],
+) -> pd.DataFrame:
+    """The canonical recording table (column order fixed by the contract)."""
+    columns: dict[str, np.ndarray] = {TIME_COLUMN: time_s}
+    for i in range(measured_C.shape[1]):
+        columns[SENSORS[i]] = measured_C[:, i]
+    columns[DRIFT_COLUMN] = measured_drift_um
+    columns.update(drivers)
+    for name in sorted(truth, key=_output_order):  # stable sort keeps FMU order in a group
+        columns[true_column(name)] = truth[name]
+    return pd.DataFrame(columns)
+
+
+# --------------------------------------------------------------------------- sidecar
+
+def sidecar_mismatch(csv_sha256: str, sidecar: dict[str, Any]) -> str | None:
+    """Why a sidecar does not describe the CSV with hash ``csv_sha256`` (None when it does).
+
+    A sidecar written by spindlebench names its CSV's hash; an older one without the field is
+    taken on trust.
+    """
+    recorded = sidecar.get("recording_sha256")
+    if recorded is None or recorded == csv_sha256:
+        return None
+    return (f"its recording_sha256 {str(recorded)[:12]}… is not the CSV's "
+            f"{csv_sha256[:12]}… (the pair was not written together)")
+
+
+def sidecar_record(*, provenance: dict[str, Any], initial_state_K: Mapping[str, float],
+                   end_time_s: float, end_state_K: Mapping[str, float]) -> dict[str, Any]:
+    """A synthetic recording's sidecar: its provenance plus the start and end states, under
+    the keys ``read_end_state`` reads back (``end_state.states_K``, kelvin by state name)."""
+    return {**provenance,
+            "initial_state": {"time_s": 0.0, "states_K": dict(initial_state_K)},
+            "end_state": {"time_s": end_time_s, "states_K": dict(end_state_K)}}
+
+
+def read_end_state(source: str | os.PathLike[str], where: str,
+                   missing: str | None = None) -> dict[str, Any]:
+    """The ``end_state.states_K`` table of a recording's sidecar, as written (values unchecked:
+    the caller knows which states and values its model accepts).
+
+    The sidecar is user-reachable input (any file can be named), so everything about it that
+    could break a run later is one line starting with ``where``; ``missing`` replaces the
+    text after it for a file that is not there.
+    """
+    try:
+        text = Path(source).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        missing = missing or f"no such file {source} (simulate the previous run first)"
+        raise SpindlebenchError(f"{where}: {missing}") from None
+    except UnicodeDecodeError as exc:
+        raise SpindlebenchError(f"{where}: {source} is not UTF-8 text (byte {exc.start}), "
+                                "not a recording sidecar") from None
+    except OSError as exc:  # a directory, no permission
+        raise SpindlebenchError(f"{where}: cannot read {source}: "
+                                f"{exc.strerror or exc}") from None
+    try:
+        saved = json.loads(text)["end_state"]["states_K"]
+    except (json.JSONDecodeError, KeyError, TypeError):
+        raise SpindlebenchError(f"{where}: {source} is not a recording sidecar with an "
+                                "end_state") from None
+    if not isinstance(saved, dict):
+        raise SpindlebenchError(f"{where}: {source}: end_state.states_K must map state names "
+                                f"to kelvin, got a {type(saved).__name__}")
+    return saved
