@@ -19,6 +19,7 @@ from spindlebench.errors import SpindlebenchError
 
 COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.adapters.command",
+    "spindlebench.calibration.command",
     "spindlebench.demo",
     "spindlebench.fingerprint_command",
     "spindlebench.modelica.build",

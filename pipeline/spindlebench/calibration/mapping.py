@@ -1,0 +1,167 @@
+"""MAP.toml: how a recording's columns relate to the model (``spindlebench calibrate --map``).
+
+A recording of a real machine has its own column names, no feed or ambient column perhaps, an
+error probe with its own sign, and sensors somewhere on the machine. The map says, once:
+
+```toml
+[inputs]                            # each FMU input: a column name or a constant
+spindle_speed_rpm = "spindle_rpm"
+feed_x_mm_per_min = 0.0
+feed_y_mm_per_min = 0.0
+ambient_C = "unknown"               # or a column, or a number; "unknown": estimated
+
+[ambient]                           # only with ambient_C = "unknown"
+knot_h = 4.0                        # piecewise-linear ambient, a knot every 4 h (0: constant)
+
+[error]                             # optional: the measured thermal error
+column = "ch3_um"
+sign = -1                           # +1: positive when the tool moves toward the table
+                                    # (as the model's drift_um), -1: the opposite
+
+[temperatures]                      # column = model output
+t1_C = "T1"                         # a sensor of the model, T1 … T20
+t5_C = "node_spindle_motor"         # or a node of the temperature field (node_<part>[_<i>])
+
+[noise]                             # optional: 1-sigma noise of a column (K or µm); default:
+t1_C = 0.05                         # estimated from the column's sample-to-sample scatter
+```
+
+Every key is checked; a bad one is one line naming the map file and the dotted key. Columns of
+the recording the map does not name are ignored (``unmapped_columns`` lists them).
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import Table, load_toml
+from spindlebench.recordings import TIME_COLUMN
+
+INPUTS = ("spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C")
+UNKNOWN = "unknown"
+DRIFT_OUTPUT = "drift_um"
+_SENSOR = re.compile(r"^T([1-9]|1[0-9]|20)$")
+
+
+@dataclass(frozen=True)
+class RecordingMap:
+    """The map of one MAP.toml file (see the module docstring)."""
+
+    path: Path
+    inputs: dict[str, str | float]  # FMU input -> column name, constant, or UNKNOWN (ambient)
+    ambient_knot_h: float
+    error_column: str | None
+    error_sign: float
+    temperatures: dict[str, str]  # column -> model output name (T1_C, node_x_C)
+    noise: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ambient_unknown(self) -> bool:
+        return self.inputs["ambient_C"] == UNKNOWN
+
+    def columns(self) -> list[str]:
+        """Every recording column the map uses."""
+        used = [v for v in self.inputs.values() if isinstance(v, str) and v != UNKNOWN]
+        used += list(self.temperatures)
+        if self.error_column:
+            used.append(self.error_column)
+        return list(dict.fromkeys(used))
+
+    def check_columns(self, header: Iterable[str], recording: Path) -> list[str]:
+        """Raise naming the key whose column ``recording`` lacks; return the unmapped columns."""
+        header = list(header)
+        present = set(header)
+        for key, value in self.inputs.items():
+            if isinstance(value, str) and value != UNKNOWN and value not in present:
+                raise SpindlebenchError(f"{self.path}: key 'inputs.{key}': column {value!r} is "
+                                        f"not in {recording}")
+        if self.error_column and self.error_column not in present:
+            raise SpindlebenchError(f"{self.path}: key 'error.column': column "
+                                    f"{self.error_column!r} is not in {recording}")
+        for column in self.temperatures:
+            if column not in present:
+                raise SpindlebenchError(f"{self.path}: key 'temperatures.{column}': column is "
+                                        f"not in {recording}")
+        used = set(self.columns()) | {TIME_COLUMN}
+        return [c for c in header if c not in used]
+
+
+def _output_name(table: Table, column: str, value: Any, outputs: set[str]) -> str:
+    if not isinstance(value, str):
+        raise table.error(column, f"must be a model output name (T1 … T20 or node_…), "
+                                  f"got {value!r}")
+    if _SENSOR.match(value):
+        return f"{value}_C"
+    name = value if value.endswith("_C") else f"{value}_C"
+    if value.startswith("node_") and name in outputs:
+        return name
+    nodes = sorted(o.removesuffix("_C") for o in outputs if o.startswith("node_"))
+    near = difflib.get_close_matches(value, nodes, n=3)
+    hint = f"did you mean {', '.join(near)}?" if near else f"nodes: {nodes[0]} … {nodes[-1]}"
+    raise table.error(column, f"{value!r} is not a model sensor (T1 … T20) or node ({hint})")
+
+
+def _column_or_constant(table: Table, key: str, allow_unknown: bool) -> str | float:
+    value = table.raw(key)
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise table.error(key, f"must be a column name or a number, got {value!r}")
+    if isinstance(value, str):
+        if value == UNKNOWN and not allow_unknown:
+            raise table.error(key, "only ambient_C may be \"unknown\"")
+        if not value:
+            raise table.error(key, "empty column name")
+        return value
+    return table.number(key)
+
+
+def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
+    """Read and check a MAP.toml file against the model's ``outputs``."""
+    path = Path(path)
+    outputs = set(outputs)
+    top = Table(load_toml(path, "map"), path)
+    inputs_table = top.table("inputs")
+    inputs = {key: _column_or_constant(inputs_table, key, key == "ambient_C") for key in INPUTS}
+    inputs_table.finish()
+    ambient = top.table("ambient", required=False)
+    if ambient.data and inputs["ambient_C"] != UNKNOWN:
+        raise ambient.error(next(ambient.names()), "only with inputs.ambient_C = \"unknown\"")
+    knot_h = ambient.number("knot_h", 4.0, minimum=0.0, unit="h")
+    ambient.finish()
+    error = top.table("error", required=False)
+    error_column = error.string("column", None)
+    sign = error.number("sign", 1.0)
+    if sign not in (1.0, -1.0):
+        raise error.error("sign", f"must be +1 or -1, got {sign:g}")
+    error.finish()
+    temperatures_table = top.table("temperatures", required=False)
+    temperatures = {
+        str(column): _output_name(temperatures_table, str(column),
+                                  temperatures_table.raw(column), outputs)
+        for column in list(temperatures_table.names())
+    }
+    if not temperatures and not error_column:
+        raise top.error("temperatures", "the map names no temperature column and no error "
+                        "column: nothing to calibrate on")
+    noise_table = top.table("noise", required=False)
+    known = set(temperatures) | ({error_column} if error_column else set())
+    noise: dict[str, float] = {}
+    for column in list(noise_table.names()):
+        if column not in known:
+            raise noise_table.error(column, "is not a temperature or error column of the map")
+        noise[column] = noise_table.number(column, positive=True)
+    top.finish()
+    return RecordingMap(
+        path=path, inputs=inputs, ambient_knot_h=knot_h, error_column=error_column,
+        error_sign=sign, temperatures=temperatures, noise=noise,
+    )
+
+
+def constant_inputs(recording_map: RecordingMap) -> Mapping[str, float]:
+    """The inputs the map gives as constants."""
+    return {k: v for k, v in recording_map.inputs.items() if isinstance(v, float)}

@@ -1,0 +1,149 @@
+"""A recording as the calibration sees it: inputs, measured channels and their noise on one grid.
+
+The map (``mapping.RecordingMap``) turns the recording's own columns into the model's inputs and
+outputs; this module reads the CSV once, thins it to the calibration step, estimates each
+channel's noise where the map does not give it, and guesses an initial state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spindlebench.calibration.mapping import DRIFT_OUTPUT, INPUTS, UNKNOWN, RecordingMap
+from spindlebench.errors import SpindlebenchError
+from spindlebench.provenance import sha256_file
+from spindlebench.recordings import TIME_COLUMN, read_recording
+
+#: Smallest noise a channel is given: a logger that quantises to 0.1 K on a slow signal shows
+#: almost no sample-to-sample scatter, and a weight of 1/0.001 K would let one channel rule.
+MIN_NOISE = {"temperature": 0.02, "error": 0.1}
+KELVIN = 273.15
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One measured column and the model output it is compared with."""
+
+    column: str
+    output: str  # model output, e.g. ``T1_C``, ``node_housing_3_C``, ``drift_um``
+    kind: str  # "temperature" (degC) or "error" (um; model drift plus a free offset)
+    values: np.ndarray  # measured, NaN where missing; error already multiplied by the sign
+    noise: float  # 1 sigma, in the channel's unit
+
+
+@dataclass(frozen=True)
+class Series:
+    """One recording on the calibration grid (``time_s`` has N + 1 samples)."""
+
+    name: str
+    path: Path
+    sha256: str
+    time_s: np.ndarray
+    inputs: np.ndarray  # (4, N + 1) in INPUTS order; the ambient row is NaN when unknown
+    channels: tuple[Channel, ...]
+    ambient_unknown: bool
+    ambient_knot_h: float
+    ignored: tuple[str, ...] = ()  # columns of the recording the map does not use
+
+    @property
+    def intervals(self) -> int:
+        return len(self.time_s) - 1
+
+    def ambient_basis(self) -> np.ndarray:
+        """(N + 1, knots): the estimated ambient at each sample is ``basis @ knots``.
+
+        Knots are ``knot_h`` apart, piecewise linear between them; ``knot_h = 0`` or a recording
+        shorter than one knot interval gives one constant.
+        """
+        t = self.time_s - self.time_s[0]
+        span = t[-1]
+        step = self.ambient_knot_h * 3600.0
+        if step <= 0 or span <= step:
+            return np.ones((len(t), 1))
+        knots = np.arange(0.0, span + step, step)
+        basis = np.zeros((len(t), len(knots)))
+        for j in range(len(knots)):
+            unit = np.zeros(len(knots))
+            unit[j] = 1.0
+            basis[:, j] = np.interp(t, knots, unit)
+        return basis
+
+    def first_temperatures(self) -> dict[str, float]:
+        """Model output -> first finite measured value of each temperature channel."""
+        first = {}
+        for channel in self.channels:
+            if channel.kind == "temperature":
+                finite = channel.values[np.isfinite(channel.values)]
+                if finite.size:
+                    first[channel.output] = float(finite[0])
+        return first
+
+    def ambient_guess(self) -> float:
+        """A start value for an unknown ambient: the coolest measured temperature at the start
+        (a machine at rest is at or above its room); 20 °C without any temperature channel."""
+        first = self.first_temperatures()
+        return float(np.percentile(list(first.values()), 10)) if first else 20.0
+
+
+def noise_estimate(values: np.ndarray, kind: str) -> float:
+    """1-sigma white noise from the scatter of successive differences (a slow thermal signal
+    hardly changes between samples), floored by ``MIN_NOISE``."""
+    finite = values[np.isfinite(values)]
+    differences = np.diff(finite)
+    if differences.size < 2:
+        return MIN_NOISE[kind]
+    # median absolute deviation: a few jumps (a step in the programme) do not inflate it
+    mad = np.median(np.abs(differences - np.median(differences))) * 1.4826 / np.sqrt(2.0)
+    return float(max(mad, MIN_NOISE[kind]))
+
+
+def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None) -> Series:
+    """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given."""
+    path = Path(path)
+    frame = read_recording(path, allow_missing=True, columns=recording_map.columns())
+    header = frame.attrs.get("header", list(frame.columns))
+    ignored = recording_map.check_columns(header, path)
+    time_s = frame[TIME_COLUMN].to_numpy(dtype=float)
+    steps = np.diff(time_s)
+    if step_s is not None:
+        native = float(np.median(steps))
+        factor = step_s / native
+        if factor < 1 - 1e-9 or abs(factor - round(factor)) > 1e-6:
+            raise SpindlebenchError(f"--step-s {step_s:g}: not a whole multiple of {path}'s "
+                                    f"sample step ({native:g} s)")
+        frame = frame.iloc[:: round(factor)].reset_index(drop=True)
+        time_s = frame[TIME_COLUMN].to_numpy(dtype=float)
+    if len(time_s) < 3:
+        raise SpindlebenchError(f"recording {path}: fewer than 3 samples to calibrate on")
+    inputs = np.empty((len(INPUTS), len(time_s)))
+    for i, name in enumerate(INPUTS):
+        source = recording_map.inputs[name]
+        if source == UNKNOWN:
+            inputs[i] = np.nan
+        elif isinstance(source, str):
+            column = frame[source].to_numpy(dtype=float)
+            if not np.all(np.isfinite(column)):
+                row = int(np.flatnonzero(~np.isfinite(column))[0])
+                raise SpindlebenchError(f"recording {path}: input column {source!r} has a gap "
+                                        f"at time_s = {time_s[row]:g}; inputs must be complete")
+            inputs[i] = column
+        else:
+            inputs[i] = source
+    channels = []
+    for column, output in recording_map.temperatures.items():
+        values = frame[column].to_numpy(dtype=float)
+        noise = recording_map.noise.get(column) or noise_estimate(values, "temperature")
+        channels.append(Channel(column, output, "temperature", values, noise))
+    if recording_map.error_column:
+        values = recording_map.error_sign * frame[recording_map.error_column].to_numpy(float)
+        noise = recording_map.noise.get(recording_map.error_column) or noise_estimate(
+            values, "error")
+        channels.append(Channel(recording_map.error_column, DRIFT_OUTPUT, "error", values, noise))
+    return Series(
+        name=path.stem, path=path, sha256=sha256_file(path), time_s=time_s, inputs=inputs,
+        channels=tuple(channels), ambient_unknown=recording_map.ambient_unknown,
+        ambient_knot_h=recording_map.ambient_knot_h, ignored=tuple(ignored),
+    )
