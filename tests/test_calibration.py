@@ -19,7 +19,7 @@ from conftest import MODELS
 from spindlebench.calibration.mapping import read_map
 from spindlebench.cli import main
 from spindlebench.errors import SpindlebenchError
-from spindlebench.recordings import read_recording
+from spindlebench.formats.recording import read_recording
 
 OUTPUTS = [f"T{i}_C" for i in range(1, 21)] + ["drift_um", "node_housing_1_C",
                                                  "node_spindle_motor_C"]

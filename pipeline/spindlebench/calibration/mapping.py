@@ -40,12 +40,19 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    NODE_PREFIX,
+    TEMPERATURE_SUFFIX,
+    TIME_COLUMN,
+    node_of_output,
+    node_output,
+)
 from spindlebench.formats.tables import Table, load_toml
-from spindlebench.recordings import TIME_COLUMN
 
 INPUTS = ("spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C")
 UNKNOWN = "unknown"
-DRIFT_OUTPUT = "drift_um"
+DRIFT_OUTPUT = DRIFT_COLUMN
 _SENSOR = re.compile(r"^T([1-9]|1[0-9]|20)$")
 
 
@@ -97,11 +104,11 @@ def _output_name(table: Table, column: str, value: Any, outputs: set[str]) -> st
         raise table.error(column, f"must be a model output name (T1 … T20 or node_…), "
                                   f"got {value!r}")
     if _SENSOR.match(value):
-        return f"{value}_C"
-    name = value if value.endswith("_C") else f"{value}_C"
-    if value.startswith("node_") and name in outputs:
-        return name
-    nodes = sorted(o.removesuffix("_C") for o in outputs if o.startswith("node_"))
+        return f"{value}{TEMPERATURE_SUFFIX}"
+    node = value.removeprefix(NODE_PREFIX).removesuffix(TEMPERATURE_SUFFIX)
+    if value.startswith(NODE_PREFIX) and node_output(node) in outputs:
+        return node_output(node)
+    nodes = sorted(NODE_PREFIX + n for n in map(node_of_output, outputs) if n)
     near = difflib.get_close_matches(value, nodes, n=3)
     hint = f"did you mean {', '.join(near)}?" if near else f"nodes: {nodes[0]} … {nodes[-1]}"
     raise table.error(column, f"{value!r} is not a model sensor (T1 … T20) or node ({hint})")

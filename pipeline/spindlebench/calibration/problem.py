@@ -40,7 +40,8 @@ from spindlebench.calibration.fitset import PRIOR_SD_LN, log_bounds
 from spindlebench.calibration.mapping import INPUTS
 from spindlebench.calibration.series import KELVIN, Series
 from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica.equations import NODE_PREFIX, ExplicitOde
+from spindlebench.formats.recording import node_output
+from spindlebench.modelica.equations import ExplicitOde
 
 #: Prior sd (K) of the uniform shift of the initial state.
 INITIAL_SD_K = 3.0
@@ -139,7 +140,7 @@ class Discretisation:
         sensed = {}
         for i, state in enumerate(self.ode.states):
             stem = state.removesuffix("_T")
-            candidates = (f"{NODE_PREFIX}{stem}_C",
+            candidates = (node_output(stem),
                           stem.removeprefix("sensor_").removesuffix("_body") + "_C")
             for output in candidates:
                 if output in outputs:

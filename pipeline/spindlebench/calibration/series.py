@@ -14,8 +14,8 @@ import numpy as np
 
 from spindlebench.calibration.mapping import DRIFT_OUTPUT, INPUTS, UNKNOWN, RecordingMap
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import TIME_COLUMN, read_recording
 from spindlebench.provenance import sha256_file
-from spindlebench.recordings import TIME_COLUMN, read_recording
 
 #: Smallest noise a channel is given: a logger that quantises to 0.1 K on a slow signal shows
 #: almost no sample-to-sample scatter, and a weight of 1/0.001 K would let one channel rule.
