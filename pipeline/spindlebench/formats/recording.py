@@ -49,6 +49,7 @@ import json
 import os
 import re
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -150,6 +151,8 @@ def read_recording(
     *,
     allow_missing: bool = False,
     columns: Iterable[str] | None = None,
+    delimiter: str = ",",
+    decimal: str = ".",
 ) -> pd.DataFrame:
     """Read and validate one recording; all columns become float64.
 
@@ -159,18 +162,21 @@ def read_recording(
     not use cannot reject the file; names not in the header are left out (the caller says
     what it missed, ``require_columns`` lists the whole header); every line must still have
     all its fields. ``frame.attrs["path"]`` keeps the file name for later messages,
-    ``frame.attrs["header"]`` every column name of the file.
+    ``frame.attrs["header"]`` every column name of the file. ``delimiter`` and ``decimal``
+    give the CSV dialect (``formats.columns.detect_dialect`` finds them); a file that reads
+    as one column whose name holds another delimiter is refused saying so.
     """
     path = Path(path)
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
-    header = _read_header(path)
+    dialect = _Dialect(delimiter, decimal)
+    header = _read_header(path, dialect)
     keep = header if columns is None else _kept(header, columns)
-    frame = _read_clean(path, header, allow_missing, keep)
+    frame = _read_clean(path, header, allow_missing, keep, dialect)
     if frame is None:  # something is wrong: read as text to say exactly what and where
-        frame = _read_diagnosing(path, header, allow_missing, keep)
+        frame = _read_diagnosing(path, header, allow_missing, keep, dialect)
     if len(frame) < 2:
         raise SpindlebenchError(
             f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
@@ -188,6 +194,12 @@ def read_recording(
     return frame
 
 
+@dataclass(frozen=True)
+class _Dialect:
+    delimiter: str = ","
+    decimal: str = "."
+
+
 def _kept(header: list[str], columns: Iterable[str]) -> list[str]:
     """The header's names among ``columns``, plus ``time_s``, in file order."""
     wanted = {str(name) for name in columns} | {TIME_COLUMN}
@@ -195,14 +207,15 @@ def _kept(header: list[str], columns: Iterable[str]) -> list[str]:
 
 
 def _read_clean(
-    path: Path, header: list[str], allow_missing: bool, keep: list[str]
+    path: Path, header: list[str], allow_missing: bool, keep: list[str], dialect: _Dialect
 ) -> pd.DataFrame | None:
     """Fast path: the ``keep`` columns parse as finite floats throughout (or NaN where
     ``allow_missing`` permits it), and every line has all its fields; or None."""
     na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
         frame = pd.read_csv(
-            path, skip_blank_lines=False, engine="c", encoding=ENCODING, **na
+            path, skip_blank_lines=False, engine="c", encoding=ENCODING,
+            sep=dialect.delimiter, decimal=dialect.decimal, **na
         )
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError):
         return None
@@ -211,7 +224,7 @@ def _read_clean(
     # pandas pads short rows and blank lines with NaN: where a NaN is not an error (an ignored
     # column, or allow_missing), every line must be checked to have all its fields.
     if frame.isna().to_numpy().any() and (allow_missing or len(keep) < len(header)) \
-            and not _all_fields_fast(path, len(frame), len(header)):
+            and not _all_fields_fast(path, len(frame), len(header), dialect.delimiter):
         return None
     frame = frame.set_axis(header, axis=1).loc[:, keep]
     numeric = all(
@@ -230,20 +243,20 @@ def _read_clean(
     return frame.astype(float)
 
 
-def _all_fields_fast(path: Path, rows: int, width: int) -> bool:
-    """Whether the file has one comma fewer than columns on every line (no quoting), cheaply;
-    False sends the caller to the slow path, which checks line by line."""
-    return path.read_bytes().count(b",") == (rows + 1) * (width - 1)
+def _all_fields_fast(path: Path, rows: int, width: int, delimiter: str = ",") -> bool:
+    """Whether the file has one delimiter fewer than columns on every line (no quoting),
+    cheaply; False sends the caller to the slow path, which checks line by line."""
+    return path.read_bytes().count(delimiter.encode()) == (rows + 1) * (width - 1)
 
 
 def _read_diagnosing(
-    path: Path, header: list[str], allow_missing: bool, keep: list[str]
+    path: Path, header: list[str], allow_missing: bool, keep: list[str], dialect: _Dialect
 ) -> pd.DataFrame:
     """Slow path: read every cell as text, raise naming the first bad cell of ``keep``."""
     try:
         raw = pd.read_csv(
             path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c",
-            encoding=ENCODING,
+            encoding=ENCODING, sep=dialect.delimiter,
         )
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         detail = " ".join(str(exc).split())
@@ -254,25 +267,42 @@ def _read_diagnosing(
     raw = _drop_trailing_blank_rows(raw)
     if allow_missing or len(keep) < len(header):
         # pandas pads short rows with empty cells: those are not missing values
-        _check_field_counts(path, len(header), len(raw))
+        _check_field_counts(path, len(header), len(raw), dialect.delimiter)
     return pd.DataFrame(
         {
-            name: _numeric_column(path, name, raw[name], allow_missing)
+            name: _numeric_column(path, name, raw[name], allow_missing, dialect.decimal)
             for name in keep
         },
         index=raw.index,
     )
 
 
-def _read_header(path: Path) -> list[str]:
+def read_header(path: str | os.PathLike[str], delimiter: str = ",") -> list[str]:
+    """A recording's column names (stripped), checked like ``read_recording`` checks them."""
+    path = Path(path)
+    if not path.is_file():
+        raise SpindlebenchError(f"recording {path}: "
+                                f"{'not a file' if path.exists() else 'file not found'}")
+    return _read_header(path, _Dialect(delimiter))
+
+
+def _read_header(path: Path, dialect: _Dialect = _Dialect()) -> list[str]:
     try:
         with open(path, newline="", encoding=ENCODING) as handle:
-            header = next(csv.reader(handle), None)
+            header = next(csv.reader(handle, delimiter=dialect.delimiter), None)
     except UnicodeDecodeError as exc:
         raise SpindlebenchError(f"recording {path}: not UTF-8 text") from exc
     if not header:
         raise SpindlebenchError(f"recording {path}: empty file (no header line)")
     names = [name.strip() for name in header]
+    if len(names) == 1:
+        for other in (",", ";", "\t", "|"):
+            if other != dialect.delimiter and other in names[0]:
+                shown = "tab" if other == "\t" else other
+                raise SpindlebenchError(
+                    f"recording {path}, line 1: read as one column {names[0][:40]!r} with "
+                    f"delimiter {dialect.delimiter!r}; the fields look separated by "
+                    f"{shown!r} (pass --delimiter '{shown}')")
     for number, name in enumerate(names, start=1):
         if not name:
             raise SpindlebenchError(f"recording {path}, line 1: column {number} has no name")
@@ -282,10 +312,10 @@ def _read_header(path: Path) -> list[str]:
     return names
 
 
-def _check_field_counts(path: Path, width: int, rows: int) -> None:
+def _check_field_counts(path: Path, width: int, rows: int, delimiter: str = ",") -> None:
     """Raise naming the first of the first ``rows`` data lines without ``width`` fields."""
     with open(path, newline="", encoding=ENCODING) as handle:
-        lines = csv.reader(handle)
+        lines = csv.reader(handle, delimiter=delimiter)
         next(lines, None)
         for number, fields in enumerate(itertools.islice(lines, rows), start=2):
             if len(fields) != width:
@@ -301,7 +331,8 @@ def _drop_trailing_blank_rows(raw: pd.DataFrame) -> pd.DataFrame:
     return raw.iloc[: filled[-1] + 1] if filled.size else raw.iloc[:0]
 
 
-def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool) -> pd.Series:
+def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool,
+                    decimal: str = ".") -> pd.Series:
     """One column as float64, or an error naming the first bad line (header = line 1).
 
     Empty and NaN cells raise ``MissingValueError`` (or pass as NaN with ``allow_missing``),
@@ -309,7 +340,8 @@ def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool
     """
     optional = name != TIME_COLUMN
     stripped = cells.str.strip()
-    values = pd.to_numeric(stripped, errors="coerce").astype(float)
+    as_numbers = stripped.str.replace(",", ".", regex=False) if decimal == "," else stripped
+    values = pd.to_numeric(as_numbers, errors="coerce").astype(float)
     bad_mask = ~np.isfinite(values.to_numpy())
     if allow_missing and optional:
         bad_mask &= ~stripped.str.lower().isin(MISSING_SPELLINGS).to_numpy(dtype=bool)

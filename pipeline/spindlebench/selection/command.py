@@ -2,24 +2,33 @@
 
 Warnings (dropped constant candidates, tied similarities, samples dropped for missing values
 with ``--missing drop-rows``) go to stderr as ``warning:`` lines and into the JSON's
-``provenance.warnings``. With ``--sensors`` only the target, ``time_s`` and those sensors are
-read and checked; other columns are ignored.
+``provenance.warnings``. The column roles (time column, sensors, excluded columns, CSV
+dialect) are ``spindlebench.formats.columns``'; only the target, the time column and the
+sensors are read and checked, other columns are ignored.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import warnings
-from collections.abc import Sequence
 from pathlib import Path
 
 import pandas as pd
 
 from spindlebench import atomic, provenance
-from spindlebench.formats.recording import MissingValueError, read_recording
-from spindlebench.listflags import split_list_flag
+from spindlebench.formats.columns import (
+    ColumnRoles,
+    RoleChoice,
+    add_role_arguments,
+    choose,
+    detect_dialect,
+    read_with_roles,
+    refuse_target_copies,
+)
+from spindlebench.formats.recording import MissingValueError, read_header
 from spindlebench.names import (
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
@@ -47,21 +56,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="select temperature-sensitive points on one recording and predict others",
         description="Xu et al. (2023): fuzzy-cluster the candidates of the training recording, "
         "keep per cluster the one most correlated with the target, fit OLS on rises, and "
-        "report the RMSE on every test recording. Without --sensors, every numeric column "
-        "except the target, time_s, true_* truth, driver/command columns (ambient_C, feed_*, "
-        "*_rpm, *_mm_per_min, *_W) and displacement/error channels (*_um) is a sensor.",
+        "report the RMSE on every test recording. Without --sensors, the columns that look "
+        "like temperatures (T3, t3_C, '... [degC]', '... °C', Temp...) are the sensors; the "
+        "command prints which it took and which it skipped and why. Only the target, the "
+        "time column and the sensors are read and checked.",
     )
     parser.add_argument("--train", required=True, type=Path, help="training recording (CSV)")
     parser.add_argument(
         "--test", required=True, nargs="+", type=Path, help="recording(s) to predict (CSV)"
     )
     parser.add_argument("--target", required=True, help="thermal-error column, e.g. drift_um")
-    parser.add_argument(
-        "--sensors", nargs="+", metavar="NAME",
-        help="sensor columns, space- or comma-separated (--sensors T1 T6 T8 or --sensors "
-        "T1,T6,T8); only these, the target and time_s are read and checked, other columns "
-        "are ignored (default: see above, every column is checked)",
-    )
+    add_role_arguments(parser)
     parser.add_argument(
         "--clusters", required=True, type=int, metavar="K",
         help="number of clusters k (for a method without clusters: the number of inputs)"
@@ -94,29 +99,38 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def parse_sensor_list(values: str | Sequence[str] | None) -> list[str] | None:
-    """``["T1,T6", "T8"]`` or ``"T1,T6, T8"`` -> ``["T1", "T6", "T8"]``; None stays None."""
-    return split_list_flag("--sensors", values, what="name", error=SelectionError)
-
-
-def _read_used(path: Path, columns: list[str], missing: str) -> pd.DataFrame:
-    """One recording with only ``columns`` (and time_s) read and checked: with --sensors a
-    gap or a note in a column nobody uses must not reject the file."""
+def _read_used(path: Path, target: str, roles: ColumnRoles,
+               missing: str) -> tuple[pd.DataFrame, RoleChoice]:
+    """One recording with only the target, time and sensor columns read and checked: a gap
+    or a note in a column nobody uses must not reject the file."""
     try:
-        return read_recording(path, allow_missing=missing == "drop-rows", columns=columns)
+        return read_with_roles(path, target, roles, allow_missing=missing == "drop-rows")
     except MissingValueError as exc:
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
 
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
-    sensors = parse_sensor_list(args.sensors)
+    roles = ColumnRoles.from_args(args)
     choice = MethodChoice(args.method, args.within, args.regressor)  # checked before reading
-    train: RecordingLike = args.train
-    tests: list[RecordingLike] = [str(path) for path in args.test]
-    if sensors is not None:  # read and check only the columns used
-        train = _read_used(args.train, [args.target, *sensors], args.missing)
-        tests = [_read_used(path, [args.target, *sensors], args.missing) for path in args.test]
+    train, taken = _read_used(args.train, args.target, roles, args.missing)
+    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
+                         roles.allow_target_copy)
+    sensors = taken.sensors
+    same = dataclasses.replace(roles, sensors=tuple(sensors), exclude=())  # the train's columns
+    tests: list[RecordingLike] = []
+    for path in args.test:
+        if taken.by_rule:  # the rule must find the same sensors in every file
+            theirs = choose(read_header(path, detect_dialect(path, roles.delimiter)[0]),
+                            args.target, roles, str(path)).sensors
+            if theirs != sensors:
+                missing = [s for s in sensors if s not in theirs]
+                extra = [s for s in theirs if s not in sensors]
+                raise SelectionError(
+                    f"recording {path}: sensor columns differ from the training file "
+                    f"{args.train} (missing: {missing or 'none'}; extra: {extra or 'none'}); "
+                    "pass --sensors")
+        tests.append(_read_used(path, args.target, same, args.missing)[0])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = evaluate(
@@ -136,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
     text = None if args.json is None else _json_text(result, args, messages)
     for message in messages:
         print(f"warning: {message}", file=sys.stderr)
+    print(taken.report())
     print(result.summary())
     if text is not None:
         atomic.write_text(args.json, text)

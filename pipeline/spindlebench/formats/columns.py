@@ -1,0 +1,330 @@
+"""Column roles of a user's recording: which column is time, which are sensors, which not.
+
+A recording from another logger names its columns its own way (``Time``, ``Spindle front
+[degC]``, ``dx [um]``), so nothing is guessed silently. The roles are explicit:
+
+- ``time_column`` (``--time-column``): the time axis in seconds (default ``time_s``); a
+  command that plots or resamples refuses a recording without it.
+- ``sensors`` (``--sensors``): names or patterns (``"T*"``, ``"*[degC]"``: ``*`` and ``?``
+  are wildcards, brackets are literal); each must match at least one column. Without it,
+  only columns that look like temperatures (``T3``, ``t3_C``, ``... [degC]``, ``... °C``,
+  ``Temp...``) are sensors, and
+  :meth:`RoleChoice.report` says which were taken and which skipped, and why.
+- ``exclude`` (``--exclude``): names or patterns never used as sensors.
+- A candidate whose |r| with the target exceeds :data:`COPY_R` is refused as a likely copy
+  of the target (a second displacement channel) unless ``allow_target_copy``.
+- ``delimiter`` / ``decimal`` (``--delimiter``/``--decimal``): the CSV dialect, detected from
+  the header and first data line when not given (``;`` with decimal comma, tab, ``|``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.listflags import split_list_flag
+
+#: The canonical time column.
+TIME_COLUMN = "time_s"
+#: |Pearson r| with the target above which a candidate is taken for a copy of the target.
+COPY_R = 0.999
+#: Delimiters the detection chooses from, and the decimal marks a user may give.
+DELIMITERS = (",", ";", "\t", "|")
+DECIMALS = (".", ",")
+
+#: Names that look like a temperature: T3 / t3_C / x_C / "... [degC]" / "... (°C)" / Temp...
+_TEMPERATURE = re.compile(
+    r"^[Tt]\d+$|_C$|deg ?C|°C|\[C\]|\(C\)|^temp|temperature", re.IGNORECASE)
+#: Names that look like time.
+_TIME = re.compile(r"^(t|time|zeit|timestamp|date|datetime|elapsed)\b|^time_|time$|\[s\]$",
+                   re.IGNORECASE)
+#: Columns that are never temperatures by default, with the reason (first match wins).
+_NOT_SENSOR = (
+    (re.compile(r"^true_"), "noise-free truth"),
+    (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
+     "displacement/thermal error"),
+    (re.compile(r"_rpm$|\[rpm\]|speed|feed|_mm_per_min$|_W$", re.IGNORECASE),
+     "driver/command input"),
+    (re.compile(r"^ambient_C$"), "the testbench's ambient driver"),
+)
+
+
+@dataclass(frozen=True)
+class ColumnRoles:
+    """What the user said about a recording's columns (None: not said, use the rule)."""
+
+    time_column: str | None = None
+    sensors: tuple[str, ...] | None = None
+    exclude: tuple[str, ...] = ()
+    allow_target_copy: bool = False
+    delimiter: str | None = None
+    decimal: str | None = None
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> ColumnRoles:
+        """The roles given on a command line built with :func:`add_role_arguments`."""
+        sensors = split_list_flag("--sensors", args.sensors, what="name")
+        exclude = split_list_flag("--exclude", args.exclude, what="name") or []
+        return cls(time_column=args.time_column,
+                   sensors=None if sensors is None else tuple(sensors),
+                   exclude=tuple(exclude), allow_target_copy=args.allow_target_copy,
+                   delimiter=_delimiter(args.delimiter, "--delimiter"),
+                   decimal=_decimal(args.decimal, "--decimal"))
+
+
+@dataclass
+class RoleChoice:
+    """The roles applied to one recording: the time column, sensors, and what was skipped."""
+
+    time_column: str | None
+    sensors: list[str]
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (column, why)
+    by_rule: bool = True
+
+    def report(self) -> str:
+        """One line: the sensors taken and the columns skipped with the reason."""
+        how = "temperature-looking columns" if self.by_rule else "--sensors"
+        skipped = "; ".join(f"{name} ({why})" for name, why in self.skipped) or "none"
+        return f"sensors ({how}): took {', '.join(self.sensors)}; skipped: {skipped}"
+
+
+def add_role_arguments(parser: argparse.ArgumentParser, *, sensors: bool = True) -> None:
+    """The column-role flags every command that reads user recordings shares."""
+    parser.add_argument("--time-column", metavar="NAME", default=None,
+                        help=f"the time column in seconds (default: {TIME_COLUMN})")
+    if sensors:
+        parser.add_argument(
+            "--sensors", nargs="+", metavar="NAME",
+            help="sensor columns: names or glob patterns ('T*', '*[degC]'), space- or "
+            "comma-separated; only these, the target and the time column are read and "
+            "checked (default: the columns that look like temperatures, listed on stdout)")
+    parser.add_argument("--exclude", nargs="+", metavar="NAME", default=None,
+                        help="columns (names or glob patterns) never used as sensors")
+    parser.add_argument("--allow-target-copy", action="store_true",
+                        help=f"keep a sensor whose |r| with the target exceeds {COPY_R} "
+                        "(refused by default as a likely copy of the target)")
+    parser.add_argument("--delimiter", default=None, metavar="CHAR",
+                        help="CSV field delimiter: ',', ';', 'tab' or '|' (default: detected)")
+    parser.add_argument("--decimal", default=None, metavar="CHAR",
+                        help="decimal mark: '.' or ',' (default: detected)")
+
+
+def _delimiter(value: str | None, where: str) -> str | None:
+    if value is None:
+        return None
+    value = "\t" if value in ("tab", "\\t") else value
+    if value not in DELIMITERS:
+        raise SpindlebenchError(f"{where}: {value!r} is not one of ',', ';', 'tab', '|'")
+    return value
+
+
+def _decimal(value: str | None, where: str) -> str | None:
+    if value is not None and value not in DECIMALS:
+        raise SpindlebenchError(f"{where}: {value!r} is not '.' or ','")
+    return value
+
+
+def detect_dialect(path: Path, delimiter: str | None = None,
+                   decimal: str | None = None) -> tuple[str, str]:
+    """The delimiter and decimal mark of a CSV: as given, or detected from its first lines.
+
+    The delimiter is the candidate that splits the header into the most fields and the first
+    data line into as many; a decimal comma is assumed when the delimiter is not a comma and
+    the data line has numbers like ``21,5``.
+    """
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as handle:
+            lines = [handle.readline() for _ in range(2)]
+    except (OSError, UnicodeDecodeError):
+        return delimiter or ",", decimal or "."  # the reader names the problem
+    header, first = lines[0], lines[1]
+    if delimiter is None:
+        counts = {d: len(next(csv.reader([header], delimiter=d), [])) for d in DELIMITERS}
+        agreeing = [d for d in DELIMITERS if counts[d] > 1 and (
+            not first.strip() or len(next(csv.reader([first], delimiter=d), [])) == counts[d])]
+        delimiter = max(agreeing, key=lambda d: counts[d]) if agreeing else ","
+    if decimal is None:
+        cells = next(csv.reader([first], delimiter=delimiter), [])
+        comma_numbers = [c for c in cells if re.fullmatch(r"\s*-?\d+,\d+\s*", c)]
+        decimal = "," if delimiter != "," and comma_numbers else "."
+    if delimiter == decimal:
+        raise SpindlebenchError(f"recording {path}: the delimiter and the decimal mark are both "
+                                f"{delimiter!r}; give --delimiter and --decimal")
+    return delimiter, decimal
+
+
+def _pattern(text: str) -> re.Pattern[str]:
+    """A name pattern: ``*`` any run of characters, ``?`` one; everything else literal, so
+    ``*[degC]`` means names ending in "[degC]" (not fnmatch's character class)."""
+    return re.compile("".join(".*" if c == "*" else "." if c == "?" else re.escape(c)
+                              for c in text) + r"\Z", re.DOTALL)
+
+
+def _matches(name: str, patterns: Sequence[str]) -> bool:
+    return any(name == p or _pattern(p).match(name) for p in patterns)
+
+
+def looks_like_time(name: str) -> bool:
+    return bool(_TIME.search(name.strip()))
+
+
+def looks_like_temperature(name: str) -> bool:
+    return bool(_TEMPERATURE.search(name.strip()))
+
+
+def choose(header: Sequence[str], target: str, roles: ColumnRoles,
+           where: str) -> RoleChoice:
+    """Apply ``roles`` to a recording's header: the time column and the sensors.
+
+    ``where`` names the recording in messages. Errors: a given time column or a sensor
+    pattern that matches no column, a target that is also a sensor, no sensor left.
+    """
+    header = [str(name) for name in header]
+    if target not in header:
+        raise SpindlebenchError(f"recording {where}: target column {target!r} not found "
+                                f"(columns are: {', '.join(header)})")
+    time_column = roles.time_column or TIME_COLUMN
+    if roles.time_column is not None and roles.time_column not in header:
+        raise SpindlebenchError(f"recording {where}: --time-column {roles.time_column!r} not "
+                                f"found (columns are: {', '.join(header)})")
+    if time_column not in header:
+        time_column = None
+    for pattern in roles.exclude:
+        if not any(_matches(name, [pattern]) for name in header):
+            raise SpindlebenchError(f"recording {where}: --exclude {pattern!r} matches no "
+                                    f"column (columns are: {', '.join(header)})")
+    skipped: list[tuple[str, str]] = []
+    if roles.sensors is not None:
+        sensors: list[str] = []
+        for pattern in roles.sensors:
+            found = [n for n in header if _matches(n, [pattern]) and n not in sensors]
+            if not any(_matches(n, [pattern]) for n in header):
+                what = ("sensor pattern matches no column" if any(c in pattern for c in "*?")
+                        else "sensor column(s) not found")
+                raise SpindlebenchError(f"recording {where}: {what}: {pattern} (columns are: "
+                                        f"{', '.join(header)})")
+            sensors += found
+        for name in list(sensors):
+            if name == target:
+                raise SpindlebenchError(f"recording {where}: the target {target!r} is also "
+                                        "listed as a sensor")
+            if name == time_column or _matches(name, roles.exclude):
+                sensors.remove(name)
+                skipped.append((name, "time column" if name == time_column else "--exclude"))
+        by_rule = False
+    else:
+        sensors = []
+        by_rule = True
+        for name in header:
+            if name == target:
+                skipped.append((name, "target"))
+            elif name == time_column:
+                skipped.append((name, "time column"))
+            elif _matches(name, roles.exclude):
+                skipped.append((name, "--exclude"))
+            elif looks_like_time(name):
+                skipped.append((name, "looks like time; --time-column names the time axis"))
+            else:
+                reason = next((why for rule, why in _NOT_SENSOR if rule.search(name)), None)
+                if reason is None and looks_like_temperature(name):
+                    sensors.append(name)
+                else:
+                    skipped.append((name, reason or "does not look like a temperature; "
+                                    "name it in --sensors to use it"))
+    if not sensors:
+        raise SpindlebenchError(f"recording {where}: no sensor columns ("
+                                + "; ".join(f"{n}: {why}" for n, why in skipped)
+                                + "); pass --sensors")
+    return RoleChoice(time_column, sensors, skipped, by_rule)
+
+
+def refuse_target_copies(frame: pd.DataFrame, target: str, sensors: Sequence[str],
+                         where: str, allow: bool) -> None:
+    """Refuse a sensor whose |r| with the target exceeds :data:`COPY_R`: a target that leaks
+    into the model gives ψ = 1 and R² = 1 and predicts nothing on a real machine."""
+    if allow:
+        return
+    y = frame[target].to_numpy(dtype=float)
+    for name in sensors:
+        x = frame[name].to_numpy(dtype=float)
+        keep = np.isfinite(x) & np.isfinite(y)
+        if keep.sum() < 3 or np.ptp(x[keep]) == 0 or np.ptp(y[keep]) == 0:
+            continue
+        r = float(np.corrcoef(x[keep], y[keep])[0, 1])
+        if abs(r) > COPY_R:
+            raise SpindlebenchError(
+                f"recording {where}: sensor {name!r} follows the target {target!r} with |r| = "
+                f"{abs(r):.4f} > {COPY_R}: likely a copy of the target (another displacement "
+                f"channel?); --exclude it, or pass --allow-target-copy")
+
+
+def require_time(choice: RoleChoice, where: str, why: str) -> str:
+    """The time column, or an error for a command that needs one (plots, resampling)."""
+    if choice.time_column is None:
+        raise SpindlebenchError(f"recording {where}: no time column {TIME_COLUMN!r}; {why} "
+                                "needs one: pass --time-column NAME")
+    return choice.time_column
+
+
+#: Values a temperature sensor cannot read (°C): below absolute zero, or a logger's error
+#: sentinel (9.9e37, 1e10); -273.15 itself is also a common "no value" code.
+PLAUSIBLE_C = (-273.15, 1.0e4)
+
+
+def refuse_implausible_temperatures(frame: pd.DataFrame, sensors: Sequence[str],
+                                    where: str) -> None:
+    """A temperature-looking sensor with a value no thermometer reads is one line naming the
+    file, line and column (one 9.9e37 cell made every other sensor look constant)."""
+    low, high = PLAUSIBLE_C
+    for name in sensors:
+        if not looks_like_temperature(name):
+            continue
+        values = frame[name].to_numpy(dtype=float)
+        bad = np.flatnonzero(~((values > low) & (values < high)) & ~np.isnan(values))
+        if bad.size:
+            row = int(bad[0])
+            line = int(frame.index[row]) + 2 if isinstance(frame.index, pd.RangeIndex) \
+                else row + 2
+            raise SpindlebenchError(
+                f"recording {where}, line {line}, column {name!r}: {values[row]:g} is not a "
+                f"plausible temperature ({low:g}..{high:g} °C; a logger's error value?); "
+                f"{bad.size} such cell(s); remove those samples or --exclude the column")
+
+
+def read_with_roles(path: Path, target: str, roles: ColumnRoles, *,
+                    allow_missing: bool = False) -> tuple[pd.DataFrame, RoleChoice]:
+    """Read a user recording under ``roles``: dialect, time column, sensors, checks.
+
+    Only the target, the time column and the sensors are read and checked. The time column
+    is renamed to ``time_s`` in the frame (so downstream code has one name), the sensors are
+    checked for implausible temperatures and (unless allowed) copies of the target.
+    """
+    from spindlebench.formats.recording import read_header, read_recording
+
+    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
+    header = read_header(path, delimiter)
+    choice = choose(header, target, roles, str(path))
+    wanted = [target, *choice.sensors] + ([choice.time_column] if choice.time_column else [])
+    frame = read_recording(path, allow_missing=allow_missing, columns=wanted,
+                           delimiter=delimiter, decimal=decimal)
+    if choice.time_column and choice.time_column != TIME_COLUMN:
+        frame = frame.rename(columns={choice.time_column: TIME_COLUMN})
+        _check_increasing(frame, path)
+    refuse_implausible_temperatures(frame, choice.sensors, str(path))
+    return frame, choice
+
+
+def _check_increasing(frame: pd.DataFrame, path: Path) -> None:
+    steps = np.diff(frame[TIME_COLUMN].to_numpy(dtype=float))
+    bad = np.flatnonzero(~(steps > 0))
+    if bad.size:
+        raise SpindlebenchError(f"recording {path}, line {bad[0] + 3}: the time column does not "
+                                "increase (--time-column names the time axis in seconds)")

@@ -1,0 +1,134 @@
+"""Issue 11: explicit column roles for a user's recording (another logger's naming, dialect).
+
+Runs ``spindlebench evaluate`` on ``docs/examples/other-logger`` (two synthetic runs written
+with semicolons, decimal commas, ``Time [s]``, ``... [degC]`` and two displacement channels)
+and on variants of it.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from spindlebench import cli
+from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.columns import ColumnRoles, choose, detect_dialect
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "other-logger"
+TARGET = "dz [um]"
+
+
+def evaluate(capsys, *args: str, train: Path = EXAMPLE / "run1.csv",
+             test: Path = EXAMPLE / "run2.csv"):
+    status = cli.main(["evaluate", "--train", str(train), "--test", str(test), "--target",
+                       TARGET, "--clusters", "2", *args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_the_readme_example_takes_the_temperatures_and_says_what_it_skipped(capsys):
+    status, out, err = evaluate(capsys, "--time-column", "Time [s]")
+    assert status == 0, err
+    first = out.splitlines()[0]
+    assert first.startswith("sensors (temperature-looking columns): took Spindle front [degC]")
+    assert "skipped: Time [s] (time column); Spindle speed [rpm] (driver/command input); " \
+           "dz [um] (target); dx [um] (displacement/thermal error)" in first
+    assert "training R2" in out
+    readme = (EXAMPLE.parents[2] / "README.md").read_text(encoding="utf-8")
+    assert first in readme  # the README shows what the command prints
+
+
+def test_a_time_column_of_another_name_is_never_a_sensor(capsys):
+    status, out, _ = evaluate(capsys, "--differences")
+    assert status == 0
+    assert "Time [s] (looks like time" in out.splitlines()[0]
+    assert "Time [s]-" not in out and "-Time [s]" not in out
+
+
+def test_a_copy_of_the_target_is_refused_unless_allowed(capsys):
+    status, out, err = evaluate(capsys, "--sensors", "*[degC]", "dx [um]")
+    assert status == 2 and out == ""
+    assert err.count("\n") == 1
+    assert "sensor 'dx [um]' follows the target 'dz [um]' with |r| = 1.0000 > 0.999" in err
+    status, out, err = evaluate(capsys, "--sensors", "*[degC]", "dx [um]",
+                                "--allow-target-copy")
+    assert status == 0, err
+
+
+def test_patterns_and_exclude(capsys):
+    status, out, err = evaluate(capsys, "--sensors", "Spindle*", "*air*", "--exclude",
+                                "Spindle speed*")
+    assert status == 0, err
+    assert out.splitlines()[0].startswith(
+        "sensors (--sensors): took Spindle front [degC], Spindle rear [degC], "
+        "Workshop air [degC]; skipped: Spindle speed [rpm] (--exclude)")
+    status, _, err = evaluate(capsys, "--sensors", "Nozzle*")
+    assert status == 2 and "sensor pattern matches no column: Nozzle*" in err
+
+
+def test_the_dialect_is_detected_and_a_wrong_delimiter_says_which_it_looks_like(capsys):
+    assert detect_dialect(EXAMPLE / "run1.csv") == (";", ",")
+    status, out, err = evaluate(capsys, "--delimiter", ",")
+    assert status == 2 and out == ""
+    assert err.count("\n") == 1
+    assert "line 1: read as one column" in err and "(pass --delimiter ';')" in err
+    status, _, err = evaluate(capsys, "--delimiter", ";", "--decimal", ",")
+    assert status == 0, err
+
+
+def test_a_logger_sentinel_in_one_cell_is_named_by_file_line_and_column(tmp_path, capsys):
+    frame = pd.read_csv(EXAMPLE / "run1.csv", sep=";", decimal=",")
+    frame.loc[57, "Motor housing [degC]"] = 9.9e37
+    train = tmp_path / "sentinel.csv"
+    frame.to_csv(train, sep=";", decimal=",", index=False)
+    status, out, err = evaluate(capsys, train=train)
+    assert status == 2 and out == ""
+    assert err == (f"error: recording {train}, line 59, column 'Motor housing [degC]': 9.9e+37 "
+                   "is not a plausible temperature (-273.15..10000 °C; a logger's error "
+                   "value?); 1 such cell(s); remove those samples or --exclude the column\n")
+
+
+def test_a_canonical_recording_keeps_its_sensors():
+    header = ["time_s", *[f"T{i}" for i in range(1, 21)], "drift_um", "spindle_speed_rpm",
+              "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C", "true_T1_C",
+              "true_drift_um", "true_Q_front_bearing_W"]
+    choice = choose(header, "drift_um", ColumnRoles(), "r.csv")
+    assert choice.sensors == [f"T{i}" for i in range(1, 21)]
+    assert choice.time_column == "time_s"
+    caiviac = ["time_s", "spindle_rpm", *[f"ch{i}_um" for i in range(1, 6)],
+               *[f"t{i}_C" for i in range(1, 17)]]
+    assert choose(caiviac, "ch3_um", ColumnRoles(), "c.csv").sensors == \
+        [f"t{i}_C" for i in range(1, 17)]
+
+
+def test_a_given_time_column_must_exist_and_increase(tmp_path, capsys):
+    status, _, err = evaluate(capsys, "--time-column", "Zeit")
+    assert status == 2 and "--time-column 'Zeit' not found" in err
+    frame = pd.read_csv(EXAMPLE / "run1.csv", sep=";", decimal=",")
+    frame.loc[10, "Time [s]"] = 0.0
+    train = tmp_path / "back.csv"
+    frame.to_csv(train, sep=";", decimal=",", index=False)
+    status, _, err = evaluate(capsys, "--time-column", "Time [s]", train=train)
+    assert status == 2 and f"{train}, line 12: the time column does not increase" in err
+
+
+def test_no_temperature_looking_column_asks_for_sensors(tmp_path):
+    path = tmp_path / "x.csv"
+    pd.DataFrame({"a": np.arange(5.0), "b": np.arange(5.0) ** 2, "y": np.arange(5.0)}).to_csv(
+        path, index=False)
+    with pytest.raises(SpindlebenchError, match=r"no sensor columns .*pass --sensors"):
+        choose(["a", "b", "y"], "y", ColumnRoles(), str(path))
+
+
+def test_the_example_can_be_regenerated(tmp_path):
+    """make_example.py writes what is committed (same scenarios, seeds, rounding)."""
+    copy = tmp_path / "other-logger"
+    shutil.copytree(EXAMPLE, copy)
+    import runpy
+
+    assert runpy.run_path(str(copy / "make_example.py"), run_name="example")["main"]() == 0
+    for name in ("run1.csv", "run2.csv"):
+        assert (copy / name).read_bytes() == (EXAMPLE / name).read_bytes()
