@@ -2,7 +2,9 @@
 
 - The paper's three candidate groups through ``spindlebench.selection.evaluate``: ``all_raw``
   (all 20 sensors), ``six_raw`` (T1, T6, T8, T10, T13, T16) and ``six_diff`` (those six plus
-  their 15 pairwise differences), each at k clusters.
+  their 15 pairwise differences), each at k clusters. With ``[methods] methods`` listing
+  other selection methods (``spindlebench methods``), each also runs on every group, named
+  ``group:label`` (``six_diff:kmeans+grey``, ``all_raw:lasso+ridge``).
 - ``top-k-correlated``: what a practitioner tries first: the k raw sensors (of all 20) whose
   rises correlate most strongly with the error, then the same OLS on rises. Same k as the
   clusters, so it isolates what the fuzzy clustering adds.
@@ -39,7 +41,15 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
 from spindlebench.formats.recording import DRIFT_COLUMN
-from spindlebench.names import ALL_RAW, PAPER_SIX, SENSORS, SIX_DIFF, SIX_RAW
+from spindlebench.names import (
+    ALL_RAW,
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    PAPER_SIX,
+    SENSORS,
+    SIX_DIFF,
+    SIX_RAW,
+)
 from spindlebench.selection import (
     PairwiseDifferences,
     correlation_with,
@@ -48,6 +58,7 @@ from spindlebench.selection import (
     rises,
     rmse,
 )
+from spindlebench.selection.registry import MethodChoice, parse_method
 from spindlebench.selection.regressors import blocked_cv_alpha
 from spindlebench.studies.executor import one_line_error
 from spindlebench.studies.study import Methods
@@ -58,23 +69,51 @@ TRUTH = "true_drift_rise_um"
 
 ORACLE = "oracle"
 GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
+#: Between a group and a selection method in a method's name (``six_diff:kmeans+grey``).
+GROUP_SEPARATOR = ":"
 
 
 @dataclass(frozen=True)
 class MethodSpec:
-    """One method at one k (``k`` None for methods without a sensor budget)."""
+    """One method at one k (``k`` None for methods without a sensor budget).
+
+    ``name`` is the results' ``method`` column: a paper group alone (``six_diff``) for the
+    paper's method, ``group:label`` (``six_diff:kmeans+grey``) for another selection method
+    (``names.METHODS``) on that group; baselines and the oracle by their own names.
+    """
 
     name: str
     k: int | None
+    seed: int = DEFAULT_METHOD_SEED
 
     @property
     def label(self) -> str:
         return self.name if self.k is None else f"{self.name} k={self.k}"
 
+    @property
+    def group(self) -> str | None:
+        """The paper group whose candidates the method selects from (None: a baseline)."""
+        group = self.name.split(GROUP_SEPARATOR)[0]
+        return group if group in GROUP_SENSORS else None
+
+    @property
+    def choice(self) -> MethodChoice:
+        """The selection method on the group (the paper's when the name is a group alone)."""
+        _, _, label = self.name.partition(GROUP_SEPARATOR)
+        return parse_method(label or DEFAULT_METHOD)
+
+
+def group_method_name(group: str, label: str) -> str:
+    """The results' name of method ``label`` on ``group``: the group alone for the paper's."""
+    return group if label == DEFAULT_METHOD else f"{group}{GROUP_SEPARATOR}{label}"
+
 
 def method_specs(methods: Methods) -> list[MethodSpec]:
-    """Every (method, k) the study asks for, groups first, in a stable order."""
-    specs = [MethodSpec(group, k) for group in methods.groups for k in methods.clusters]
+    """Every (method, k) the study asks for, groups first (each with every selection method
+    of ``methods.methods``, the paper's first), in a stable order."""
+    specs = [MethodSpec(group_method_name(group, label), k, methods.seed)
+             for group in methods.groups for label in methods.methods
+             for k in methods.clusters]
     for baseline in methods.baselines:
         if baseline == "ridge":
             specs.append(MethodSpec(baseline, None))
@@ -98,7 +137,7 @@ def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.Dat
                similarity: str) -> dict[str, Score]:
     """Train ``spec`` on ``train`` (columns T1..T20, drift_um, true_drift_rise_um) and score
     it on every frame of ``tests``."""
-    if spec.name in GROUP_SENSORS:
+    if spec.group is not None:
         return _paper_group(spec, train, tests, similarity)
     if spec.name == "top-k-correlated":
         return _top_k_correlated(spec, train, tests)
@@ -127,9 +166,10 @@ def _paper_group(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.D
         raise ValueError(f"{spec.name} needs a number of clusters k")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
-        result = evaluate(train, dict(tests), TARGET, sensors=list(GROUP_SENSORS[spec.name]),
-                          k=spec.k, differences=spec.name.endswith("+diff"),
-                          similarity=similarity, missing="drop-rows")
+        result = evaluate(train, dict(tests), TARGET, sensors=list(GROUP_SENSORS[spec.group]),
+                          k=spec.k, differences=spec.group == SIX_DIFF,
+                          similarity=similarity, missing="drop-rows", method=spec.choice,
+                          seed=spec.seed)
     kept = {name: frame.iloc[result.test_rows[name]] for name, frame in tests.items()}
     return _scores(kept, result.predictions, ";".join(result.selected))
 

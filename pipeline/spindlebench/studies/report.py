@@ -16,7 +16,7 @@ import pandas as pd
 from spindlebench.names import SIX_RAW
 from spindlebench.studies.experiments import Experiment
 from spindlebench.studies.study import NO_FAULT, SweepStudy
-from spindlebench.studies.summary import RAW
+from spindlebench.studies.summary import DIFF, RAW
 
 CRITERIA = {
     "iqr": "interquartile range over held-out runs",
@@ -159,6 +159,36 @@ def failure_slices(slices: pd.DataFrame, versus: str) -> list[str]:
     return lines
 
 
+def rank_lines(ranks: pd.DataFrame | None, shown: int = 3) -> list[str]:
+    """"Methods ranked per slice": per slice and k the best ``shown`` methods with their
+    median, and where the paper's ``six_diff`` ranks among all of them."""
+    if ranks is None or ranks.empty:
+        return []
+    ks = [k for k in ranks["k"].dropna().unique()]
+    lines = ["### Methods ranked per slice", "",
+             "Every method (not the oracle) by median held-out RMSE within each slice of the "
+             f"measured data (`summary/rank_by_slice.csv` has the full order): the best {shown}, "
+             "and the rank of the paper's six_diff (closure + differences).", "",
+             "| slice | " + " | ".join(f"k = {int(k)}" for k in ks) + " |",
+             "|---|" + "---|" * len(ks)]
+    for (axis, value), at in ranks.groupby(["axis", "value"], sort=False):
+        cells = []
+        for k in ks:
+            here = at[at["k"] == k].sort_values("rank")
+            if here.empty:
+                cells.append("")
+                continue
+            top = ", ".join(f"{row.method} ({row.median_um:.2f})"
+                            for row in here.head(shown).itertuples())
+            diff = here[here["method"] == DIFF]
+            if len(diff):
+                top += f"; six_diff {int(diff['rank'].iloc[0])}/{int(here['of'].iloc[0])}"
+            cells.append(top.replace("|", "\\|"))
+        name = "whole study" if axis == "all" else f"{axis} = {value}"
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return [*lines, ""]
+
+
 def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFrame],
            figures: dict[str, Path], record: dict[str, Any],
            trains: list[Experiment]) -> str:
@@ -202,7 +232,9 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
         "by fuzzy clustering into k clusters and fitted by OLS on rises. `top-k-correlated` "
         "keeps the k raw sensors most correlated with the error (no clustering). `ridge` "
         "fits all 20 sensors and 190 differences with a cross-validated ridge penalty (no "
-        "selection, no k). *noise-free* rows run the same methods on the true temperatures "
+        "selection, no k). `group:label` is another selection method (`spindlebench "
+        "methods`) on that group's candidates, e.g. `six_diff:kmeans+grey`. *noise-free* "
+        "rows run the same methods on the true temperatures "
         "and true drift: what perfect instruments would give. That is a reference, not a "
         "bound: selection can choose worse on perfectly smooth data. `oracle` fits all 20 "
         "sensors on the held-out run itself: no method that predicts from these sensors' "
@@ -234,6 +266,7 @@ def readme(study: SweepStudy, results: pd.DataFrame, tables: dict[str, pd.DataFr
             "Against the same six sensors without differences (six_raw), the paper's "
             "like-for-like comparison:", "",
             *failure_slices(slices, SIX_RAW), ""]
+    out += rank_lines(tables.get("rank_by_slice"))
     best = tables["best"]
     out += ["### Against the baselines", ""]
     for _, row in best.iterrows():

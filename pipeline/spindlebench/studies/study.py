@@ -30,7 +30,15 @@ from spindlebench.formats.tables import (
     positive,
     range_problem,
 )
-from spindlebench.names import DEFAULT_SIMILARITY, GROUPS, SENSORS, SIMILARITIES
+from spindlebench.names import (
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    DEFAULT_SIMILARITY,
+    GROUPS,
+    METHODS,
+    SENSORS,
+    SIMILARITIES,
+)
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import sha256_file
 from spindlebench.studies.seasons import MONTHS, Climate, load_climate, resolve_climate_path
@@ -124,6 +132,11 @@ class Methods:
     baselines: tuple[str, ...]
     similarity: str
     ground_truth: bool
+    #: Selection method labels (``selection.registry``) run on every group; ``closure`` is
+    #: the paper's and keeps the group's plain name in the results.
+    methods: tuple[str, ...] = (DEFAULT_METHOD,)
+    #: Seed of the seeded methods (fcm, kmeans, stability).
+    seed: int = DEFAULT_METHOD_SEED
 
 
 @dataclass(frozen=True)
@@ -486,10 +499,20 @@ def _methods(t: Table) -> Methods:
     similarity = t.get("similarity", str, default=DEFAULT_SIMILARITY,
                        check=lambda v: one_of(v, SIMILARITIES))
     ground_truth = t.get("ground_truth", bool, default=True)
+    labels = t.get_list("methods", str, default=[DEFAULT_METHOD])
+    seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
     t.finish()
+    from spindlebench.selection.registry import check_labels
+
+    labels = list(METHODS) if labels == ["all"] else labels
+    try:
+        methods = check_labels(labels, "methods")
+    except SpindlebenchError as exc:
+        raise t.error("methods", str(exc).removeprefix("methods: ")) from None
     if not groups and not baselines:
         raise t.error("groups", "no method left to evaluate (groups and baselines are empty)")
-    return Methods(tuple(clusters), tuple(groups), tuple(baselines), similarity, ground_truth)
+    return Methods(tuple(clusters), tuple(groups), tuple(baselines), similarity, ground_truth,
+                   methods, seed)
 
 
 def describe(study: SweepStudy) -> dict[str, Any]:

@@ -12,7 +12,8 @@ The paper's claim has two halves, and each is measured, not assumed:
 
 ``claim_by_slice`` repeats the *lower* test within every value of every study axis (noise
 level, fault, held-out season, speed, programme, cooling, training run), which is where the
-conditions under which the claim fails show up.
+conditions under which the claim fails show up. ``rank_by_slice`` ranks every method (the
+paper's groups, the other selection methods on them, the baselines) within the same slices.
 """
 
 from __future__ import annotations
@@ -174,6 +175,37 @@ def claim_by_slice(results: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def rank_by_slice(results: pd.DataFrame) -> pd.DataFrame:
+    """Every method (not the oracle) ranked by median held-out RMSE within each slice (axis
+    value) and k, on measured data; ``all`` is the whole study. Methods without k (ridge)
+    take part at every k. Rank 1 is the lowest median."""
+    data = ok_rows(results)
+    data = data[(data["data"] == "measured") & (data["method"] != "oracle")]
+    ks = sorted(int(k) for k in data["k"].dropna().unique())
+    rows = []
+    slices = [("all", "all", data)]
+    for axis in SLICES:
+        if data[axis].nunique() < 2:
+            continue
+        if axis == "test_month" and data["test_month"].nunique() == data["test_season"].nunique():
+            continue
+        slices += [(axis, f"{value:g}" if isinstance(value, float) else str(value), at)
+                   for value, at in data.groupby(axis, sort=False)]
+    for axis, value, at in slices:
+        for k in ks or [None]:
+            chosen = at[at["k"].isna() | (at["k"] == k)] if k is not None else at
+            medians = chosen.groupby("method", sort=False)["rmse_um"].median().sort_values(
+                kind="stable")
+            for rank, (method, median) in enumerate(medians.items(), start=1):
+                rows.append({"axis": axis, "value": value, "k": k, "rank": rank,
+                             "method": method, "median_um": median,
+                             "of": len(medians)})
+    table = pd.DataFrame(rows)
+    if len(table):
+        table["k"] = table["k"].astype("Int64")
+    return table
+
+
 def baselines_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
     """Per data kind: the method (not the oracle) with the lowest median, and the oracle's."""
     rows = []
@@ -198,4 +230,5 @@ def summarise(results: pd.DataFrame) -> dict[str, pd.DataFrame]:
         "verdict": verdict(results, summary, stable),
         "claim_by_slice": claim_by_slice(results),
         "best": baselines_vs_paper(summary),
+        "rank_by_slice": rank_by_slice(results),
     }

@@ -1,0 +1,101 @@
+"""The sweep's methods: study-file labels, group:label specs, the six_diff group's
+differences, and the per-slice ranking of every method (no simulation needed)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import REPO
+from spindlebench.errors import SpindlebenchError
+from spindlebench.names import SENSORS
+from spindlebench.studies.methods import MethodSpec, method_specs, run_method
+from spindlebench.studies.study import load_study
+from spindlebench.studies.summary import rank_by_slice
+
+TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
+
+
+def _study(tmp_path, methods_lines: str):
+    text = TINY.read_text(encoding="utf-8").replace("clusters = [2, 3]",
+                                                    "clusters = [2, 3]\n" + methods_lines)
+    path = tmp_path / "study.toml"
+    path.write_text(text, encoding="utf-8")
+    return load_study(path)
+
+
+def test_methods_key_gives_group_label_specs(tmp_path):
+    study = _study(tmp_path, 'methods = ["closure", "kmeans+grey", "lasso+ridge"]\nseed = 4')
+    assert study.methods.methods == ("closure", "kmeans+grey", "lasso+ridge")
+    names = [spec.name for spec in method_specs(study.methods)]
+    assert names[:6] == ["all_raw", "all_raw", "all_raw:kmeans+grey", "all_raw:kmeans+grey",
+                         "all_raw:lasso+ridge", "all_raw:lasso+ridge"]
+    spec = next(s for s in method_specs(study.methods) if s.name == "six_diff:kmeans+grey")
+    assert spec.group == "six_diff" and spec.choice.within == "grey" and spec.seed == 4
+    assert MethodSpec("ridge", None).group is None
+    everything = _study(tmp_path, 'methods = ["all"]').methods.methods
+    assert everything[0] == "closure" and "greedy" in everything and len(everything) == 11
+
+
+@pytest.mark.parametrize("line, message", [
+    ('methods = ["knn"]', "key 'methods.methods': unknown method 'knn'"),
+    ('methods = ["lasso+grey"]', "has no clusters"),
+    ('methods = ["ward", "ward+psi+ols"]', "listed twice"),
+    ("seed = -2", "seed"),
+])
+def test_bad_methods_are_one_line(tmp_path, line, message):
+    with pytest.raises(SpindlebenchError, match=message):
+        _study(tmp_path, line)
+
+
+def _frame(seed: int, speed: float) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    t = np.arange(120) * 120.0
+    ambient = 10 + 3 * t / t[-1]
+    columns = {"time_s": t}
+    for i, name in enumerate(SENSORS):
+        columns[name] = ambient + speed * (0.2 + 0.1 * i) * (1 - np.exp(-t / (800 + 300 * i))) \
+            + rng.normal(0, 0.02, t.size)
+    columns["T10"] = ambient + rng.normal(0, 0.02, t.size)
+    drift = 6 * (columns["T1"] - columns["T10"]) - 1.5 * (columns["T13"] - columns["T16"])
+    columns["drift_um"] = drift - drift[0]
+    columns["true_drift_rise_um"] = columns["drift_um"]
+    return pd.DataFrame(columns)
+
+
+def test_six_diff_selects_from_differences_and_methods_run():
+    train = _frame(1, 1.0)
+    tests = {"b": _frame(2, 0.6), "c": _frame(3, 1.3)}
+    diff = run_method(MethodSpec("six_diff", 2), train, tests, "abs-pearson")
+    assert any("-" in name for name in diff["b"].selected.split(";"))
+    raw = run_method(MethodSpec("six_raw", 2), train, tests, "abs-pearson")
+    assert not any("-" in name for name in raw["b"].selected.split(";"))
+    for name in ("six_diff:ward+grey+pls", "all_raw:greedy", "six_diff:stability+ridge"):
+        scores = run_method(MethodSpec(name, 2), train, tests, "abs-pearson")
+        assert set(scores) == {"b", "c"}
+        assert all(np.isfinite(s.rmse_um) and len(s.selected.split(";")) == 2
+                   for s in scores.values())
+
+
+def test_rank_by_slice_orders_every_method_by_median():
+    rows = []
+    for fault in ("none", "T1-stuck"):
+        for method, k, values in (("six_diff", 2, [3.0, 5.0]), ("six_raw", 2, [1.0, 2.0]),
+                                  ("ridge", None, [2.0, 2.0]), ("oracle", None, [0.1, 0.1])):
+            worse = 4.0 if (fault == "T1-stuck" and method == "six_raw") else 0.0
+            for i, value in enumerate(values):
+                rows.append({"data": "measured", "method": method, "k": k,
+                             "rmse_um": value + worse, "fault": fault, "noise": "lab",
+                             "test_experiment": f"e{i}"})
+    results = pd.DataFrame(rows)
+    for axis in ("test_season", "test_month", "test_speed_rpm", "test_programme",
+                 "test_cooling", "train_experiment"):
+        results[axis] = "x"
+    ranks = rank_by_slice(results)
+    whole = ranks[ranks["axis"] == "all"].sort_values("rank")
+    assert list(whole["method"]) == ["ridge", "six_raw", "six_diff"]  # medians 2, 3.5, 4
+    stuck = ranks[(ranks["axis"] == "fault") & (ranks["value"] == "T1-stuck")]
+    assert list(stuck.sort_values("rank")["method"]) == ["ridge", "six_diff", "six_raw"]
+    none = ranks[(ranks["axis"] == "fault") & (ranks["value"] == "none")]
+    assert list(none.sort_values("rank")["method"]) == ["six_raw", "ridge", "six_diff"]
+    assert "oracle" not in set(ranks["method"]) and set(ranks["of"]) == {3}
