@@ -111,12 +111,19 @@ def _read_used(path: Path, target: str, roles: ColumnRoles,
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
+    if args.clusters < 1:
+        raise SelectionError(f"--clusters: must be at least 1, got {args.clusters}")
     roles = ColumnRoles.from_args(args)
     choice = MethodChoice(args.method, args.within, args.regressor)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)
     refuse_target_copies(train, args.target, taken.sensors, str(args.train),
                          roles.allow_target_copy)
     sensors = taken.sensors
+    n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
+    if args.clusters > n:
+        raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
+                             f"({n}) of recording {args.train} (sensors, and their differences "
+                             "with --differences)")
     same = dataclasses.replace(roles, sensors=tuple(sensors), exclude=())  # the train's columns
     tests: list[RecordingLike] = []
     for path in args.test:

@@ -1,0 +1,490 @@
+"""Issue 11, "done when": a set of hostile inputs, each one line, no traceback, no new file.
+
+Every case builds its bad input in a fresh folder, runs the real command line in-process
+(``cli.main``) from that folder, and asserts: exit status != 0, exactly one line on stderr
+that starts with ``error:`` and names the file (or flag) and the key, line or column, no
+traceback, and not a single new file anywhere in the folder (temporary FMU extractions
+included: the temp dir points into it).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from selection_data import synthetic_experiment
+from spindlebench import cli
+from spindlebench.paths import DEFAULT_FMU
+
+REPO = Path(__file__).resolve().parents[1]
+TINY = (REPO / "scenarios" / "studies" / "tiny_sweep.toml").read_text(encoding="utf-8")
+
+QUICK = """\
+duration_s = 600
+step_s = 10.0
+sample_interval_s = 60
+seed = 2
+
+[speed]
+kind = "constant"
+rpm = 3000
+
+[feed]
+kind = "with_spindle"
+x_mm_per_min = 1500
+y_mm_per_min = 1500
+
+[ambient]
+kind = "constant"
+temperature_C = 18.0
+"""
+
+AIR = "time_s,ambient_C\n0,18\n300,18.5\n600,19\n"
+
+Case = Callable[[Path], tuple[list[str], list[str]]]
+CASES: dict[str, Case] = {}
+
+
+def case(name: str) -> Callable[[Case], Case]:
+    def register(build: Case) -> Case:
+        assert name not in CASES
+        CASES[name] = build
+        return build
+    return register
+
+
+def write(folder: Path, name: str, text: str | bytes) -> Path:
+    path = folder / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text, encoding="utf-8")
+    return path
+
+
+# --------------------------------------------------------------------------- scenarios
+
+SCENARIO_EDITS = {
+    "negative speed": (("rpm = 3000", "rpm = -3000"), "speed.rpm"),
+    "speed as text": (("rpm = 3000", 'rpm = "fast"'), "speed.rpm"),
+    "kelvin ambient": (("temperature_C = 18.0", "temperature_C = 291.15"),
+                       "ambient.temperature_C"),
+    "step larger than duration": (("step_s = 10.0", "step_s = 900"), "step_s"),
+    "fractional seed": (("seed = 2", "seed = 2.5"), "seed"),
+    "negative duration": (("duration_s = 600", "duration_s = -600"), "duration_s"),
+    "zero sample interval": (("sample_interval_s = 60", "sample_interval_s = 0"),
+                             "sample_interval_s"),
+    "unknown speed kind": (('kind = "constant"\nrpm', 'kind = "warp"\nrpm'), "speed.kind"),
+    "unknown ambient kind": (('kind = "constant"\ntemperature_C',
+                              'kind = "weather"\ntemperature_C'), "ambient.kind"),
+    "misspelt key": (("seed = 2", "sed = 2"), "sed"),
+    "negative feed": (("x_mm_per_min = 1500", "x_mm_per_min = -1"), "feed.x_mm_per_min"),
+    "tiny step": (("step_s = 10.0", "step_s = 1e-9"), "step_s"),
+    "NaN ambient": (("temperature_C = 18.0", "temperature_C = nan"), "ambient.temperature_C"),
+    "inf duration": (("duration_s = 600", "duration_s = inf"), "duration_s"),
+}
+for _label, ((_old, _new), _key) in SCENARIO_EDITS.items():
+    def _build(tmp: Path, old: str = _old, new: str = _new, key: str = _key):
+        scenario = write(tmp, "bad.toml", QUICK.replace(old, new, 1))
+        return ["simulate", str(scenario), "-o", "out"], [str(scenario), key]
+    case(f"scenario: {_label}")(_build)
+
+
+@case("scenario: TOML syntax error")
+def _(tmp):
+    scenario = write(tmp, "bad.toml", QUICK + "\n[speed\n")
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "line"]
+
+
+@case("scenario: not UTF-8")
+def _(tmp):
+    scenario = write(tmp, "bad.toml", QUICK.encode() + b"# \xff\xfe\n")
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "UTF-8"]
+
+
+@case("scenario: missing file")
+def _(tmp):
+    return ["simulate", str(tmp / "none.toml"), "-o", "out"], ["none.toml"]
+
+
+@case("scenario: unknown parameter")
+def _(tmp):
+    scenario = write(tmp, "bad.toml", QUICK + "\n[parameters]\nno_such_thing = 1\n")
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "parameters.no_such_thing"]
+
+
+@case("scenario: cooling set as a parameter")
+def _(tmp):
+    scenario = write(tmp, "bad.toml", QUICK + "\n[parameters]\ncooling_enabled = 1\n")
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "parameters.cooling_enabled"]
+
+
+@case("scenario: parameter below the FMU's declared min")
+def _(tmp):
+    fmu = bounded_fmu(tmp)
+    scenario = write(tmp, "bad.toml", QUICK + "\n[parameters]\nh_nat = -100\n")
+    return (["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)],
+            [str(scenario), "parameters.h_nat", "must be ≥ 0, got -100"])
+
+
+@case("scenario: parameter above the FMU's declared max")
+def _(tmp):
+    fmu = bounded_fmu(tmp)
+    scenario = write(tmp, "bad.toml", QUICK + "\n[parameters]\nh_nat = 1e6\n")
+    return (["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)],
+            [str(scenario), "parameters.h_nat", "must be ≤ 100"])
+
+
+@case("scenario: continue from a missing sidecar")
+def _(tmp):
+    scenario = write(tmp, "bad.toml", QUICK + '\n[initial]\nkind = "continue"\nfrom = "x.json"\n')
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "initial.from"]
+
+
+@case("scenario: continue from a non-UTF-8 sidecar")
+def _(tmp):
+    write(tmp, "x.json", b"\xff\xfe{}")
+    scenario = write(tmp, "bad.toml", QUICK + '\n[initial]\nkind = "continue"\nfrom = "x.json"\n')
+    return ["simulate", str(scenario), "-o", "out"], [str(scenario), "initial.from", "x.json"]
+
+
+AMBIENT_FILES = {
+    "extra field": ("time_s,ambient_C\n0,18\n300,18.5,7\n600,19\n", "line 3"),
+    "time goes back": ("time_s,ambient_C\n0,18\n300,18.5\n200,19\n600,19\n", "line 4"),
+    "kelvin": ("time_s,ambient_C\n0,291\n600,292\n", "line 2"),
+    "text cell": ("time_s,ambient_C\n0,18\n300,warm\n600,19\n", "line 3"),
+    "missing column": ("time_s,air_C\n0,18\n600,19\n", "ambient.value_column"),
+    "too short": ("time_s,ambient_C\n0,18\n300,19\n", "ambient.file"),
+    "repeated column": ("time_s,ambient_C,ambient_C\n0,18,18\n600,19,19\n", "line 1"),
+}
+for _label, (_text, _where) in AMBIENT_FILES.items():
+    def _build(tmp: Path, text: str = _text, where: str = _where):
+        write(tmp, "air.csv", text)
+        scenario = write(tmp, "s.toml", QUICK.replace(
+            'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+        return ["simulate", str(scenario), "-o", "out"], [where, "air.csv"]
+    case(f"ambient CSV: {_label}")(_build)
+
+
+# --------------------------------------------------------------------------- simulate flags
+
+
+@case("simulate: negative seed")
+def _(tmp):
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--seed", "-1"], ["--seed"]
+
+
+@case("simulate: -o names a text file")
+def _(tmp):
+    one = write(tmp, "a/one.toml", QUICK)
+    write(tmp, "a/two.toml", QUICK)
+    return ["simulate", str(one.parent), "-o", "x.txt"], ["x.txt"]
+
+
+@case("simulate: directory without scenarios")
+def _(tmp):
+    (tmp / "empty").mkdir()
+    return ["simulate", str(tmp / "empty"), "-o", "out"], ["empty", ".toml"]
+
+
+# --------------------------------------------------------------------------- FMUs
+
+
+def fmu_variant(tmp: Path, name: str, edit: Callable[[str, bytes], bytes]) -> Path:
+    target = tmp / name
+    with zipfile.ZipFile(DEFAULT_FMU) as source, zipfile.ZipFile(target, "w") as out:
+        for info in source.infolist():
+            out.writestr(info, edit(info.filename, source.read(info)))
+    return target
+
+
+def bounded_fmu(tmp: Path) -> Path:
+    def edit(name: str, data: bytes) -> bytes:
+        if name != "modelDescription.xml":
+            return data
+        return data.replace(b'name="h_nat"', b'max="100" min="0" name="h_nat"')
+    return fmu_variant(tmp, "bounded.fmu", edit)
+
+
+@case("FMU: bad CRC inside the zip")
+def _(tmp):
+    fmu = fmu_variant(tmp, "crc.fmu", lambda name, data: data)
+    raw = bytearray(fmu.read_bytes())
+    with zipfile.ZipFile(fmu) as archive:
+        info = next(i for i in archive.infolist() if i.filename.startswith("binaries/"))
+    start = info.header_offset + 30 + len(info.filename) + len(info.extra) + 1000
+    raw[start:start + 16] = bytes(16)
+    fmu.write_bytes(bytes(raw))
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)], [str(fmu), "binaries/"]
+
+
+@case("FMU: empty shared library")
+def _(tmp):
+    fmu = fmu_variant(tmp, "empty.fmu",
+                      lambda name, data: b"" if name.startswith("binaries/") else data)
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)], [str(fmu), "binaries/"]
+
+
+@case("FMU: not a zip")
+def _(tmp):
+    fmu = write(tmp, "junk.fmu", b"not a zip at all")
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)], [str(fmu)]
+
+
+@case("FMU: missing")
+def _(tmp):
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--fmu", "none.fmu"], ["none.fmu"]
+
+
+@case("FMU: modelDescription.xml is not XML")
+def _(tmp):
+    fmu = fmu_variant(tmp, "xml.fmu", lambda name, data: b"<fmi" if name ==
+                      "modelDescription.xml" else data)
+    scenario = write(tmp, "s.toml", QUICK)
+    return ["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)], [str(fmu)]
+
+
+# --------------------------------------------------------------------------- recordings
+
+
+def recording_text(seed: int = 0) -> str:
+    return synthetic_experiment(seed).to_csv(index=False)
+
+
+def evaluate_case(tmp: Path, train_text: str | bytes, *extra: str) -> list[str]:
+    train = write(tmp, "train.csv", train_text)
+    test = write(tmp, "test.csv", recording_text(1))
+    return ["evaluate", "--train", str(train), "--test", str(test), "--target", "drift_um",
+            "--clusters", "2", *extra]
+
+
+def edited(edit: Callable[[list[str]], list[str]]) -> str:
+    return "\n".join(edit(recording_text().splitlines())) + "\n"
+
+
+def set_cell(lines: list[str], line: int, column: int, value: str) -> list[str]:
+    cells = lines[line - 1].split(",")
+    cells[column] = value
+    lines[line - 1] = ",".join(cells)
+    return lines
+
+
+RECORDINGS = {
+    "empty file": ("", ["train.csv", "empty"]),
+    "header only": (recording_text().splitlines()[0] + "\n", ["train.csv", "row"]),
+    "one row": ("\n".join(recording_text().splitlines()[:2]) + "\n", ["train.csv", "row"]),
+    "text cell": (edited(lambda ls: set_cell(ls, 5, 1, "hot")), ["train.csv", "line 5"]),
+    "inf cell": (edited(lambda ls: set_cell(ls, 7, 1, "inf")), ["train.csv", "line 7"]),
+    "empty cell": (edited(lambda ls: set_cell(ls, 9, 1, "")), ["train.csv", "line 9"]),
+    "NaN cell": (edited(lambda ls: set_cell(ls, 9, 1, "NaN")), ["train.csv", "line 9"]),
+    "short row": (edited(lambda ls: [*ls[:10], ",".join(ls[10].split(",")[:3]), *ls[11:]]),
+                  ["train.csv", "line 11"]),
+    "long row": (edited(lambda ls: [*ls[:10], ls[10] + ",1", *ls[11:]]), ["train.csv"]),
+    "repeated column": (edited(lambda ls: [ls[0].replace("T6", "T1"), *ls[1:]]),
+                        ["train.csv", "line 1"]),
+    "time goes back": (edited(lambda ls: set_cell(ls, 6, 0, "0")), ["train.csv", "line 6"]),
+    "sentinel 9.9e37": (edited(lambda ls: set_cell(ls, 58, 2, "9.9e37")),
+                        ["train.csv", "line 58", "column"]),
+    "below absolute zero": (edited(lambda ls: set_cell(ls, 12, 2, "-9999")),
+                            ["train.csv", "line 12", "column"]),
+    "not UTF-8": (recording_text().encode() + b"\xff\xfe\n", ["train.csv"]),
+    "semicolons read with comma": (recording_text().replace(",", ";"),
+                                   ["train.csv", "line 1", "';'"]),
+    "empty column name": (edited(lambda ls: [ls[0].replace("T6", ""), *ls[1:]]),
+                          ["train.csv", "line 1", "no name"]),
+}
+#: Flags a recording case needs besides the defaults.
+RECORDING_FLAGS = {"semicolons read with comma": ["--delimiter", ","]}
+for _label, (_text, _expect) in RECORDINGS.items():
+    def _build(tmp: Path, text: str | bytes = _text, expect: list[str] = _expect,
+               label: str = _label):
+        return evaluate_case(tmp, text, *RECORDING_FLAGS.get(label, [])), expect
+    case(f"recording: {_label}")(_build)
+
+
+EVALUATE_FLAGS = {
+    "target not found": (["--target", "dz_um"], ["train.csv", "dz_um"]),
+    "sensor not found": (["--sensors", "T1,T99"], ["train.csv", "T99"]),
+    "sensor pattern matches nothing": (["--sensors", "Q*"], ["train.csv", "Q*"]),
+    "target is a sensor": (["--sensors", "T1,drift_um"], ["train.csv", "drift_um"]),
+    "time column not found": (["--time-column", "Zeit"], ["train.csv", "--time-column"]),
+    "exclude matches nothing": (["--exclude", "nothing"], ["train.csv", "--exclude"]),
+    "bad delimiter": (["--delimiter", "x"], ["--delimiter"]),
+    "bad decimal": (["--decimal", ";"], ["--decimal"]),
+    "zero clusters": (["--clusters", "0"], ["--clusters"]),
+    "too many clusters": (["--clusters", "99"], ["--clusters", "train.csv"]),
+    "copy of the target": (["--sensors", "T1,T6,drift_copy"], ["train.csv", "drift_copy"]),
+    "json into a folder": (["--json", "."], ["."]),
+}
+for _label, (_flags, _expect) in EVALUATE_FLAGS.items():
+    def _build(tmp: Path, flags: list[str] = _flags, expect: list[str] = _expect):
+        frame = synthetic_experiment(0)
+        frame["drift_copy"] = 0.5 * frame["drift_um"] + 1e-6 * np.arange(len(frame))
+        argv = evaluate_case(tmp, frame.to_csv(index=False))
+        test = synthetic_experiment(1)
+        test["drift_copy"] = test["drift_um"]
+        write(tmp, "test.csv", test.to_csv(index=False))
+        for flag in flags[::2]:  # a flag given here replaces the default one
+            if flag in argv:
+                at = argv.index(flag)
+                del argv[at:at + 2]
+        return argv + flags, expect
+    case(f"evaluate: {_label}")(_build)
+
+
+@case("evaluate: train recording missing")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    argv[argv.index("--train") + 1] = str(tmp / "none.csv")
+    return argv, ["none.csv", "not found"]
+
+
+@case("evaluate: train recording is a folder")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    (tmp / "dir.csv").mkdir()
+    argv[argv.index("--train") + 1] = str(tmp / "dir.csv")
+    return argv, ["dir.csv", "not a file"]
+
+
+@case("evaluate: test recording lacks a sensor")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    write(tmp, "test.csv", synthetic_experiment(1).drop(columns="T6").to_csv(index=False))
+    return argv, ["test.csv", "T6"]
+
+
+# --------------------------------------------------------------------------- paper
+
+
+@case("paper: recordings folder missing")
+def _(tmp):
+    return ["paper", "--recordings", str(tmp / "nothing")], ["nothing"]
+
+
+@case("paper: an experiment CSV is a folder")
+def _(tmp):
+    for i in range(1, 5):
+        write(tmp, f"recs/exp{i}.csv", recording_text(i))
+    (tmp / "recs" / "exp5.csv").mkdir()
+    sensors = "T1,T6,T8,T10,T13,T16"
+    return (["paper", "--recordings", str(tmp / "recs"), "--sensors-all", sensors, "--six",
+             sensors], ["exp5.csv", "folder"])
+
+
+@case("paper: config not UTF-8")
+def _(tmp):
+    for i in range(1, 6):
+        write(tmp, f"recs/exp{i}.csv", recording_text(i))
+    config = write(tmp, "p.toml", b"\xff\xfe")
+    return ["paper", "--recordings", str(tmp / "recs"), "--config", str(config)], ["p.toml"]
+
+
+# --------------------------------------------------------------------------- studies
+
+
+STUDY_EDITS = {
+    "zero replicas": (("replicas = 2", "replicas = 0"), "study.replicas"),
+    "unknown month": (('months = ["Jan", "Jul"]', 'months = ["Jan", "Juli"]'), "axes.months"),
+    "unknown climate": (('climate = "chongqing"', 'climate = "atlantis"'), "study.climate"),
+    "name escapes results/": (('name = "tiny-sweep"', 'name = "../../escape"'), "study.name"),
+    "negative speed": (("speeds_rpm = [2000, 4000]", "speeds_rpm = [-2000, 4000]"),
+                       "axes.speeds_rpm"),
+    "unknown parameter": (("[training]", "[parameters]\nno_such = 1.0\n\n[training]"),
+                          "parameters.no_such"),
+}
+for _label, ((_old, _new), _key) in STUDY_EDITS.items():
+    def _build(tmp: Path, old: str = _old, new: str = _new, key: str = _key):
+        study = write(tmp, "study.toml", TINY.replace(old, new, 1))
+        return ["sweep", str(study), "--workers", "0", "--no-progress"], [str(study), key]
+    case(f"study: {_label}")(_build)
+
+
+@case("study: parameter outside the FMU's declared bounds")
+def _(tmp):
+    fmu = bounded_fmu(tmp)
+    study = write(tmp, "study.toml", TINY.replace("[study]", f"[study]\nfmu = {str(fmu)!r}", 1)
+                  + "\n[parameters]\nh_nat = -100\n")
+    return (["sweep", str(study), "--workers", "0", "--no-progress"],
+            [str(study), "parameters.h_nat", "must be ≥ 0"])
+
+
+@case("study: results folder holds other files")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    write(tmp, "taken/notes.txt", "mine")
+    return (["sweep", str(study), "-o", str(tmp / "taken"), "--workers", "0", "--no-progress"],
+            ["taken", "not a study results folder"])
+
+
+@case("study: both --workers and --dask-address")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    return (["sweep", str(study), "--workers", "1", "--dask-address", "tcp://h:1"],
+            ["--dask-address"])
+
+
+# --------------------------------------------------------------------------- build
+
+
+@case("build: segments out of range")
+def _(tmp):
+    return ["build", "--segments", "100000", "--out", str(tmp / "o.fmu")], ["--segments"]
+
+
+@case("build: no model source")
+def _(tmp):
+    (tmp / "models").mkdir()
+    return ["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")], ["models"]
+
+
+@case("build: model source not UTF-8")
+def _(tmp):
+    write(tmp, "models/SpindleBench.mo", b"package SpindleBench\n\xff\nend SpindleBench;\n")
+    return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
+            ["SpindleBench.mo:2"])
+
+
+# --------------------------------------------------------------------------- the test
+
+
+def snapshot(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+
+
+def test_there_are_at_least_60_hostile_inputs():
+    assert len(CASES) >= 60, len(CASES)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_a_hostile_input_is_one_line_naming_where_and_writes_nothing(
+        name, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    scratch = tmp_path / "systmp"  # FMPy's extraction folder lands here
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    argv, expected = CASES[name](tmp_path)
+    before = snapshot(tmp_path)
+    try:
+        status = cli.main(argv)
+    except SystemExit as exc:  # argparse: a usage mistake
+        status = exc.code
+    out, err = capsys.readouterr()
+    assert status != 0, (name, out)
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("error: "), err
+    assert "Traceback" not in err
+    for text in expected:
+        assert text in lines[0], (text, lines[0])
+    assert snapshot(tmp_path) == before
