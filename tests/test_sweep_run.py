@@ -22,15 +22,9 @@ from spindlebench.formats.recording import read_recording
 from spindlebench.studies.executor import TaskRunner
 from spindlebench.studies.jobs import measured_frame
 from spindlebench.studies.methods import method_specs
+from spindlebench.studies.simulations import failure_path, recording_path
 from spindlebench.studies.study import load_study
-from spindlebench.studies.sweep import (
-    RESULT_COLUMNS,
-    Sweep,
-    failure_path,
-    recording_path,
-    run_sweep,
-    write_outputs,
-)
+from spindlebench.studies.sweep import RESULT_COLUMNS, Sweep, run_sweep, write_outputs
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 NUMBERS = ["rmse_um", "rmse_true_um"]
@@ -266,8 +260,9 @@ def test_a_comment_or_reordered_key_does_not_block_resuming(tmp_path, reference)
     assert provenance["study"]["sha256"] != original["study"]["sha256"]  # the raw file hash
 
 
-def test_a_folder_of_the_previous_version_resumes_only_if_the_file_is_unchanged(tmp_path,
-                                                                             reference):
+def test_a_state_file_without_the_pinned_content_is_refused(tmp_path, reference):
+    """A state.json that pins no study content (an unreleased early format) is not adopted:
+    one line, and the folder is left as it was."""
     from spindlebench.provenance import sha256_file
 
     out = tmp_path / "old"
@@ -275,19 +270,11 @@ def test_a_folder_of_the_previous_version_resumes_only_if_the_file_is_unchanged(
     fmu = load_study(TINY).fmu
     old_state = {"inputs": {"study_sha256": sha256_file(TINY), "fmu_sha256": sha256_file(fmu)}}
     (out / "state.json").write_text(json.dumps(old_state))
-    commented = tmp_path / "tiny_commented.toml"
-    commented.write_text(TINY.read_text() + "# a comment\n")
     with pytest.raises(SpindlebenchError) as refused:
-        run_sweep(commented, out, workers=0, progress=False)
-    assert str(refused.value) == (
-        f"{out}: was started by an earlier spindlebench version, which pinned the study file "
-        "byte for byte, and the study file changed since (the old state cannot tell what); "
-        "undo the change or use a new output folder")
-    assert run_sweep(TINY, out, workers=0, progress=False).resumed
-    state = json.loads((out / "state.json").read_text())
-    assert set(state["inputs"]) == {"study_content_sha256", "fmu_sha256"}
-    assert state["content"]["study file"]["study"]["seed"] == 7
-    assert run_sweep(commented, out, workers=0, progress=False).resumed  # upgraded state
+        run_sweep(TINY, out, workers=0, progress=False)
+    assert str(refused.value) == (f"{out / 'state.json'}: not a study state file; choose "
+                                  "another output folder")
+    assert json.loads((out / "state.json").read_text()) == old_state
 
 
 def test_command_line(tmp_path, capsys, reference):

@@ -35,13 +35,16 @@ COMMAND_MODULES: tuple[str, ...] = (
 
 class _OneLineErrorParser(argparse.ArgumentParser):
     """argparse, but a usage mistake is one ``error:`` line (status 2) like every other error;
-    sub-command parsers inherit the class."""
+    sub-command parsers inherit the class. ``commands`` maps each sub-command to its parser
+    (filled by ``build_parser``)."""
+
+    commands: dict[str, argparse.ArgumentParser]
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"error: {self.prog}: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> _OneLineErrorParser:
     """The full argument parser with every sub-command registered."""
     parser = _OneLineErrorParser(
         prog="spindlebench",
@@ -52,11 +55,11 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module_name in COMMAND_MODULES:
         importlib.import_module(module_name).register(subparsers)
+    parser.commands = dict(subparsers.choices)
     return parser
 
 
-def parse_args(parser: argparse.ArgumentParser,
-               argv: Sequence[str] | None) -> argparse.Namespace:
+def parse_args(parser: _OneLineErrorParser, argv: Sequence[str] | None) -> argparse.Namespace:
     """``parser.parse_args``, but arguments left over after a sub-command are reported by that
     sub-command's parser, so the hint names ``spindlebench <cmd> --help`` (its flags), not the
     top-level help that does not list them."""
@@ -65,18 +68,11 @@ def parse_args(parser: argparse.ArgumentParser,
     if extras:
         command = getattr(args, "command", None)
         after = argv[argv.index(command) + 1:] if command in argv else []
-        subparser = _subparsers(parser).get(command) if command else None
+        subparser = parser.commands.get(command) if command else None
         if subparser is None or any(extra not in after for extra in extras):
             subparser = parser  # something before the sub-command: the top level's mistake
         subparser.error(f"unrecognized arguments: {' '.join(extras)}")
     return args
-
-
-def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            return dict(action.choices)
-    return {}
 
 
 def _one_line(text: str) -> str:

@@ -41,9 +41,8 @@ STATE_FILE = "state.json"
 MANIFEST_FILE = "manifest.json"
 LOCK_FILE = ".lock"
 CONTENT_KEY = "study_content_sha256"
-#: How a refusal names each pinned input (``study_sha256``: the raw file hash that state files
-#: of earlier versions pinned).
-_LABELS = {CONTENT_KEY: "study", "fmu_sha256": "FMU", "study_sha256": "study file"}
+#: How a refusal names each pinned input.
+_LABELS = {CONTENT_KEY: "study", "fmu_sha256": "FMU"}
 _MAX_NAMED = 3
 
 
@@ -242,15 +241,12 @@ class ResultStore:
             raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
                                     "choose an empty or new folder")
 
-    def claim(self, content: dict[str, Any], hashes: dict[str, str],
-              legacy: dict[str, str] | None = None) -> bool:
+    def claim(self, content: dict[str, Any], hashes: dict[str, str]) -> bool:
         """Start or resume: pin the inputs or check them against the pinned ones.
 
         ``content``: the study's canonical content (sections of tables, see
         :func:`differences`); its hash is pinned and the content itself is kept, so a refusal
         names the keys that changed. ``hashes``: other inputs pinned by hash (the FMU).
-        ``legacy``: the inputs an earlier version pinned (the study file's raw hash); a folder
-        it wrote is resumed, and its state rewritten in today's form, only if they match.
         Returns True when resuming existing work; refuses a folder made from other inputs.
         """
         content = canonical(content)
@@ -261,14 +257,11 @@ class ResultStore:
             try:
                 state = json.loads(state_path.read_text(encoding="utf-8"))
                 recorded = state["inputs"]
-                if not isinstance(recorded, dict):
+                if not isinstance(recorded, dict) or CONTENT_KEY not in recorded:
                     raise TypeError
             except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
                 raise SpindlebenchError(f"{state_path}: not a study state file; "
                                         "choose another output folder") from None
-            if CONTENT_KEY not in recorded:
-                self._resume_legacy(recorded, inputs, content, legacy or {})
-                return True
             for key, value in inputs.items():
                 if recorded.get(key) != value:
                     raise self._refusal(key, recorded.get(key), value, state.get("content"),
@@ -276,19 +269,6 @@ class ResultStore:
             return True
         self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
         return False
-
-    def _resume_legacy(self, recorded: dict[str, Any], inputs: dict[str, str],
-                       content: dict[str, Any], legacy: dict[str, str]) -> None:
-        """Adopt a folder whose state an earlier version wrote, if its pins still hold."""
-        changed = [key for key, value in legacy.items() if recorded.get(key) != value]
-        if legacy and not changed:
-            self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
-            return
-        what = " and ".join(f"the {_LABELS.get(key, key)}" for key in changed) or "its inputs"
-        raise SpindlebenchError(
-            f"{self.root}: was started by an earlier spindlebench version, which pinned the "
-            f"study file byte for byte, and {what} changed since (the old state cannot tell "
-            "what); undo the change or use a new output folder")
 
     def _refusal(self, key: str, was: Any, now: str, old_content: Any,
                  new_content: dict[str, Any]) -> SpindlebenchError:

@@ -22,14 +22,13 @@ import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import TRUTH_COLUMNS, read_recording, write_recording
-from spindlebench.provenance import file_entry, provenance, sha256_file
+from spindlebench.formats.recording import TRUTH_COLUMNS, read_recording
+from spindlebench.provenance import file_entry, provenance
 from spindlebench.studies.executor import (
     Outcome,
     RunStats,
     Task,
     TaskRunner,
-    add_study_arguments,
     results_folder,
 )
 from spindlebench.studies.experiments import (
@@ -38,7 +37,6 @@ from spindlebench.studies.experiments import (
     conditions,
     experiments,
     replicas,
-    scenario_for,
     sensor_seed,
     training_experiments,
 )
@@ -46,9 +44,14 @@ from spindlebench.studies.jobs import (
     NOISE_FREE,
     EvaluationJob,
     evaluate_job,
-    simulate_job,
 )
 from spindlebench.studies.methods import method_specs
+from spindlebench.studies.simulations import (
+    Simulations,
+    failure_path,
+    recording_path,
+    register_study_command,
+)
 from spindlebench.studies.store import ResultStore, content_sha256
 from spindlebench.studies.study import (
     SweepStudy,
@@ -74,26 +77,6 @@ class SweepOutcome:
     stats: RunStats
     resumed: bool
     skipped: dict[str, int] = field(default_factory=dict)
-
-
-def run_dir(replica: int) -> str:
-    return f"runs/r{replica:03d}"
-
-
-def recording_path(replica: int, experiment: Experiment) -> str:
-    return f"{run_dir(replica)}/{experiment.id}.csv"
-
-
-def failure_path(replica: int, experiment: Experiment) -> str:
-    return f"{run_dir(replica)}/{experiment.id}.error.json"
-
-
-def failed_runs(store: ResultStore, study: SweepStudy, family: list[Experiment]
-                ) -> tuple[list[tuple[int, Experiment]], list[tuple[int, Experiment]]]:
-    """Every (replica, experiment) run of a study, and those whose simulation failed (an
-    error file is kept in place of the recording)."""
-    runs = [(r, e) for r in replicas(study) for e in family]
-    return runs, [(r, e) for r, e in runs if store.exists(failure_path(r, e))]
 
 
 def condition_id(condition: Condition | None) -> str:
@@ -122,23 +105,17 @@ class Sweep:
             self.conditions.append(None)
         self.specs = tuple(method_specs(study.methods))
         self.fmu = check_fmu(study)
+        self.simulations = Simulations(self.store, study, self.family, self.fmu)
         self._truths: dict[tuple[int, str], pd.DataFrame] = {}
-        self._simulations: dict[str, tuple[int, Experiment]] = {}
 
     # ----------------------------------------------------------------- planning
-
-    def pending_simulations(self) -> dict[int, list[Experiment]]:
-        return {r: [e for e in self.family if not self.store.exists(recording_path(r, e))]
-                for r in replicas(self.study)}
 
     def evaluation_keys(self, replica: int) -> list[tuple[Condition | None, Experiment]]:
         return [(c, t) for c in self.conditions for t in self.trains]
 
     def simulation_task(self, replica: int, experiment: Experiment) -> Task:
-        scenario = scenario_for(self.study, replica, experiment)
-        key = f"simulate r{replica} {experiment.id}"
-        self._simulations[key] = (replica, experiment)
-        return Task(key, simulate_job, (scenario, self.fmu), kind="simulation")
+        """The task that simulates one run (a seam: tests break a run here)."""
+        return self.simulations.task(replica, experiment)
 
     def evaluation_task(self, replica: int, condition: Condition | None,
                         train: Experiment) -> Task:
@@ -146,8 +123,7 @@ class Sweep:
         failures: dict[str, str] = {}
         for experiment in self.family:
             if self.store.exists(failure_path(replica, experiment)):
-                failures[experiment.id] = self.store.read_json(
-                    failure_path(replica, experiment))["error"]
+                failures[experiment.id] = self.simulations.error(replica, experiment)
             else:
                 truths[experiment.id] = self.truth(replica, experiment)
         job = EvaluationJob(
@@ -174,11 +150,8 @@ class Sweep:
             return self._run(runner)
 
     def _run(self, runner: TaskRunner) -> SweepOutcome:
-        fmu_sha256 = sha256_file(self.fmu)
-        resumed = self.store.claim(pinned_content(self.study), {"fmu_sha256": fmu_sha256},
-                                   legacy={"study_sha256": self.study.sha256,
-                                           "fmu_sha256": fmu_sha256})
-        pending = self.pending_simulations()
+        resumed = self.simulations.claim()
+        pending = self.simulations.pending()
         waiting = {r: {e.id for e in exps} for r, exps in pending.items()}
         tasks: list[Task] = []
         skipped = {"simulation": 0, "evaluation": 0}
@@ -226,14 +199,7 @@ class Sweep:
         return tasks
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
-        replica, experiment = self._simulations[outcome.task.key]
-        if outcome.ok:
-            frame, sidecar = outcome.value
-            write_recording(self.store.path(recording_path(replica, experiment)), frame, sidecar)
-            self.store.remove(failure_path(replica, experiment))
-        else:
-            self.store.write_json(failure_path(replica, experiment),
-                                  {"error": outcome.error, "detail": outcome.detail})
+        replica, experiment = self.simulations.store_outcome(outcome)
         waiting[replica].discard(experiment.id)
         return self._evaluations_to_do(replica) if not waiting[replica] else []
 
@@ -316,10 +282,10 @@ def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchErr
     the error line point at the first cause instead of a crash in the summary.
     """
     store, study = sweep.store, sweep.study
-    runs, failed = failed_runs(store, study, sweep.family)
+    runs, failed = sweep.simulations.runs(), sweep.simulations.failed()
     if failed:
         where = failure_path(*failed[0])
-        first = store.read_json(where)["error"]
+        first = sweep.simulations.error(*failed[0])
     else:
         with_error = results[results["error"] != ""]
         first = with_error["error"].iloc[0] if len(with_error) else "no result rows"
@@ -344,13 +310,14 @@ def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchErr
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "sweep", help="season stress test: run a study of experiments and score the methods",
+    """Add the ``sweep`` sub-command."""
+    register_study_command(
+        subparsers, "sweep",
+        help="season stress test: run a study of experiments and score the methods",
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
-        "it on the others, and write results.csv, a summary, box plots and README.md.")
-    add_study_arguments(parser, "scenarios/studies/season_sweep.toml")
-    parser.set_defaults(func=_main)
+        "it on the others, and write results.csv, a summary, box plots and README.md.",
+        example="scenarios/studies/season_sweep.toml", main=_main)
 
 
 def _main(args: argparse.Namespace) -> int:

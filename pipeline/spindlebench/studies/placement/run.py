@@ -23,22 +23,19 @@ import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import read_recording, write_recording
-from spindlebench.provenance import file_entry, provenance, sha256_file
+from spindlebench.formats.recording import read_recording
+from spindlebench.provenance import file_entry, provenance
 from spindlebench.selection import rmse
 from spindlebench.studies.executor import (
     Outcome,
     RunStats,
     Task,
     TaskRunner,
-    add_study_arguments,
     results_folder,
 )
 from spindlebench.studies.experiments import (
-    Experiment,
     experiments,
     replicas,
-    scenario_for,
     sensor_seed,
     training_experiments,
 )
@@ -50,10 +47,14 @@ from spindlebench.studies.placement.placements import (
     score_all,
 )
 from spindlebench.studies.placement.study import PlacementStudy, describe, load_placement_study
+from spindlebench.studies.simulations import (
+    Simulations,
+    failure_path,
+    recording_path,
+    register_study_command,
+)
 from spindlebench.studies.store import ResultStore, content_sha256
 from spindlebench.studies.study import check_fmu, pinned_content
-from spindlebench.studies.sweep import failed_runs, failure_path, recording_path
-from spindlebench.testbench.simulate import record
 
 
 @dataclass
@@ -80,48 +81,22 @@ class PlacementStudyRun:
         self.family = experiments(study.family)
         self.trains = training_experiments(study.family, self.family)
         self.fmu = check_fmu(study.family)
-        self._keys: dict[str, tuple[int, Experiment]] = {}
-
-    def pending(self) -> list[tuple[int, Experiment]]:
-        return [(r, e) for r in replicas(self.study.family) for e in self.family
-                if not self.store.exists(recording_path(r, e))]
+        self.simulations = Simulations(self.store, study.family, self.family, self.fmu)
 
     def simulate(self, runner: TaskRunner) -> tuple[RunStats, bool]:
-        fmu_sha256 = sha256_file(self.fmu)
-        resumed = self.store.claim(pinned_content(self.study.family),
-                                   {"fmu_sha256": fmu_sha256},
-                                   legacy={"study_sha256": sha256_file(self.study.path),
-                                           "fmu_sha256": fmu_sha256})
-        tasks = []
-        for replica, experiment in self.pending():
-            key = f"simulate r{replica} {experiment.id}"
-            self._keys[key] = (replica, experiment)
-            scenario = scenario_for(self.study.family, replica, experiment)
-            tasks.append(Task(key, record, (scenario, self.fmu), kind="simulation"))
+        resumed = self.simulations.claim()
+        tasks = [self.simulations.task(r, e)
+                 for r, exps in self.simulations.pending().items() for e in exps]
 
         def on_outcome(outcome: Outcome) -> Iterable[Task]:
-            replica, experiment = self._keys[outcome.task.key]
-            if outcome.ok:
-                frame, sidecar = outcome.value
-                write_recording(self.store.path(recording_path(replica, experiment)), frame,
-                                sidecar)
-                self.store.remove(failure_path(replica, experiment))
-            else:
-                self.store.write_json(failure_path(replica, experiment),
-                                      {"error": outcome.error, "detail": outcome.detail})
+            self.simulations.store_outcome(outcome)
             return ()
 
         return runner.run(tasks, on_outcome), resumed
 
     def failures(self) -> dict[str, str]:
         """``r<replica> <experiment>`` → error of every simulation that failed."""
-        out = {}
-        for replica in replicas(self.study.family):
-            for experiment in self.family:
-                if self.store.exists(failure_path(replica, experiment)):
-                    error = self.store.read_json(failure_path(replica, experiment))["error"]
-                    out[f"r{replica} {experiment.id}"] = error
-        return out
+        return {f"r{r} {e.id}": self.simulations.error(r, e) for r, e in self.simulations.failed()}
 
     def failure_summary(self) -> str:
         """The failures in a few words: how many, the first error once, where it is kept.
@@ -130,10 +105,10 @@ class PlacementStudyRun:
         usually fails every run, and repeating it per run made a line of thousands of
         characters.
         """
-        runs, failed = failed_runs(self.store, self.study.family, self.family)
+        runs, failed = self.simulations.runs(), self.simulations.failed()
         if not failed:
             return "no runs"
-        errors = [self.store.read_json(failure_path(r, e))["error"] for r, e in failed]
+        errors = [self.simulations.error(r, e) for r, e in failed]
         replica, experiment = failed[0]
         others = len(set(errors)) - 1
         return (f"{len(failed)} of {len(runs)} simulations failed; first, r{replica} "
@@ -237,14 +212,14 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``place`` sub-command."""
-    parser = subparsers.add_parser(
-        "place", help="virtual sensor placement: choose m of the model's nodes per method",
+    register_study_command(
+        subparsers, "place",
+        help="virtual sensor placement: choose m of the model's nodes per method",
         description="Run (or resume) a virtual sensor-placement study: simulate the study's "
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
-        "seasons and write placements.csv, plots, schematic drawings and README.md.")
-    add_study_arguments(parser, "scenarios/studies/placement.toml")
-    parser.set_defaults(func=_main)
+        "seasons and write placements.csv, plots, schematic drawings and README.md.",
+        example="scenarios/studies/placement.toml", main=_main)
 
 
 def _main(args: argparse.Namespace) -> int:
