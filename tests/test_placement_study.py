@@ -194,13 +194,13 @@ def test_missing_placement_table_and_file(tmp_path):
 def test_when_every_run_fails_the_error_is_one_short_line(tmp_path, capsys, monkeypatch):
     import dataclasses
 
-    from spindlebench.studies.placement import run
+    from spindlebench.studies import simulations
 
     def broken(*args):
         return dataclasses.replace(real(*args), parameters={"no_such_parameter": 1.0})
 
-    real = run.scenario_for
-    monkeypatch.setattr(run, "scenario_for", broken)
+    real = simulations.scenario_for
+    monkeypatch.setattr(simulations, "scenario_for", broken)
     out = tmp_path / "out"
     assert main(["place", str(TINY), "-o", str(out), "--workers", "0", "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
