@@ -1,13 +1,22 @@
 """Co-simulation of a scenario with the SpindleBench FMU (FMI 3.0 model exchange) via FMPy.
 
 The loop follows FMPy's own ``simulateME``: instantiate, set parameters and the initial state
-by name, initialise, then integrate with FMPy's CVode wrapper from one communication point to
-the next. Inputs are held constant over each step (zero-order hold): they are set at the start
-of the step, and CVode is stopped exactly at the step's end (``CVodeSetStopTime``) so it never
-integrates past a point where an input changes. Where a programmed input jumps (a speed or feed
-step) the solver is re-initialised, so its step-size history does not straddle the jump.
+by name, initialise, then integrate with FMPy's CVode wrapper from one stop to the next.
+Two input modes (``Scenario.inputs``, scenarios/README.md says why continuous is the default):
 
-Per-step Python work is kept small: the driver values for all steps are computed up front, the
+- ``continuous``: the ambient is set at the solver's time inside the right-hand side (FMPy's
+  ``set_time`` hook); speed and feed are piecewise constant. CVode stops only at output
+  points and input jumps, never steps past the next jump (``CVodeSetStopTime``) and has no
+  step cap.
+- ``hold``: every input is held over each communication step (zero-order hold), set at its
+  start, and CVode is stopped exactly at its end, so it never integrates past a point where
+  an input changes.
+
+In both, where a programmed input jumps (a speed or feed step) the solver is re-initialised,
+so its step-size history does not straddle the jump; between two stops Python runs (a
+pending Ctrl-C is acted on there: FMPy's CVode callbacks swallow KeyboardInterrupt).
+
+Per-stop Python work is kept small: the driver values for all steps are computed up front, the
 value references are turned into ctypes arrays once, inputs are set and outputs read with one
 ``fmi3SetFloat64`` / ``fmi3GetFloat64`` call each, straight from and into numpy rows.
 """
@@ -41,8 +50,11 @@ from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
 
-#: CVode's relative tolerance; absolute tolerance = nominal × this (K for temperatures).
-RELATIVE_TOLERANCE = 1e-6
+#: CVode's relative tolerance per input mode; absolute tolerance = nominal × this (K for
+#: temperatures). Without the 1 s step cap the solver's own error control sets the accuracy,
+#: so the continuous mode asks for 10× more (it still takes ~100× fewer steps); the hold keeps
+#: the tolerance it always had.
+RELATIVE_TOLERANCE = {"continuous": 1e-7, "hold": 1e-6}
 #: Cooling settings of the scenario map onto these FMU parameters.
 COOLING_PARAMETERS = ("cooling_enabled", "cooling_follows_ambient", "cooling_setpoint_C")
 
@@ -397,23 +409,35 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         fmu.enterContinuousTimeMode()
         _check_initial_state(fmu, fmu_info, x0)
 
+        step_s = scenario.step_s
+        stops, segment_ends = solver_stops(jumps, every, n_steps, scenario.inputs)
+        if scenario.inputs == "hold":
+            hooks = _HeldInputs(fmu, input_vrs, inputs, step_s)
+            set_time, max_step = fmu.setTime, step_s
+        else:
+            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index("ambient_C")],
+                                      inputs[:, INPUT_NAMES.index("ambient_C")], step_s)
+            set_time, max_step = hooks.set_time, float("inf")
         solver = CVodeSolver(
             nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,
             get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
             get_dx=fmu.getContinuousStateDerivatives, get_z=fmu.getEventIndicators,
-            get_nominals=fmu.getNominalsOfContinuousStates, set_time=fmu.setTime,
-            input=_HeldInputs(fmu, input_vrs, inputs, scenario.step_s),
-            startTime=0.0, maxStep=scenario.step_s, relativeTolerance=RELATIVE_TOLERANCE,
+            get_nominals=fmu.getNominalsOfContinuousStates, set_time=set_time,
+            input=hooks, startTime=0.0, maxStep=max_step,
+            relativeTolerance=RELATIVE_TOLERANCE[scenario.inputs], maxNumSteps=MAX_SOLVER_STEPS,
         )
         completed_step = md.modelExchange.needsCompletedIntegratorStep
         get_outputs(component, output_vrs, n_out, y_buffer, n_out)
         samples[0] = y_view
         t = 0.0
-        step_s = scenario.step_s
-        report_every = max(1, n_steps // 200)
-        for k in range(n_steps):
-            t_next = (k + 1) * step_s
-            set_stop_time(solver.cvode_mem, t_next)
+        report_every = max(1, len(stops) // 200)
+        # One solver segment per stop: a stop is an output point or an input jump (every
+        # communication point with inputs = "hold"); CVode never steps past the segment's
+        # end (the next jump). Between segments Python runs, so a pending signal is seen.
+        for number, (k, end) in enumerate(zip(stops.tolist(), segment_ends.tolist(),
+                                              strict=True)):
+            t_next = k * step_s
+            set_stop_time(solver.cvode_mem, end * step_s)
             _, _, t = solver.step(t, t_next)
             interrupts.check()  # a Ctrl-C that arrived during the step ends the run here
             if abs(t - t_next) > 1e-9 * max(1.0, t_next):
@@ -421,18 +445,18 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                                         f"instead of {t_next:g} s")
             t = t_next
             fmu.setTime(t)
-            memmove(u_buffer, inputs_address + (k + 1) * row_bytes, row_bytes)
+            memmove(u_buffer, inputs_address + k * row_bytes, row_bytes)
             set_inputs(component, input_vrs, n_in, u_buffer, n_in)
             if completed_step:
                 _, terminate = fmu.completedIntegratorStep()
                 if terminate:
                     raise SpindlebenchError(f"{fmu_info.path}: model terminated at t={t:g} s")
-            if jumps[k + 1]:
+            if jumps[k]:
                 solver.reset(t)
-            if (k + 1) % every == 0:
+            if k % every == 0:
                 get_outputs(component, output_vrs, n_out, y_buffer, n_out)
-                samples[(k + 1) // every] = y_view
-            if bar is not None and (k + 1) % report_every == 0:
+                samples[k // every] = y_view
+            if bar is not None and (number + 1) % report_every == 0:
                 bar.update(round(t) - bar.n)
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
         fmu.terminate()
@@ -460,12 +484,39 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         parameters=params,
         solver={
             "integrator": "FMPy CVodeSolver (SUNDIALS CVODE, BDF)",
-            "relative_tolerance": RELATIVE_TOLERANCE,
+            "relative_tolerance": RELATIVE_TOLERANCE[scenario.inputs],
             "communication_step_s": scenario.step_s,
-            "input_hold": "zero-order hold, set at the start of each communication step",
+            "inputs": scenario.inputs,
+            "input_hold": INPUT_DESCRIPTIONS[scenario.inputs],
+            "solver_stops": int(stops.size),
             "restarts_at_input_jumps": int(jumps.sum()),
         },
     )
+
+
+#: What each ``Scenario.inputs`` mode does, for the recording's provenance.
+INPUT_DESCRIPTIONS = {
+    "continuous": "ambient evaluated at the solver's time in the right-hand side (linear "
+                  "between communication points); speed and feed held between their jumps; "
+                  "CVode stopped at output points and jumps only",
+    "hold": "zero-order hold, set at the start of each communication step",
+}
+#: CVode's internal steps allowed per call (FMPy's default of 500 can be too few for a long
+#: output interval right after a jump).
+MAX_SOLVER_STEPS = 100_000
+
+
+def solver_stops(jumps: np.ndarray, every: int, n_steps: int,
+                 inputs: str) -> tuple[np.ndarray, np.ndarray]:
+    """Communication points (step indices) where the loop stops CVode, and for each the end
+    of its segment (the next input jump, or the end of the run), past which CVode may not
+    step. ``hold`` stops at every point; ``continuous`` at output points and jumps only."""
+    if inputs == "hold":
+        stops = np.arange(1, n_steps + 1)
+        return stops, stops
+    stops = np.union1d(np.arange(every, n_steps + 1, every), np.flatnonzero(jumps[1:]) + 1)
+    ends = np.append(np.flatnonzero(jumps[1:]) + 1, n_steps)
+    return stops, ends[np.searchsorted(ends, stops, side="left")]
 
 
 def _cvode_set_stop_time() -> Any:
@@ -498,6 +549,37 @@ class _HeldInputs:
         n = len(self.vrs)
         self.fmu.fmi3SetFloat64(self.fmu.component, self.vrs, n, _row_pointer(self.inputs, row),
                                 n)
+
+
+class _ContinuousInputs:
+    """The ambient as a continuous-time input: set at the solver's time whenever CVode
+    evaluates the right-hand side (FMPy's ``set_time`` hook) or the event indicators (its
+    ``input`` hook), linearly interpolated between the communication points' values (the
+    season curve is smooth; a measured series is already piecewise linear). Speed and feed
+    are piecewise constant and set by the loop at their jumps."""
+
+    def __init__(self, fmu: FMU3Model, ambient_vr: int, ambient_C: np.ndarray,
+                 step_s: float):
+        self.set_fmu_time, self.set_float = fmu.fmi3SetTime, fmu.fmi3SetFloat64
+        self.component = fmu.component
+        self.vr = (fmi3ValueReference * 1)(ambient_vr)
+        self.value = (fmi3Float64 * 1)()
+        self.ambient = ambient_C.tolist()  # at least 2 points: n_steps >= 1
+        self.last = len(self.ambient) - 2  # the last interval's start
+        self.rate = 1.0 / step_s
+        self.varying = bool(np.any(ambient_C != ambient_C[0]))
+
+    def set_time(self, t: float) -> None:
+        self.set_fmu_time(self.component, t)
+        if self.varying:
+            x = t * self.rate
+            k = min(int(x), self.last)
+            a = self.ambient
+            self.value[0] = a[k] + (x - k) * (a[k + 1] - a[k])
+            self.set_float(self.component, self.vr, 1, self.value, 1)
+
+    def apply(self, t: float, **_: Any) -> None:
+        self.set_time(t)
 
 
 def _check_initial_state(fmu: FMU3Model, info: FmuInterface, x0: Mapping[str, float]) -> None:

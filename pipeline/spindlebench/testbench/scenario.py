@@ -43,7 +43,10 @@ MAX_STEPS = 10_000_000
 #: Longest soak history (days) before a run: the slowest node (the floor slab, about a day)
 #: has long forgotten its cold start by then.
 MAX_SOAK_DAYS = 60
-
+#: ``continuous``: the ambient is evaluated at the solver's own time inside the right-hand
+#: side and CVode stops only at output points and input jumps; ``hold``: every input is held
+#: over each communication step (zero-order hold, a stop every ``step_s``).
+INPUT_MODES = ("continuous", "hold")
 
 
 # --------------------------------------------------------------------------- dataclasses
@@ -293,6 +296,8 @@ class Scenario:
     sensors: SensorModel
     initial: InitialState
     parameters: Mapping[str, float]
+    #: How the runner feeds the drivers to the FMU (``INPUT_MODES``; scenarios/README.md).
+    inputs: str = "continuous"
 
     @property
     def n_steps(self) -> int:
@@ -746,6 +751,7 @@ def load_scenario(path: str | Path) -> Scenario:
         sensors=_read_sensors(top, duration_s),
         initial=_read_initial(top, scenario_dir),
         parameters=_read_parameters(top),
+        inputs=top.string("inputs", "continuous", choices=INPUT_MODES),
     )
     top.finish()
     if scenario.initial.kind == "soak" and isinstance(scenario.ambient, MeasuredAmbient):
