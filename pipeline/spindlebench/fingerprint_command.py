@@ -45,7 +45,7 @@ from spindlebench.formats.recording import (
     require_columns,
     sidecar_path,
 )
-from spindlebench.listflags import split_list_flag
+from spindlebench.listflags import expand_folders, split_list_flag
 
 #: The error column of a recording that has it and no ``--target`` is given.
 DEFAULT_TARGET = DRIFT_COLUMN
@@ -197,16 +197,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def recording_files(paths: list[Path]) -> list[Path]:
     """The recordings named: files as given, a folder as its ``*.csv`` in name order."""
-    files: list[Path] = []
-    for path in paths:
-        if path.is_dir():
-            found = sorted(path.glob("*.csv"))
-            if not found:
-                raise SpindlebenchError(f"{path}: folder holds no .csv recording")
-            files.extend(found)
-        else:
-            files.append(path)
-    return files
+    return expand_folders(paths, ".csv", "recording")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 from spindlebench.errors import SpindlebenchError
 
@@ -28,3 +29,19 @@ def split_list_flag(flag: str, values: str | Sequence[str] | None, what: str = "
             raise error(f"{flag}: empty {what} in {' '.join(items)!r}")
         names.extend(pieces)
     return names
+
+
+def expand_folders(paths: Sequence[str | Path], suffix: str, what: str) -> list[Path]:
+    """File arguments as given, a folder as its ``*<suffix>`` files in name order; a folder
+    without any is one line (``DIR: folder holds no .csv recording``)."""
+    files: list[Path] = []
+    for argument in paths:
+        path = Path(argument)
+        if path.is_dir():
+            found = sorted(path.glob(f"*{suffix}"))
+            if not found:
+                raise SpindlebenchError(f"{path}: folder holds no {suffix} {what}")
+            files.extend(found)
+        else:
+            files.append(path)
+    return files

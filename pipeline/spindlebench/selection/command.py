@@ -41,7 +41,13 @@ from spindlebench.names import (
 )
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
-from spindlebench.selection.evaluate import MISSING_MODES, Evaluation, RecordingLike, evaluate
+from spindlebench.selection.evaluate import (
+    MISSING_MODES,
+    Evaluation,
+    RecordingLike,
+    check_same_sensors,
+    evaluate,
+)
 from spindlebench.selection.registry import MethodChoice
 from spindlebench.selection.similarity import SIMILARITIES
 
@@ -130,13 +136,7 @@ def run(args: argparse.Namespace) -> int:
         if taken.by_rule:  # the rule must find the same sensors in every file
             theirs = choose(read_header(path, detect_dialect(path, roles.delimiter)[0]),
                             args.target, roles, str(path)).sensors
-            if theirs != sensors:
-                missing = [s for s in sensors if s not in theirs]
-                extra = [s for s in theirs if s not in sensors]
-                raise SelectionError(
-                    f"recording {path}: sensor columns differ from the training file "
-                    f"{args.train} (missing: {missing or 'none'}; extra: {extra or 'none'}); "
-                    "pass --sensors")
+            check_same_sensors(str(path), theirs, sensors, str(args.train))
         tests.append(_read_used(path, args.target, same, args.missing)[0])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -22,7 +22,7 @@ from spindlebench.selection.closure import (
     check_similarity,
     maximum_spanning_tree,
 )
-from spindlebench.selection.errors import SelectionError, SelectionWarning
+from spindlebench.selection.errors import SelectionError, SelectionWarning, check_n_clusters
 
 
 @dataclass(frozen=True)
@@ -74,27 +74,15 @@ def cut_for_clusters(T: np.ndarray, n_clusters: int) -> Cut:
     so and the finer partition (more clusters) is returned.
     """
     T = check_similarity(T)
-    _check_n_clusters(n_clusters, T.shape[0])
+    check_n_clusters(n_clusters, T.shape[0])
     return cut_tree_for_clusters(maximum_spanning_tree(T), n_clusters)
-
-
-def _check_n_clusters(n_clusters: int, n: int) -> None:
-    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
-        raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
-    if n_clusters < 1:
-        raise SelectionError(f"the number of clusters must be at least 1, got {n_clusters}")
-    if n_clusters > n:
-        raise SelectionError(
-            f"cannot make {n_clusters} clusters from {n} candidate(s): "
-            f"n_clusters is larger than the number of candidates"
-        )
 
 
 def cut_tree_for_clusters(tree: SpanningTree, n_clusters: int) -> Cut:
     """``cut_for_clusters`` from a maximum spanning tree of R alone (no n x n matrix): the
     selection over sensors and all their differences builds the tree row by row."""
     n = tree.order.size
-    _check_n_clusters(n_clusters, n)
+    check_n_clusters(n_clusters, n)
     child, parent, weight = tree.edges()
     levels = np.unique(np.append(weight, 1.0))  # distinct values of t(R), ascending
     sorted_weights = np.sort(weight)

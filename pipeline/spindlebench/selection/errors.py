@@ -7,6 +7,8 @@ It also phrases the column lists and name checks those one-line messages share.
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from spindlebench.errors import SpindlebenchError
 
 
@@ -36,3 +38,16 @@ def column_list(indices: Sequence[int], names: Sequence[str] | None) -> str:
     labels = [str(names[i]) if names is not None else f"column {i}" for i in indices]
     shown = ", ".join(labels[:10])
     return shown + (f" and {len(labels) - 10} more" if len(labels) > 10 else "")
+
+
+def check_n_clusters(n_clusters: int, n: int, what: str = "candidate(s)") -> None:
+    """The one check of a cluster count k against the ``n`` things to cluster."""
+    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
+        raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
+    if n_clusters < 1:
+        raise SelectionError(f"the number of clusters must be at least 1, got {n_clusters}")
+    if n_clusters > n:
+        raise SelectionError(
+            f"cannot make {n_clusters} clusters from {n} {what}: "
+            f"n_clusters is larger than the number of candidates"
+        )

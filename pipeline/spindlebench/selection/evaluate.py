@@ -367,15 +367,20 @@ def resolve_sensors(
     if not chosen:
         raise SelectionError(f"recording {train_name}: no sensor columns found; pass --sensors")
     for name, frame in tests.items():
-        theirs = default_sensors(frame, target)
-        if theirs != chosen:
-            missing = [s for s in chosen if s not in theirs]
-            extra = [s for s in theirs if s not in chosen]
-            raise SelectionError(
-                f"recording {name}: sensor columns differ from the training file {train_name} "
-                f"(missing: {missing or 'none'}; extra: {extra or 'none'}); pass --sensors"
-            )
+        check_same_sensors(name, default_sensors(frame, target), chosen, train_name)
     return chosen
+
+
+def check_same_sensors(name: str, theirs: Sequence[str], chosen: Sequence[str],
+                       train_name: str) -> None:
+    """A held-out recording must offer the training file's sensors, found by the same rule."""
+    if list(theirs) != list(chosen):
+        missing = [s for s in chosen if s not in theirs]
+        extra = [s for s in theirs if s not in chosen]
+        raise SelectionError(
+            f"recording {name}: sensor columns differ from the training file {train_name} "
+            f"(missing: {missing or 'none'}; extra: {extra or 'none'}); pass --sensors"
+        )
 
 
 def evaluate(

@@ -19,7 +19,12 @@ import numpy as np
 from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import Cut, cut_for_clusters
-from spindlebench.selection.errors import SelectionError, SelectionWarning, check_names
+from spindlebench.selection.errors import (
+    SelectionError,
+    SelectionWarning,
+    check_n_clusters,
+    check_names,
+)
 from spindlebench.selection.similarity import (
     constant_columns,
     correlation_with,
@@ -86,15 +91,7 @@ def check_counts(n_samples: int, n_candidates: int, y: np.ndarray, n_clusters: i
         raise SelectionError(f"{n_samples} candidate samples but {y.shape[0]} target samples")
     if n_samples < 2:
         raise SelectionError(f"selection needs at least 2 samples, got {n_samples} sample(s)")
-    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
-        raise SelectionError(f"the number of clusters must be an integer, got {n_clusters!r}")
-    if n_clusters < 1:
-        raise SelectionError(f"the number of clusters must be at least 1, got {n_clusters}")
-    if n_clusters > n_candidates:
-        raise SelectionError(
-            f"cannot make {n_clusters} clusters from {n_candidates} feature(s): "
-            f"n_clusters is larger than the number of candidates"
-        )
+    check_n_clusters(n_clusters, n_candidates, "feature(s)")
 
 
 def split_constant(

@@ -15,7 +15,7 @@ Every problem becomes one line naming the study file and the dotted key.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -468,18 +468,16 @@ def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | N
 def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
               programmes: list[str], cooling: list[str], climate: Climate) -> Training:
     rule = t.get("rule", str, default="one", check=lambda v: one_of(v, TRAINING_RULES))
-    month = t.get("month", str, default=months[0],
-                  check=lambda v: None if v in months else
-                  f"must be one of the study's months ({', '.join(months)})")
-    speed = t.get("speed_rpm", float, default=speeds[0],
-                  check=lambda v: None if v in speeds else
-                  f"must be one of the study's speeds ({', '.join(f'{s:g}' for s in speeds)})")
+    def of_the_study(values: Sequence[Any], what: str) -> Callable[[Any], str | None]:
+        shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+        return lambda v: None if v in values else f"must be one of the study's {what} ({shown})"
+
+    month = t.get("month", str, default=months[0], check=of_the_study(months, "months"))
+    speed = t.get("speed_rpm", float, default=speeds[0], check=of_the_study(speeds, "speeds"))
     programme = t.get("programme", str, default=programmes[0],
-                      check=lambda v: None if v in programmes else
-                      f"must be one of the study's programmes ({', '.join(programmes)})")
+                      check=of_the_study(programmes, "programmes"))
     cooling_mode = t.get("cooling", str, default=cooling[0],
-                         check=lambda v: None if v in cooling else
-                         f"must be one of the study's cooling modes ({', '.join(cooling)})")
+                         check=of_the_study(cooling, "cooling modes"))
     if rule == "each-season" and t.has("month"):
         raise t.error("month", "with rule 'each-season' the first listed month of every "
                                "season trains; remove 'month'")

@@ -27,6 +27,7 @@ from spindlebench.formats.recording import (
     write_recording,
 )
 from spindlebench.formats.recording import sidecar_record as recording_sidecar
+from spindlebench.listflags import expand_folders
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
@@ -124,17 +125,7 @@ def _columns(truth: Mapping[str, np.ndarray], names: tuple[str, ...]) -> np.ndar
 
 
 def _scenario_files(arguments: list[str]) -> list[Path]:
-    files: list[Path] = []
-    for argument in arguments:
-        path = Path(argument)
-        if path.is_dir():
-            found = sorted(path.glob("*.toml"))
-            if not found:
-                raise SpindlebenchError(f"{path}: directory holds no .toml scenario")
-            files.extend(found)
-        else:
-            files.append(path)
-    return files
+    return expand_folders(arguments, ".toml", "scenario")
 
 
 @dataclass(frozen=True)
