@@ -20,6 +20,7 @@ from spindlebench.errors import SpindlebenchError
 COMMAND_MODULES: tuple[str, ...] = (
     "spindlebench.adapters.command",
     "spindlebench.calibration.command",
+    "spindlebench.compensation.command",
     "spindlebench.demo",
     "spindlebench.fingerprint_command",
     "spindlebench.modelica.build",

@@ -1,0 +1,6 @@
+"""Compensation in the loop: the trained model in the controller, day after day.
+
+``controller`` turns predictions into the offset an axis would apply (update interval, rate
+limit, dead band) and detects sensor faults; ``loop`` simulates the days, trains, retrains and
+scores the residual; ``command`` is ``spindlebench compensate``.
+"""

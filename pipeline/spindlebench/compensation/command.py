@@ -1,0 +1,204 @@
+"""``spindlebench compensate STUDY.toml [-o DIR]``: the model in the controller, day after day.
+
+Writes into DIR (default ``results/<study.name>``): ``README.md`` (set-up, the residual per
+model, per day), ``days.csv`` (one row per model and day), ``summary.csv``, ``timeseries.csv``
+(every sample: true drift, prediction, applied offset, residual), ``compensation.png``
+(uncompensated drift, applied offset and residual over the run) and ``provenance.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from spindlebench import atomic, provenance
+from spindlebench.compensation.loop import run_loop, simulate_days, summary
+from spindlebench.compensation.study import CompensationStudy, load_compensation
+from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.study import check_fmu
+
+FIGURE_DPI = 110
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``compensate`` sub-command."""
+    parser = subparsers.add_parser(
+        "compensate", help="run the trained model in a simulated controller over many days",
+        description="Train each model of the study's [compensate] table on day 1, then "
+        "simulate every other day of the study family with the model in the controller "
+        "(update interval, rate limit, dead band); report the residual (true drift minus "
+        "applied offset) per day, the fraction of time within the tolerance, the effect of "
+        "a sensor fault after training and of the retraining rule.")
+    parser.add_argument("study", type=Path, help="study TOML with a [compensate] table")
+    parser.add_argument("-o", "--out", type=Path, default=None,
+                        help="output folder (default results/<study.name>)")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, simulate, write."""
+    study = load_compensation(args.study)
+    fmu = check_fmu(study.family)
+    out = args.out if args.out is not None else Path("results") / study.name
+    if out.exists() and not out.is_dir():
+        raise SpindlebenchError(f"{out}: exists and is not a folder")
+    truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
+    outcome = run_loop(study, truths)
+    days = pd.DataFrame(outcome.days)
+    series = pd.concat(outcome.series, ignore_index=True)
+    table = summary(study, days, series)
+    write_outputs(study, args.study, fmu, out, days, series, table, outcome)
+    print(_summary_text(table))
+    print(f"wrote {out / 'README.md'} and 5 more files")
+    return 0
+
+
+def _csv(path: Path, frame: pd.DataFrame) -> None:
+    with atomic.atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.6g")
+
+
+def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
+                  days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
+                  outcome) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    _csv(out / "days.csv", days)
+    _csv(out / "summary.csv", table)
+    _csv(out / "timeseries.csv", series)
+    figure(study, series, days, table, out / "compensation.png")
+    models = {name: [{"trained_on_day": m.trained_on_day, "inputs": list(m.selected),
+                      "excluded": list(m.excluded),
+                      "coefficients": [float(m.fit.intercept), *map(float, m.fit.coefficients)]}
+                     for m in versions] for name, versions in outcome.models.items()}
+    record = provenance.provenance(
+        command="compensate", study=provenance.file_entry(study_path),
+        fmu=provenance.file_entry(fmu), seed=study.family.seed, method_seed=study.seed,
+        models=models,
+        controller={"update_interval_s": study.controller.update_interval_s,
+                    "rate_limit_um_per_s": study.controller.rate_limit_um_per_s,
+                    "dead_band_um": study.controller.dead_band_um},
+        tolerance_um=study.tolerance_um, retrain=study.retrain,
+        fault=None if study.fault is None else study.fault.name,
+        fault_from_day=study.fault_from_day)
+    atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
+    atomic.write_text(out / "README.md", readme(study, study_path, days, table))
+
+
+def best_model(table: pd.DataFrame) -> str:
+    """The model with the lowest residual RMS over all run days."""
+    at = table[(table["part"] == "all days") & (table["model"] != "uncompensated")]
+    return str(at.loc[at["rms_um"].idxmin(), "model"])
+
+
+def figure(study: CompensationStudy, series: pd.DataFrame, days: pd.DataFrame,
+           table: pd.DataFrame, path: Path) -> None:
+    """Uncompensated drift, applied offset (best model and the paper's six_diff) and the
+    residual of every model over the whole run, days side by side."""
+    duration_h = study.family.duration_s / 3600.0
+    best = best_model(table)
+    fig = Figure(figsize=(11, 6.5))
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    first = series[series["model"] == study.models[0]]
+    hours = (first["day"] - 2) * duration_h + first["time_s"] / 3600.0
+    top.plot(hours, first["true_drift_um"], color="black", lw=1.0, label="uncompensated drift")
+    shown = [best] + [m for m in study.models if m == "six_diff" and m != best]
+    for name in shown:
+        at = series[series["model"] == name]
+        top.plot(hours.to_numpy(), at["offset_um"].to_numpy(), lw=0.9,
+                 label=f"applied offset, {name}")
+    for name in study.models:
+        at = series[series["model"] == name]
+        bottom.plot(hours.to_numpy(), at["residual_um"].to_numpy(), lw=0.8, label=name)
+    tol = study.tolerance_um
+    bottom.axhspan(-tol, tol, color="0.85", zorder=0, label=f"±{tol:g} µm")
+    fault_days = sorted(set(days.loc[days["fault_active"], "day"]))
+    for ax in (top, bottom):
+        for d in fault_days:
+            ax.axvspan((d - 2) * duration_h, (d - 1) * duration_h, color="tab:red",
+                       alpha=0.06, lw=0)
+        for d in sorted(set(days["day"])):
+            ax.axvline((d - 2) * duration_h, color="0.8", lw=0.4)
+    top.set_ylabel("drift / offset (µm)")
+    bottom.set_ylabel("residual (µm)")
+    bottom.set_xlabel(f"operating hours (days 2–{int(days['day'].max())} side by side, "
+                      f"{duration_h:g} h each; red: fault active)")
+    top.legend(loc="upper left", fontsize=8)
+    bottom.legend(loc="upper left", fontsize=8, ncol=3)
+    top.set_title(f"{study.name}: compensation in the loop (trained on day 1; retrain "
+                  f"{study.retrain})", fontsize=10)
+    fig.tight_layout()
+    with atomic.atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=FIGURE_DPI)
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    return "–" if not np.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _summary_text(table: pd.DataFrame) -> str:
+    lines = [f"{'part':<13} {'model':<22} {'RMS':>7} {'peak':>7} {'within':>7}"]
+    for row in table.itertuples():
+        lines.append(f"{row.part:<13} {row.model:<22} {row.rms_um:7.2f} {row.peak_um:7.2f} "
+                     f"{100 * row.within_tolerance:6.1f}%")
+    return "\n".join(lines)
+
+
+def readme(study: CompensationStudy, study_path: Path, days: pd.DataFrame,
+           table: pd.DataFrame) -> str:
+    c = study.controller
+    rate = "none" if c.rate_limit_um_per_s is None else f"{c.rate_limit_um_per_s:g} µm/s"
+    fault = "none" if study.fault is None else (
+        f"{study.fault.name} ({study.fault.kind} of {study.fault.sensor} from "
+        f"{study.fault.start_s / 3600:g} h into every day from day {study.fault_from_day})")
+    lines = [f"# Compensation in the loop: {study.name}", "",
+             f"Made by `spindlebench compensate {study_path}`. Every number is computed from "
+             "`timeseries.csv`.", "",
+             "## Set-up", "",
+             f"- Days: {int(days['day'].max())} runs of {study.family.duration_s / 3600:g} h "
+             f"(the study family's experiments × {study.family.replicas} replica(s)); day 1 "
+             "trains every model, days 2 onward are compensated.",
+             f"- Models (k = {study.k}): {', '.join(study.models)} (sweep method names; "
+             "`spindlebench methods`).",
+             f"- Controller: update every {c.update_interval_s:g} s, rate limit {rate}, dead "
+             f"band {c.dead_band_um:g} µm; tolerance ±{study.tolerance_um:g} µm.",
+             f"- Sensor fault: {fault}; retraining: {study.retrain}.",
+             "- Residual = true drift − applied offset (the probe's measurement is used "
+             "only for training).", "",
+             "## Residual over the run", "",
+             "| part | model | days | RMS (µm) | mean daily RMS | worst daily RMS | peak (µm) "
+             "| within ± tol |", "|---|---|---|---|---|---|---|---|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.part} | {row.model} | {row.days} | {_fmt(row.rms_um)} | "
+                     f"{_fmt(row.mean_daily_rms_um)} | {_fmt(row.worst_daily_rms_um)} | "
+                     f"{_fmt(row.peak_um)} | {100 * row.within_tolerance:.1f} % |")
+    best = best_model(table)
+    lines += ["", f"Lowest residual RMS over all days: **{best}**.", "",
+              "![drift, offset and residual](compensation.png)", "",
+              "## Per day (RMS / peak of the residual, µm)", ""]
+    wide = days.pivot_table(index=["day", "experiment", "fault_active"], columns="model",
+                            values=["rms_residual_um", "peak_residual_um"], aggfunc="first")
+    unc = days.groupby("day")["rms_uncompensated_um"].first()
+    header = ["day", "experiment", "fault", "uncompensated RMS", *study.models]
+    lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for (day, experiment, fault_active), row in wide.iterrows():
+        cells = [f"{_fmt(row[('rms_residual_um', m)])} / {_fmt(row[('peak_residual_um', m)])}"
+                 for m in study.models]
+        lines.append(f"| {day} | {experiment} | {'yes' if fault_active else ''} | "
+                     f"{_fmt(unc[day])} | " + " | ".join(cells) + " |")
+    detected = days[days["detected"] != ""]
+    if len(detected):
+        lines += ["", "Faults detected (the model retrained without the sensor):", ""]
+        lines += [f"- day {r.day}, {r.model}: {r.detected}" for r in detected.itertuples()]
+    lines += ["", "## Files", "",
+              "- `days.csv`: one row per model and day (inputs, retraining, RMS, peak, "
+              "fraction within tolerance); `summary.csv`: the table above.",
+              "- `timeseries.csv`: every sample of every compensated day and model.",
+              "- `provenance.json`: study and FMU hashes, seeds, every model version "
+              "(inputs, coefficients), package versions.", ""]
+    return "\n".join(lines)

@@ -1,0 +1,144 @@
+"""``spindlebench compensate``: the controller (hand-computed), the fault monitor, the study
+file, and the loop on the real FMU over the tiny 4-day study (short runs)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import REPO
+from spindlebench import cli
+from spindlebench.compensation.controller import (
+    ControllerSettings,
+    FaultMonitor,
+    applied_offset,
+    detect_faults,
+)
+from spindlebench.compensation.loop import plan_days, run_loop, simulate_days, summary
+from spindlebench.compensation.study import load_compensation
+from spindlebench.errors import SpindlebenchError
+
+TINY = REPO / "scenarios" / "studies" / "tiny_compensate.toml"
+
+
+def test_offset_holds_between_updates_and_respects_dead_band_and_rate():
+    t = np.arange(8) * 10.0
+    predicted = np.array([0.4, 2.0, 2.5, 2.6, 6.0, 6.0, 6.2, 6.2])
+    # updates every 20 s (samples 0, 2, 4, 6); dead band 1: 0.4 and 0.1 changes ignored
+    offset = applied_offset(t, predicted, ControllerSettings(20.0, None, 1.0))
+    assert offset.tolist() == [0.0, 0.0, 2.5, 2.5, 6.0, 6.0, 6.0, 6.0]
+    # rate limit 0.1 um/s: at most 1 um per 10 s sample towards the set-point (2.5 from
+    # sample 2, 6.0 from sample 4, so the offset climbs 1 um per sample from 0 to 6)
+    limited = applied_offset(t, predicted, ControllerSettings(20.0, 0.1, 1.0))
+    np.testing.assert_allclose(limited, [0.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+    slow = applied_offset(t, predicted, ControllerSettings(20.0, 0.02, 1.0))
+    np.testing.assert_allclose(slow, [0.0, 0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2])
+    with pytest.raises(SpindlebenchError, match="update_interval_s"):
+        ControllerSettings(0.0)
+    with pytest.raises(SpindlebenchError, match="time must increase"):
+        applied_offset(np.array([0.0, 0.0]), np.array([1.0, 2.0]), ControllerSettings())
+
+
+def test_monitor_flags_a_jump_and_a_stuck_reading_not_a_healthy_one():
+    t = np.arange(300) * 10.0
+    rng = np.random.default_rng(0)
+    healthy = np.round((20 + 0.002 * t + rng.normal(0, 0.05, t.size)) / 0.1) * 0.1
+    jumped = healthy + np.where(t >= 1000, 1.0, 0.0)
+    stuck = np.where(t >= 500, healthy[49] + 0.03, healthy)  # frozen from sample 50 on
+    found = detect_faults(t, np.column_stack([healthy, jumped, stuck]), ["a", "b", "c"],
+                          FaultMonitor(stuck_window_s=600.0, jump_C=0.5))
+    assert [(d.sensor, d.kind, d.sample) for d in found] == [("b", "jump", 100),
+                                                           ("c", "stuck", 110)]
+
+
+@pytest.mark.parametrize("replace, message", [
+    ('models = ["all_raw", "six_diff", "all_raw:greedy"]', "key 'compensate.models'"),
+    ("update_interval_s = 120", "not a multiple"),
+    ('fault = "T8-stuck"', "no fault 'T9'"),
+    ('retrain = "after-fault"', "must be one of never, weekly, after-fault"),
+])
+def test_bad_compensation_study_is_one_line(tmp_path, replace, message):
+    text = TINY.read_text(encoding="utf-8")
+    bad = {"models": 'models = ["raw99"]', "update": "update_interval_s = 90",
+           "fault": 'fault = "T9"', "retrain": 'retrain = "monthly"'}
+    new = next(v for k, v in bad.items() if k in replace.split(" ")[0])
+    path = tmp_path / "c.toml"
+    path.write_text(text.replace(replace, new), encoding="utf-8")
+    with pytest.raises(SpindlebenchError, match=message):
+        load_compensation(path)
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    study = load_compensation(TINY)
+    return study, simulate_days(study, study.family.fmu)
+
+
+def test_days_train_first_and_fault_from_its_day(tiny):
+    study, truths = tiny
+    days = plan_days(study)
+    assert [d.number for d in days] == [1, 2, 3, 4] and sorted(truths) == [1, 2, 3, 4]
+    assert days[0].experiment.speed_rpm == 4000 and days[0].replica == 1
+    assert [d.fault_active for d in days] == [False, False, True, True]
+
+
+def test_residual_is_true_drift_minus_applied_offset(tiny):
+    study, truths = tiny
+    outcome = run_loop(study, truths)
+    series = pd.concat(outcome.series)
+    np.testing.assert_allclose(series["residual_um"],
+                               series["true_drift_um"] - series["offset_um"])
+    days = pd.DataFrame(outcome.days)
+    assert len(days) == 3 * len(study.models)
+    first = series[(series["model"] == "all_raw") & (series["day"] == 2)]
+    rms = float(np.sqrt(np.mean(first["residual_um"] ** 2)))
+    at = days[(days["model"] == "all_raw") & (days["day"] == 2)].iloc[0]
+    assert at["rms_residual_um"] == pytest.approx(rms)
+    assert at["rms_residual_um"] < at["rms_uncompensated_um"]
+    table = summary(study, days, series)
+    assert set(table["part"]) == {"all days", "healthy days", "fault days"}
+
+
+def test_after_fault_retrains_without_the_stuck_sensor(tiny):
+    study, truths = tiny
+    monitored = run_loop(study, truths)
+    ignored = run_loop(type(study)(**{**study.__dict__, "retrain": "never"}), truths)
+    days = pd.DataFrame(monitored.days)
+    readers = [name for name in study.models if "T8" in
+               ";".join(days[(days["model"] == name) & (days["day"] == 2)]["inputs"])]
+    assert readers, "no model reads T8: the tiny study no longer tests the fault"
+    for name in readers:
+        detected = days[(days["model"] == name) & (days["day"] == 3)]["detected"].iloc[0]
+        assert detected.startswith("T8 stuck")
+        assert "T8" in monitored.models[name][-1].excluded
+        day4 = days[(days["model"] == name) & (days["day"] == 4)].iloc[0]
+        assert "T8" not in day4["inputs"] and day4["detected"] == ""
+        # whether dropping the sensor beats living with it is data, not a rule: the
+        # never-retrain run keeps reading the stuck T8 on both fault days
+        kept = pd.DataFrame(ignored.days)
+        kept = kept[(kept["model"] == name) & (kept["day"] == 4)].iloc[0]
+        assert "T8" in kept["inputs"]
+
+
+def test_weekly_rule_retrains_on_the_previous_day(tiny):
+    study, truths = tiny
+    weekly = type(study)(**{**study.__dict__, "retrain": "weekly", "retrain_every_days": 2})
+    outcome = run_loop(weekly, truths)
+    versions = outcome.models["six_diff"]
+    assert [m.trained_on_day for m in versions] == [1, 2]  # day 3 retrains on day 2
+
+
+def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
+    out = tmp_path / "comp"
+    assert cli.main(["compensate", str(TINY), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "uncompensated" in printed
+    for name in ("README.md", "days.csv", "summary.csv", "timeseries.csv",
+                 "compensation.png", "provenance.json"):
+        assert (out / name).is_file(), name
+    assert (out / "compensation.png").read_bytes()[:4] == b"\x89PNG"
+    record = json.loads((out / "provenance.json").read_text())
+    assert record["retrain"] == "after-fault" and record["fmu"]["sha256"]
+    assert "## Residual over the run" in (out / "README.md").read_text()
