@@ -283,6 +283,7 @@ RECORDINGS = {
     "empty file": ("", ["train.csv", "empty"]),
     "header only": (recording_text().splitlines()[0] + "\n", ["train.csv", "row"]),
     "one row": ("\n".join(recording_text().splitlines()[:2]) + "\n", ["train.csv", "row"]),
+    "two rows": ("\n".join(recording_text().splitlines()[:3]) + "\n", ["train.csv"]),
     "text cell": (edited(lambda ls: set_cell(ls, 5, 1, "hot")), ["train.csv", "line 5"]),
     "inf cell": (edited(lambda ls: set_cell(ls, 7, 1, "inf")), ["train.csv", "line 7"]),
     "empty cell": (edited(lambda ls: set_cell(ls, 9, 1, "")), ["train.csv", "line 9"]),

@@ -403,3 +403,15 @@ def test_a_diverging_simulation_names_the_scenario_and_the_parameters_it_changes
     assert f"{scenario}: the simulation diverged" in line
     assert "front_bearing_friction_f0 = 1e+06" in line
     assert not (tmp_path / "out").exists()
+
+
+# --------------------------------------------------------------------------- case 13: messages
+
+
+def test_warnings_from_sweep_workers_are_one_line_each(tmp_path):
+    child = spindlebench("sweep", str(TINY), "-o", str(tmp_path / "sweep"), "--workers", "1",
+                         "--no-progress")
+    _, stderr = child.communicate(timeout=600)
+    assert child.returncode == 0, stderr
+    for line in stderr.splitlines():
+        assert line.startswith("warning: "), stderr  # no Python source lines, no traceback

@@ -206,11 +206,14 @@ class Evaluation:
 
 @contextmanager
 def _naming(name: str) -> Iterator[None]:
-    """Put the recording's name in front of an overflow error from the numerics below."""
+    """Put the recording's name in front of an error from the numerics below (an overflow,
+    or too few distinguishable candidates in a two-row recording) that does not name one."""
     try:
         yield
-    except SelectionOverflowError as exc:
-        raise SelectionOverflowError(f"recording {name}: {exc}") from exc
+    except SelectionError as exc:
+        if str(exc).startswith("recording "):
+            raise
+        raise type(exc)(f"recording {name}: {exc}") from exc
 
 
 def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
