@@ -258,6 +258,8 @@ def test_soak_lags_the_daily_cycle_and_is_cached_once_per_cycle(tmp_path, soak_c
     assert soak.soak_state(other_run, DEFAULT_FMU) == states  # memory
     monkeypatch.setattr(soak, "_memory", {})
     assert soak.soak_state(other_run, DEFAULT_FMU) == states  # file
+    held = replace(other_run, inputs="hold")  # the run's input mode is not the soak's
+    assert soak.soak_state(held, DEFAULT_FMU) == states
     warmer = replace(scenario, ambient=replace(scenario.ambient, high_C=12.0))
     with pytest.raises(AssertionError, match="simulated again"):
         soak.soak_state(warmer, DEFAULT_FMU)  # another cycle is another soak

@@ -48,10 +48,13 @@ from spindlebench.testbench.scenario import (
 
 #: Communication step (s) of the soak: the machine is idle and the air changes over hours.
 SOAK_STEP_S = 300.0
+#: The runner's input mode of every soak, whatever the run's: a soak shared by runs in either
+#: mode (and its cache file) must be one computation.
+SOAK_INPUTS = "continuous"
 CACHE_ENV = "SPINDLEBENCH_SOAK_CACHE"
 DEFAULT_CACHE = Path("results") / "cache" / "soak"
 #: Bumped when the soak's recipe changes, so old cache files are not reused.
-RECIPE = 1
+RECIPE = 2
 
 _memory: dict[str, dict[str, float]] = {}
 
@@ -84,6 +87,7 @@ def soak_scenario(scenario: Scenario) -> Scenario:
         cooling=Cooling(),
         sensors=SensorModel(),
         initial=InitialState(),
+        inputs=SOAK_INPUTS,
     )
 
 
@@ -94,6 +98,7 @@ def soak_key(history: Scenario, fmu_path: Path) -> str:
         "fmu_sha256": sha256_file(fmu_path),
         "duration_s": history.duration_s,
         "step_s": history.step_s,
+        "inputs": history.inputs,
         "ambient": history.to_dict()["ambient"],
         "parameters": dict(sorted(history.parameters.items())),
     }
