@@ -238,3 +238,13 @@ def test_runs_on_the_caiviac_runs(tmp_path, capsys):
     # the real machine: one sensor nearly follows the axial error, a difference a bit better
     assert 0.9 < median["best_raw_psi"] < median["best_diff_psi"] <= 1.0
     assert median["overshoot"] > 1.0 and 0.0 < median["early_fraction"] < 0.3
+
+
+def test_reference_key_changes_with_the_testbench_code(monkeypatch):
+    from spindlebench import fingerprint_reference as reference
+    from spindlebench.provenance import source_sha256
+
+    before = reference.inputs_key()
+    assert before["code_sha256"] == source_sha256(*reference.REFERENCE_CODE)
+    monkeypatch.setattr(reference, "REFERENCE_CODE", reference.REFERENCE_CODE[:-1])
+    assert reference.inputs_key()["code_sha256"] != before["code_sha256"]

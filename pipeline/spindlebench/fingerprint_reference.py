@@ -8,8 +8,9 @@ places:
   (every ``*.csv`` in it is used, with ``drift_um`` as the error);
 - otherwise a cache, ``results/fingerprint_reference/``: the five experiments simulated with
   the committed FMU the first time they are needed (a few seconds each), reused while the
-  FMU and the scenario files (``scenarios/paper/*.toml`` and ``scenarios/machines/*.toml``
-  when present) have the hashes recorded in its ``reference.json``. Anything else (a changed
+  FMU, the scenario files (``scenarios/paper/*.toml`` and ``scenarios/machines/*.toml``
+  when present), the testbench's source and the package versions have the hashes recorded in
+  its ``reference.json``. Anything else (a changed
   FMU or scenario, a missing or damaged file) resimulates. ``reference.json`` is written
   last, so an interrupted simulation is never taken for a complete cache.
 """
@@ -25,13 +26,18 @@ from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, write_recording
 from spindlebench.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
-from spindlebench.provenance import sha256_file
+from spindlebench.provenance import sha256_file, source_sha256
 from spindlebench.testbench.simulate import check_batch, plan_batch, record
 
 PAPER_SCENARIOS = SCENARIOS_DIR / "paper"
 MACHINES = SCENARIOS_DIR / "machines"
 DEFAULT_CACHE = Path("results") / "fingerprint_reference"
 KEY_FILE = "reference.json"
+#: The code that turns scenarios into recordings: a change in it (or in a tracked package's
+#: version) resimulates the reference, as a changed FMU or scenario does.
+REFERENCE_CODE = ("spindlebench.formats.recording", *(
+    f"spindlebench.testbench.{name}" for name in (
+        "drivers", "runner", "scenario", "sensors", "simulate", "soak")))
 #: The error column of a synthetic recording.
 REFERENCE_TARGET = DRIFT_COLUMN
 
@@ -49,6 +55,7 @@ def inputs_key(fmu: Path = DEFAULT_FMU, scenarios: Path = PAPER_SCENARIOS,
     """The hashes that decide whether a cached reference is still the default machine's."""
     files = sorted(scenarios.glob("*.toml")) + sorted(machines.glob("*.toml"))
     return {
+        "code_sha256": source_sha256(*REFERENCE_CODE),
         "fmu": {"path": str(fmu), "sha256": sha256_file(fmu)},
         "scenarios": {str(path.relative_to(DATA_ROOT) if path.is_relative_to(DATA_ROOT)
                           else path): sha256_file(path) for path in files},

@@ -25,6 +25,24 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     return digest.hexdigest()
 
 
+def source_sha256(*modules: str) -> str:
+    """One SHA-256 over the source files of ``modules`` (dotted names) and the tracked package
+    versions: a cache of computed results keyed by it is redone when the code that computed
+    them, or a numerical library under it, changes."""
+    import importlib.util
+
+    digest = hashlib.sha256()
+    for name in modules:
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.origin is None:
+            raise ModuleNotFoundError(name)
+        digest.update(name.encode())
+        digest.update(Path(spec.origin).read_bytes())
+    for package, version in sorted(package_versions().items()):
+        digest.update(f"{package}={version}".encode())
+    return digest.hexdigest()
+
+
 def package_versions() -> dict[str, str]:
     """Installed versions of the packages whose behaviour shapes the numbers."""
     versions = {"python": platform.python_version(), "spindlebench": spindlebench.__version__}

@@ -18,8 +18,9 @@ month of a sweep (each speed, programme, replica) shares one soak.
 
 Soaks are cached twice: in memory for the process, and as JSON files in the folder
 ``SPINDLEBENCH_SOAK_CACHE`` (default ``results/cache/soak``), named by a SHA-256 of everything
-the soak depends on (the FMU's hash included), written atomically, so parallel workers and
-later runs reuse them and a stale entry cannot be hit.
+the soak depends on (the FMU's hash, the runner's source and the package versions included),
+written atomically, so parallel workers and later runs reuse them and a stale entry cannot be
+hit.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from typing import Any
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
-from spindlebench.provenance import sha256_file
+from spindlebench.provenance import sha256_file, source_sha256
 from spindlebench.testbench.scenario import (
     ConstantFeed,
     ConstantSpeed,
@@ -55,6 +56,10 @@ CACHE_ENV = "SPINDLEBENCH_SOAK_CACHE"
 DEFAULT_CACHE = Path("results") / "cache" / "soak"
 #: Bumped when the soak's recipe changes, so old cache files are not reused.
 RECIPE = 2
+#: The modules whose source (with the package versions) is part of the cache key: a changed
+#: runner or driver computes another soak.
+SOAK_CODE = ("spindlebench.testbench.runner", "spindlebench.testbench.drivers",
+             "spindlebench.testbench.soak")
 
 _memory: dict[str, dict[str, float]] = {}
 
@@ -95,6 +100,7 @@ def soak_key(history: Scenario, fmu_path: Path) -> str:
     """SHA-256 of everything the soak's end state depends on."""
     what: dict[str, Any] = {
         "recipe": RECIPE,
+        "code_sha256": source_sha256(*SOAK_CODE),
         "fmu_sha256": sha256_file(fmu_path),
         "duration_s": history.duration_s,
         "step_s": history.step_s,
