@@ -30,10 +30,9 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import TIME_COLUMN, not_sensor_reason
 from spindlebench.listflags import split_list_flag
 
-#: The canonical time column.
-TIME_COLUMN = "time_s"
 #: |Pearson r| with the target above which a candidate is taken for a copy of the target.
 COPY_R = 0.999
 #: Delimiters the detection chooses from, and the decimal marks a user may give.
@@ -46,15 +45,6 @@ _TEMPERATURE = re.compile(
 #: Names that look like time.
 _TIME = re.compile(r"^(t|time|zeit|timestamp|date|datetime|elapsed)\b|^time_|time$|\[s\]$",
                    re.IGNORECASE)
-#: Columns that are never temperatures by default, with the reason (first match wins).
-_NOT_SENSOR = (
-    (re.compile(r"^true_"), "noise-free truth"),
-    (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
-     "displacement/thermal error"),
-    (re.compile(r"_rpm$|\[rpm\]|speed|feed|_mm_per_min$|_W$", re.IGNORECASE),
-     "driver/command input"),
-    (re.compile(r"^ambient_C$"), "the testbench's ambient driver"),
-)
 
 
 @dataclass(frozen=True)
@@ -233,7 +223,7 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
             elif looks_like_time(name):
                 skipped.append((name, "looks like time; --time-column names the time axis"))
             else:
-                reason = next((why for rule, why in _NOT_SENSOR if rule.search(name)), None)
+                reason = not_sensor_reason(name)
                 if reason is None and looks_like_temperature(name):
                     sensors.append(name)
                 else:

@@ -117,16 +117,29 @@ def _output_order(name: str) -> int:
     return 4
 
 
-#: Columns that are never sensors by default: the synthetic testbench's driver inputs and
-#: noise-free truth, and, on any recording, thermal errors/displacements (``*_um``), speeds
-#: (``*_rpm``), feed rates and heat flows. ``ambient_C`` is the testbench's ambient *driver*;
-#: the measured ambient sensor is a T column.
-_NOT_SENSOR = re.compile(r"^(true_.*|.*_um|.*_rpm|feed_.*|.*_mm_per_min|.*_W|ambient_C)$")
+#: Columns that are never sensors by default, with the reason (first match wins): the
+#: synthetic testbench's noise-free truth and driver inputs, and, on any recording, thermal
+#: errors/displacements (``*_um``, ``[µm]``), speeds, feed rates and heat flows. ``ambient_C``
+#: is the testbench's ambient *driver*; the measured ambient sensor is a T column. Used by
+#: ``default_sensors`` and by the column roles of user recordings (``formats.columns``).
+NOT_SENSOR: tuple[tuple[re.Pattern[str], str], ...] = (
+    (re.compile(r"^true_"), "noise-free truth"),
+    (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
+     "displacement/thermal error"),
+    (re.compile(r"_rpm$|\[rpm\]|speed|feed|_mm_per_min$|_W$", re.IGNORECASE),
+     "driver/command input"),
+    (re.compile(r"^ambient_C$"), "the testbench's ambient driver"),
+)
+
+
+def not_sensor_reason(name: str) -> str | None:
+    """Why a column is never a sensor by default, or None."""
+    return next((why for rule, why in NOT_SENSOR if rule.search(name)), None)
 
 
 def is_default_sensor(name: str) -> bool:
     """Whether a column counts as a sensor when none are named (see ``default_sensors``)."""
-    return name != TIME_COLUMN and not _NOT_SENSOR.match(name)
+    return name != TIME_COLUMN and not_sensor_reason(name) is None
 
 
 # --------------------------------------------------------------------------- reading
