@@ -57,7 +57,7 @@ def test_monitor_flags_a_jump_and_a_stuck_reading_not_a_healthy_one():
     ('models = ["all_raw", "six_diff", "all_raw:greedy"]', "key 'compensate.models'"),
     ("update_interval_s = 120", "not a multiple"),
     ('fault = "T8-stuck"', "no fault 'T9'"),
-    ('retrain = "after-fault"', "must be one of never, weekly, after-fault"),
+    ('retrain = ["after-fault", "never"]', "must be one of never, weekly, after-fault"),
 ])
 def test_bad_compensation_study_is_one_line(tmp_path, replace, message):
     text = TINY.read_text(encoding="utf-8")
@@ -99,12 +99,13 @@ def test_residual_is_true_drift_minus_applied_offset(tiny):
     assert at["rms_residual_um"] < at["rms_uncompensated_um"]
     table = summary(study, days, series)
     assert set(table["part"]) == {"all days", "healthy days", "fault days"}
+    assert set(table["retrain"]) == {"after-fault"}
 
 
 def test_after_fault_retrains_without_the_stuck_sensor(tiny):
     study, truths = tiny
     monitored = run_loop(study, truths)
-    ignored = run_loop(type(study)(**{**study.__dict__, "retrain": "never"}), truths)
+    ignored = run_loop(study, truths, "never")
     days = pd.DataFrame(monitored.days)
     readers = [name for name in study.models if "T8" in
                ";".join(days[(days["model"] == name) & (days["day"] == 2)]["inputs"])]
@@ -124,8 +125,8 @@ def test_after_fault_retrains_without_the_stuck_sensor(tiny):
 
 def test_weekly_rule_retrains_on_the_previous_day(tiny):
     study, truths = tiny
-    weekly = type(study)(**{**study.__dict__, "retrain": "weekly", "retrain_every_days": 2})
-    outcome = run_loop(weekly, truths)
+    weekly = type(study)(**{**study.__dict__, "retrain_every_days": 2})
+    outcome = run_loop(weekly, truths, "weekly")
     versions = outcome.models["six_diff"]
     assert [m.trained_on_day for m in versions] == [1, 2]  # day 3 retrains on day 2
 
@@ -140,5 +141,7 @@ def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
         assert (out / name).is_file(), name
     assert (out / "compensation.png").read_bytes()[:4] == b"\x89PNG"
     record = json.loads((out / "provenance.json").read_text())
-    assert record["retrain"] == "after-fault" and record["fmu"]["sha256"]
+    assert record["retrain"] == ["after-fault", "never"] and record["fmu"]["sha256"]
+    table = pd.read_csv(out / "summary.csv")
+    assert set(table["retrain"]) == {"after-fault", "never"}
     assert "## Residual over the run" in (out / "README.md").read_text()

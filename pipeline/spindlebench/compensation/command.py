@@ -49,11 +49,12 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
     truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
-    outcome = run_loop(study, truths)
-    days = pd.DataFrame(outcome.days)
-    series = pd.concat(outcome.series, ignore_index=True)
+    outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
+    days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
+    series = pd.concat([part for o in outcomes.values() for part in o.series],
+                       ignore_index=True)
     table = summary(study, days, series)
-    write_outputs(study, args.study, fmu, out, days, series, table, outcome)
+    write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
     print(_summary_text(table))
     print(f"wrote {out / 'README.md'} and 5 more files")
     return 0
@@ -66,16 +67,20 @@ def _csv(path: Path, frame: pd.DataFrame) -> None:
 
 def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
                   days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
-                  outcome) -> None:
+                  outcomes: dict) -> None:
     out.mkdir(parents=True, exist_ok=True)
     _csv(out / "days.csv", days)
     _csv(out / "summary.csv", table)
     _csv(out / "timeseries.csv", series)
-    figure(study, series, days, table, out / "compensation.png")
-    models = {name: [{"trained_on_day": m.trained_on_day, "inputs": list(m.selected),
-                      "excluded": list(m.excluded),
-                      "coefficients": [float(m.fit.intercept), *map(float, m.fit.coefficients)]}
-                     for m in versions] for name, versions in outcome.models.items()}
+    rule = study.retrain[0]
+    figure(study, series[series["retrain"] == rule], days[days["retrain"] == rule],
+           table[table["retrain"] == rule], out / "compensation.png")
+    models = {rule: {name: [{"trained_on_day": m.trained_on_day, "inputs": list(m.selected),
+                             "excluded": list(m.excluded),
+                             "coefficients": [float(m.fit.intercept),
+                                              *map(float, m.fit.coefficients)]}
+                            for m in versions] for name, versions in o.models.items()}
+              for rule, o in outcomes.items()}
     record = provenance.provenance(
         command="compensate", study=provenance.file_entry(study_path),
         fmu=provenance.file_entry(fmu), seed=study.family.seed, method_seed=study.seed,
@@ -83,7 +88,7 @@ def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Pa
         controller={"update_interval_s": study.controller.update_interval_s,
                     "rate_limit_um_per_s": study.controller.rate_limit_um_per_s,
                     "dead_band_um": study.controller.dead_band_um},
-        tolerance_um=study.tolerance_um, retrain=study.retrain,
+        tolerance_um=study.tolerance_um, retrain=list(study.retrain),
         fault=None if study.fault is None else study.fault.name,
         fault_from_day=study.fault_from_day)
     atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
@@ -91,8 +96,9 @@ def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Pa
 
 
 def best_model(table: pd.DataFrame) -> str:
-    """The model with the lowest residual RMS over all run days."""
-    at = table[(table["part"] == "all days") & (table["model"] != "uncompensated")]
+    """The model with the lowest residual RMS over all run days (under the first rule)."""
+    at = table[(table["part"] == "all days") & (table["model"] != "uncompensated")
+               & (table["retrain"] == table["retrain"].iloc[0])]
     return str(at.loc[at["rms_um"].idxmin(), "model"])
 
 
@@ -131,7 +137,7 @@ def figure(study: CompensationStudy, series: pd.DataFrame, days: pd.DataFrame,
     top.legend(loc="upper left", fontsize=8)
     bottom.legend(loc="upper left", fontsize=8, ncol=3)
     top.set_title(f"{study.name}: compensation in the loop (trained on day 1; retrain "
-                  f"{study.retrain})", fontsize=10)
+                  f"{study.retrain[0]})", fontsize=10)
     fig.tight_layout()
     with atomic.atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=FIGURE_DPI)
@@ -142,10 +148,10 @@ def _fmt(value: float, digits: int = 2) -> str:
 
 
 def _summary_text(table: pd.DataFrame) -> str:
-    lines = [f"{'part':<13} {'model':<22} {'RMS':>7} {'peak':>7} {'within':>7}"]
+    lines = [f"{'retrain':<12} {'part':<13} {'model':<24} {'RMS':>7} {'peak':>7} {'within':>7}"]
     for row in table.itertuples():
-        lines.append(f"{row.part:<13} {row.model:<22} {row.rms_um:7.2f} {row.peak_um:7.2f} "
-                     f"{100 * row.within_tolerance:6.1f}%")
+        lines.append(f"{row.retrain:<12} {row.part:<13} {row.model:<24} {row.rms_um:7.2f} "
+                     f"{row.peak_um:7.2f} {100 * row.within_tolerance:6.1f}%")
     return "\n".join(lines)
 
 
@@ -167,20 +173,24 @@ def readme(study: CompensationStudy, study_path: Path, days: pd.DataFrame,
              "`spindlebench methods`).",
              f"- Controller: update every {c.update_interval_s:g} s, rate limit {rate}, dead "
              f"band {c.dead_band_um:g} µm; tolerance ±{study.tolerance_um:g} µm.",
-             f"- Sensor fault: {fault}; retraining: {study.retrain}.",
+             f"- Sensor fault: {fault}; retraining rules (each on the same days): "
+             f"{', '.join(study.retrain)}.",
              "- Residual = true drift − applied offset (the probe's measurement is used "
              "only for training).", "",
              "## Residual over the run", "",
-             "| part | model | days | RMS (µm) | mean daily RMS | worst daily RMS | peak (µm) "
-             "| within ± tol |", "|---|---|---|---|---|---|---|---|"]
+             "| retrain | part | model | days | RMS (µm) | mean daily RMS | worst daily RMS "
+             "| peak (µm) | within ± tol |", "|---|---|---|---|---|---|---|---|---|"]
     for row in table.itertuples():
-        lines.append(f"| {row.part} | {row.model} | {row.days} | {_fmt(row.rms_um)} | "
+        lines.append(f"| {row.retrain} | {row.part} | {row.model} | {row.days} | "
+                     f"{_fmt(row.rms_um)} | "
                      f"{_fmt(row.mean_daily_rms_um)} | {_fmt(row.worst_daily_rms_um)} | "
                      f"{_fmt(row.peak_um)} | {100 * row.within_tolerance:.1f} % |")
     best = best_model(table)
-    lines += ["", f"Lowest residual RMS over all days: **{best}**.", "",
-              "![drift, offset and residual](compensation.png)", "",
-              "## Per day (RMS / peak of the residual, µm)", ""]
+    rule = study.retrain[0]
+    lines += ["", f"Lowest residual RMS over all days (retrain {rule}): **{best}**.", "",
+              f"![drift, offset and residual](compensation.png) (retrain {rule})", "",
+              f"## Per day (RMS / peak of the residual, µm; retrain {rule})", ""]
+    days = days[days["retrain"] == rule]
     wide = days.pivot_table(index=["day", "experiment", "fault_active"], columns="model",
                             values=["rms_residual_um", "peak_residual_um"], aggfunc="first")
     unc = days.groupby("day")["rms_uncompensated_um"].first()

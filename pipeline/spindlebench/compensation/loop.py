@@ -162,8 +162,11 @@ def simulate_days(study: CompensationStudy, fmu: Path,
     return truths
 
 
-def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame]) -> Outcome:
-    """Run every model of the study through the controller on the simulated days."""
+def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
+             retrain: str | None = None) -> Outcome:
+    """Run every model of the study through the controller on the simulated days, retrained
+    by rule ``retrain`` (default: the study's first)."""
+    retrain = study.retrain[0] if retrain is None else retrain
     days = plan_days(study)
     outcome = Outcome()
     frames: dict[int, pd.DataFrame] = {}
@@ -182,13 +185,13 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame]) -> Outco
         true_rise = frame[TRUTH].to_numpy(float)
         for name in study.models:
             model = current[name]
-            if study.retrain == "weekly" and (day.number - 1) % study.retrain_every_days == 0:
+            if retrain == "weekly" and (day.number - 1) % study.retrain_every_days == 0:
                 model = train(name, study, frames[day.number - 1], day.number - 1,
                               model.excluded)
                 outcome.models[name].append(model)
             predicted = model.predict(frame)
             detection = ""
-            if study.retrain == "after-fault":
+            if retrain == "after-fault":
                 sensors = model.sensors
                 found = detect_faults(time_s, frame[sensors].to_numpy(float), sensors,
                                       study.monitor)
@@ -203,18 +206,26 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame]) -> Outco
             current[name] = model
             offset = applied_offset(time_s, predicted, study.controller)
             residual = true_rise - offset
-            outcome.days.append(_day_row(study, day, model, residual, true_rise, detection))
+            outcome.days.append({"retrain": retrain, **_day_row(study, day, model, residual,
+                                                                 true_rise, detection)})
             outcome.series.append(pd.DataFrame({
-                "model": name, "day": day.number, "time_s": time_s,
+                "retrain": retrain, "model": name, "day": day.number, "time_s": time_s,
                 "true_drift_um": true_rise, "predicted_um": predicted,
                 "offset_um": offset, "residual_um": residual}))
     return outcome
 
 
 def summary(study: CompensationStudy, days: pd.DataFrame, series: pd.DataFrame) -> pd.DataFrame:
-    """Per model (and the uncompensated machine): residual RMS and peak over all run days,
-    the mean and worst daily RMS, the fraction of time within the tolerance; split into days
-    with and without the fault when there is one."""
+    """Per retraining rule and model (and the uncompensated machine): residual RMS and peak
+    over all run days, the mean and worst daily RMS, the fraction of time within the
+    tolerance; split into days with and without the fault when there is one."""
+    tables = [_summary(study, days[days["retrain"] == rule], series[series["retrain"] == rule])
+              .assign(retrain=rule) for rule in dict.fromkeys(days["retrain"])]
+    table = pd.concat(tables, ignore_index=True)
+    return table[["retrain", *[c for c in table.columns if c != "retrain"]]]
+
+
+def _summary(study: CompensationStudy, days: pd.DataFrame, series: pd.DataFrame) -> pd.DataFrame:
     rows = []
     parts = [("all days", days["fault_active"] | ~days["fault_active"])]
     if days["fault_active"].any():

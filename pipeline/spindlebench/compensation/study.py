@@ -13,7 +13,8 @@ every replica, replica by replica, in the order of the axes. ``[compensate]``::
     tolerance_um = 5.0                 # "within tolerance" band of the residual
     fault = "T1-stuck"                 # optional: a [faults] table, on every day from ...
     fault_from_day = 8                 # ... this day on (never on the training day)
-    retrain = "never"                  # or "weekly" (on the previous day) or "after-fault"
+    retrain = "never"                  # or "weekly" (on the previous day) or "after-fault",
+                                       # or a list of them: each runs on the same days
     retrain_every_days = 7             # the "weekly" interval
     stuck_window_min = 30              # fault monitor: a reading constant this long is stuck
     jump_C = 0.5                       # fault monitor: a step larger than this is a fault
@@ -47,7 +48,7 @@ class CompensationStudy:
     tolerance_um: float
     fault: Fault | None
     fault_from_day: int
-    retrain: str
+    retrain: tuple[str, ...]  #: retraining rules, each run on the same simulated days
     seed: int
     retrain_every_days: int = WEEK_DAYS
     monitor: FaultMonitor = field(default_factory=FaultMonitor)
@@ -99,14 +100,20 @@ def load_compensation(path) -> CompensationStudy:
                           f"(have: {', '.join(known) or 'none'})")
         fault = known[fault_name]
     from_day = t.get("fault_from_day", int, default=2, check=in_range(2, None))
-    retrain = t.get("retrain", str, default="never", check=lambda v: one_of(v, RETRAIN_RULES))
+    if isinstance(t.raw("retrain", None), list):
+        retrain = tuple(t.get_list("retrain", str, check=lambda v: one_of(v, RETRAIN_RULES)))
+        if len(set(retrain)) != len(retrain):
+            raise t.error("retrain", "a rule is listed twice")
+    else:
+        retrain = (t.get("retrain", str, default="never",
+                         check=lambda v: one_of(v, RETRAIN_RULES)),)
     every = t.get("retrain_every_days", int, default=WEEK_DAYS, check=in_range(1, None))
     window_min = t.get("stuck_window_min", float, default=30.0,
                        check=in_range(positive=True, unit=" min"))
     jump = t.get("jump_C", float, default=0.5, check=in_range(positive=True, unit=" K"))
     seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
     t.finish()
-    if retrain == "after-fault" and fault is None:
+    if "after-fault" in retrain and fault is None:
         raise t.error("retrain", "'after-fault' needs a fault to detect (set 'fault')")
     return CompensationStudy(family, models, k, ControllerSettings(update, rate, dead_band),
                              tolerance, fault, from_day, retrain, seed, every,
