@@ -40,6 +40,7 @@ import pandas as pd
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.paths import shared_recordings_dir
 from spindlebench.provenance import file_entry, provenance
 
@@ -204,7 +205,7 @@ def study_config_text(schedule: Schedule, phase: Phase) -> str:
         f"sensors_all = {names(TEMPERATURES)}",
         'six = "auto"',
         "clusters = [2, 3, 4]",
-        'similarity = "abs-pearson"',
+        f'similarity = "{DEFAULT_SIMILARITY}"',
         "",
     ])
 

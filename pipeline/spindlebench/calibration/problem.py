@@ -38,10 +38,11 @@ from threadpoolctl import threadpool_limits
 
 from spindlebench.calibration.fitset import PRIOR_SD_LN, log_bounds
 from spindlebench.calibration.mapping import INPUTS
-from spindlebench.calibration.series import KELVIN, Series
+from spindlebench.calibration.series import Series
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import node_output
 from spindlebench.modelica.equations import ExplicitOde
+from spindlebench.names import KELVIN_OFFSET
 
 #: Prior sd (K) of the uniform shift of the initial state.
 INITIAL_SD_K = 3.0
@@ -102,8 +103,8 @@ class Discretisation:
         for k, i in enumerate(self.fit_index):
             p[i] = self.base[i] * ca.exp(s[k])
         u_model = ca.vertcat(ca.fmax(ca.fabs(u[0]), MIN_SPEED_RPM), u[1:])
-        f0, y0 = self.ode.ode(z0 + KELVIN, u_model, p)
-        f1 = self.ode.ode(z1 + KELVIN, u_model, p)[0]
+        f0, y0 = self.ode.ode(z0 + KELVIN_OFFSET, u_model, p)
+        f1 = self.ode.ode(z1 + KELVIN_OFFSET, u_model, p)[0]
         residual = z1 - z0 - h / 2 * (f0 + f1)
         self.step = ca.Function("step", [z0, z1, u, h, s], [residual])
         dense = ca.densify

@@ -20,7 +20,6 @@ from spindlebench.provenance import sha256_file
 #: Smallest noise a channel is given: a logger that quantises to 0.1 K on a slow signal shows
 #: almost no sample-to-sample scatter, and a weight of 1/0.001 K would let one channel rule.
 MIN_NOISE = {"temperature": 0.02, "error": 0.1}
-KELVIN = 273.15
 
 
 @dataclass(frozen=True)

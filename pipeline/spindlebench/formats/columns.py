@@ -32,6 +32,7 @@ import pandas as pd
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import TIME_COLUMN, not_sensor_reason
 from spindlebench.listflags import split_list_flag
+from spindlebench.names import KELVIN_OFFSET
 
 #: |Pearson r| with the target above which a candidate is taken for a copy of the target.
 COPY_R = 0.999
@@ -266,7 +267,7 @@ def require_time(choice: RoleChoice, where: str, why: str) -> str:
 
 #: Values a temperature sensor cannot read (°C): below absolute zero, or a logger's error
 #: sentinel (9.9e37, 1e10); -273.15 itself is also a common "no value" code.
-PLAUSIBLE_C = (-273.15, 1.0e4)
+PLAUSIBLE_C = (-KELVIN_OFFSET, 1.0e4)
 
 
 def refuse_implausible_temperatures(frame: pd.DataFrame, sensors: Sequence[str],

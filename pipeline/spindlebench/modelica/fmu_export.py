@@ -35,6 +35,7 @@ from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import FMU_NAME
 from spindlebench.modelica.equations import ExplicitOde
+from spindlebench.names import KELVIN_OFFSET
 
 DEFAULT_COMPILER = "gcc"
 ZIP_DATE = (1980, 1, 1, 0, 0, 0)
@@ -44,7 +45,7 @@ DEFAULT_STOP_TIME_S = 4 * 3600.0
 UNIT_DEFINITIONS: dict[str, dict[str, float]] = {
     "1": {},
     "K": {"K": 1},
-    "degC": {"K": 1, "offset": 273.15},
+    "degC": {"K": 1, "offset": KELVIN_OFFSET},
     "K/s": {"K": 1, "s": -1},
     "1/K": {"K": -1},
     "W": {"kg": 1, "m": 2, "s": -3},

@@ -33,6 +33,7 @@ import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
 from scipy.spatial.distance import squareform
 
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning
@@ -80,7 +81,7 @@ def fcm_memberships(points: np.ndarray, n_clusters: int, random_state: int) -> n
 
 
 def cluster_candidates(X: np.ndarray, n_clusters: int, clustering: str = "closure",
-                       similarity: str = "abs-pearson", closure: str = "fast",
+                       similarity: str = DEFAULT_SIMILARITY, closure: str = "fast",
                        random_state: int = 0,
                        names: Sequence[str] | None = None) -> list[np.ndarray]:
     """Partition the columns of ``X`` (non-constant candidates) into ``n_clusters`` clusters.

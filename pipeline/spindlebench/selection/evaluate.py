@@ -222,7 +222,7 @@ def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
     keep the matrix path (results unchanged to the last bit); the row-wise path gives the same
     clusters and psi, and eta to rounding."""
     return (candidates.differences and len(candidates.names) > ROW_WISE_ABOVE
-            and similarity == "abs-pearson" and closure == "fast")
+            and similarity == DEFAULT_SIMILARITY and closure == "fast")
 
 
 def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:

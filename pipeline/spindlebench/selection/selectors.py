@@ -35,6 +35,7 @@ from sklearn.linear_model import enet_path
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
@@ -144,7 +145,7 @@ class ClusterSelector(_Selector):
     }
 
     def __init__(self, n_clusters: int = 2, clustering: str = "closure", within: str = "psi",
-                 similarity: str = "abs-pearson", closure: str = "fast",
+                 similarity: str = DEFAULT_SIMILARITY, closure: str = "fast",
                  normalisation: str = "interval", rho: float = DEFAULT_RHO,
                  random_state: int = 0):
         self.n_clusters = n_clusters
