@@ -1,0 +1,108 @@
+"""Benchmark: ``calibrate`` on a 24 h recording at 60 s sampling with 10 parameters (issue 13's
+budget: at most 2 minutes on this 2-core machine), and the two solvers against each other.
+
+1. The FMU simulates a 24 h twin of the default machine with 10 parameters perturbed by up to
+   30 % (speed steps, X/Y feed while the spindle turns, a daily ambient, the sensor model's
+   noise); the default Gauss-Newton calibration fits those 10 on 10 temperatures and the drift.
+   Prints wall time, evaluations, peak memory and how many parameters came back inside their
+   95 % intervals (a fast but wrong fit cannot look good).
+2. On the first ``--compare-h`` hours of the same recording, the same fit with
+   ``method="ipopt"`` (full discretisation) and with Gauss-Newton, in this process: the ratio.
+
+    .venv/bin/python bench/bench_calibration.py [--hours 24] [--compare-h 3] [--segments 12]
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from spindlebench.calibration.fitset import DEFAULT_FIT
+from spindlebench.calibration.mapping import read_map
+from spindlebench.calibration.problem import Discretisation, calibrate
+from spindlebench.calibration.series import load_series
+from spindlebench.cli import main
+from spindlebench.modelica.equations import explicit_ode
+
+ROOT = Path(__file__).resolve().parents[1]
+#: 10 of the default set (the table's expansion length and the Y feed loss left at default).
+FIT = [name for name in DEFAULT_FIT if name not in ("table_L", "c_y_motor")]
+FACTORS = (1.3, 0.8, 0.75, 1.2, 1.15, 0.85, 1.25, 1.3, 0.9, 0.8)
+MAP = """
+[inputs]
+spindle_speed_rpm = "spindle_speed_rpm"
+feed_x_mm_per_min = "feed_x_mm_per_min"
+feed_y_mm_per_min = "feed_y_mm_per_min"
+ambient_C = "ambient_C"
+[error]
+column = "drift_um"
+[temperatures]
+""" + "".join(f'T{i} = "T{i}"\n' for i in (1, 2, 4, 6, 7, 8, 9, 10, 12, 16))
+
+
+def twin_scenario(path: Path, hours: float, truth: dict[str, float]) -> Path:
+    steps = ", ".join(f"{{at_s = {int(i * 7200)}, rpm = {rpm}}}" for i, rpm in
+                      enumerate([2000, 5000, 0, 3500, 6000, 0, 1000, 4000, 0, 2500, 0, 3000])
+                      if i * 7200 < hours * 3600)
+    lines = [f"duration_s = {int(hours * 3600)}", "step_s = 60.0", "sample_interval_s = 60.0",
+             "seed = 11", "[speed]", 'kind = "steps"', f"steps = [{steps}]", "[feed]",
+             'kind = "with_spindle"', "x_mm_per_min = 1500", "y_mm_per_min = 1200",
+             "[ambient]", 'kind = "season"', "low_C = 17", "high_C = 24", "[parameters]",
+             *[f"{k} = {v!r}" for k, v in truth.items()]]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def run(hours: float, compare_h: float, segments: int) -> None:
+    ode = explicit_ode(ROOT / "models", segments=segments)
+    truth = {name: ode.parameters[name] * f for name, f in zip(FIT, FACTORS, strict=True)}
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        scenario = twin_scenario(folder / "twin.toml", hours, truth)
+        assert main(["simulate", str(scenario), "-o", str(folder / "twin.csv")]) == 0
+        (folder / "map.toml").write_text(MAP, encoding="utf-8")
+        recording_map = read_map(folder / "map.toml", ode.outputs)
+        series = load_series(folder / "twin.csv", recording_map, None)
+        d = Discretisation(ode, FIT, ode.parameter_vector())
+        started = time.perf_counter()
+        fit = calibrate(d, [series])
+        seconds = time.perf_counter() - started
+        inside = sum(lo <= truth[n] <= hi for n, (lo, hi) in fit.interval95().items())
+        worst = max(abs(fit.values[n] / truth[n] - 1) for n in FIT)
+        peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        print(f"gauss-newton, {hours:g} h at 60 s, {len(FIT)} parameters, {segments} segments: "
+              f"{seconds:.1f} s, {fit.evaluations} evaluations, peak RSS {peak_mb:.0f} MB; "
+              f"{inside}/{len(FIT)} true values inside the 95 % intervals, worst relative "
+              f"error {100 * worst:.1f} %, reduced chi-square {fit.chi2_reduced:.2f}")
+
+        short = load_series(folder / "twin.csv", recording_map, None)
+        keep = short.time_s <= compare_h * 3600
+        short = replace(short, time_s=short.time_s[keep], inputs=short.inputs[:, keep],
+                        channels=tuple(replace(c, values=c.values[keep])
+                                       for c in short.channels))
+        timings, estimates = {}, {}
+        for method in ("gauss-newton", "ipopt"):
+            started = time.perf_counter()
+            result = calibrate(d, [short], method=method, max_iter=200)
+            timings[method] = time.perf_counter() - started
+            estimates[method] = result.log_factors
+            count = "iterations" if method == "ipopt" else "evaluations"
+            print(f"{method}, first {compare_h:g} h: {timings[method]:.1f} s, "
+                  f"{result.evaluations} {count}, {result.status}")
+        gap = float(np.max(np.abs(np.exp(estimates["ipopt"] - estimates["gauss-newton"]) - 1)))
+        print(f"ipopt / gauss-newton time ratio: {timings['ipopt'] / timings['gauss-newton']:.1f}"
+              f"; largest relative difference of their estimates {100 * gap:.2f} %")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--hours", type=float, default=24.0)
+    parser.add_argument("--compare-h", type=float, default=3.0)
+    parser.add_argument("--segments", type=int, default=12)
+    args = parser.parse_args()
+    run(args.hours, args.compare_h, args.segments)
