@@ -132,3 +132,39 @@ def test_the_example_can_be_regenerated(tmp_path):
     assert runpy.run_path(str(copy / "make_example.py"), run_name="example")["main"]() == 0
     for name in ("run1.csv", "run2.csv"):
         assert (copy / name).read_bytes() == (EXAMPLE / name).read_bytes()
+
+
+SENSORS = ["Spindle front [degC]", "Spindle rear [degC]", "Motor housing [degC]",
+           "Headstock top [degC]", "Column front [degC]", "Bed [degC]", "Workshop air [degC]"]
+
+
+def paper_folder(tmp_path: Path, extra: str = "") -> Path:
+    folder = tmp_path / "recs"
+    folder.mkdir()
+    for name in ("run1.csv", "run2.csv"):
+        shutil.copy(EXAMPLE / name, folder / name)
+    names = ", ".join(f'"{s}"' for s in SENSORS)
+    (folder / "paper_study.toml").write_text(
+        f'target = "{TARGET}"\ntrain = "run1"\ntests = ["run2"]\nsensors_all = [{names}]\n'
+        f'six = "auto"\nclusters = [2]\n{extra}', encoding="utf-8")
+    return folder
+
+
+def test_paper_takes_the_roles_from_its_study_file(tmp_path, capsys):
+    folder = paper_folder(tmp_path, 'time_column = "Time [s]"\n'
+                                    'exclude = ["Workshop*"]\n')
+    assert cli.main(["paper", "--recordings", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "target dz [um]" in out and "Workshop air" not in out.split("six = ")[1]
+    assert (folder / "paper_study" / "README.md").is_file()
+
+
+def test_paper_without_its_time_column_says_so(tmp_path, capsys):
+    folder = paper_folder(tmp_path)
+    assert cli.main(["paper", "--recordings", str(folder)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == (f"error: recording {folder / 'run1.csv'}: no time column 'time_s'; the "
+                       "paper's figures plot against time and needs one: name it with "
+                       "--time-column (or time_column)")
+    assert not (folder / "paper_study").exists()
+    assert cli.main(["paper", "--recordings", str(folder), "--time-column", "Time [s]"]) == 0

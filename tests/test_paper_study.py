@@ -210,7 +210,8 @@ def test_bad_configuration_is_one_line(tmp_path, generated):
     with pytest.raises(SpindlebenchError, match=r"missing column.*no_such_um"):
         run_study(folder, config)
     config = study_config.load(None, {"six": "T1,T2", "clusters": "2,4"})
-    with pytest.raises(SpindlebenchError, match="group six_raw, k = 4: cannot make 4 clusters"):
+    with pytest.raises(SpindlebenchError,
+                       match=r"group six_raw, k = 4: recording .*exp1\.csv: cannot make 4"):
         run_study(folder, config)
     assert cli.main(["paper", "--recordings", str(tmp_path / "nowhere")]) == 2
 

@@ -159,7 +159,8 @@ def _pattern(text: str) -> re.Pattern[str]:
                               for c in text) + r"\Z", re.DOTALL)
 
 
-def _matches(name: str, patterns: Sequence[str]) -> bool:
+def matches(name: str, patterns: Sequence[str]) -> bool:
+    """Whether ``name`` is one of ``patterns`` or matches one (``*``, ``?`` wildcards)."""
     return any(name == p or _pattern(p).match(name) for p in patterns)
 
 
@@ -189,15 +190,15 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
     if time_column not in header:
         time_column = None
     for pattern in roles.exclude:
-        if not any(_matches(name, [pattern]) for name in header):
+        if not any(matches(name, [pattern]) for name in header):
             raise SpindlebenchError(f"recording {where}: --exclude {pattern!r} matches no "
                                     f"column (columns are: {', '.join(header)})")
     skipped: list[tuple[str, str]] = []
     if roles.sensors is not None:
         sensors: list[str] = []
         for pattern in roles.sensors:
-            found = [n for n in header if _matches(n, [pattern]) and n not in sensors]
-            if not any(_matches(n, [pattern]) for n in header):
+            found = [n for n in header if matches(n, [pattern]) and n not in sensors]
+            if not any(matches(n, [pattern]) for n in header):
                 what = ("sensor pattern matches no column" if any(c in pattern for c in "*?")
                         else "sensor column(s) not found")
                 raise SpindlebenchError(f"recording {where}: {what}: {pattern} (columns are: "
@@ -207,7 +208,7 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
             if name == target:
                 raise SpindlebenchError(f"recording {where}: the target {target!r} is also "
                                         "listed as a sensor")
-            if name == time_column or _matches(name, roles.exclude):
+            if name == time_column or matches(name, roles.exclude):
                 sensors.remove(name)
                 skipped.append((name, "time column" if name == time_column else "--exclude"))
         by_rule = False
@@ -219,7 +220,7 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
                 skipped.append((name, "target"))
             elif name == time_column:
                 skipped.append((name, "time column"))
-            elif _matches(name, roles.exclude):
+            elif matches(name, roles.exclude):
                 skipped.append((name, "--exclude"))
             elif looks_like_time(name):
                 skipped.append((name, "looks like time; --time-column names the time axis"))
@@ -261,8 +262,18 @@ def require_time(choice: RoleChoice, where: str, why: str) -> str:
     """The time column, or an error for a command that needs one (plots, resampling)."""
     if choice.time_column is None:
         raise SpindlebenchError(f"recording {where}: no time column {TIME_COLUMN!r}; {why} "
-                                "needs one: pass --time-column NAME")
+                                "needs one: name it with --time-column (or time_column)")
     return choice.time_column
+
+
+def parse_delimiter(value: str | None, where: str) -> str | None:
+    """A delimiter as given by a user (``tab`` for a tab), checked."""
+    return _delimiter(value, where)
+
+
+def parse_decimal(value: str | None, where: str) -> str | None:
+    """A decimal mark as given by a user, checked."""
+    return _decimal(value, where)
 
 
 #: Values a temperature sensor cannot read (°C): below absolute zero, or a logger's error

@@ -7,6 +7,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from spindlebench.formats.columns import add_role_arguments
 from spindlebench.listflags import split_list_flag
 from spindlebench.names import GROUP_LABELS, SIMILARITIES
 from spindlebench.paper_study import config as study_config
@@ -60,6 +61,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "comma-separated, or 'all' (default: closure, the paper's, only)")
     parser.add_argument("--seed", default=None, type=int,
                         help="seed of fcm, kmeans and stability selection (default 0)")
+    add_role_arguments(parser, sensors=False)  # --sensors-all names the sensors here
     parser.set_defaults(func=_run)
 
 
@@ -72,9 +74,12 @@ def _joined(flag: str, values: list[str] | None) -> str | None:
 def _run(args: argparse.Namespace) -> int:
     lists = {key: _joined("--" + key.replace("_", "-"), getattr(args, key))
              for key in ("tests", "sensors_all", "six", "clusters", "methods")}
+    lists["exclude"] = _joined("--exclude", args.exclude)
     overrides = {
         "target": args.target, "train": args.train, "similarity": args.similarity,
-        "missing": args.missing, "seed": args.seed, **lists,
+        "missing": args.missing, "seed": args.seed, "time_column": args.time_column,
+        "delimiter": args.delimiter, "decimal": args.decimal,
+        "allow_target_copy": True if args.allow_target_copy else None, **lists,
     }
     config_path = args.config
     own = Path(args.recordings) / study_config.CONFIG_NAME
@@ -93,9 +98,11 @@ def _run(args: argparse.Namespace) -> int:
             ("--six", lists["six"]), ("--clusters", lists["clusters"]),
             ("--similarity", args.similarity), ("--missing", args.missing),
             ("--methods", lists["methods"]), ("--seed", args.seed),
+            ("--time-column", args.time_column), ("--exclude", lists["exclude"]),
+            ("--delimiter", args.delimiter), ("--decimal", args.decimal),
         )
         if value is not None
-    )
+    ) + (" --allow-target-copy" if args.allow_target_copy else "")
     check_out_dir(out_dir)  # before the study's minutes, not after
     result = run_study(args.recordings, config)
     paths = write_outputs(result, out_dir, command)

@@ -21,6 +21,11 @@ TOML keys (all optional)::
     methods = ["closure", "kmeans+grey"]   # method labels (spindlebench methods), or "all";
                                            # every one runs on every group and k
     seed = 0                               # seed of fcm, kmeans and stability selection
+    time_column = "time_s"                 # the time axis in seconds (the figures need it)
+    exclude = ["dx [um]"]                  # columns (names or * ? patterns) never sensors
+    allow_target_copy = false              # keep a sensor with |r| > 0.999 with the target
+    delimiter = ";"                        # CSV dialect (default: detected), "tab" for a tab
+    decimal = ","
 
 ``six = "auto"`` picks the subset by a rule that does not look at the thermal error (the paper
 chose its six by location, one per region of the machine): cut the fuzzy equivalence hierarchy
@@ -56,7 +61,8 @@ CONFIG_NAME = "paper_study.toml"
 MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
 
 _KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
-         "missing", "methods", "seed")
+         "missing", "methods", "seed", "time_column", "exclude", "allow_target_copy",
+         "delimiter", "decimal")
 #: ``methods = "all"``: every selection method with its defaults (psi, ols).
 ALL_METHODS = "all"
 
@@ -78,6 +84,13 @@ class StudyConfig:
     #: paper's tables; the others add the "methods compared" tables.
     methods: tuple[str, ...] = (DEFAULT_METHOD,)
     seed: int = DEFAULT_METHOD_SEED
+    #: Column roles (``formats.columns``): time axis, excluded columns, copies of the target,
+    #: CSV dialect (None: detected).
+    time_column: str = TIME_COLUMN
+    exclude: tuple[str, ...] = ()
+    allow_target_copy: bool = False
+    delimiter: str | None = None
+    decimal: str | None = None
     source: str = field(default="defaults", compare=False)
 
     @property
@@ -97,10 +110,20 @@ class StudyConfig:
                 if not _plain_name(name):
                     raise fail(key, f"{name!r} is not an experiment name (the stem of a CSV "
                                     "in --recordings: no folder separators, '.' or '..')")
-        if self.target == TIME_COLUMN:
-            raise fail("target", f"{TIME_COLUMN} is the time axis, not a thermal error")
-        if TIME_COLUMN in self.sensors_all:
-            raise fail("sensors_all", f"{TIME_COLUMN} is the time axis, not a sensor")
+        if self.target == self.time_column:
+            raise fail("target", f"{self.time_column} is the time axis, not a thermal error")
+        if self.time_column in self.sensors_all:
+            raise fail("sensors_all", f"{self.time_column} is the time axis, not a sensor")
+        from spindlebench.formats.columns import matches, parse_decimal, parse_delimiter
+
+        parse_delimiter(self.delimiter, f"{where}: key 'delimiter'")
+        parse_decimal(self.decimal, f"{where}: key 'decimal'")
+        excluded = [s for s in self.sensors_all if matches(s, self.exclude)]
+        if excluded:
+            kept = tuple(s for s in self.sensors_all if s not in excluded)
+            six = self.six if isinstance(self.six, str) else tuple(
+                s for s in self.six if s not in excluded)
+            return replace(self, sensors_all=kept, six=six, exclude=()).checked()
         if self.target in self.sensors_all:
             raise fail("target", f"{self.target!r} is also in sensors_all (a model would "
                                  "predict it from itself)")
@@ -148,7 +171,8 @@ class StudyConfig:
             "six": self.six if isinstance(self.six, str) else list(self.six),
             "clusters": list(self.clusters), "similarity": self.similarity,
             "missing": self.missing, "methods": list(self.methods), "seed": self.seed,
-            "source": self.source,
+            "time_column": self.time_column, "allow_target_copy": self.allow_target_copy,
+            "delimiter": self.delimiter, "decimal": self.decimal, "source": self.source,
         }
 
 
@@ -190,12 +214,18 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
     for key in _KEYS:
         if table.raw(key, None) is None:
             continue
-        if key in ("title", "target", "train", "similarity", "missing"):
+        if key == "allow_target_copy":
+            value = table.raw(key)
+            if not isinstance(value, bool):
+                raise table.error(key, f"expected true or false, got {value!r}")
+            changes[key] = value
+        elif key in ("title", "target", "train", "similarity", "missing", "time_column",
+                     "delimiter", "decimal"):
             value = table.raw(key)
             if not isinstance(value, str) or not value:
                 raise table.error(key, "expected a non-empty string")
             changes[key] = value
-        elif key in ("tests", "sensors_all"):
+        elif key in ("tests", "sensors_all", "exclude"):
             changes[key] = _names(table, key)
         elif key == "six":
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)

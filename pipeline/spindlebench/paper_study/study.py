@@ -23,7 +23,14 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import MissingValueError, read_recording
+from spindlebench.formats.columns import (
+    ColumnRoles,
+    detect_dialect,
+    read_with_roles,
+    refuse_target_copies,
+    require_time,
+)
+from spindlebench.formats.recording import TIME_COLUMN, MissingValueError, read_header
 from spindlebench.names import ALL_RAW, DEFAULT_METHOD, GROUPS, SIX_DIFF
 from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
 from spindlebench.selection import SelectionWarning, evaluate
@@ -145,16 +152,25 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
             raise SpindlebenchError(
                 f"{path}: experiment {name!r} not found (the folder has: {found}){hint}"
             )
+        delimiter, decimal = detect_dialect(path, config.delimiter, config.decimal)
+        header = read_header(path, delimiter)
+        missing = [column for column in needed if column not in header]
+        if missing:
+            raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
+        given_time = None if config.time_column == TIME_COLUMN else config.time_column
+        roles = ColumnRoles(time_column=given_time, sensors=tuple(config.sensors_all),
+                            delimiter=delimiter, decimal=decimal)
         try:
-            frame = read_recording(path, allow_missing=config.missing == "drop-rows",
-                                   columns=needed)
+            frame, choice = read_with_roles(path, config.target, roles,
+                                            allow_missing=config.missing == "drop-rows")
         except MissingValueError as exc:
             raise SpindlebenchError(
                 f"{exc}; missing = \"drop-rows\" (--missing drop-rows) drops incomplete samples"
             ) from exc
-        missing = [column for column in needed if column not in frame.columns]
-        if missing:
-            raise SpindlebenchError(f"{path}: missing column(s) {', '.join(missing)}")
+        require_time(choice, str(path), "the paper's figures plot against time and")
+        if name == config.train:
+            refuse_target_copies(frame, config.target, choice.sensors, str(path),
+                                 config.allow_target_copy)
         frames[name] = frame
         paths[name] = path
     return frames, paths
