@@ -36,8 +36,9 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 from IPython.display import Image, display
+
 from spindlebench import course
-from spindlebench.cli import main as spindlebench
+from spindlebench.course import spindlebench
 from spindlebench.formats.recording import read_recording
 
 work = course.start("01")  # this notebook's own files go into work/01
@@ -80,8 +81,8 @@ def scenario(name: str, rpm: int, ambient_table: str, ambient: str) -> Path:
 
 constant_20 = 'kind = "constant"\ntemperature_C = 20.0'
 base = scenario("base", 4000, constant_20, "20 °C")
-spindlebench(["simulate", str(base), "-o", str(work / "base.csv"), "--plot"])
-display(Image(str(work / "base.png")))
+spindlebench("simulate", base, "-o", work / "base.csv", "--plot")
+display(Image(filename=work / "base.png"))
 
 # %% [markdown]
 # The figure has four rows. The first two are temperatures, grouped by the part of the
@@ -149,10 +150,10 @@ warming = scenario("warming_room", 4000,
                    'kind = "season"\nlow_C = 12.0\nhigh_C = 22.0\nstart_hour = 8\n'
                    'trough_hour = 8\npeak_hour = 12', "12-22 °C")
 for path in (slow, warming):
-    spindlebench(["simulate", str(path), "-o", str(work / f"{path.stem}.csv"), "-q"])
-spindlebench(["plot", *(str(work / f"{n}.csv") for n in ("base", "slow", "warming_room")),
-              "--rises", "-o", str(work / "compare.png")])
-display(Image(str(work / "compare.png")))
+    spindlebench("simulate", path, "-o", work / f"{path.stem}.csv", "-q")
+spindlebench("plot", *(work / f"{n}.csv" for n in ("base", "slow", "warming_room")),
+              "--rises", "-o", work / "compare.png")
+display(Image(filename=work / "compare.png"))
 
 # %%
 for name in ("base", "slow", "warming_room"):

@@ -35,7 +35,7 @@ import numpy as np
 from IPython.display import Image, display
 from scipy.cluster.hierarchy import dendrogram
 from spindlebench import course
-from spindlebench.cli import main as spindlebench
+from spindlebench.course import spindlebench
 from spindlebench.formats.recording import read_recording
 from spindlebench.paper_study.figures import cut_height
 from spindlebench.paths import SCENARIOS_DIR
@@ -58,14 +58,14 @@ def quick_copy(name: str) -> str:
     text = (SCENARIOS_DIR / "paper" / f"{name}.toml").read_text()
     path = work / f"{name}.toml"
     path.write_text(text.replace("step_s = 1.0", "step_s = 30.0"))
-    return str(path)
+    return path
 
 
 for name in ("exp1", "exp2"):
-    spindlebench(["simulate", quick_copy(name), "-o", str(work / f"{name}.csv"), "-q"])
-spindlebench(["plot", str(work / "exp1.csv"), str(work / "exp2.csv"), "--rises",
-              "-o", str(work / "days.png")])
-display(Image(str(work / "days.png")))
+    spindlebench("simulate", quick_copy(name), "-o", work / f"{name}.csv", "-q")
+spindlebench("plot", work / "exp1.csv", work / "exp2.csv", "--rises",
+              "-o", work / "days.png")
+display(Image(filename=work / "days.png"))
 
 # %% [markdown]
 # ## Step 1: the similarity matrix
@@ -139,7 +139,7 @@ plt.show()
 # %%
 result = evaluate(work / "exp1.csv", [work / "exp2.csv"], "drift_um", k=3)
 print("chosen:", result.selected, " RMSE on February:",
-      f"{result.rmse_um[str(work / 'exp2.csv')]:.1f} µm")
+      f"{result.rmse_um[work / 'exp2.csv']:.1f} µm")
 
 # %% [markdown]
 # ## Pick sensors by hand
@@ -149,7 +149,7 @@ print("chosen:", result.selected, " RMSE on February:",
 # them all and only fits.
 
 # %%
-test = str(work / "exp2.csv")
+test = work / "exp2.csv"
 for pick in (["T1", "T10"], ["T1", "T8"], ["T6", "T10"], ["T4", "T16"]):
     by_hand = evaluate(work / "exp1.csv", [test], "drift_um", sensors=pick, k=len(pick))
     print(f"{' + '.join(pick):9s} RMSE on February: {by_hand.rmse_um[test]:5.1f} µm")

@@ -36,7 +36,7 @@ import pandas as pd
 from IPython.display import Image, display
 
 from spindlebench import course
-from spindlebench.cli import main as spindlebench
+from spindlebench.course import spindlebench
 from spindlebench.names import PAPER_SIX
 from spindlebench.paths import SCENARIOS_DIR
 from spindlebench.recordings import read_recording
@@ -70,19 +70,19 @@ def quick_copy(name: str, machine: str) -> str:
     folder.mkdir(exist_ok=True)
     path = folder / f"{name}.toml"
     path.write_text(text)
-    return str(path)
+    return path
 
 
 recordings: dict[str, dict[str, pd.DataFrame]] = {}
 for machine in machines:
     for name in EXPERIMENTS:
         csv = work / machine / f"{name}.csv"
-        spindlebench(["simulate", quick_copy(name, machine), "-o", str(csv), "-q"])
+        spindlebench("simulate", quick_copy(name, machine), "-o", csv, "-q")
     recordings[machine] = {n: read_recording(work / machine / f"{n}.csv")
                            for n in EXPERIMENTS}
-spindlebench(["plot", *(str(work / "default" / f"{n}.csv") for n in EXPERIMENTS),
-              "--rises", "-o", str(work / "default.png")])
-display(Image(str(work / "default.png")))
+spindlebench("plot", *(work / "default" / f"{n}.csv" for n in EXPERIMENTS),
+              "--rises", "-o", work / "default.png")
+display(Image(filename=work / "default.png"))
 
 # %% [markdown]
 # The three days differ in speed (February runs at 2000 rpm) and in the room: in January it

@@ -34,25 +34,49 @@ def notebook_files(folder: Path = NOTEBOOKS) -> list[Path]:
     return sorted(folder.glob("[0-9][0-9]_*.py"))
 
 
+def _figures_inline() -> None:
+    """Select matplotlib's inline backend when running in a notebook kernel."""
+    try:
+        from IPython import get_ipython
+    except ImportError:  # run as a plain script: nothing to show inline
+        return
+    shell = get_ipython()
+    if shell is not None and "inline" not in matplotlib_backend():
+        shell.run_line_magic("matplotlib", "inline")
+
+
+def matplotlib_backend() -> str:
+    import matplotlib
+
+    return str(matplotlib.get_backend())
+
+
+def spindlebench(*arguments: object) -> None:
+    """Run a ``spindlebench`` command from a notebook, as on the command line:
+    ``spindlebench("plot", "a.csv", "-o", "a.png")``. Paths may be ``Path`` objects. A
+    command that fails (its one-line error is printed) raises, so the notebook stops there
+    instead of running on without the command's output."""
+    from spindlebench.cli import main
+
+    words = [str(argument) for argument in arguments]
+    status = main(words)
+    _figures_inline()  # a command's figure modules may have selected Agg
+    if status != 0:
+        raise RuntimeError(f"spindlebench {' '.join(words)} failed (status {status})")
+
+
 def start(name: str) -> Path:
     """Begin a notebook: its working folder for its own files, emptied first
     (``work/<name>`` under the folder the notebook runs in), and figures shown inline.
 
-    The figure modules select matplotlib's file-only Agg backend when the command line
-    imports them (on the first ``spindlebench.cli.main`` call); importing them here first
-    and then switching to the inline backend keeps the notebook's own figures visible.
+    The figure modules select matplotlib's file-only Agg backend when they are imported
+    (some only when their command runs), which would hide the notebook's own figures; the
+    inline backend is selected here and again after every ``spindlebench(...)`` command.
     """
     from spindlebench.cli import build_parser
 
-    build_parser()  # imports every command module, so none switches the backend later
-    try:
-        from IPython import get_ipython
-    except ImportError:  # run as a plain script: nothing to show inline
-        shell = None
-    else:
-        shell = get_ipython()
-    if shell is not None:
-        shell.run_line_magic("matplotlib", "inline")
+    build_parser()  # imports every command module now, before the backend is chosen
+    _figures_inline()
     folder = Path.cwd() / "work" / name
     if folder.exists():
         shutil.rmtree(folder)
