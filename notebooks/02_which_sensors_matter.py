@@ -137,9 +137,10 @@ plt.show()
 # model on the test recording (RMSE: the typical size of the prediction error in µm).
 
 # %%
-result = evaluate(work / "exp1.csv", [work / "exp2.csv"], "drift_um", k=3)
+february = {"February": work / "exp2.csv"}  # test recordings by the name results use
+result = evaluate(work / "exp1.csv", february, "drift_um", k=3)
 print("chosen:", result.selected, " RMSE on February:",
-      f"{result.rmse_um[work / 'exp2.csv']:.1f} µm")
+      f"{result.rmse_um['February']:.1f} µm")
 
 # %% [markdown]
 # ## Pick sensors by hand
@@ -149,15 +150,14 @@ print("chosen:", result.selected, " RMSE on February:",
 # them all and only fits.
 
 # %%
-test = work / "exp2.csv"
 for pick in (["T1", "T10"], ["T1", "T8"], ["T6", "T10"], ["T4", "T16"]):
-    by_hand = evaluate(work / "exp1.csv", [test], "drift_um", sensors=pick, k=len(pick))
-    print(f"{' + '.join(pick):9s} RMSE on February: {by_hand.rmse_um[test]:5.1f} µm")
+    by_hand = evaluate(work / "exp1.csv", february, "drift_um", sensors=pick, k=len(pick))
+    print(f"{' + '.join(pick):9s} RMSE on February: {by_hand.rmse_um['February']:5.1f} µm")
 
 # %%
-prediction = result.predictions[test]
-measured = result.measured[test]
-hours = read_recording(test)["time_s"] / 3600
+prediction = result.predictions["February"]
+measured = result.measured["February"]
+hours = read_recording(february["February"])["time_s"] / 3600
 fig, ax = plt.subplots(figsize=(8, 3))
 ax.plot(hours, measured, "k", lw=2, label="measured drift, February")
 ax.plot(hours, prediction, "tab:red", label=f"predicted from {', '.join(result.selected)}")

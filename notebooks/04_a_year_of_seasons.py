@@ -72,7 +72,7 @@ baselines = ["top-k-correlated"]
 """
 study = work / "seasons.toml"
 study.write_text(STUDY)
-spindlebench("sweep", study, "-o", work / "sweep")
+spindlebench("sweep", study, "-o", work / "sweep", "--workers", "0")  # in this process
 
 # %% [markdown]
 # The sweep writes one row per (method, k, held-out day) into `results.csv`, a README

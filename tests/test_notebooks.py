@@ -1,9 +1,12 @@
 """The course notebooks execute from top to bottom (the real commands, the real FMU).
 
 Each notebook runs in a fresh kernel of this venv (``spindlebench.course.execute``, as
-``make notebooks`` does), in a temporary working folder. A failing cell fails the test with
-the cell and its traceback.
+``make notebooks`` does), in a temporary working folder. The kernels are single-threaded
+work, so two notebooks run at a time (the machine has two cores); each test then checks
+one notebook's result. A failing cell fails that notebook's test with its traceback.
 """
+
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 from spindlebench.course import NOTEBOOKS, execute, notebook_files
@@ -11,15 +14,29 @@ from spindlebench.course import NOTEBOOKS, execute, notebook_files
 NOTEBOOK_FILES = notebook_files()
 
 
-def test_the_course_has_its_notebooks():
-    assert [p.name[:2] for p in NOTEBOOK_FILES] == [f"{i:02d}" for i in
-                                                     range(1, len(NOTEBOOK_FILES) + 1)]
-    assert len(NOTEBOOK_FILES) >= 2, NOTEBOOKS
+@pytest.fixture(scope="module")
+def executed(tmp_path_factory):
+    """name → the executed notebook, or the exception its execution raised."""
+    def run(path):
+        try:
+            return execute(path, tmp_path_factory.mktemp(path.stem))
+        except Exception as exc:  # reported by the notebook's own test
+            return exc
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        return dict(zip((p.stem for p in NOTEBOOK_FILES), pool.map(run, NOTEBOOK_FILES),
+                        strict=True))
+
+
+def test_the_course_has_its_six_notebooks():
+    assert [p.name[:2] for p in NOTEBOOK_FILES] == [f"{i:02d}" for i in range(1, 7)], NOTEBOOKS
 
 
 @pytest.mark.parametrize("path", NOTEBOOK_FILES, ids=[p.stem for p in NOTEBOOK_FILES])
-def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, tmp_path):
-    notebook = execute(path, tmp_path)
+def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, executed):
+    notebook = executed[path.stem]
+    if isinstance(notebook, Exception):
+        raise notebook
     outputs = [out for cell in notebook.cells if cell.cell_type == "code"
                for out in cell.outputs]
     assert not [out for out in outputs if out.output_type == "error"]
