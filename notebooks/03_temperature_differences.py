@@ -39,7 +39,7 @@ from spindlebench import course
 from spindlebench.course import spindlebench
 from spindlebench.names import PAPER_SIX
 from spindlebench.paths import SCENARIOS_DIR
-from spindlebench.recordings import read_recording
+from spindlebench.formats.recording import read_recording
 from spindlebench.selection import evaluate, with_differences
 
 work = course.start("03")

@@ -34,7 +34,7 @@ from IPython.display import Image, display
 from spindlebench import course
 from spindlebench.course import spindlebench
 from spindlebench.paths import SCENARIOS_DIR
-from spindlebench.recordings import read_recording
+from spindlebench.formats.recording import read_recording
 from spindlebench.studies.placement.schematic import draw_machine, node_positions
 
 work = course.start("05")

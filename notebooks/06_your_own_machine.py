@@ -31,7 +31,7 @@ from IPython.display import Image, display
 from spindlebench import course
 from spindlebench.course import spindlebench
 from spindlebench.paths import SCENARIOS_DIR
-from spindlebench.recordings import default_sensors, read_recording
+from spindlebench.formats.recording import default_sensors, read_recording
 from spindlebench.selection import correlation_with, evaluate, rises
 
 work = course.start("06")
