@@ -156,20 +156,81 @@ def draw_machine(ax: plt.Axes, nodes: Sequence[str], labels: bool = False) -> di
     return positions
 
 
+#: Markers closer than this (drawing units) are spread around their centre so none hides
+#: another; the spread puts each at ``MARKER_SPREAD`` from the centre.
+MARKER_CLEARANCE = 0.09
+MARKER_SPREAD = 0.075
+
+
+def spread_markers(points: Sequence[tuple[float, float]],
+                   clearance: float = MARKER_CLEARANCE,
+                   radius: float = MARKER_SPREAD) -> list[tuple[float, float]]:
+    """Marker positions where points closer than ``clearance`` (chained) are put on a small
+    circle around their common centre, in input order; lone points stay where they are."""
+    pts = np.asarray(points, float).reshape(-1, 2)
+    group = list(range(len(pts)))
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    for i in range(len(pts)):
+        for j in range(i):
+            if np.hypot(*(pts[i] - pts[j])) < clearance:
+                group[root(i)] = root(j)
+    placed = pts.copy()
+    for r in {root(i) for i in range(len(pts))}:
+        members = [i for i in range(len(pts)) if root(i) == r]
+        if len(members) < 2:
+            continue
+        centre = pts[members].mean(axis=0)
+        for k, i in enumerate(members):
+            angle = np.pi / 2 + 2 * np.pi * k / len(members)
+            placed[i] = centre + radius * np.array([np.cos(angle), np.sin(angle)])
+    return [tuple(p) for p in placed]
+
+
 def draw_placement(ax: plt.Axes, nodes: Sequence[str], placement: Placement,
                    colour: str) -> None:
-    """Chosen sensors as numbered markers; a difference as a line between its two nodes."""
+    """Chosen sensors as numbered markers: a node filled, a difference A-B as ``n+`` at A
+    (filled) and ``n−`` at B (hollow). No line joins the two ends of a difference: across
+    the machine it crossed every other marker. Markers that would overlap are spread."""
     positions = draw_machine(ax, nodes)
+    markers: list[tuple[tuple[float, float], str, bool]] = []  # (node position, text, filled)
     for number, variable in enumerate(placement.variables, start=1):
-        ends = variable.split("-") if variable not in positions else [variable]
-        pts = np.array([positions[e] for e in ends])
-        if len(ends) == 2:
-            ax.plot(pts[:, 0], pts[:, 1], color=colour, lw=1.2, ls=":", zorder=5)
-        ax.scatter(pts[:, 0], pts[:, 1], s=70, color=colour, edgecolor="black", lw=0.6,
-                   zorder=6)
-        for y, z in pts:
-            ax.text(y, z, str(number), fontsize=6, ha="center", va="center", color="white",
-                    fontweight="bold", zorder=7)
+        if variable in positions:
+            markers.append((positions[variable], str(number), True))
+        else:
+            first, second = variable.split("-")
+            markers.append((positions[first], f"{number}+", True))
+            markers.append((positions[second], f"{number}−", False))
+    spread = spread_markers([at for at, _, _ in markers])
+    for (node_at, text, filled), (y, z) in zip(markers, spread, strict=True):
+        if (y, z) != tuple(node_at):  # a thin tick from the marker to its node
+            ax.plot([node_at[0], y], [node_at[1], z], color="#333333", lw=0.5, zorder=5)
+        ax.scatter([y], [z], s=95, color=colour if filled else "white", edgecolor=colour
+                   if not filled else "black", lw=1.4 if not filled else 0.6, zorder=6)
+        ax.text(y, z, text, fontsize=5.5, ha="center", va="center", fontweight="bold",
+                color="white" if filled else colour, zorder=7)
+
+
+def placement_legend(fig: plt.Figure, methods: Sequence[str]) -> None:
+    """What the colours and markers mean, once for the whole figure."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], ls="", marker="o", ms=8, color=METHOD_COLOURS.get(m, "purple"),
+                      mec="black", label=m) for m in dict.fromkeys(methods)]
+    grey = "#555555"
+    handles += [
+        Line2D([], [], ls="", marker="o", ms=8, color=grey, mec="black",
+               label="n: the n-th chosen node"),
+        Line2D([], [], ls="", marker="o", ms=8, color="white", mec=grey, mew=1.4,
+               label="n+ / n−: a difference, node n+ minus node n−"),
+        Line2D([], [], ls="", marker="o", ms=3, color=grey, label="model node (candidate)"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=7,
+               frameon=False)
 
 
 def _save(fig: plt.Figure, path: Path) -> Path:
@@ -216,11 +277,13 @@ def budget_figure(nodes: Sequence[str], placements: Sequence[Placement], table: 
         ax.set_title(f"{placement.label}, m = {budget}: test RMSE {rmse:.2f} µm", fontsize=8)
         strip = fig.add_subplot(grid[2 * row + 1, col])
         strip.axis("off")
-        listing = "\n".join(f"{n}: {v}" for n, v in enumerate(placement.variables, start=1))
+        listing = "\n".join(f"{n}: {v.replace('-', ' − ')}" for n, v in
+                            enumerate(placement.variables, start=1))
         strip.text(0.02, 1.0, listing, fontsize=6, ha="left", va="top", family="monospace",
                    transform=strip.transAxes)
-    fig.suptitle(f"Sensor placements for a budget of m = {budget} (numbers: order in the "
-                 "model; dotted line: a difference of two nodes)", fontsize=9)
+    fig.suptitle(f"Sensor placements for a budget of m = {budget} (colour: method; number: "
+                 "order in the model; test RMSE on the held-out days)", fontsize=9)
+    placement_legend(fig, [p.method for p in chosen])
     return _save(fig, path)
 
 
