@@ -56,7 +56,7 @@ def generated(tmp_path_factory):
 
 def test_defaults_write_every_table_and_figure(generated):
     _folder, out = generated
-    for name in [*FIGURES, "fig5_measured_vs_predicted_exp2.png"]:
+    for name in [*FIGURES, "fig5_measured_vs_predicted.png"]:
         assert (out / name).read_bytes()[:8] == PNG_SIGNATURE, name
     table4 = pd.read_csv(out / "table4_selected.csv")
     assert len(table4) == 3 * (2 + 3 + 4)
@@ -221,10 +221,15 @@ def test_rerun_into_the_same_folder_removes_only_its_own_stale_files(generated, 
     out = tmp_path / "study"
     assert cli.main(["paper", "--recordings", str(folder), "--out", str(out)]) == 0
     (out / "my_notes.txt").write_text("keep me")
+    # an output an earlier version of the study wrote (fig5 was once one file per test run)
+    provenance = json.loads((out / "provenance.json").read_text())
+    provenance["outputs"].append("fig5_measured_vs_predicted_exp2.png")
+    (out / "provenance.json").write_text(json.dumps(provenance))
+    (out / "fig5_measured_vs_predicted_exp2.png").write_bytes(b"stale")
     assert cli.main(["paper", "--recordings", str(folder), "--out", str(out),
                      "--tests", "exp3,exp4"]) == 0
     names = {path.name for path in out.iterdir()}
-    assert "fig5_measured_vs_predicted_exp3.png" in names
+    assert "fig5_measured_vs_predicted.png" in names
     assert "fig5_measured_vs_predicted_exp2.png" not in names  # the first run's, now stale
     assert "my_notes.txt" in names  # not the study's: never touched
     listed = set(json.loads((out / "provenance.json").read_text())["outputs"])
@@ -351,15 +356,21 @@ def test_figures_label_the_quantity_and_keep_legends_off_the_data(generated, mon
     monkeypatch.setattr(figures, "_save", keep)
     result = run_study(folder, study_config.load(None, {"clusters": "2,3"}))
     figures.write_all(result, folder / "unused")
-    for name in ("fig3_error_curves.png", "fig5_measured_vs_predicted_exp2.png",
-                 "dendrogram_six_diff.png"):
-        for ax in drawn[name].axes:
-            legend = ax.get_legend()
+    for name in ("fig3_error_curves.png", "fig4_six_temperatures.png",
+                 "fig5_measured_vs_predicted.png", "dendrogram_six_diff.png"):
+        legends = [(ax, ax.get_legend()) for ax in drawn[name].axes if ax.get_legend()]
+        assert legends, name
+        for ax, legend in legends:
             assert legend.get_window_extent().x0 >= ax.get_window_extent().x1, name
     fig3 = drawn["fig3_error_curves.png"].axes[0]
     assert fig3.get_ylabel() == "thermal error (µm)" and "drift_um" in fig3.get_title()
-    fig5 = drawn["fig5_measured_vs_predicted_exp2.png"].axes
-    assert all(ax.get_ylabel() == "thermal error (µm)" for ax in fig5)
+    fig5 = drawn["fig5_measured_vs_predicted.png"].axes
+    assert len(fig5) == len(result.config.tests) * 2  # every predicted run × k = 2, 3
+    assert [ax.get_ylabel() for ax in fig5[::2]] == [
+        f"{name}\nthermal error (µm)" for name in result.config.tests]
+    fig4 = drawn["fig4_six_temperatures.png"].axes[0]
+    assert fig4.get_ylabel() == "rise since the start (K)"
+    assert all(line.get_ydata()[0] == 0 for line in fig4.lines)
     dendrogram = drawn["dendrogram_six_diff.png"].axes[0]
     assert dendrogram.get_ylabel() == "merge height 1 − t(R)"
     eta = result.cell("six_diff", 2).eta

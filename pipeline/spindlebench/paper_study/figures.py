@@ -61,40 +61,71 @@ def error_curves(result: StudyResult, path: Path) -> Path:
     return _save(figure, path)
 
 
+def _rise(values: np.ndarray) -> np.ndarray:
+    """Change since the first finite sample (a missing first sample must not blank it)."""
+    values = np.asarray(values, dtype=float)
+    finite = values[np.isfinite(values)]
+    return values - finite[0] if finite.size else values
+
+
 def six_temperatures(result: StudyResult, path: Path) -> Path:
-    """Fig. 4: temperatures of the six sensors in the training experiment."""
+    """Fig. 4: the six sensors in the training experiment, as rises since its start.
+
+    Rises, because the method works on rises, and because absolute values of different
+    levels (a warm spindle beside a cold air probe) flatten each curve's shape."""
     name = result.config.train
-    figure = Figure(figsize=(7, 4))
+    figure = Figure(figsize=(7.5, 4))
     ax = figure.add_subplot()
     for sensor in result.six:
-        ax.plot(_hours(result, name), result.frames[name][sensor], label=sensor)
+        ax.plot(_hours(result, name), _rise(result.frames[name][sensor].to_numpy()),
+                label=sensor)
     ax.set_xlabel("time (h)")
-    ax.set_ylabel("temperature (°C)")
-    ax.set_title(f"The six sensors in {name}")
+    ax.set_ylabel("rise since the start (K)")
+    ax.set_title(f"The six sensors in {name}, as rises since the start")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small", ncol=2)
+    _legend_outside(ax, fontsize="small")
     return _save(figure, path)
 
 
-def measured_vs_predicted(result: StudyResult, path: Path, experiment: str) -> Path:
-    """Fig. 5: measured and predicted error of one test experiment, one panel per k."""
-    ks = result.config.clusters
-    figure = Figure(figsize=(9.5, 2.6 * len(ks)))
-    hours = _hours(result, experiment)
-    measured = result.frames[experiment][result.config.target]
-    for row, k in enumerate(ks, start=1):
-        ax = figure.add_subplot(len(ks), 1, row)
-        ax.plot(hours, measured, color="black", lw=2, label="measured")
-        for group in result.groups:
-            cell = result.cell(group, k)
-            ax.plot(hours, cell.predictions_um[experiment], color=GROUP_COLORS[group],
-                    label=f"{GROUP_LABELS[group]} ({cell.rmse_um[experiment]:.1f})")
-        ax.set_title(f"{experiment}, {k} clusters: measured and predicted "
-                     f"{result.config.target}", fontsize="medium")
-        ax.set_ylabel(ERROR_LABEL)
-        ax.grid(alpha=0.3)
-        _legend_outside(ax, fontsize="x-small", title="RMSE in µm", title_fontsize="x-small")
-    ax.set_xlabel("time (h)")
+def measured_vs_predicted(result: StudyResult, path: Path) -> Path:
+    """Fig. 5 as small multiples: every predicted experiment (rows) × every k (columns),
+    measured error and the three groups' predictions, each panel with the groups' RMSE.
+
+    Rows share their y axis, so the k columns of one experiment compare at a glance; one
+    legend serves the figure."""
+    ks = list(result.config.clusters)
+    tests = list(result.config.tests)
+    figure = Figure(figsize=(3.3 * len(ks) + 2.2, 2.0 * len(tests) + 0.8))
+    axes = figure.subplots(len(tests), len(ks), squeeze=False, sharex="row", sharey="row")
+    for row, experiment in enumerate(tests):
+        hours = _hours(result, experiment)
+        measured = result.frames[experiment][result.config.target]
+        for column, k in enumerate(ks):
+            ax = axes[row, column]
+            ax.plot(hours, measured, color="black", lw=1.8, label="measured")
+            scores = []
+            for group in result.groups:
+                cell = result.cell(group, k)
+                ax.plot(hours, cell.predictions_um[experiment], color=GROUP_COLORS[group],
+                        lw=1.1, label=GROUP_LABELS[group])
+                scores.append((f"{cell.rmse_um[experiment]:.1f}", GROUP_COLORS[group]))
+            for i, (text, colour) in enumerate(scores):  # RMSE of each group, in its colour
+                ax.text(1.0 - 0.1 * (len(scores) - i), 0.97, text, color=colour,
+                        transform=ax.transAxes, ha="right", va="top", fontsize="x-small",
+                        fontweight="bold", zorder=5,
+                        bbox={"facecolor": "white", "alpha": 0.8, "pad": 1.0, "lw": 0})
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize="x-small")
+            if row == 0:
+                ax.set_title(f"k = {k}", fontsize="medium")
+            if column == 0:
+                ax.set_ylabel(f"{experiment}\n{ERROR_LABEL}", fontsize="small")
+            if row == len(tests) - 1:
+                ax.set_xlabel("time (h)", fontsize="small")
+    _legend_outside(axes[0, -1], fontsize="x-small",
+                    title="numbers: RMSE (µm)", title_fontsize="x-small")
+    figure.suptitle(f"Measured and predicted {result.config.target} of every predicted "
+                    f"experiment (trained on {result.config.train})", fontsize="medium")
     return _save(figure, path)
 
 
@@ -158,12 +189,11 @@ def closure_dendrogram(result: StudyResult, group: str, path: Path) -> Path:
 
 def write_all(result: StudyResult, out_dir: Path) -> dict[str, Path]:
     """Every figure; keys name them for the README."""
-    first_test = result.config.tests[0]
     figures = {
         "error_curves": error_curves(result, out_dir / "fig3_error_curves.png"),
         "six_temperatures": six_temperatures(result, out_dir / "fig4_six_temperatures.png"),
         "measured_vs_predicted": measured_vs_predicted(
-            result, out_dir / f"fig5_measured_vs_predicted_{first_test}.png", first_test
+            result, out_dir / "fig5_measured_vs_predicted.png"
         ),
         "rmse_bars": rmse_bars(result, out_dir / "fig6_rmse_bars.png"),
     }

@@ -173,7 +173,7 @@ Ours first, then the paper's Table 6 in the same row where it predicted the same
 - Thermal error of every experiment (paper Fig. 3): ![error curves]({fig["error_curves"]})
 - The six sensors in the training experiment (paper Fig. 4):
   ![six temperatures]({fig["six_temperatures"]})
-- Measured vs predicted, {config.tests[0]} (paper Fig. 5):
+- Measured vs predicted, every predicted experiment and k (paper Fig. 5):
   ![measured vs predicted]({fig["measured_vs_predicted"]})
 - RMSE of every prediction (paper Fig. 6, as grouped bars): ![rmse]({fig["rmse_bars"]})
 - Fuzzy equivalence hierarchies with the λ-cuts (not in the paper): single-linkage dendrograms
