@@ -69,7 +69,9 @@ def test_every_method_colour_shows_on_white_and_under_a_black_median(kept, tmp_p
     assert mcolors.to_rgb(plots.MEDIAN["color"]) == (0, 0, 0)
     for method in plots.METHOD_ORDER:
         assert 0.25 < luminance(plots.COLOURS[method]) < 0.85, method
-    plots.by_month(results(), tmp_path / "month.png", 2)
+    plots.by_month(results(), tmp_path / "month.png")
+    assert [ax.get_title() for ax in kept[0].axes] == [
+        "k = 2, all held-out runs", "k = 3, all held-out runs"]  # one row per k
     medians = [line for line in kept[0].axes[0].lines
                if mcolors.to_rgb(line.get_color()) == (0, 0, 0) and line.get_linewidth() == 1.5]
     assert len(medians) == 4 * 2  # all_raw, six_diff, ridge, oracle in two months

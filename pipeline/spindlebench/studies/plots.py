@@ -102,17 +102,43 @@ def _no_k_note(frame: pd.DataFrame) -> str:
     return f"; {' and '.join(names)}: no k" if names else ""
 
 
-def by_month(results: pd.DataFrame, path: Path, k: int) -> Path | None:
+def by_month(results: pd.DataFrame, path: Path) -> Path | None:
+    """Held-out RMSE by month, one row of panels per k and one column per held-out spindle
+    speed: the month alone hardly moves the error, the speed of the held-out run and k do,
+    so a single k = 2 panel pooled over speeds looked flat and hid what varies. Methods
+    without a k (ridge, oracle) are repeated in every row, as the title says."""
     ok = results[results["rmse_um"].notna() & (results["data"] == "measured")]
-    at = ok[(ok["k"] == k) | ok["k"].isna()]
-    if at.empty:
+    if ok.empty:
         return None
-    months = [m for m in MONTHS if m in set(at["test_month"])]
-    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(months)), 4.2))
-    _grouped_boxes(ax, at, months, "test_month", _methods(at))
-    ax.set_title(f"Held-out RMSE by month of the held-out run (measured, k = {k}"
-                 f"{_no_k_note(at)})")
-    ax.legend(fontsize=8, ncols=3)
+    ks = sorted(int(k) for k in ok["k"].dropna().unique()) or [None]
+    speeds = (sorted(float(v) for v in ok["test_speed_rpm"].dropna().unique())
+              if "test_speed_rpm" in ok else [None])
+    months = [m for m in MONTHS if m in set(ok["test_month"])]
+    n_methods = len(_methods(ok))
+    fig, axes = plt.subplots(len(ks), len(speeds), squeeze=False, sharey=True,
+                             figsize=(max(5.0, 0.22 * n_methods * len(months) + 1.5)
+                                      * len(speeds), 3.3 * len(ks) + 0.6),
+                             layout="constrained")
+    for row, k in enumerate(ks):
+        at_k = ok[(ok["k"] == k) | ok["k"].isna()] if k is not None else ok
+        for column, speed in enumerate(speeds):
+            at = at_k if speed is None else at_k[at_k["test_speed_rpm"] == speed]
+            ax = axes[row, column]
+            _grouped_boxes(ax, at, months, "test_month", _methods(at))
+            where = [f"k = {k}" if k is not None else "", f"held-out runs at {speed:g} rpm"
+                     if speed is not None else "all held-out runs"]
+            ax.set_title(", ".join(w for w in where if w), fontsize=10)
+            if column:
+                ax.set_ylabel("")
+    top = float(ok["rmse_um"].quantile(0.99)) * 1.15
+    clipped = int((ok["rmse_um"] > top).sum())
+    axes[0, 0].set_ylim(0, top)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, ncols=len(labels), loc="outside lower center",
+               frameon=False)  # outside: inside, it hid the tallest boxes
+    note = f"; {clipped} of {len(ok)} values above {top:.0f} µm not shown" if clipped else ""
+    fig.suptitle(f"Held-out RMSE by month of the held-out run (measured{_no_k_note(ok)}, "
+                 f"repeated in every row{note})", fontsize=11)
     return _save(fig, path)
 
 
@@ -137,6 +163,6 @@ def box_plots(results: pd.DataFrame, folder: Path) -> dict[str, Path]:
     ks = sorted(int(k) for k in results["k"].dropna().unique())
     figures["by_method"] = by_method_and_k(results, folder / "rmse_by_method.png")
     if ks:
-        figures["by_month"] = by_month(results, folder / "rmse_by_month.png", ks[0])
+        figures["by_month"] = by_month(results, folder / "rmse_by_month.png")
         figures["by_condition"] = by_condition(results, folder / "rmse_by_condition.png", ks[0])
     return {name: path for name, path in figures.items() if path is not None}
