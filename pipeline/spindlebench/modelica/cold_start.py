@@ -75,38 +75,54 @@ def rise(frame: pd.DataFrame, column: str, minutes: float) -> float:
 
 
 def plot(fmu_path: str | Path = DEFAULT_FMU, out_path: str | Path = DEFAULT_FIGURE) -> Path:
-    """Draw the cold-start figure: six sensors at 4000 rpm, drift at 4000 and 2000 rpm."""
-    import matplotlib
+    """Draw the cold-start figure: six sensors at 4000 rpm, drift at 4000 and 2000 rpm.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Hours on both axes, as in every other figure; absolute temperatures so the ambient probe
+    T10 is seen sitting on the room's 8 °C (as a rise it vanished on the axis); the sensors in
+    their machine part's colours (``testbench.sensor_parts``), named at their line ends.
+    """
+    from matplotlib.figure import Figure
 
-    fast = cold_start(fmu_path, speed_rpm=4000.0)
-    slow = cold_start(fmu_path, speed_rpm=2000.0)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
-    minutes = fast["time_s"] / 60.0
-    for sensor in FIGURE_SENSORS:
-        left.plot(minutes, fast[sensor] - fast[sensor].iloc[0], label=sensor.removesuffix("_C"))
-    left.axvline(50, color="grey", linestyle=":", linewidth=1)
-    left.set(
-        xlabel="time (min)",
-        ylabel="temperature rise (K)",
-        title="Cold start at 4000 rpm, X/Y at 1500 mm/min, 8 °C",
-    )
-    left.legend(ncol=2, fontsize=8)
-    for frame, label in ((fast, "4000 rpm"), (slow, "2000 rpm")):
-        right.plot(
-            frame["time_s"] / 60.0, frame["drift_um"] - frame["drift_um"].iloc[0], label=label
-        )
-    right.set(
-        xlabel="time (min)",
-        ylabel="drift since start (µm)",
-        title="Axial drift, tool towards table",
-    )
+    from spindlebench.testbench.overview import END_LABEL, label_line_ends
+    from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, sensor_colours
+
+    ambient_C = 8.0
+    fast = cold_start(fmu_path, speed_rpm=4000.0, ambient_C=ambient_C)
+    slow = cold_start(fmu_path, speed_rpm=2000.0, ambient_C=ambient_C)
+    colours: dict[str, tuple] = {}
+    for part in PARTS:
+        colours.update(sensor_colours(part))
+    fig = Figure(figsize=(11.5, 4.4), layout="constrained")
+    fig.get_layout_engine().set(wspace=0.12)  # room for the line-end labels between panels
+    left, right = fig.subplots(1, 2, width_ratios=[1.15, 1.0])
+    hours = fast["time_s"] / 3600.0
+    left.plot(hours, np.full(len(hours), ambient_C), color="0.6", lw=4, alpha=0.5,
+              gid=END_LABEL, label="room air")
+    for output in FIGURE_SENSORS:
+        sensor = output.removesuffix("_C")
+        ambient = sensor == AMBIENT_SENSOR
+        left.plot(hours, fast[output], color="black" if ambient else colours[sensor],
+                  ls="--" if ambient else "-", lw=1.3, gid=END_LABEL,
+                  label=f"{sensor} (air probe)" if ambient else sensor)
+    left.axvline(50 / 60, color="0.4", ls=":", lw=1)
+    left.text(50 / 60 + 0.05, 0.97, "50 min", transform=left.get_xaxis_transform(),
+              fontsize=8, color="0.3", va="top")
+    left.set(xlabel="time (h)", ylabel="temperature (°C)",
+             title=f"Cold start at 4000 rpm, X/Y at 1500 mm/min, room at {ambient_C:g} °C")
+    left.grid(alpha=0.3)
+    for frame, label, style in ((fast, "4000 rpm", "-"), (slow, "2000 rpm", "--")):
+        right.plot(frame["time_s"] / 3600.0, frame["drift_um"] - frame["drift_um"].iloc[0],
+                   color="tab:brown", ls=style, label=label)
+    right.axvline(50 / 60, color="0.4", ls=":", lw=1)
+    right.set(xlabel="time (h)", ylabel="drift since start (µm)",
+              title="Axial drift, tool towards table")
+    right.grid(alpha=0.3)
     right.legend()
+    fig.canvas.draw()  # final layout before the labels are placed beside the axes
+    fig.set_layout_engine("none")
+    label_line_ends(left)
     with atomic.atomic_path(Path(out_path).with_suffix(".png")) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+        fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     return Path(out_path)
 
 

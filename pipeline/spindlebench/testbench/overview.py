@@ -131,7 +131,7 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
         width_in = fig.get_figwidth()  # room right of each column for the line-end labels
         fig.subplots_adjust(wspace=0.3, right=min(fig.subplotpars.right, 1 - 0.55 / width_in))
         for ax in axes[:len(panels), :].flat:
-            _label_line_ends(ax)
+            label_line_ends(ax)
     except BaseException:
         plt.close(fig)
         raise
@@ -150,13 +150,13 @@ def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel]
         ax.set_title(PANEL_TITLES[panel.key], fontsize=8, loc="left", color="0.3")
         if panel.key == "axes" and AMBIENT_DRIVER in frame:  # a wide grey band under T10
             ax.plot(hours, values(AMBIENT_DRIVER), color="0.6", lw=4, alpha=0.5, zorder=1,
-                    gid="end-label", label="ambient air")
+                    gid=END_LABEL, label="ambient air")
         for i, name in enumerate(panel.sensors):
             if name not in frame:
                 continue
             ambient = name == AMBIENT_SENSOR
             ax.plot(hours, values(name), color="black" if ambient else colours[name],
-                    lw=1.1, ls="--" if ambient or i % 2 else "-", label=name, gid="end-label")
+                    lw=1.1, ls="--" if ambient or i % 2 else "-", label=name, gid=END_LABEL)
         ax.grid(alpha=0.3)
     error = axes[len(panels)]
     error.plot(hours, frame[target], lw=1.2, color="tab:brown", label="measured")
@@ -232,10 +232,15 @@ def spread_labels(wanted: Sequence[float], gap: float, low: float, high: float) 
     return result.tolist()
 
 
-def _label_line_ends(ax: Axes) -> None:
-    """Name each temperature line just right of the axes, at the height where it ends,
-    joined to its end by a thin leader; labels are spread so none overlap."""
-    lines = [line for line in ax.lines if line.get_gid() == "end-label"]
+#: Lines drawn with this ``gid`` are named at their end by ``label_line_ends``.
+END_LABEL = "end-label"
+
+
+def label_line_ends(ax: Axes) -> None:
+    """Name each line drawn with ``gid=END_LABEL`` just right of the axes, at the height
+    where it ends, joined to its end by a thin leader; labels are spread so none overlap.
+    Call it after the axes' limits and the figure layout are final."""
+    lines = [line for line in ax.lines if line.get_gid() == END_LABEL]
     ends = []
     for line in lines:
         x, y = (np.asarray(v, float) for v in line.get_data())
