@@ -8,8 +8,8 @@ error, so each composes before any regressor in a ``Pipeline``:
   one per cluster: the largest |psi| (``within="psi"``, the paper's eq. 4) or the largest grey
   relational grade (``within="grey"``, ``selection.grey``).
 - ``TopCorrelatedSelector``: the k candidates with the largest |psi|, no clustering.
-- ``LassoPathSelector``: the first k candidates to enter the LASSO (``l1_ratio=1``) or
-  elastic-net path of the standardised candidates.
+- ``LassoPathSelector``: the first k candidates to enter the LASSO (``l1_ratio=1``, exact
+  path by LARS) or elastic-net path of the standardised candidates.
 - ``StabilitySelector``: how often each candidate is among those k over random half-samples
   of the rows (Meinshausen and Buehlmann's stability selection); keep the k most frequent.
 - ``GreedyForwardSelector``: greedy forward selection by cross-experiment RMSE
@@ -31,7 +31,7 @@ from typing import ClassVar
 import numpy as np
 from sklearn.base import BaseEstimator, _fit_context
 from sklearn.feature_selection import SelectorMixin
-from sklearn.linear_model import enet_path
+from sklearn.linear_model import enet_path, lars_path
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -234,6 +234,9 @@ class TopCorrelatedSelector(_Selector):
 def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndarray:
     """The first ``k`` columns to enter the elastic-net path of standardised ``X``.
 
+    The LASSO's path (``l1_ratio`` 1) is computed exactly by LARS (``lars_path``, its kinks);
+    an elastic net's on a grid of ``PATH_ALPHAS`` penalties (``enet_path``).
+
     Walking down the path from the largest alpha, the first point with at least k active
     candidates decides: its active candidates ranked by when they entered, then by |coef|
     there. If the path never has k active ones (collinear data), the rest are filled by |psi|.
@@ -244,8 +247,11 @@ def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndar
     Z[:, varying] = (X[:, varying] - mean[varying]) / scale[varying]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # convergence warnings at tiny alphas
-        _, coefs, _ = enet_path(Z, y - y.mean(), l1_ratio=l1_ratio, eps=PATH_EPS,
-                                alphas=PATH_ALPHAS)
+        if l1_ratio == 1.0:  # the LASSO: LARS gives the exact path, kink by kink
+            _, _, coefs = lars_path(Z, y - y.mean(), method="lasso")
+        else:
+            _, coefs, _ = enet_path(Z, y - y.mean(), l1_ratio=l1_ratio, eps=PATH_EPS,
+                                    alphas=PATH_ALPHAS)
     active = coefs != 0  # p x n_alphas, alphas decreasing
     entry = np.where(active.any(axis=1), np.argmax(active, axis=1), active.shape[1])
     counts = active.sum(axis=0)
