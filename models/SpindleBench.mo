@@ -10,6 +10,8 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
   //   [HOL]  Holkup et al. (2010), "Thermo-mechanical model of spindles", CIRP Annals 59.
   //   [MAY]  Mayr et al. (2012), "Thermal issues in machine tools", CIRP Annals 61.
   //   [ISO]  ISO 3448 viscosity grades; ISO 1 reference temperature 20 degC.
+//   [D341] ASTM D341 (Walther): log10(log10(nu + 0.7)) = A - B log10(T), from nu_40 and nu_100.
+//   [ISO230] ISO 230-3: thermal tests with a test mandrel and a probe fixture on the table.
   //   [EST]  engineering estimate for a VMC-850 class machine (masses from similar designs).
 
   package HeatTransfer "Thermal components named and connected like Modelica.Thermal.HeatTransfer"
@@ -37,7 +39,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     package Components "Lumped thermal components"
 
       model HeatCapacitor "Lumped thermal element storing heat"
-        parameter Real C(unit = "J/K") = 1000.0 "Heat capacity of element (= cp*m)";
+        parameter Real C(unit = "J/K", min = 1.0e-3, max = 1.0e9) = 1000.0 "Heat capacity of element (= cp*m)";
         Real T(unit = "K", start = 293.15, fixed = true) "Temperature of element";
         Real der_T(unit = "K/s") "Time derivative of temperature (= der(T))";
         Interfaces.HeatPort port "Heat port of the element";
@@ -49,7 +51,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 
       model ThermalConductor "Lumped thermal element transporting heat without storing it"
         extends Interfaces.Element1D;
-        parameter Real G(unit = "W/K") = 1.0 "Constant thermal conductance of material";
+        parameter Real G(unit = "W/K", min = 0.0, max = 1.0e5) = 1.0 "Constant thermal conductance of material";
       equation
         Q_flow = G * dT;
       end ThermalConductor;
@@ -72,17 +74,17 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
         // positional ports port_1..port_3 sit at fractions x1..x3: their heat is shared between
         // the two nearest segment centres and their temperature is interpolated linearly, so a
         // connection keeps its physical position when n changes (coarse and fine builds agree).
-        parameter Integer n = 4 "Number of segments (structural)";
-        parameter Real C(unit = "J/K") = 1.0e5 "Total heat capacity";
-        parameter Real G(unit = "W/K") = 1.0 "End-to-end axial conductance k*A/L";
-        parameter Real L(unit = "m") = 1.0 "Length along the axis";
-        parameter Real alpha(unit = "1/K") = 1.05e-5 "Linear thermal expansion coefficient";
-        parameter Real T_nominal(unit = "K") = 293.15 "Temperature at which the body has its nominal length";
-        parameter Real x1(unit = "1") = 0.5 "Position of port_1 as a fraction of L";
-        parameter Real x2(unit = "1") = 0.5 "Position of port_2 as a fraction of L";
-        parameter Real x3(unit = "1") = 0.5 "Position of port_3 as a fraction of L";
-        parameter Real x_lo(unit = "1") = 0.0 "Start of the span whose elongation is reported in dL";
-        parameter Real x_hi(unit = "1") = 1.0 "End of the span whose elongation is reported in dL";
+        parameter Integer n(min = 1, max = 50) = 4 "Number of segments (structural)";
+        parameter Real C(unit = "J/K", min = 1.0e-3, max = 1.0e9) = 1.0e5 "Total heat capacity";
+        parameter Real G(unit = "W/K", min = 1.0e-6, max = 1.0e5) = 1.0 "End-to-end axial conductance k*A/L";
+        parameter Real L(unit = "m", min = 1.0e-3, max = 20.0) = 1.0 "Length along the axis";
+        parameter Real alpha(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.05e-5 "Linear thermal expansion coefficient";
+        parameter Real T_nominal(unit = "K", min = 250.0, max = 330.0) = 293.15 "Temperature at which the body has its nominal length";
+        parameter Real x1(unit = "1", min = 0.0, max = 1.0) = 0.5 "Position of port_1 as a fraction of L";
+        parameter Real x2(unit = "1", min = 0.0, max = 1.0) = 0.5 "Position of port_2 as a fraction of L";
+        parameter Real x3(unit = "1", min = 0.0, max = 1.0) = 0.5 "Position of port_3 as a fraction of L";
+        parameter Real x_lo(unit = "1", min = 0.0, max = 1.0) = 0.0 "Start of the span whose elongation is reported in dL";
+        parameter Real x_hi(unit = "1", min = 0.0, max = 1.0) = 1.0 "End of the span whose elongation is reported in dL";
         input Real G_side1(unit = "W/K") "Total conductance of the distributed surface side_1";
         input Real G_side2(unit = "W/K") "Total conductance of the distributed surface side_2";
         Real T[n](each unit = "K", each start = 293.15, each fixed = true) "Segment temperatures";
@@ -171,36 +173,52 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 
   end HeatTransfer;
 
-  package Machine "Machine-specific heat sources and sensor models"
+  package Machine "Machine-specific heat sources, bodies and sensor models"
 
-    model BearingFriction "Palmgren bearing friction heat with temperature-dependent lubricant viscosity"
-      // M0 = 1e-7 f0 (nu n)^(2/3) dm^3 [N mm] for nu*n >= 2000 (else the constant 160e-7 f0 dm^3),
-      // M1 = f1 P1 dm [N mm] with nu in mm2/s, n in rev/min, dm in mm [SKF, HK]. The viscosity
-      // follows nu = nu_40 exp(-b_nu (T - 313.15 K)), a local fit of ISO VG oils near 10-60 degC [ISO].
-      parameter Real f0(unit = "1") = 1.5 "Speed-dependent Palmgren factor of the bearing set [HK]";
-      parameter Real f1(unit = "1") = 4.0e-4 "Load-dependent friction factor [HK]";
-      parameter Real P1(unit = "N") = 1500.0 "Equivalent load (mainly preload)";
-      parameter Real dm(unit = "m") = 0.09 "Bearing pitch diameter";
-      parameter Real nu_40(unit = "mm2/s") = 22.0 "Base-oil kinematic viscosity at 40 degC";
-      parameter Real b_nu(unit = "1/K") = 0.03 "Viscosity-temperature coefficient";
+    model BearingFriction "Palmgren bearing friction heat with a Walther (ASTM D341) lubricant viscosity"
+      // M0 = 1e-7 f0 z (nu n)^(2/3) dm^3 [N mm] for nu*n >= 2000 (else the constant 160e-7 f0 z dm^3),
+      // M1 = f1 z P1 dm [N mm] with nu in mm2/s, n in rev/min, dm in mm [SKF, HK]; f0 is the factor
+      // of ONE bearing, z the number of bearings in the set. The viscosity of the base oil at the
+      // bearing temperature follows Walther's equation through nu_40 and nu_100 [D341].
+      parameter Real f0(unit = "1", min = 0.0, max = 10.0) = 2.0 "Speed-dependent Palmgren factor of one bearing [HK]";
+      parameter Real z(unit = "1", min = 1.0, max = 8.0) = 2.0 "Number of bearings in the set";
+      parameter Real f1(unit = "1", min = 0.0, max = 1.0e-2) = 4.0e-4 "Load-dependent friction factor [HK]";
+      parameter Real P1(unit = "N", min = 0.0, max = 1.0e5) = 1500.0 "Equivalent load of one bearing (mainly preload)";
+      parameter Real dm(unit = "m", min = 1.0e-3, max = 1.0) = 0.09 "Bearing pitch diameter";
+      parameter Real nu_40(unit = "mm2/s", min = 2.0, max = 1000.0) = 22.0 "Base-oil kinematic viscosity at 40 degC [ISO]";
+      parameter Real nu_100(unit = "mm2/s", min = 1.0, max = 100.0) = 4.3 "Base-oil kinematic viscosity at 100 degC (below nu_40) [ISO]";
       input Real n_rpm(unit = "rev/min") "Shaft speed";
+      Real walther_B(unit = "1") "Slope B of Walther's line (from nu_40 and nu_100)";
+      Real walther_A(unit = "1") "Intercept A of Walther's line";
       Real nu(unit = "mm2/s") "Lubricant viscosity at the bearing temperature";
-      Real M(unit = "N.m") "Friction torque";
+      Real M(unit = "N.m") "Friction torque of the set";
       Real Q_flow(unit = "W") "Friction heat released into the bearing region";
-      HeatTransfer.Interfaces.HeatPort port "Bearing region: receives the heat, sets the viscosity";
+      HeatTransfer.Interfaces.HeatPort port "Bearing rings: receive the heat, set the viscosity";
     equation
-      nu = nu_40 * exp(-b_nu * (port.T - 313.15));
-      M = 1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm;
+      walther_B = (log(log(nu_40 + 0.7) / log(10.0)) - log(log(nu_100 + 0.7) / log(10.0))) / (log(373.15) - log(313.15));
+      walther_A = log(log(nu_40 + 0.7) / log(10.0)) / log(10.0) + walther_B * log(313.15) / log(10.0);
+      nu = exp(log(10.0) * exp(log(10.0) * (walther_A - walther_B * log(port.T) / log(10.0)))) - 0.7;
+      M = z * (1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm);
       Q_flow = M * abs(n_rpm) * 2.0 * 3.14159265358979 / 60.0;
       port.Q_flow = -Q_flow;
     end BearingFriction;
 
+    model ExpandingBody "Lumped body (one temperature) whose length L grows with its temperature"
+      extends HeatTransfer.Components.HeatCapacitor;
+      parameter Real L(unit = "m", min = 0.0, max = 5.0) = 0.1 "Length along the loop direction";
+      parameter Real alpha(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.15e-5 "Linear thermal expansion coefficient";
+      parameter Real T_nominal(unit = "K", min = 250.0, max = 330.0) = 293.15 "Temperature at which the body has its nominal length";
+      Real dL(unit = "m") "Elongation relative to T_nominal";
+    equation
+      dL = alpha * L * (T - T_nominal);
+    end ExpandingBody;
+
     model ContactSensor "Surface temperature probe: small mass with contact and environment conductances"
       // A real probe is not the part: it has its own heat capacity (lag), a finite contact
       // conductance to the part and a loss to its surroundings, so it reads between the two.
-      parameter Real C(unit = "J/K") = 10.0 "Heat capacity of the probe with its mount [EST]";
-      parameter Real G_contact(unit = "W/K") = 0.5 "Conductance probe-part (contact resistance)";
-      parameter Real G_env(unit = "W/K") = 0.02 "Conductance probe-surroundings";
+      parameter Real C(unit = "J/K", min = 1.0e-3, max = 1.0e4) = 10.0 "Heat capacity of the probe with its mount [EST]";
+      parameter Real G_contact(unit = "W/K", min = 1.0e-6, max = 1.0e3) = 0.5 "Conductance probe-part (contact resistance)";
+      parameter Real G_env(unit = "W/K", min = 0.0, max = 1.0e3) = 0.02 "Conductance probe-surroundings";
       output Real T(unit = "K") "Probe reading";
       HeatTransfer.Components.HeatCapacitor body(C = C) "Probe body";
       HeatTransfer.Components.ThermalConductor contact(G = G_contact) "Contact to the measured part";
@@ -219,7 +237,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 
   end Machine;
 
-  model MachiningCentre "Vertical machining centre: spindle, headstock, column, bed, table, X/Y feed drives"
+  model MachiningCentre "Vertical machining centre: spindle, tool, headstock, Z drive, column, bed, table, X/Y drives, probe fixture"
     import SpindleBench.HeatTransfer.Components.HeatCapacitor;
     import SpindleBench.HeatTransfer.Components.ThermalConductor;
     import SpindleBench.HeatTransfer.Components.Convection;
@@ -227,77 +245,98 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     import SpindleBench.HeatTransfer.Sources.PrescribedTemperature;
     import SpindleBench.HeatTransfer.Sources.PrescribedHeatFlow;
     import SpindleBench.Machine.BearingFriction;
+    import SpindleBench.Machine.ExpandingBody;
     import SpindleBench.Machine.ContactSensor;
 
     // ---- structure and operating inputs --------------------------------------------------
-    parameter Integer nSeg = 12 "Segments per large part (structural: set at build time)";
-    input Real spindle_speed_rpm(unit = "rev/min", start = 0.0) "Spindle speed";
-    input Real feed_x_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the X axis";
-    input Real feed_y_mm_per_min(unit = "mm/min", start = 0.0) "Mean absolute feed rate of the Y axis";
-    input Real ambient_C(unit = "degC", start = 20.0) "Ambient air temperature";
+    parameter Integer nSeg(min = 2, max = 50) = 12 "Segments per large part (structural: set at build time)";
+    input Real spindle_speed_rpm(unit = "rev/min", min = 0.0, max = 30000.0, start = 0.0) "Spindle speed";
+    input Real feed_x_mm_per_min(unit = "mm/min", min = 0.0, max = 60000.0, start = 0.0) "Mean absolute feed rate of the X axis";
+    input Real feed_y_mm_per_min(unit = "mm/min", min = 0.0, max = 60000.0, start = 0.0) "Mean absolute feed rate of the Y axis";
+    input Real ambient_C(unit = "degC", min = -50.0, max = 80.0, start = 20.0) "Ambient air temperature";
 
     // ---- global physical parameters -------------------------------------------------------
-    parameter Real T_ref(unit = "K") = 293.15 "Reference temperature of the nominal geometry (20 degC) [ISO]";
-    parameter Real alpha_iron(unit = "1/K") = 1.05e-5 "Expansion coefficient of grey cast iron EN-GJL-250 [VDI]";
-    parameter Real alpha_steel(unit = "1/K") = 1.15e-5 "Expansion coefficient of spindle steel [VDI]";
-    parameter Real h_nat(unit = "W/(m2.K)") = 8.0 "Natural convection plus radiation, machine surfaces in still air [VDI]";
-    parameter Real n_ref(unit = "rev/min") = 4000.0 "Reference speed of the speed-dependent laws";
-    parameter Real h_rot_ref(unit = "W/(m2.K)") = 110.0 "Forced convection on the rotating shaft at n_ref, Nu = 0.133 Re^(2/3) Pr^(1/3) [KR, BT]";
-    parameter Real h_cavity_stir(unit = "W/(m2.K)") = 6.0 "Extra convection on cavity walls from air stirred at n_ref [EST]";
+    parameter Real T_ref(unit = "K", min = 250.0, max = 330.0) = 293.15 "Reference temperature of the nominal geometry (20 degC) [ISO]";
+    parameter Real T_start(unit = "K", min = 220.0, max = 360.0) = 293.15 "Start temperature of every node and probe whose start value the importer does not set";
+    parameter Real alpha_iron(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.05e-5 "Expansion coefficient of grey cast iron EN-GJL-250 [VDI]";
+    parameter Real alpha_steel(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.15e-5 "Expansion coefficient of spindle, tool and screw steel [VDI]";
+    parameter Real alpha_fixture(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.15e-5 "Expansion coefficient of the probe fixture (steel; aluminium 2.3e-5) [VDI]";
+    parameter Real h_nat(unit = "W/(m2.K)", min = 0.0, max = 100.0) = 8.0 "Natural convection plus radiation, machine surfaces in still air [VDI]";
+    parameter Real n_ref(unit = "rev/min", min = 1.0, max = 30000.0) = 4000.0 "Reference speed of the speed-dependent laws";
+    parameter Real h_rot_ref(unit = "W/(m2.K)", min = 0.0, max = 1000.0) = 110.0 "Forced convection on the rotating shaft at n_ref, Nu = 0.133 Re^(2/3) Pr^(1/3) [KR, BT]";
+    parameter Real h_cavity_stir(unit = "W/(m2.K)", min = 0.0, max = 1000.0) = 6.0 "Extra convection on cavity walls from air stirred at n_ref [EST]";
 
     // ---- spindle cooling unit (oil chiller around the front bearing seat) -----------------
-    parameter Real cooling_enabled(unit = "1") = 0.0 "1: cooling unit on, 0: off";
-    parameter Real cooling_follows_ambient(unit = "1") = 1.0 "1: coolant at ambient + setpoint, 0: at absolute setpoint";
-    parameter Real cooling_setpoint_C(unit = "degC") = 0.0 "Coolant temperature (absolute) or offset from ambient (following)";
-    parameter Real G_cooling(unit = "W/K") = 25.0 "Conductance coolant jacket - front bearing seat [HOL]";
+    parameter Real cooling_enabled(unit = "1", min = 0.0, max = 1.0) = 0.0 "1: cooling unit on, 0: off";
+    parameter Real cooling_follows_ambient(unit = "1", min = 0.0, max = 1.0) = 1.0 "1: coolant at ambient + setpoint, 0: at absolute setpoint";
+    parameter Real cooling_setpoint_C(unit = "degC", min = -50.0, max = 80.0) = 0.0 "Coolant temperature (absolute) or offset from ambient (following)";
+    parameter Real G_cooling(unit = "W/K", min = 0.0, max = 1.0e4) = 25.0 "Conductance coolant jacket - front bearing seat [HOL]";
 
     // ---- heat sources -----------------------------------------------------------------
-    parameter Real P_spindle_motor_ref(unit = "W") = 140.0 "Spindle motor no-load loss at n_ref (iron, friction, windage) [EST]";
-    parameter Real k_spindle_motor(unit = "1") = 1.6 "Exponent of the motor loss in speed [EST]";
-    parameter Real c_x_nut(unit = "W.min/mm") = 0.0045 "X ball-nut friction heat per feed rate (0.43 N.m preload torque, 10 mm lead) [EST]";
-    parameter Real c_y_nut(unit = "W.min/mm") = 0.0045 "Y ball-nut friction heat per feed rate [EST]";
-    parameter Real c_x_bearing(unit = "W.min/mm") = 0.003 "X screw support bearings heat per feed rate [EST]";
-    parameter Real c_y_bearing(unit = "W.min/mm") = 0.003 "Y screw support bearings heat per feed rate [EST]";
-    parameter Real P_x_motor_idle(unit = "W") = 4.0 "X servo motor loss at standstill (holding, position control) [EST]";
-    parameter Real P_y_motor_idle(unit = "W") = 4.0 "Y servo motor loss at standstill [EST]";
-    parameter Real c_x_motor(unit = "W.min/mm") = 0.006 "X servo motor loss per feed rate (reciprocating, acceleration currents) [EST]";
-    parameter Real c_y_motor(unit = "W.min/mm") = 0.007 "Y servo motor loss per feed rate (heavier axis) [EST]";
+    parameter Real P_spindle_motor_ref(unit = "W", min = 0.0, max = 1.0e5) = 140.0 "Spindle motor no-load loss at n_ref (iron, friction, windage) [EST]";
+    parameter Real k_spindle_motor(unit = "1", min = 0.0, max = 4.0) = 1.6 "Exponent of the motor loss in speed [EST]";
+    parameter Real c_x_nut(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.0045 "X ball-nut friction heat per feed rate (0.43 N.m preload torque, 10 mm lead) [EST]";
+    parameter Real c_y_nut(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.0045 "Y ball-nut friction heat per feed rate [EST]";
+    parameter Real c_z_nut(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.0045 "Z ball-nut friction heat per feed rate [EST]";
+    parameter Real c_x_bearing(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.003 "X screw support bearings heat per feed rate [EST]";
+    parameter Real c_y_bearing(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.003 "Y screw support bearings heat per feed rate [EST]";
+    parameter Real c_z_bearing(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.003 "Z screw top bearings heat per feed rate [EST]";
+    parameter Real P_x_motor_idle(unit = "W", min = 0.0, max = 1.0e4) = 4.0 "X servo motor loss at standstill (holding, position control) [EST]";
+    parameter Real P_y_motor_idle(unit = "W", min = 0.0, max = 1.0e4) = 4.0 "Y servo motor loss at standstill [EST]";
+    parameter Real P_z_motor_idle(unit = "W", min = 0.0, max = 1.0e4) = 4.0 "Z servo motor loss at standstill: holds the counterbalanced headstock [EST]";
+    parameter Real c_x_motor(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.006 "X servo motor loss per feed rate (reciprocating, acceleration currents) [EST]";
+    parameter Real c_y_motor(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.007 "Y servo motor loss per feed rate (heavier axis) [EST]";
+    parameter Real c_z_motor(unit = "W.min/mm", min = 0.0, max = 1.0) = 0.008 "Z servo motor loss per feed rate (lifts the headstock) [EST]";
+    parameter Real feed_z_mm_per_min(unit = "mm/min", min = 0.0, max = 60000.0) = 0.0 "Mean absolute Z feed rate of a run (the paper's experiments keep Z still)";
 
     // ---- surfaces (m2) ----------------------------------------------------------------
-    parameter Real A_shaft(unit = "m2") = 0.077 "Shaft surface in the cavity (d 70 mm x 0.35 m)";
-    parameter Real A_nose(unit = "m2") = 0.03 "Spindle nose and tool holder surface in open air";
-    parameter Real A_housing_out(unit = "m2") = 1.6 "Outer surface of the headstock";
-    parameter Real A_housing_in(unit = "m2") = 0.8 "Inner surface of the headstock cavity";
-    parameter Real A_column(unit = "m2") = 5.0 "Column surface";
-    parameter Real A_bed(unit = "m2") = 6.0 "Bed surface in air";
-    parameter Real A_table(unit = "m2") = 3.0 "Table and saddle surface";
+    parameter Real A_shaft(unit = "m2", min = 0.0, max = 100.0) = 0.077 "Shaft surface in the cavity (d 70 mm x 0.35 m)";
+    parameter Real A_nose(unit = "m2", min = 0.0, max = 100.0) = 0.012 "Spindle nose face and flange surface in open air";
+    parameter Real A_tool(unit = "m2", min = 0.0, max = 100.0) = 0.04 "Tool holder and test mandrel surface (d 40 mm x 0.2 m plus the BT40 flange)";
+    parameter Real A_housing_out(unit = "m2", min = 0.0, max = 100.0) = 1.6 "Outer surface of the headstock";
+    parameter Real A_housing_in(unit = "m2", min = 0.0, max = 100.0) = 0.8 "Inner surface of the headstock cavity";
+    parameter Real A_column(unit = "m2", min = 0.0, max = 100.0) = 12.0 "Column surface in air, outer walls and the inner ribs of the box casting";
+    parameter Real A_bed(unit = "m2", min = 0.0, max = 100.0) = 6.0 "Bed surface in air";
+    parameter Real A_table(unit = "m2", min = 0.0, max = 100.0) = 3.0 "Table and saddle surface";
+    parameter Real A_fixture(unit = "m2", min = 0.0, max = 100.0) = 0.12 "Probe fixture surface in air";
+    parameter Real G_bed_floor(unit = "W/K", min = 0.0, max = 1.0e4) = 10.0 "Bed underside - floor slab (levelling elements and grout)";
 
     // ---- geometry of the structural loop ----------------------------------------------
-    parameter Real H_bed(unit = "m") = 0.5 "Bed height (vertical growth under column and under table)";
+    parameter Real H_bed(unit = "m", min = 0.0, max = 5.0) = 0.5 "Bed height (vertical growth under column and under table)";
 
     // ---- large parts, discretised --------------------------------------------------------
     SegmentedSolid spindle_shaft(n = nSeg, C = 8300.0, G = 0.27, L = 0.55, alpha = alpha_steel, T_nominal = T_ref,
       x1 = 0.22, x2 = 0.85, x3 = 0.08, x_lo = 0.0, x_hi = 0.22)
       "Spindle shaft, nose (x=0) to drawbar end (x=1): 18 kg steel, d 70/20 mm, k 42 W/(m.K); front bearing at x1, rear at x2";
     SegmentedSolid housing(n = nSeg, C = 161000.0, G = 1.6, L = 0.6, alpha = alpha_iron, T_nominal = T_ref,
-      x1 = 0.5, x2 = 0.8, x3 = 0.2, x_lo = 0.0, x_hi = 0.5)
-      "Headstock housing, front bearing seat (x=0) to top (x=1): 350 kg cast iron; Z carriages at x1, rear bearing seat at x2";
-    SegmentedSolid column(n = nSeg, C = 736000.0, G = 3.8, L = 1.0, alpha = alpha_iron, T_nominal = T_ref,
-      x1 = 0.75, x2 = 0.5, x3 = 0.25, x_lo = 0.0, x_hi = 0.75)
-      "Column, bed face (x=0) to top (x=1): 1600 kg cast iron; headstock carriages at x1";
+      x1 = 0.4167, x2 = 0.8, x3 = 0.15, x_lo = 0.0, x_hi = 0.15)
+      "Headstock housing, front bearing seat (x=0) to top (x=1): 350 kg cast iron; Z carriages at x1 (0.25 m above the seat), rear bearing seat at x2, Z nut bracket at x3";
+    SegmentedSolid column(n = nSeg, C = 736000.0, G = 2.7, L = 1.42, alpha = alpha_iron, T_nominal = T_ref,
+      x1 = 0.7, x2 = 0.5, x3 = 0.7, x_lo = 0.0, x_hi = 1.0)
+      "Column, bed face (x=0) to the Z screw top bearing (x=1): 1600 kg cast iron; headstock carriages at x1, spindle motor bracket and exhaust air at x3 (beside the carriages)";
     SegmentedSolid bed(n = nSeg, C = 1150000.0, G = 3.6, L = 2.0, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.45, x2 = 0.1, x3 = 0.7, x_lo = 0.0, x_hi = 1.0)
       "Bed, front (x=0) to rear under the column (x=1): 2500 kg cast iron; saddle on the Y guides at x1";
     SegmentedSolid table(n = nSeg, C = 414000.0, G = 32.0, L = 0.45, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.5, x2 = 0.2, x3 = 0.8, x_lo = 0.0, x_hi = 1.0)
-      "Saddle and table stacked vertically, saddle underside (x=0) to table top (x=1): 900 kg cast iron; X drive at x1";
+      "Saddle and table stacked vertically, saddle underside (x=0) to table top (x=1): 900 kg cast iron; X drive at x1, probe fixture on top";
 
     // ---- lumped nodes ---------------------------------------------------------------------
-    HeatCapacitor front_bearing(C = 1850.0) "Front bearing region: 2x7014 angular contact set, spacers, seat sleeve (4 kg)";
+    HeatCapacitor front_bearing(C = 1000.0) "Front bearing rings and balls: 2x7014 angular contact set (2.2 kg)";
+    HeatCapacitor front_cap(C = 3700.0) "Front bearing cap, seat sleeve and labyrinth ring (8 kg steel)";
     HeatCapacitor rear_bearing(C = 920.0) "Rear bearing region: 7012 pair (2 kg)";
     HeatCapacitor drawbar_cylinder(C = 4600.0) "Drawbar (tool unclamping) cylinder with its base (10 kg)";
     HeatCapacitor spindle_motor(C = 28800.0) "Spindle motor, 11 kW class, belt drive (60 kg)";
     HeatCapacitor inner_cavity(C = 3000.0) "Headstock inner cavity: air, belt, pulleys, fittings";
+    ExpandingBody tool(C = 1400.0, L = 0.2, alpha = alpha_steel, T_nominal = T_ref)
+      "BT40 tool holder with test mandrel d 40 mm, gauge length 0.2 m from the spindle nose to the measured face (3 kg steel) [ISO230]";
+    ExpandingBody fixture(C = 2300.0, L = 0.15, alpha = alpha_fixture, T_nominal = T_ref)
+      "Probe fixture on the table: bracket holding the eddy-current probe 0.15 m above the table, pointing up at the mandrel face (5 kg) [ISO230]";
+    ExpandingBody z_screw(C = 1600.0, L = 0.35, alpha = alpha_steel, T_nominal = T_ref)
+      "Z ball screw d 40 mm between its top bearing and the nut (3.5 kg steel)";
+    HeatCapacitor z_nut(C = 1850.0) "Z ball-screw nut with bracket on the headstock (4 kg)";
+    HeatCapacitor z_bearing_seat(C = 2300.0) "Z screw top bearing seat on the column (5 kg)";
+    HeatCapacitor z_motor(C = 15000.0) "Z servo motor with flange housing on the column top (32 kg)";
     HeatCapacitor x_motor(C = 15000.0) "X servo motor with flange housing and mounting bracket (32 kg)";
     HeatCapacitor x_nut(C = 1850.0) "X ball-screw nut with bracket (4 kg)";
     HeatCapacitor x_screw(C = 4000.0) "X ball screw d 32 mm x 1 m with coupling (8 kg)";
@@ -311,34 +350,50 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     // ---- boundaries and sources --------------------------------------------------------
     PrescribedTemperature ambient "Workshop air";
     PrescribedTemperature coolant "Coolant of the spindle cooling unit";
-    BearingFriction front_bearing_friction(f0 = 1.1, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, b_nu = 0.03)
-      "Front bearings 7014 set, grease with 22 mm2/s base oil [SKF, HK]";
-    BearingFriction rear_bearing_friction(f0 = 0.8, f1 = 4.0e-4, P1 = 600.0, dm = 0.0775, nu_40 = 22.0, b_nu = 0.03)
-      "Rear bearings 7012 pair [SKF, HK]";
+    BearingFriction front_bearing_friction(f0 = 1.0, z = 2.0, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, nu_100 = 4.3)
+      "Front bearings 7014 set (2 single-row angular contact), grease with ISO VG 22 base oil; f0 per bearing tuned to half the handbook 2 [SKF, HK, D341]";
+    BearingFriction rear_bearing_friction(f0 = 1.0, z = 2.0, f1 = 4.0e-4, P1 = 600.0, dm = 0.0775, nu_40 = 22.0, nu_100 = 4.3)
+      "Rear bearings 7012 pair (2 single-row angular contact) [SKF, HK, D341]";
     PrescribedHeatFlow spindle_motor_loss "Spindle motor losses";
     PrescribedHeatFlow x_nut_friction "X nut friction";
     PrescribedHeatFlow y_nut_friction "Y nut friction";
+    PrescribedHeatFlow z_nut_friction "Z nut friction";
     PrescribedHeatFlow x_bearing_friction "X screw support bearing friction";
     PrescribedHeatFlow y_bearing_friction "Y screw support bearing friction";
+    PrescribedHeatFlow z_bearing_friction "Z screw top bearing friction";
     PrescribedHeatFlow x_motor_loss "X servo motor losses";
     PrescribedHeatFlow y_motor_loss "Y servo motor losses";
+    PrescribedHeatFlow z_motor_loss "Z servo motor losses";
 
     // ---- couplings ----------------------------------------------------------------------
     ThermalConductor fb_housing(G = 15.0) "Front bearing outer rings - housing seat [BT, HOL]";
     ThermalConductor fb_shaft(G = 6.0) "Front bearing inner rings - shaft [BT, HOL]";
-    ThermalConductor fb_air(G = 0.6) "Front bearing cap and labyrinth - air";
+    ThermalConductor fb_cap(G = 4.0) "Front bearing outer ring face - clamping cap and seat sleeve [BT]";
+    ThermalConductor cap_housing(G = 10.0) "Front bearing cap flange - housing front face (bolted)";
+    ThermalConductor cap_air(G = 0.8) "Front bearing cap and labyrinth - air";
     ThermalConductor rb_housing(G = 8.0) "Rear bearing outer rings - housing seat [BT]";
     ThermalConductor rb_shaft(G = 3.0) "Rear bearing inner rings - shaft [BT]";
+    ThermalConductor tool_taper(G = 4.0) "Spindle taper and face - tool holder (BT40 contact) [EST]";
     ThermalConductor drawbar_shaft(G = 0.4) "Drawbar cylinder - shaft end (rotary union)";
     ThermalConductor drawbar_housing(G = 1.5) "Drawbar cylinder base - housing top";
     ThermalConductor drawbar_air(G = 2.4) "Drawbar cylinder - air (0.3 m2)";
     ThermalConductor motor_housing(G = 2.0) "Spindle motor flange - headstock top";
     ThermalConductor motor_air(G = 12.0) "Spindle motor fan-cooled surface - air";
+    ThermalConductor motor_column(G = 8.0) "Spindle motor bracket and fan exhaust air - column upper front";
     ThermalConductor cavity_air(G = 1.0) "Cavity - workshop air through openings";
-    ThermalConductor headstock_column(G = 5.0) "Headstock - column through Z guides and nut bracket";
+    ThermalConductor headstock_column(G = 40.0) "Headstock - column through the four Z guide carriages and the rails";
     ThermalConductor column_bed(G = 20.0) "Column foot - bed (bolted joint)";
     ThermalConductor bed_table(G = 15.0) "Bed - saddle through the Y guides";
     ThermalConductor floor_air(G = 30.0) "Floor slab - workshop air";
+    ThermalConductor fixture_table(G = 0.6) "Probe fixture foot - table top (clamped, small contact)";
+    ThermalConductor z_nut_housing(G = 0.5) "Z nut bracket - headstock";
+    ThermalConductor z_nut_screw(G = 3.0) "Z nut - screw";
+    ThermalConductor z_screw_seat(G = 1.0) "Z screw - top bearing seat";
+    ThermalConductor z_seat_column(G = 3.0) "Z top bearing seat - column top";
+    ThermalConductor z_motor_seat(G = 2.0) "Z motor flange - top bearing seat";
+    ThermalConductor z_motor_air(G = 0.8) "Z motor - air (0.1 m2)";
+    ThermalConductor z_nut_air(G = 0.3) "Z nut - air";
+    ThermalConductor z_screw_air(G = 0.5) "Z screw - air";
     ThermalConductor x_nut_table(G = 1.5) "X nut bracket - table";
     ThermalConductor x_nut_screw(G = 3.0) "X nut - screw";
     ThermalConductor x_screw_seat(G = 1.0) "X screw - support bearing seat";
@@ -355,7 +410,9 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ThermalConductor y_motor_air(G = 0.8) "Y motor - air (0.1 m2)";
     ThermalConductor y_nut_air(G = 0.3) "Y nut - air";
     ThermalConductor y_screw_air(G = 0.5) "Y screw - air";
-    Convection nose_convection "Spindle nose and tool holder - air (speed dependent)";
+    Convection nose_convection "Spindle nose - air (speed dependent)";
+    Convection tool_convection "Tool holder and mandrel - air (speed dependent)";
+    Convection fixture_convection "Probe fixture - air";
     Convection cooling_bearing "Coolant jacket - front bearing seat";
 
     // ---- the paper's 20 sensors (Xu et al. 2023, Table 1) ------------------------------------
@@ -363,7 +420,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ContactSensor sensor_T2(C = 10.0, G_contact = 0.5, G_env = 0.03) "T2 spindle front: housing flange at the bearing seat";
     ContactSensor sensor_T3(C = 12.0, G_contact = 0.15, G_env = 0.04) "T3 spindle front: labyrinth ring (poor contact)";
     ContactSensor sensor_T4(C = 10.0, G_contact = 0.4, G_env = 0.03) "T4 spindle front: housing side above the seat";
-    ContactSensor sensor_T5(C = 10.0, G_contact = 0.4, G_env = 0.05) "T5 spindle front: bearing seat, inside the cavity";
+    ContactSensor sensor_T5(C = 10.0, G_contact = 0.4, G_env = 0.05) "T5 spindle front: bearing seat sleeve, inside the cavity";
     ContactSensor sensor_T6(C = 10.0, G_contact = 0.5, G_env = 0.03) "T6 headstock housing side";
     ContactSensor sensor_T7(C = 10.0, G_contact = 0.5, G_env = 0.03) "T7 drawbar cylinder base";
     ContactSensor sensor_T8(C = 10.0, G_contact = 0.5, G_env = 0.03) "T8 spindle motor housing";
@@ -407,15 +464,20 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     output Real Q_spindle_motor_W(unit = "W") "Spindle motor losses";
     output Real Q_x_feed_W(unit = "W") "X drive heat (motor, nut, support bearings)";
     output Real Q_y_feed_W(unit = "W") "Y drive heat (motor, nut, support bearings)";
+    output Real Q_z_feed_W(unit = "W") "Z drive heat (motor, nut, top bearings)";
+    output Real Q_motor_to_column_W(unit = "W") "Heat from the spindle motor into the column";
     output Real Q_shaft_convection_W(unit = "W") "Heat from the rotating shaft into the cavity air";
     output Real Q_headstock_to_column_W(unit = "W") "Heat from the headstock into the column";
     output Real Q_cooling_W(unit = "W") "Heat removed by the spindle cooling unit";
     output Real Q_to_ambient_W(unit = "W") "Total heat released to the workshop air";
     output Real spindle_growth_um(unit = "um") "Shaft growth between front bearing and nose (towards the table)";
-    output Real headstock_growth_um(unit = "um") "Headstock growth between Z carriages and front bearing seat (towards the table)";
-    output Real column_growth_um(unit = "um") "Column growth between bed and Z carriages (head away from the table)";
+    output Real tool_growth_um(unit = "um") "Tool holder and test mandrel growth, nose to measured face (towards the table)";
+    output Real headstock_growth_um(unit = "um") "Headstock growth between the Z nut bracket and the front bearing seat (towards the table)";
+    output Real z_screw_growth_um(unit = "um") "Z ball screw growth between its top bearing and the nut (towards the table)";
+    output Real column_growth_um(unit = "um") "Column growth between bed and Z screw top bearing (head away from the table)";
     output Real bed_tilt_um(unit = "um") "Bed growth under the column minus under the table (head away)";
     output Real table_growth_um(unit = "um") "Saddle and table growth (towards the tool)";
+    output Real fixture_growth_um(unit = "um") "Probe fixture growth (probe towards the tool)";
   equation
     // boundaries
     ambient.T = ambient_C + 273.15;
@@ -426,12 +488,14 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     spindle_shaft.G_side1 = A_shaft * (h_nat + h_rot_ref * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
     spindle_shaft.G_side2 = 0.0;
     nose_convection.Gc = A_nose * (h_nat + h_rot_ref * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
+    tool_convection.Gc = A_tool * (h_nat + h_rot_ref * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
+    fixture_convection.Gc = A_fixture * h_nat;
     housing.G_side1 = A_housing_out * h_nat;
     housing.G_side2 = A_housing_in * (h_nat + h_cavity_stir * (abs(spindle_speed_rpm) / n_ref) ^ (2.0 / 3.0));
     column.G_side1 = A_column * h_nat;
     column.G_side2 = 0.0;
     bed.G_side1 = A_bed * h_nat;
-    bed.G_side2 = 10.0;
+    bed.G_side2 = G_bed_floor;
     table.G_side1 = A_table * h_nat;
     table.G_side2 = 0.0;
     cooling_bearing.Gc = cooling_enabled * G_cooling;
@@ -446,6 +510,9 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     y_bearing_friction.Q_flow = c_y_bearing * abs(feed_y_mm_per_min);
     x_motor_loss.Q_flow = P_x_motor_idle + c_x_motor * abs(feed_x_mm_per_min);
     y_motor_loss.Q_flow = P_y_motor_idle + c_y_motor * abs(feed_y_mm_per_min);
+    z_nut_friction.Q_flow = c_z_nut * feed_z_mm_per_min;
+    z_bearing_friction.Q_flow = c_z_bearing * feed_z_mm_per_min;
+    z_motor_loss.Q_flow = P_z_motor_idle + c_z_motor * feed_z_mm_per_min;
 
     // spindle and headstock
     connect(front_bearing_friction.port, front_bearing.port);
@@ -454,8 +521,16 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(fb_housing.port_b, housing.port_a);
     connect(front_bearing.port, fb_shaft.port_a);
     connect(fb_shaft.port_b, spindle_shaft.port_1);
-    connect(front_bearing.port, fb_air.port_a);
-    connect(fb_air.port_b, ambient.port);
+    connect(front_bearing.port, fb_cap.port_a);
+    connect(fb_cap.port_b, front_cap.port);
+    connect(front_cap.port, cap_housing.port_a);
+    connect(cap_housing.port_b, housing.port_a);
+    connect(front_cap.port, cap_air.port_a);
+    connect(cap_air.port_b, ambient.port);
+    connect(spindle_shaft.port_a, tool_taper.port_a);
+    connect(tool_taper.port_b, tool.port);
+    connect(tool.port, tool_convection.solid);
+    connect(tool_convection.fluid, ambient.port);
     connect(rear_bearing.port, rb_housing.port_a);
     connect(rb_housing.port_b, housing.port_2);
     connect(rear_bearing.port, rb_shaft.port_a);
@@ -475,6 +550,8 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(motor_housing.port_b, housing.port_b);
     connect(spindle_motor.port, motor_air.port_a);
     connect(motor_air.port_b, ambient.port);
+    connect(spindle_motor.port, motor_column.port_a);
+    connect(motor_column.port_b, column.port_3);
     connect(housing.side_1, ambient.port);
     connect(housing.side_2, inner_cavity.port);
     connect(inner_cavity.port, cavity_air.port_a);
@@ -497,6 +574,31 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(bed_table.port_b, table.port_a);
     connect(table.side_1, ambient.port);
     connect(table.side_2, ambient.port);
+    connect(table.port_b, fixture_table.port_a);
+    connect(fixture_table.port_b, fixture.port);
+    connect(fixture.port, fixture_convection.solid);
+    connect(fixture_convection.fluid, ambient.port);
+
+    // Z drive (on the column, carries the headstock)
+    connect(z_nut_friction.port, z_nut.port);
+    connect(z_bearing_friction.port, z_bearing_seat.port);
+    connect(z_motor_loss.port, z_motor.port);
+    connect(z_nut.port, z_nut_housing.port_a);
+    connect(z_nut_housing.port_b, housing.port_3);
+    connect(z_nut.port, z_nut_screw.port_a);
+    connect(z_nut_screw.port_b, z_screw.port);
+    connect(z_screw.port, z_screw_seat.port_a);
+    connect(z_screw_seat.port_b, z_bearing_seat.port);
+    connect(z_bearing_seat.port, z_seat_column.port_a);
+    connect(z_seat_column.port_b, column.port_b);
+    connect(z_motor.port, z_motor_seat.port_a);
+    connect(z_motor_seat.port_b, z_bearing_seat.port);
+    connect(z_motor.port, z_motor_air.port_a);
+    connect(z_motor_air.port_b, ambient.port);
+    connect(z_nut.port, z_nut_air.port_a);
+    connect(z_nut_air.port_b, ambient.port);
+    connect(z_screw.port, z_screw_air.port_a);
+    connect(z_screw_air.port_b, ambient.port);
 
     // X drive (on the saddle, moves the table)
     connect(x_nut_friction.port, x_nut.port);
@@ -541,15 +643,15 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(y_screw_air.port_b, ambient.port);
 
     // sensors
-    connect(sensor_T1.port, front_bearing.port);
+    connect(sensor_T1.port, front_cap.port);
     connect(sensor_T1.port_env, ambient.port);
     connect(sensor_T2.port, housing.port_a);
     connect(sensor_T2.port_env, ambient.port);
-    connect(sensor_T3.port, front_bearing.port);
+    connect(sensor_T3.port, front_cap.port);
     connect(sensor_T3.port_env, ambient.port);
     connect(sensor_T4.port, housing.port_3);
     connect(sensor_T4.port_env, ambient.port);
-    connect(sensor_T5.port, front_bearing.port);
+    connect(sensor_T5.port, front_cap.port);
     connect(sensor_T5.port_env, inner_cavity.port);
     connect(sensor_T6.port, housing.port_1);
     connect(sensor_T6.port_env, ambient.port);
@@ -604,16 +706,22 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     T19_C = sensor_T19.T - 273.15;
     T20_C = sensor_T20.T - 273.15;
     spindle_growth_um = 1.0e6 * spindle_shaft.dL;
+    tool_growth_um = 1.0e6 * tool.dL;
     headstock_growth_um = 1.0e6 * housing.dL;
+    z_screw_growth_um = 1.0e6 * z_screw.dL;
     column_growth_um = 1.0e6 * column.dL;
     bed_tilt_um = 1.0e6 * alpha_iron * H_bed * (bed.port_b.T - bed.port_1.T);
     table_growth_um = 1.0e6 * table.dL;
-    drift_um = spindle_growth_um + headstock_growth_um - column_growth_um - bed_tilt_um + table_growth_um;
+    fixture_growth_um = 1.0e6 * fixture.dL;
+    drift_um = spindle_growth_um + tool_growth_um + headstock_growth_um + z_screw_growth_um - column_growth_um
+      - bed_tilt_um + table_growth_um + fixture_growth_um;
     Q_front_bearing_W = front_bearing_friction.Q_flow;
     Q_rear_bearing_W = rear_bearing_friction.Q_flow;
     Q_spindle_motor_W = spindle_motor_loss.Q_flow;
     Q_x_feed_W = x_nut_friction.Q_flow + x_bearing_friction.Q_flow + x_motor_loss.Q_flow;
     Q_y_feed_W = y_nut_friction.Q_flow + y_bearing_friction.Q_flow + y_motor_loss.Q_flow;
+    Q_z_feed_W = z_nut_friction.Q_flow + z_bearing_friction.Q_flow + z_motor_loss.Q_flow;
+    Q_motor_to_column_W = motor_column.Q_flow;
     Q_shaft_convection_W = -spindle_shaft.side_1.Q_flow;
     Q_headstock_to_column_W = headstock_column.Q_flow;
     Q_cooling_W = coolant.port.Q_flow;

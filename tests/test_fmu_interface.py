@@ -119,3 +119,34 @@ def test_sensors_on_the_same_part_read_differently(one_hour):
     assert min(abs(a - b) for i, a in enumerate(front) for b in front[i + 1 :]) > 0.05
     for a, b in ((12, 14), (13, 15), (16, 17), (18, 19)):
         assert abs(last[f"T{a}_C"] - last[f"T{b}_C"]) > 0.01, (a, b)
+
+
+def test_every_parameter_declares_physical_bounds(description):
+    parameters = [v for v in description.modelVariables if v.causality == "parameter"]
+    assert len(parameters) > 200
+    for variable in parameters:
+        assert variable.min is not None and variable.max is not None, variable.name
+        low, high, start = float(variable.min), float(variable.max), float(variable.start)
+        assert low <= start <= high, variable.name
+        if variable.unit == "J/K":
+            assert low > 0.0, variable.name  # a capacity is never zero
+        if variable.unit == "W/K":
+            assert low >= 0.0, variable.name
+    by_name = {v.name: v for v in parameters}
+    assert float(by_name["alpha_steel"].max) < 1e-3  # the hostile 1e6 is outside
+    assert float(by_name["fb_housing_G"].min) == 0.0
+    assert float(by_name["cooling_enabled"].max) == 1.0
+
+
+def test_t_start_alone_gives_an_fmpy_cold_start():
+    """Issue 12: with FMPy alone, T_start sets every state the caller does not set by name."""
+    result = simulate_fmu(
+        str(FMU),
+        start_values={"T_start": 281.15, "ambient_C": 8.0, "housing_2_T": 300.0},
+        stop_time=60.0,
+        output_interval=60.0,
+        output=["T1_C", "T10_C", "node_column_5_C", "node_floor_slab_C", "node_housing_2_C"],
+    )
+    for name in ("T1_C", "T10_C", "node_column_5_C", "node_floor_slab_C"):
+        assert result[name][0] == pytest.approx(8.0), name
+    assert result["node_housing_2_C"][0] == pytest.approx(300.0 - 273.15)

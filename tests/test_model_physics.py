@@ -8,7 +8,14 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 from spindlebench.modelica.equations import explicit_ode
 
-SOURCES = ("Q_front_bearing_W", "Q_rear_bearing_W", "Q_spindle_motor_W", "Q_x_feed_W", "Q_y_feed_W")
+SOURCES = (
+    "Q_front_bearing_W",
+    "Q_rear_bearing_W",
+    "Q_spindle_motor_W",
+    "Q_x_feed_W",
+    "Q_y_feed_W",
+    "Q_z_feed_W",
+)
 
 
 @pytest.fixture(scope="module")
@@ -66,13 +73,13 @@ def test_interface_names_follow_the_contract(ode):
     ):
         assert name in ode.parameters
     assert "nSeg" not in ode.parameters  # structural, fixed at build time
-    # roughly 50-100 field nodes at the default; 5 parts x 4 segments + 14 lumped here
-    assert len(ode.node_states) == 5 * 4 + 14
+    # roughly 50-100 field nodes at the default; 5 parts x 4 segments + 21 lumped here
+    assert len(ode.node_states) == 5 * 4 + 21
     assert len(ode.states) == len(ode.node_states) + 20
 
 
 def test_idle_machine_at_ambient_is_in_equilibrium(ode):
-    p = ode.parameter_vector(P_x_motor_idle=0.0, P_y_motor_idle=0.0)
+    p = ode.parameter_vector(P_x_motor_idle=0.0, P_y_motor_idle=0.0, P_z_motor_idle=0.0)
     xdot, y = evaluate(ode, uniform(ode, 17.0), inputs(speed=0.0, feed=0.0, ambient=17.0), p)
     assert np.abs(xdot).max() < 1e-12
     assert y["T1_C"] == pytest.approx(17.0)
@@ -116,6 +123,8 @@ def test_drift_of_a_uniform_warming_is_the_loop_of_expansion_lengths(ode):
         par["alpha_steel"]
         * par["spindle_shaft_L"]
         * (par["spindle_shaft_x_hi"] - par["spindle_shaft_x_lo"])
+        + par["alpha_steel"] * (par["tool_L"] + par["z_screw_L"])
+        + par["alpha_fixture"] * par["fixture_L"]
         + par["alpha_iron"] * par["housing_L"] * (par["housing_x_hi"] - par["housing_x_lo"])
         - par["alpha_iron"] * par["column_L"] * (par["column_x_hi"] - par["column_x_lo"])
         + par["alpha_iron"] * par["table_L"] * (par["table_x_hi"] - par["table_x_lo"])
@@ -165,3 +174,32 @@ def test_cooling_setpoint_is_absolute_or_follows_the_ambient(ode):
     assert q_cooling(25.0, cooling_follows_ambient=1.0, cooling_setpoint_C=0.0) == pytest.approx(
         0.0, abs=1e-9
     )
+
+
+def walther_viscosity(nu_40, nu_100, kelvin):
+    """ASTM D341: log10(log10(nu + 0.7)) is linear in log10(T) through (313.15 K, nu_40) and
+    (373.15 K, nu_100)."""
+    ll = [np.log10(np.log10(nu + 0.7)) for nu in (nu_40, nu_100)]
+    slope = (ll[1] - ll[0]) / (np.log10(373.15) - np.log10(313.15))
+    return 10 ** (10 ** (ll[0] + slope * (np.log10(kelvin) - np.log10(313.15)))) - 0.7
+
+
+def test_front_bearing_friction_follows_palmgren_with_walther_viscosity(ode):
+    par = ode.parameters
+    nu_40, nu_100 = par["front_bearing_friction_nu_40"], par["front_bearing_friction_nu_100"]
+    assert walther_viscosity(nu_40, nu_100, 293.15) == pytest.approx(54.3, abs=0.5)  # VG 22
+    assert walther_viscosity(nu_40, nu_100, 278.15) == pytest.approx(132, abs=2)
+    speed = 4000.0
+    omega = speed * 2 * np.pi / 60
+    z, f0 = par["front_bearing_friction_z"], par["front_bearing_friction_f0"]
+    dm_mm = 1000 * par["front_bearing_friction_dm"]
+    load_part = z * par["front_bearing_friction_f1"] * par["front_bearing_friction_P1"] * (
+        par["front_bearing_friction_dm"]
+    ) * omega
+    p = ode.parameter_vector()
+    for celsius in (5.0, 20.0, 40.0):
+        # the friction heat reads the rings' viscosity: every node at the same temperature
+        q = evaluate(ode, uniform(ode, celsius), inputs(speed=speed), p)[1]["Q_front_bearing_W"]
+        nu = walther_viscosity(nu_40, nu_100, celsius + 273.15)
+        speed_part = z * 1e-10 * f0 * (nu * speed) ** (2 / 3) * dm_mm**3 * omega
+        assert q == pytest.approx(speed_part + load_part, rel=1e-9)

@@ -46,6 +46,8 @@ class ExplicitOde:
     symbols: tuple[ca.SX, ca.SX, ca.SX] = field(repr=False)  # x, u, p of ``ode``
     units: dict[str, str] = field(default_factory=dict)
     descriptions: dict[str, str] = field(default_factory=dict)
+    #: Declared ``(min, max)`` of tunable parameters and inputs (None where not declared).
+    bounds: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
 
     def state_jacobian(self) -> ca.Function:
         """``jac(x, u, p) -> d xdot / d x`` (sparse), for implicit integrators."""
@@ -234,6 +236,7 @@ def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
     units, descriptions = _annotations(
         translated, states, inputs, params, tunable_index, output_names
     )
+    bounds = _bounds(translated, inputs, params, tunable_index)
     return ExplicitOde(
         ode=ode,
         states=list(states.flat),
@@ -245,6 +248,7 @@ def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
         segments=translated.segments,
         units=units,
         descriptions=descriptions,
+        bounds=bounds,
         symbols=(states.sx, inputs.sx, tunable_sx),
     )
 
@@ -301,6 +305,19 @@ def _annotations(translated, states, inputs, params, tunable_index, output_names
         else:
             declared(name, name)
     return units, descriptions
+
+
+def _bounds(translated, inputs, params, tunable_index) -> dict:
+    """Declared bounds of the inputs and tunable parameters, by FMU name."""
+    symbols = translated.symbols
+    pairs = list(zip(inputs.flat, inputs.bases, strict=True))
+    pairs += [(params.flat[i], params.bases[i]) for i in tunable_index]
+    bounds = {}
+    for flat, base in pairs:
+        info = symbols.get(base)
+        if info is not None and (info.minimum is not None or info.maximum is not None):
+            bounds[flat] = (info.minimum, info.maximum)
+    return bounds
 
 
 def explicit_ode(model_dir: str | Path = "models", segments: int = DEFAULT_SEGMENTS) -> ExplicitOde:

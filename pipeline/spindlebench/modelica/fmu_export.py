@@ -10,6 +10,9 @@ CasADi's FMU exporter is experimental. What we repair after ``export_fmu``:
 - ``<InitialUnknown>`` lists every output and state derivative (dependencies omitted = all);
 - ``fmi3GetEventIndicators`` returns ``fmi3OK`` instead of ``fmi3Fatal`` for a model without
   event indicators (the C source is patched, then compiled by us);
+- every state the importer does not set before ``fmi3EnterInitializationMode`` starts at the
+  tunable parameter ``T_start`` (the wrapper records which states were set), so an FMPy user
+  gets a cold start at 8 degC with ``start_values={"T_start": 281.15}`` alone;
 - the archive is reproducible: no generation timestamp, an instantiation token derived from
   the sources, fixed zip dates and sorted entries.
 """
@@ -102,6 +105,11 @@ def _dae_builder(ode: ExplicitOde) -> ca.DaeBuilder:
             info["unit"] = ode.units[name]
         if ode.descriptions.get(name):
             info["description"] = ode.descriptions[name]
+        minimum, maximum = ode.bounds.get(name, (None, None))
+        if minimum is not None:
+            info["min"] = minimum
+        if maximum is not None:
+            info["max"] = maximum
         return info
 
     p = [
@@ -215,13 +223,87 @@ NO_EVENTS_OK = (
 )
 
 
-def patch_wrapper(source: str) -> str:
-    """Make ``fmi3GetEventIndicators`` succeed for a model without event indicators."""
-    if NO_EVENTS_FATAL not in source:
+START_PARAMETER = "T_start"
+PATCH_NOTE = "(patched by spindlebench)"
+
+
+def _replace_once(source: str, old: str, new: str, where: str) -> str:
+    if source.count(old) != 1:
         raise SpindlebenchError(
-            "CasADi's FMU wrapper changed: the fmi3GetEventIndicators patch no longer applies"
+            f"CasADi's FMU wrapper changed: the {where} patch no longer applies"
         )
-    return source.replace(NO_EVENTS_FATAL, NO_EVENTS_OK)
+    return source.replace(old, new)
+
+
+def _replace_in_function(source: str, function: str, old: str, new: str) -> str:
+    """Replace ``old`` once inside the body of the exported C function ``function``."""
+    start = source.find(f"FMI3_Export fmi3Status {function}(")
+    end = source.find("\nFMI3_Export", start + 1)
+    if start < 0 or end < 0:
+        raise SpindlebenchError(f"CasADi's FMU wrapper changed: {function} not found")
+    body = _replace_once(source[start:end], old, new, function)
+    return source[:start] + body + source[end:]
+
+
+def patch_start_temperature(source: str, start_vr: int) -> str:
+    """States not set by the importer start at the parameter with value reference ``start_vr``.
+
+    The wrapper gets a per-instance flag per state: cleared by ``fmi3Reset``, set by
+    ``fmi3SetFloat64``; ``fmi3EnterInitializationMode`` copies ``T_start`` into every state
+    whose flag is still clear. A runner that sets all states by name is unaffected.
+    """
+    source = _replace_once(
+        source,
+        "  int continuous_states_changed;\n",
+        "  int continuous_states_changed;\n"
+        f"  // Which states the importer set before initialisation {PATCH_NOTE}\n"
+        "  int state_set[N_X];\n",
+        "state flags",
+    )
+    source = _replace_in_function(
+        source,
+        "fmi3Reset",
+        "  m->continuous_states_changed = 0;\n",
+        "  m->continuous_states_changed = 0;\n"
+        "  for (i = 0; i < N_X; ++i) m->state_set[i] = 0;\n",
+    )
+    source = _replace_in_function(
+        source,
+        "fmi3SetFloat64",
+        "    vr = valueReferences[i];\n",
+        "    vr = valueReferences[i];\n"
+        "    for (j = 0; j < N_X; ++j) if (x_vr[j] == vr) m->state_set[j] = 1;\n",
+    )
+    source = _replace_in_function(
+        source,
+        "fmi3EnterInitializationMode",
+        "  casadi_fmi_memory* m;\n",
+        "  casadi_fmi_memory* m;\n  size_t i;\n",
+    )
+    return _replace_in_function(
+        source,
+        "fmi3EnterInitializationMode",
+        "  m->t = startTime;\n",
+        "  m->t = startTime;\n"
+        f"  // States the importer did not set start at {START_PARAMETER} {PATCH_NOTE}\n"
+        "  for (i = 0; i < N_X; ++i)\n"
+        f"    if (!m->state_set[i]) m->v[var_offset[x_vr[i]]] = m->v[var_offset[{start_vr}]];\n"
+        "  m->up_to_date = 0;\n",
+    )
+
+
+def patch_wrapper(source: str, start_vr: int | None = None) -> str:
+    """Make ``fmi3GetEventIndicators`` succeed for a model without event indicators, and (with
+    ``start_vr``) start unset states at ``T_start``."""
+    source = _replace_once(source, NO_EVENTS_FATAL, NO_EVENTS_OK, "fmi3GetEventIndicators")
+    return source if start_vr is None else patch_start_temperature(source, start_vr)
+
+
+def _value_reference(xml_text: str, name: str) -> int | None:
+    for variable in ET.fromstring(xml_text).iter():
+        if variable.get("name") == name and variable.get("valueReference") is not None:
+            return int(variable.get("valueReference"))
+    return None
 
 
 def compile_binary(sources: list[Path], include_dir: Path, output: Path) -> None:
@@ -284,13 +366,18 @@ def export_fmu(ode: ExplicitOde, out_path: str | Path) -> Path:
             shutil.move(str(staging / local), destination)
         sources_dir = package / "sources"
         wrapper = sources_dir / f"{FMU_NAME}_wrap.c"
-        wrapper.write_text(patch_wrapper(wrapper.read_text()))
+        description = package / "modelDescription.xml"
+        start_vr = (
+            _value_reference(description.read_text(), START_PARAMETER)
+            if START_PARAMETER in ode.parameters
+            else None
+        )
+        wrapper.write_text(patch_wrapper(wrapper.read_text(), start_vr))
         c_sources = sorted(sources_dir.glob("*.c"))
         digest = hashlib.sha256()
         for source in c_sources:
             digest.update(source.read_bytes())
         token = "{" + digest.hexdigest()[:32] + "}"
-        description = package / "modelDescription.xml"
         description.write_text(fix_model_description(description.read_text(), ode, token))
         compile_binary(
             c_sources, sources_dir, package / "binaries" / folder / f"{FMU_NAME}{suffix}"

@@ -27,10 +27,16 @@ SEGMENTS_PARAMETER = "nSeg"
 
 @dataclass(frozen=True)
 class SymbolInfo:
-    """Declaration facts pymoca's CasADi model drops: description string and unit."""
+    """Declaration facts pymoca's CasADi model drops: description, unit and the bounds.
+
+    ``minimum``/``maximum`` are the declared ``min``/``max`` when they are plain numbers
+    (None when not declared), so the FMU can carry them and importers refuse values outside.
+    """
 
     description: str
     unit: str
+    minimum: float | None = None
+    maximum: float | None = None
 
 
 @dataclass
@@ -108,7 +114,12 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
         raise SpindlebenchError(_semantic_error(path, exc)) from None
     (flat_class,) = flat.classes.values()
     symbols = {
-        name: SymbolInfo(description=str(sym.comment or ""), unit=_unit_of(sym))
+        name: SymbolInfo(
+            description=str(sym.comment or ""),
+            unit=_unit_of(sym),
+            minimum=_bound_of(sym, "min"),
+            maximum=_bound_of(sym, "max"),
+        )
         for name, sym in flat_class.symbols.items()
     }
     package, machine = MODEL_CLASS.split(".")
@@ -151,6 +162,15 @@ def _unit_of(symbol: Any) -> str:
     unit = getattr(symbol, "unit", None)
     value = getattr(unit, "value", unit)
     return value if isinstance(value, str) else ""
+
+
+def _bound_of(symbol: Any, attribute: str) -> float | None:
+    """A declared ``min``/``max`` that is a finite number, else None (pymoca's default is None)."""
+    bound = getattr(symbol, attribute, None)
+    value = getattr(bound, "value", bound)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value) if abs(value) != float("inf") else None
 
 
 def _semantic_error(path: Path, exc: Exception) -> str:

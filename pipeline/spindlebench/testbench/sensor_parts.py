@@ -36,11 +36,11 @@ AMBIENT_SENSOR = "T10"
 #: Sensor (``names.SENSORS``) → (what its probe is connected to in the model, where it is
 #: on the machine: the paper's Table 1, in more detail).
 LOCATIONS: dict[str, tuple[str, str]] = {
-    "T1": ("front_bearing", "front bearing cap"),
+    "T1": ("front_cap", "front bearing cap"),
     "T2": ("housing.port_a", "housing flange at the bearing seat"),
-    "T3": ("front_bearing", "labyrinth ring (poor contact)"),
+    "T3": ("front_cap", "labyrinth ring (poor contact)"),
     "T4": ("housing.port_3", "housing side above the seat"),
-    "T5": ("front_bearing", "bearing seat, inside the cavity"),
+    "T5": ("front_cap", "bearing seat sleeve, inside the cavity"),
     "T6": ("housing.port_1", "housing side at the Z carriages"),
     "T7": ("drawbar_cylinder", "drawbar cylinder base"),
     "T8": ("spindle_motor", "spindle motor housing"),

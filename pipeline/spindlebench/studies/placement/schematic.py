@@ -51,6 +51,13 @@ SEGMENTED = {
 #: Lumped nodes: (y, z).
 LUMPED = {
     "front_bearing": (0.98, 1.50),
+    "front_cap": (1.08, 1.43),
+    "tool": (0.85, 1.13),
+    "fixture": (0.85, 1.01),
+    "z_nut": (1.66, 1.75),
+    "z_screw": (1.72, 2.05),
+    "z_bearing_seat": (1.72, 2.50),
+    "z_motor": (1.82, 2.60),
     "rear_bearing": (0.98, 2.15),
     "inner_cavity": (1.15, 1.85),
     "drawbar_cylinder": (0.85, 2.49),
