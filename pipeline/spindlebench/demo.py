@@ -41,6 +41,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--models", default=models, help=f"Modelica folder (default: {models})")
     parser.add_argument("--scenarios", default=scenarios,
                         help=f"scenario folder (default: {scenarios})")
+    parser.add_argument("--machine", default=None, metavar="NAME",
+                        help="machine variant to simulate (scenarios/machines/NAME.toml or a "
+                        ".toml file; default: each scenario's machine key, else 'default')")
     parser.set_defaults(func=run)
 
 
@@ -54,7 +57,8 @@ def _step(argv: list[str]) -> None:
         raise SystemExit(status)
 
 
-def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path) -> None:
+def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path,
+                 machine: str | None = None) -> None:
     """Check the Modelica folder and the scenario folder before the ~25 s build writes anything.
 
     The scenarios are loaded and planned as ``simulate`` will, so a missing experiment or a
@@ -71,7 +75,7 @@ def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path) -> 
         raise SpindlebenchError(f"--scenarios {folder}: lacks {', '.join(missing)} (the paper "
                                 "stage trains on exp1 and predicts exp2 … exp5)")
     files = sorted(folder.glob("*.toml"))
-    plan_batch(files, [synthetic / f"{file.stem}.csv" for file in files])
+    plan_batch(files, [synthetic / f"{file.stem}.csv" for file in files], machine)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,11 +83,13 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     fmu = out / "fmu" / f"{FMU_NAME}.fmu"
     synthetic = out / "paper"
-    check_inputs(args.models, args.scenarios, synthetic)
+    machine = getattr(args, "machine", None)
+    check_inputs(args.models, args.scenarios, synthetic, machine)
     _step(["build", "--models", args.models, "--out", str(fmu)])
     same = COMMITTED_FMU.exists() and sha256_file(fmu) == sha256_file(COMMITTED_FMU)
     print(f"rebuilt FMU {'is byte-identical to' if same else 'differs from'} {COMMITTED_FMU}")
-    _step(["simulate", args.scenarios, "-o", str(synthetic), "--fmu", str(fmu), "-q"])
+    _step(["simulate", args.scenarios, "-o", str(synthetic), "--fmu", str(fmu), "-q",
+           *(["--machine", machine] if machine else [])])
     overview = synthetic / "exp1_overview.png"
     plot_recording(read_recording(synthetic / "exp1.csv"), overview,
                    "Synthetic experiment 1: 4000 rpm, January ambient 5.3-10.4 °C")

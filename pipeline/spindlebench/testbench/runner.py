@@ -240,6 +240,12 @@ def check_physical(simulation: Simulation, scenario: Scenario) -> None:
 def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
     """Scenario parameters and cooling settings as FMU parameter values; unknown names fail."""
     values: dict[str, float] = {}
+    machine = scenario.machine
+    for name, value in machine.parameters.items():  # the machine first, the scenario on top
+        if name in COOLING_PARAMETERS or name not in fmu.parameters:
+            raise SpindlebenchError(f"{machine.path}: key 'parameters.{name}': the FMU "
+                                    f"{fmu.path.name} has no machine parameter {name!r}")
+        values[name] = value
     for name, value in scenario.parameters.items():
         if name in COOLING_PARAMETERS:
             raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': set cooling "

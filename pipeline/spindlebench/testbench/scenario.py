@@ -18,6 +18,7 @@ from typing import Any, Literal
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.tables import REQUIRED, Table, load_toml, range_problem
+from spindlebench.machines import DEFAULT_MACHINE, Machine, load_machine
 from spindlebench.names import SENSORS
 
 #: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
@@ -298,6 +299,8 @@ class Scenario:
     parameters: Mapping[str, float]
     #: How the runner feeds the drivers to the FMU (``INPUT_MODES``; scenarios/README.md).
     inputs: str = "continuous"
+    #: The machine variant (``scenarios/machines``); its parameters apply under ``parameters``.
+    machine: Machine = field(default_factory=load_machine)
 
     @property
     def n_steps(self) -> int:
@@ -668,6 +671,19 @@ def is_scenario_reference(value: str) -> bool:
             and Path(value).suffix.lower() not in (".json", ".csv"))
 
 
+def _read_machine(top: Table, path: Path) -> Machine:
+    name = top.string("machine", DEFAULT_MACHINE)
+    try:
+        return load_machine(name, source=path)
+    except SpindlebenchError as exc:
+        raise top.error("machine", str(exc)) from None
+
+
+def with_machine(scenario: Scenario, name: str | None) -> Scenario:
+    """``scenario`` on machine ``name`` (a shipped name or a .toml path); None keeps its own."""
+    return scenario if name is None else replace(scenario, machine=load_machine(name))
+
+
 def resolve_initial(scenario: Scenario, output_dir: str | Path) -> Scenario:
     """The scenario with a sibling reference in ``initial.from`` turned into a file.
 
@@ -752,6 +768,7 @@ def load_scenario(path: str | Path) -> Scenario:
         initial=_read_initial(top, scenario_dir),
         parameters=_read_parameters(top),
         inputs=top.string("inputs", "continuous", choices=INPUT_MODES),
+        machine=_read_machine(top, path),
     )
     top.finish()
     if scenario.initial.kind == "soak" and isinstance(scenario.ambient, MeasuredAmbient):

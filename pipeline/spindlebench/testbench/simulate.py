@@ -43,6 +43,7 @@ from spindlebench.testbench.scenario import (
     Scenario,
     load_scenario,
     resolve_initial,
+    with_machine,
 )
 from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.soak import soak_provenance
@@ -62,6 +63,7 @@ def sidecar_record(scenario: Scenario, fmu_path: Path, seed: int,
         provenance=provenance(
             kind="spindlebench synthetic recording",
             scenario=file_entry(scenario.path),
+            machine=scenario.machine.provenance(),
             fmu=file_entry(fmu_path),
             seed=seed,
             **extra,
@@ -137,12 +139,13 @@ class BatchPlan:
     state_from_batch: list[bool]  # whether a run's start state is written by an earlier run
 
 
-def plan_batch(files: list[Path], targets: list[Path]) -> BatchPlan:
+def plan_batch(files: list[Path], targets: list[Path], machine: str | None = None) -> BatchPlan:
     """Validate a batch and order it so a run comes after the run it continues from.
 
     ``targets[i]`` is the CSV that ``files[i]`` will be written to. A scenario whose
     ``initial.from`` is the sidecar of another target (by sibling name or by path) runs after
-    it; otherwise the given (alphabetical) order is kept. A reference that no run of the batch
+    it; otherwise the given (alphabetical) order is kept. ``machine`` (``--machine``) replaces
+    every scenario's machine. A reference that no run of the batch
     writes and that does not exist yet, or a circle of continuations, is one error line naming
     the file and key, before anything is simulated.
     """
@@ -154,7 +157,7 @@ def plan_batch(files: list[Path], targets: list[Path]) -> BatchPlan:
                                     "rename one of the two scenario files")
         seen[key] = i
     producers = {target.with_suffix(".json").resolve(): i for i, target in enumerate(targets)}
-    scenarios = [resolve_initial(load_scenario(path), target.parent)
+    scenarios = [resolve_initial(with_machine(load_scenario(path), machine), target.parent)
                  for path, target in zip(files, targets, strict=True)]
     after: list[int | None] = []
     for path, scenario in zip(files, scenarios, strict=True):
@@ -242,7 +245,7 @@ def run(args: argparse.Namespace) -> int:
                 raise SpindlebenchError(f"{target.with_suffix('.png')}: is a directory; "
                                         "--plot writes the figure there (choose another -o)")
     # validate all first: a typo in the last file should cost nothing
-    plan = plan_batch(files, targets)
+    plan = plan_batch(files, targets, args.machine)
     check_batch(plan, args.fmu)
     show_progress = not args.quiet and sys.stderr.isatty()
     for i in plan.order:
@@ -277,6 +280,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/)")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed of the sensor model (default: the scenario's)")
+    parser.add_argument("--machine", default=None, metavar="NAME",
+                        help="machine variant for every scenario: a name from "
+                        "scenarios/machines/ or a .toml file (default: each scenario's "
+                        "machine key, else 'default')")
     parser.add_argument("--plot", action="store_true",
                         help="also draw each recording (as `spindlebench plot`) into "
                         "<recording>.png beside it")

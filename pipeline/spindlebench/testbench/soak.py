@@ -107,6 +107,7 @@ def soak_key(history: Scenario, fmu_path: Path) -> str:
         "inputs": history.inputs,
         "ambient": history.to_dict()["ambient"],
         "parameters": dict(sorted(history.parameters.items())),
+        "machine_parameters": dict(sorted(history.machine.parameters.items())),
     }
     text = json.dumps(what, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

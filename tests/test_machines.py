@@ -1,0 +1,98 @@
+"""Machine variants: every shipped machine meets its file's fingerprint targets on the paper's
+five experiments (noise-free, the committed FMU), and the machine key reaches the FMU."""
+
+import json
+
+import pytest
+from conftest import FMU, SCENARIOS
+from spindlebench import cli
+from spindlebench.errors import SpindlebenchError
+from spindlebench.machine_check import paper_fingerprints
+from spindlebench.machines import (
+    DEFAULT_MACHINE,
+    Target,
+    load_machine,
+    machine_names,
+    target_problems,
+)
+from spindlebench.testbench.runner import inspect_fmu, parameter_values
+from spindlebench.testbench.scenario import load_scenario, with_machine
+
+
+def test_default_and_ambient_following_are_shipped():
+    assert {DEFAULT_MACHINE, "ambient-following"} <= set(machine_names())
+    assert load_machine().parameters == {}  # the FMU's defaults are the default machine
+
+
+@pytest.mark.parametrize("name", machine_names())
+def test_shipped_machine_meets_its_fingerprint_targets(name):
+    machine = load_machine(name)
+    assert machine.targets, f"{name} states no fingerprint targets"
+    fingerprints = paper_fingerprints(machine, FMU)
+    assert target_problems(machine, fingerprints) == []
+
+
+def test_targets_are_checked_median_or_each():
+    machine = load_machine()
+    good = {run: {"best_raw_psi": 0.9, "best_diff_psi": 0.99, "early_fraction": 0.6,
+                  "overshoot": 1.1} for run in ("exp1", "exp2", "exp3", "exp4", "exp5")}
+    assert target_problems(machine, good) == []
+    one_flat = {**good, "exp3": {**good["exp3"], "overshoot": 1.0}}  # a 4000 rpm run, each
+    assert len(target_problems(machine, one_flat)) == 1
+    raw_close = {run: {**stats, "best_diff_psi": 0.91} for run, stats in good.items()}
+    (problem,) = target_problems(machine, raw_close)
+    assert "best_diff_psi - best_raw_psi >= 0.02" in problem and "got 0.010" in problem
+    assert Target("overshoot", minimum=1.0).describe().startswith("overshoot >= 1")
+
+
+def write(tmp_path, text, name="m.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('name = "x"\n', "key 'description': missing"),
+    ('description = "d"\n[parameters]\nA_column = "big"\n',
+     "key 'parameters.A_column': must be"),
+    ('description = "d"\n[[targets]]\nstatistic = "psi"\nmax = 1\n',
+     r"key 'targets\[0\]\.statistic'"),
+    ('description = "d"\n[[targets]]\nstatistic = "overshoot"\n', "needs min and/or max"),
+    ('description = "d"\ncolour = 1\n', "unknown key"),
+])
+def test_bad_machine_file_is_one_line(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(SpindlebenchError, match=message) as info:
+        load_machine(str(path))
+    assert "\n" not in str(info.value) and str(path) in str(info.value)
+
+
+def test_unknown_machine_lists_the_shipped_ones(tmp_path):
+    scenario = SCENARIOS / "examples" / "quick.toml"
+    bad = write(tmp_path, 'machine = "lathe"\n' + scenario.read_text(), "bad.toml")
+    with pytest.raises(SpindlebenchError, match=r"key 'machine'.*'lathe' not found.*default"):
+        load_scenario(bad)
+
+
+def test_machine_parameters_reach_the_fmu_under_the_scenario_ones(tmp_path):
+    fmu = inspect_fmu(FMU)
+    scenario = load_scenario(SCENARIOS / "examples" / "quick.toml")
+    assert scenario.machine.name == DEFAULT_MACHINE
+    following = with_machine(scenario, "ambient-following")
+    values = parameter_values(following, fmu)
+    assert values["headstock_column_G"] == 5.0 and values["A_column"] == 5.0
+    machine = write(tmp_path, 'description = "d"\n[parameters]\nno_such_G = 1.0\n')
+    with pytest.raises(SpindlebenchError, match=r"m\.toml: key 'parameters\.no_such_G'"):
+        parameter_values(with_machine(scenario, str(machine)), fmu)
+
+
+def test_simulate_machine_flag_names_the_machine_in_the_provenance(tmp_path):
+    out = tmp_path / "quick.csv"
+    scenario = SCENARIOS / "examples" / "quick.toml"
+    assert cli.main(["simulate", str(scenario), "-o", str(out), "--machine",
+                     "ambient-following", "-q"]) == 0
+    sidecar = json.loads(out.with_suffix(".json").read_text())
+    machine = load_machine("ambient-following")
+    assert sidecar["machine"] == {"name": "ambient-following", "file": "ambient-following.toml",
+                                  "sha256": machine.sha256}
+    assert sidecar["parameters"]["headstock_column_G"] == 5.0
