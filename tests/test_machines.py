@@ -96,3 +96,10 @@ def test_simulate_machine_flag_names_the_machine_in_the_provenance(tmp_path):
     assert sidecar["machine"] == {"name": "ambient-following", "file": "ambient-following.toml",
                                   "sha256": machine.sha256}
     assert sidecar["parameters"]["headstock_column_G"] == 5.0
+
+
+def test_machine_value_outside_the_fmu_bounds_is_refused(tmp_path):
+    scenario = load_scenario(SCENARIOS / "examples" / "quick.toml")
+    machine = write(tmp_path, 'description = "d"\n[parameters]\nfb_housing_G = -50.0\n')
+    with pytest.raises(SpindlebenchError, match=r"key 'parameters\.fb_housing_G': must be ≥ 0"):
+        parameter_values(with_machine(scenario, str(machine)), inspect_fmu(FMU))

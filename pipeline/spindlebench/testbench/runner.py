@@ -245,6 +245,9 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
         if name in COOLING_PARAMETERS or name not in fmu.parameters:
             raise SpindlebenchError(f"{machine.path}: key 'parameters.{name}': the FMU "
                                     f"{fmu.path.name} has no machine parameter {name!r}")
+        problem = bound_problem(fmu.parameters[name], value)
+        if problem:
+            raise SpindlebenchError(f"{machine.path}: key 'parameters.{name}': {problem}")
         values[name] = value
     for name, value in scenario.parameters.items():
         if name in COOLING_PARAMETERS:
