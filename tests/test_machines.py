@@ -103,3 +103,25 @@ def test_machine_value_outside_the_fmu_bounds_is_refused(tmp_path):
     machine = write(tmp_path, 'description = "d"\n[parameters]\nfb_housing_G = -50.0\n')
     with pytest.raises(SpindlebenchError, match=r"key 'parameters\.fb_housing_G': must be ≥ 0"):
         parameter_values(with_machine(scenario, str(machine)), inspect_fmu(FMU))
+
+
+def test_a_study_names_its_machine_and_every_run_uses_it(tmp_path):
+    from spindlebench.studies.experiments import experiments, scenario_for
+    from spindlebench.studies.study import load_study, pinned_content
+
+    tiny = SCENARIOS / "studies" / "tiny_sweep.toml"
+    assert load_study(tiny).machine.name == DEFAULT_MACHINE
+    named = write(tmp_path, tiny.read_text().replace("[study]\n", '[study]\nmachine = '
+                                                     '"ambient-following"\n', 1), "s.toml")
+    text = named.read_text().replace('climate = "chongqing"', 'climate = "'
+                                     + str(SCENARIOS / "seasons" / "chongqing.toml") + '"')
+    named.write_text(text)
+    study = load_study(named)
+    assert study.machine.name == "ambient-following"
+    run = scenario_for(study, 0, experiments(study)[0])
+    assert run.machine.parameters["headstock_column_G"] == 5.0
+    assert pinned_content(study)["machine"]["sha256"] == study.machine.sha256
+    assert load_study(tiny, machine="ambient-following").machine.name == "ambient-following"
+    bad = write(tmp_path, text.replace('"ambient-following"', '"lathe"'), "bad.toml")
+    with pytest.raises(SpindlebenchError, match=r"bad\.toml: key 'study\.machine': .*'lathe'"):
+        load_study(bad)

@@ -371,6 +371,9 @@ def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
     parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
                         help="run on an existing Dask distributed cluster instead")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--machine", default=None, metavar="NAME",
+                        help="machine variant of every run: a name from scenarios/machines/ or "
+                        "a .toml file (default: the study's [study] machine, else 'default')")
 
 
 def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) -> Path:

@@ -200,4 +200,5 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         sensors=sensor_model(study.noise[0], None),
         initial=initial_for(study, experiment),
         parameters=dict(study.parameters),
+        machine=study.machine,
     )

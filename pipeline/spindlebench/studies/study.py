@@ -30,6 +30,7 @@ from spindlebench.formats.tables import (
     positive,
     range_problem,
 )
+from spindlebench.machines import DEFAULT_MACHINE, Machine, load_machine
 from spindlebench.names import (
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
@@ -173,14 +174,20 @@ class SweepStudy:
     #: ``[experiment.indoor]``: the indoor ambient's building and weather (outdoor cycle and
     #: seed are filled in per run); None: the season curve of the replica's day.
     indoor: IndoorAmbient | None = None
+    #: The machine variant every run simulates (``[study] machine``, or ``--machine``).
+    machine: Machine = field(default_factory=load_machine)
 
     @property
     def sha256(self) -> str:
         return sha256_file(self.path)
 
 
-def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStudy:
+def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
+               machine: str | None = None) -> SweepStudy:
     """Read and validate a sweep study file.
+
+    ``machine`` (``--machine``) replaces the study's ``[study] machine`` (default machine when
+    neither names one).
 
     ``extra_tables``: top-level tables another study kind reads itself (the placement study's
     ``[placement]``); they are let through instead of rejected as unknown keys.
@@ -204,7 +211,14 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
     if fmu_text and not fmu.is_file():
         raise head.error("fmu", f"no such FMU: {fmu}")
     fmu_parameters = _fmu_parameters(head, fmu) if fmu.is_file() else None
+    machine_name = head.get("machine", str, default=DEFAULT_MACHINE)
+    try:
+        machine_variant = load_machine(machine or machine_name, source=None if machine else path)
+    except SpindlebenchError as exc:
+        raise (head.error("machine", str(exc)) if machine is None else exc) from None
     head.finish()
+    if fmu_parameters is not None:
+        _check_machine(machine_variant, fmu_parameters, fmu)
 
     exp = root.table("experiment")
     duration_s, duration_key = _duration_s(exp)
@@ -285,8 +299,22 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = ()) -> SweepStu
         feed=feed, feed_x_mm_per_min=feed_x, feed_y_mm_per_min=feed_y, months=months,
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
-        indoor=indoor,
+        indoor=indoor, machine=machine_variant,
     )
+
+
+def _check_machine(machine: Machine, known: Mapping[str, Any], fmu: Path) -> None:
+    """The machine's parameters must be the FMU's, within its declared bounds (at load time,
+    not once per simulation in the workers)."""
+    from spindlebench.testbench.runner import bound_problem
+
+    for name, value in machine.parameters.items():
+        where = f"{machine.path}: key 'parameters.{name}'"
+        if name not in known:
+            raise SpindlebenchError(f"{where}: the FMU {fmu.name} has no parameter {name!r}")
+        problem = bound_problem(known[name], value)
+        if problem:
+            raise SpindlebenchError(f"{where}: {problem}")
 
 
 def _soak_days(exp: Table) -> int | None:
@@ -544,7 +572,8 @@ def pinned_content(study: SweepStudy) -> dict[str, Any]:
     for table, key in UNPINNED_KEYS:
         if isinstance(data.get(table), dict):
             data[table].pop(key, None)
-    return {"study file": data, "climate file": load_toml(study.climate.path)}
+    return {"study file": data, "climate file": load_toml(study.climate.path),
+            "machine": {**study.machine.provenance(), "parameters": dict(study.machine.parameters)}}
 
 
 def check_fmu(study: SweepStudy) -> Path:

@@ -230,9 +230,11 @@ class Sweep:
 
 
 def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None = None,
-              dask_address: str | None = None, progress: bool = True) -> SweepOutcome:
-    """Run (or resume) a sweep and write every output; return what was done."""
-    study = load_study(study_path)
+              dask_address: str | None = None, progress: bool = True,
+              machine: str | None = None) -> SweepOutcome:
+    """Run (or resume) a sweep and write every output; return what was done. ``machine``
+    replaces the study's machine variant."""
+    study = load_study(study_path, machine=machine)
     sweep = Sweep(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="job")
@@ -263,6 +265,7 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> No
         study=file_entry(study.path),
         study_content_sha256=content_sha256(pinned_content(study)),
         climate=file_entry(study.climate.path),
+        machine=study.machine.provenance(),
         fmu=file_entry(sweep.fmu),
         study_seed=study.seed,
         seeds=seeds,
@@ -323,7 +326,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _main(args: argparse.Namespace) -> int:
     out = results_folder(args, lambda study: load_study(study).name)
     outcome = run_sweep(args.study, out, workers=args.workers,
-                        dask_address=args.dask_address, progress=not args.no_progress)
+                        dask_address=args.dask_address, progress=not args.no_progress,
+                        machine=args.machine)
     results = outcome.results
     failed = int((results["error"] != "").sum()) if len(results) else 0
     stats = outcome.stats

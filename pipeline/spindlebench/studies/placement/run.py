@@ -131,9 +131,11 @@ class PlacementStudyRun:
 
 
 def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | None = None,
-                  dask_address: str | None = None, progress: bool = True) -> PlacementOutcome:
-    """Run (or resume) a placement study and write every output; return what was done."""
-    study = load_placement_study(study_path)
+                  dask_address: str | None = None, progress: bool = True,
+                  machine: str | None = None) -> PlacementOutcome:
+    """Run (or resume) a placement study and write every output; return what was done.
+    ``machine`` replaces the study's machine variant."""
+    study = load_placement_study(study_path, machine)
     work = PlacementStudyRun(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="run")
@@ -193,6 +195,7 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
         study=file_entry(study.path),
         study_content_sha256=content_sha256(pinned_content(study.family)),
         climate=file_entry(study.family.climate.path),
+        machine=study.family.machine.provenance(),
         fmu=file_entry(work.fmu),
         study_seed=study.family.seed,
         seeds=seeds,
@@ -225,7 +228,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _main(args: argparse.Namespace) -> int:
     out = results_folder(args, lambda study: load_placement_study(study).name)
     outcome = run_placement(args.study, out, workers=args.workers,
-                            dask_address=args.dask_address, progress=not args.no_progress)
+                            dask_address=args.dask_address, progress=not args.no_progress,
+                            machine=args.machine)
     found = [p for p in outcome.placements if p.found]
     print(f"{'resumed' if outcome.resumed else 'ran'}: {outcome.stats.total('simulation')} "
           f"simulation(s) in {outcome.stats.seconds:.1f} s; {len(found)} placement(s) found "

@@ -106,10 +106,11 @@ def _reject_sweep_only(data: dict[str, Any], family: SweepStudy) -> None:
                                 f"conditions; leave faults out or set [\"{NO_FAULT}\"]")
 
 
-def load_placement_study(path: str | Path) -> PlacementStudy:
-    """Read and validate a placement study; every error names the file and the key."""
+def load_placement_study(path: str | Path, machine: str | None = None) -> PlacementStudy:
+    """Read and validate a placement study; every error names the file and the key.
+    ``machine`` (``--machine``) replaces the study's machine."""
     path = Path(path)
-    family = load_study(path, extra_tables=("placement",))
+    family = load_study(path, extra_tables=("placement",), machine=machine)
     data = load_toml(path, "study")
     _reject_sweep_only(data, family)
     if not isinstance(data.get("placement"), dict):
