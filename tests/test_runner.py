@@ -294,12 +294,32 @@ def test_fmu_without_a_binary_for_this_platform_is_one_line(tmp_path):
         co_simulate(scenario, stripped)
 
 
+def _without_bounds(tmp_path):
+    """A copy of the FMU whose model description declares no min/max (like many third-party
+    FMUs), so an unphysical value reaches the solver."""
+    import re
+    import zipfile
+
+    copy = tmp_path / "nobounds.fmu"
+    with zipfile.ZipFile(FMU) as source, zipfile.ZipFile(copy, "w") as target:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = re.sub(rb' (min|max)="[^"]*"', b"", data)
+            target.writestr(item, data)
+    return copy
+
+
 def test_a_failing_integration_is_one_line_and_writes_nothing(tmp_path):
     capacity = next(name for name in inspect_fmu(FMU).parameters if name.endswith("bearing_C"))
     path = write(tmp_path, "neg.toml", scenario_text(
         minutes=10, extra=f"[parameters]\n{capacity} = -1e-3\n"))  # negative heat capacity
-    with pytest.raises(SpindlebenchError, match=r"simulation failed in scenario .*neg\.toml"):
+    # the committed FMU declares capacities > 0: refused before simulating
+    with pytest.raises(SpindlebenchError, match=rf"neg\.toml: key 'parameters\.{capacity}': "
+                                                r"must be ≥"):
         simulate_scenario(path, tmp_path / "neg.csv", fmu_path=FMU)
+    with pytest.raises(SpindlebenchError, match=r"simulation failed in scenario .*neg\.toml"):
+        simulate_scenario(path, tmp_path / "neg.csv", fmu_path=_without_bounds(tmp_path))
     assert not (tmp_path / "neg.csv").exists()
 
 
