@@ -86,8 +86,7 @@ def test_the_spanning_tree_is_the_matrix_trees():
     reference = maximum_spanning_tree(similarity_matrix(X))
     candidates = PairCandidates(raw)
     geometry = PairGeometry.of(candidates, standardized_centre(raw))
-    tree = maximum_spanning_tree_of_pairs(geometry, np.arange(X.shape[1]),
-                                          include_raw=True)
+    tree = maximum_spanning_tree_of_pairs(geometry, np.arange(X.shape[1]))
     np.testing.assert_array_equal(tree.order, reference.order)
     np.testing.assert_array_equal(tree.parent, reference.parent)
     np.testing.assert_allclose(tree.weight, reference.weight, rtol=0, atol=1e-12)

@@ -205,7 +205,7 @@ PRIM_BATCH = 512
 
 
 def maximum_spanning_tree_of_pairs(
-    geometry: PairGeometry, kept: np.ndarray, include_raw: bool
+    geometry: PairGeometry, kept: np.ndarray
 ) -> SpanningTree:
     """Prim's algorithm over the ``kept`` candidates, one row of R at a time.
 
@@ -216,24 +216,29 @@ def maximum_spanning_tree_of_pairs(
     from spindlebench.selection.prim_kernel import prim_steps
 
     n_all = geometry.first.size
-    inverse = np.full(n_all, np.nan)
-    inverse[kept] = geometry.inverse_norm[kept]
-    best = np.full(n_all, -np.inf)
-    parent = np.full(n_all, -1, dtype=np.int64)
+    kept = np.asarray(kept, dtype=np.int64)
+    ids = kept.copy()
+    first = geometry.first[kept].astype(np.int32)
+    second = geometry.second[kept].astype(np.int32)
+    inverse = geometry.inverse_norm[kept].copy()
+    best = np.full(kept.size, -np.inf)
+    parent = np.full(kept.size, -1, dtype=np.int64)
+    state = np.array([0, kept.size, 0], dtype=np.int64)
     order = np.empty(kept.size, dtype=np.int64)
     weight = np.ones(n_all)
+    tree_parent = np.full(n_all, -1, dtype=np.int64)
     factor_rows = np.vstack([geometry.factor.T, np.zeros((1, geometry.factor.shape[0]))])
-    vertex = int(kept[0])
+    factor_t = np.ascontiguousarray(geometry.factor.T)
     with threadpool_limits(limits=1, user_api="blas"):
         for start in range(0, kept.size, PRIM_BATCH):
-            vertex = prim_steps(factor_rows, inverse, geometry.first, geometry.second,
-                                include_raw, best, parent, weight, order, start,
-                                min(start + PRIM_BATCH, kept.size), vertex)
+            prim_steps(factor_rows, factor_t, ids, first, second, inverse, best, parent,
+                       state, order, weight, tree_parent, start,
+                       min(start + PRIM_BATCH, kept.size))
     local = np.full(n_all, -1, dtype=np.intp)
     local[kept] = np.arange(kept.size)
-    tree_parent = np.full(kept.size, -1, dtype=np.intp)
-    tree_parent[local[order[1:]]] = local[parent[order[1:]]]
-    return SpanningTree(order=local[order], parent=tree_parent, weight=weight[kept])
+    parents = np.full(kept.size, -1, dtype=np.intp)
+    parents[local[order[1:]]] = local[tree_parent[order[1:]]]
+    return SpanningTree(order=local[order], parent=parents, weight=weight[kept])
 
 
 def select_among_pairs(
@@ -265,7 +270,7 @@ def select_among_pairs(
     geometry = PairGeometry.of(candidates, centred)
     geometry.check_finite(kept, names)
     psi = geometry.correlations(centred, kept, y)
-    tree = maximum_spanning_tree_of_pairs(geometry, kept, include_raw)
+    tree = maximum_spanning_tree_of_pairs(geometry, kept)
     cut = cut_tree_for_clusters(tree, n_clusters)
 
     def similarity() -> np.ndarray:

@@ -12,51 +12,60 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def prim_steps(factor_rows, inverse_norm, first, second, include_raw, best, parent, weight,
-               order, start, stop, vertex):  # pragma: no cover (compiled)
-    """Add the vertices ``order[start:stop]`` to the tree, beginning with ``vertex``; return
-    the next vertex (-1 when none is left).
+def prim_steps(factor_rows, factor_t, ids, first, second, inverse_norm, best, parent, state,
+               order, weight, tree_parent, start, stop):  # pragma: no cover (compiled)
+    """Add vertices ``order[start:stop]`` to the tree; ``state`` = [position of the next
+    vertex in the outside arrays, number of outside entries, entries of tree members].
 
-    ``factor_rows`` is G^T with a row of zeros appended ((m + 1) x r); a candidate's vector
-    is row ``first`` minus row ``second`` (the zero row for a raw sensor). Tree members and
-    candidates outside the selection carry a NaN ``inverse_norm`` and a ``best`` of -inf, so
-    no row raises them and they are never the largest: the next vertex is the outside one
-    with the largest link, the first on ties; a parent changes only on a strictly larger
-    similarity (the rules of ``closure.maximum_spanning_tree``).
+    The outside arrays (``ids``, ``first``, ``second``, ``inverse_norm``, ``best``,
+    ``parent``, in candidate order) hold every candidate not yet in the tree, plus joined
+    ones until they make up half (then they are squeezed out, order kept). ``factor_rows``
+    is G^T with a row of zeros appended ((m + 1) x r): a candidate's vector is row ``first``
+    minus row ``second`` (the zero row for a raw sensor); ``factor_t`` is G^T alone, its own
+    C-contiguous array (a slice would make ``@`` skip BLAS). A joined entry carries a NaN norm
+    and a best of -inf, so no row raises it and it is never the largest: the next vertex is
+    the outside one with the largest link, the first on ties; a parent changes only on a
+    strictly larger similarity (the rules of ``closure.maximum_spanning_tree``).
     """
     m = factor_rows.shape[0] - 1
-    factor_t = factor_rows[:m]
+    u = np.zeros(m + 1)
+    at, n_active, dead = state[0], state[1], state[2]
     for position in range(start, stop):
+        vertex = ids[at]
         order[position] = vertex
         if position:
-            weight[vertex] = best[vertex]
-        scale = inverse_norm[vertex]
-        best[vertex] = -np.inf
-        inverse_norm[vertex] = np.nan
-        direction = (factor_rows[first[vertex]] - factor_rows[second[vertex]]) * scale
-        u = factor_t @ direction  # covariance of the new vertex with every raw sensor
+            weight[vertex] = best[at]
+            tree_parent[vertex] = parent[at]
+        scale = inverse_norm[at]
+        direction = (factor_rows[first[at]] - factor_rows[second[at]]) * scale
+        best[at] = -np.inf
+        inverse_norm[at] = np.nan
+        dead += 1
+        u[:m] = factor_t @ direction  # covariance of the new vertex with every raw sensor
+        if 2 * dead > n_active:  # squeeze the tree members out, keeping candidate order
+            kept = 0
+            for j in range(n_active):
+                if not np.isnan(inverse_norm[j]):
+                    ids[kept] = ids[j]
+                    first[kept] = first[j]
+                    second[kept] = second[j]
+                    inverse_norm[kept] = inverse_norm[j]
+                    best[kept] = best[j]
+                    parent[kept] = parent[j]
+                    kept += 1
+            n_active = kept
+            dead = 0
         top = -np.inf
-        vertex = -1
-        j = 0
-        if include_raw:
-            for i in range(m):
-                r = min(abs(u[i]) * inverse_norm[i], 1.0)
-                if r > best[i]:
-                    best[i] = r
-                    parent[i] = order[position]
-                if best[i] > top:
-                    top = best[i]
-                    vertex = i
-            j = m
-        for i in range(m - 1):
-            ui = u[i]
-            for k in range(i + 1, m):
-                r = min(abs(ui - u[k]) * inverse_norm[j], 1.0)
-                if r > best[j]:
-                    best[j] = r
-                    parent[j] = order[position]
-                if best[j] > top:
-                    top = best[j]
-                    vertex = j
-                j += 1
-    return vertex
+        at = -1
+        for j in range(n_active):  # branch-free update: the comparisons are unpredictable
+            r = min(abs(u[first[j]] - u[second[j]]) * inverse_norm[j], 1.0)
+            b = best[j]
+            closer = r > b
+            b = r if closer else b
+            best[j] = b
+            parent[j] = vertex if closer else parent[j]
+            if b > top:
+                top = b
+                at = j
+    state[0], state[1], state[2] = at, n_active, dead
+    return at
