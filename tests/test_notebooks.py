@@ -43,3 +43,22 @@ def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, execu
     assert sum("image/png" in out.get("data", {}) for out in outputs) >= 2
     assert "## Exercises" in notebook.cells[-1].source
     assert notebook.cells[0].cell_type == "markdown"  # plain words first
+
+
+def test_render_writes_each_notebook_as_html_with_its_figures_and_an_index(tmp_path):
+    """``make notebooks`` (``spindlebench.course.render``) on a one-cell course."""
+    from spindlebench.course import render
+
+    course = tmp_path / "course"
+    course.mkdir()
+    (course / "01_tiny.py").write_text(
+        "# %% [markdown]\n# # Tiny\n# %%\nfrom spindlebench import course\n"
+        "work = course.start('01')\nimport matplotlib.pyplot as plt\n"
+        "plt.plot([1, 2])\nplt.show()\n", encoding="utf-8")
+    (course / "notes.py").write_text("not a notebook: no NN_ prefix\n", encoding="utf-8")
+    out = tmp_path / "html"
+    assert render(out, course) == [out / "01_tiny.html"]
+    html = (out / "01_tiny.html").read_text(encoding="utf-8")
+    assert "<h1" in html and "data:image/png;base64" in html
+    assert 'href="01_tiny.html"' in (out / "index.html").read_text(encoding="utf-8")
+    assert (out / "work" / "01_tiny" / "work" / "01").is_dir()  # ran in its own folder

@@ -25,3 +25,12 @@ def test_the_side_view_puts_each_probe_next_to_its_model_node():
 def test_write_sensor_map_writes_a_png(tmp_path):
     out = write_sensor_map(tmp_path / "map.png")
     assert out.read_bytes()[:4] == b"\x89PNG" and out.stat().st_size > 50_000
+
+
+def test_port_fractions_come_from_the_model_source():
+    from spindlebench.studies.placement.sensor_map import port_fractions
+
+    source = 'SegmentedSolid housing(n = 4, x1 = 0.25,\n  x3 = 0.1) "Headstock";'
+    assert port_fractions("housing", source) == {"port_a": 0.0, "port_b": 1.0, "port_1": 0.25,
+                                                 "port_2": 0.5, "port_3": 0.1}
+    assert 0.0 < port_fractions("housing")["port_3"] < port_fractions("housing")["port_1"]

@@ -11,6 +11,7 @@ schematics, not to scale. ``docs/figures/sensor_map.png`` is drawn by::
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Mapping
 from pathlib import Path
@@ -24,12 +25,26 @@ from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from spindlebench.atomic import atomic_path
+from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import MODELS_DIR
 from spindlebench.studies.placement.schematic import LUMPED, SEGMENTED, draw_machine
 from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, LOCATIONS, PARTS, sensor_colours
 
-#: Fraction along the housing axis of the housing ports the sensors use (``x1``, ``x3`` of
-#: ``housing`` in the model; ``port_a`` is its front bearing seat end).
-HOUSING_PORTS = {"port_a": 0.0, "port_1": 0.5, "port_3": 0.2}
+
+def port_fractions(part: str, source: str | None = None) -> dict[str, float]:
+    """Where the ports of a segmented part sit along its axis, read from the model source:
+    ``port_a`` at 0, ``port_b`` at 1, ``port_k`` at the part's ``xk`` modifier (the default
+    0.5 of ``SegmentedSolid`` where the model does not set it)."""
+    if source is None:
+        source = (MODELS_DIR / "SpindleBench.mo").read_text(encoding="utf-8")
+    match = re.search(rf"SegmentedSolid\s+{part}\s*\((.*?)\)\s*\"", source, re.S)
+    if match is None:
+        raise SpindlebenchError(f"{MODELS_DIR / 'SpindleBench.mo'}: no SegmentedSolid {part}")
+    fractions = {"port_a": 0.0, "port_b": 1.0}
+    for k in (1, 2, 3):
+        value = re.search(rf"\bx{k}\s*=\s*([0-9.eE+-]+)", match[1])
+        fractions[f"port_{k}"] = float(value[1]) if value else 0.5
+    return fractions
 
 #: Offset (dy, dz) of each sensor marker from its node in the side view, so several probes on
 #: one node (T1, T3, T5 on the front bearing) stay apart; T10 is in the air by the column.
@@ -69,6 +84,7 @@ FRONT = {
 def side_positions() -> dict[str, tuple[float, float]]:
     """Side-view position of every sensor: its model node's place on the schematic, nudged."""
     positions = {}
+    fractions: dict[str, dict[str, float]] = {}
     for sensor, (node, _) in LOCATIONS.items():
         if sensor == AMBIENT_SENSOR:
             positions[sensor] = AMBIENT_SIDE
@@ -76,7 +92,7 @@ def side_positions() -> dict[str, tuple[float, float]]:
         part, _, port = node.partition(".")
         if port:
             (y0, z0), (y1, z1) = SEGMENTED[part]
-            f = HOUSING_PORTS[port]
+            f = fractions.setdefault(part, port_fractions(part))[port]
             y, z = y0 + f * (y1 - y0), z0 + f * (z1 - z0)
         else:
             y, z = LUMPED[part]
