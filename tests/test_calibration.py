@@ -9,6 +9,8 @@ true machine (both simulated by the FMU).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import tomllib
 from pathlib import Path
@@ -97,16 +99,25 @@ def _scenario(path: Path, speed_steps: str, parameters: dict[str, float], seed: 
     return path
 
 
-def test_twin_recovery_and_held_out_prediction(tmp_path, capsys):
-    twin = _scenario(tmp_path / "twin.toml", "[{at_s = 0, rpm = 3000}, {at_s = 2400, rpm = "
-                     "6000}, {at_s = 4800, rpm = 0}]", TRUE, seed=5)
-    assert main(["simulate", str(twin), "-o", str(tmp_path / "twin.csv")]) == 0
+@pytest.fixture(scope="module")
+def twin(tmp_path_factory):
+    """A twin recording simulated by the FMU and calibrated once: (folder, CLI output)."""
+    folder = tmp_path_factory.mktemp("twin")
+    scenario = _scenario(folder / "twin.toml", "[{at_s = 0, rpm = 3000}, {at_s = 2400, rpm = "
+                         "6000}, {at_s = 4800, rpm = 0}]", TRUE, seed=5)
+    assert main(["simulate", str(scenario), "-o", str(folder / "twin.csv")]) == 0
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        status = main(["calibrate", str(folder / "twin.csv"), "--map",
+                       str(_map(folder, TWIN_MAP)), "-o", str(folder / "machines" / "twin.toml"),
+                       "--models", str(MODELS), "--fit", ",".join(TRUE), "--design"])
+    assert status == 0, buffer.getvalue()
+    return folder, buffer.getvalue()
+
+
+def test_twin_recovery_and_held_out_prediction(twin):
+    tmp_path, out = twin
     machine = tmp_path / "machines" / "twin.toml"
-    status = main(["calibrate", str(tmp_path / "twin.csv"), "--map",
-                   str(_map(tmp_path, TWIN_MAP)), "-o", str(machine), "--models", str(MODELS),
-                   "--fit", ",".join(TRUE), "--design"])
-    assert status == 0
-    out = capsys.readouterr().out
     assert "ignored (not in the map): T2, T3" in out and "design:" in out
     report = json.loads((tmp_path / "machines" / "twin.calibration.json").read_text())
     assert (tmp_path / "machines" / "twin.calibration.png").stat().st_size > 10_000
@@ -132,3 +143,17 @@ def test_twin_recovery_and_held_out_prediction(tmp_path, capsys):
     rmse = float(np.sqrt(np.mean((true_drift("model") - true_drift("truth")) ** 2)))
     uncalibrated = float(np.sqrt(np.mean((true_drift("default") - true_drift("truth")) ** 2)))
     assert rmse < 1.0 and rmse < uncalibrated / 3, (rmse, uncalibrated)
+
+
+def test_calibrated_machine_runs_through_sweep_unchanged(twin, repo):
+    """The machine file calibrate writes is a machine like the shipped ones."""
+    machines = pytest.importorskip("spindlebench.machines")
+    tmp_path, _ = twin
+    machine_file = tmp_path / "machines" / "twin.toml"
+    machine = machines.load_machine(str(machine_file))
+    assert set(machine.parameters) == set(TRUE)
+    out = tmp_path / "sweep"
+    assert main(["sweep", str(repo / "scenarios" / "studies" / "tiny_sweep.toml"), "-o", str(out),
+                 "--machine", str(machine_file)]) == 0
+    provenance = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    assert "twin" in json.dumps(provenance)

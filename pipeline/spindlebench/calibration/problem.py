@@ -20,8 +20,9 @@ derivatives of the step). ``method="ipopt"`` solves the same problem with IPOPT 
 discretisation instead (``calibration.ipopt``); ``bench/bench_calibration.py`` compares them.
 
 Uncertainty: the Gauss-Newton covariance ``(J^T J)^-1`` of all unknowns (priors included). When
-the fit is worse than the stated noise (reduced chi-square above 1, as on any real machine) it
-is scaled by the reduced chi-square, so the intervals reflect the misfit actually seen.
+the fit is worse than the stated noise (reduced chi-square above 1, as on any real machine) the
+data's noise is inflated by the reduced chi-square (the priors' is not), so the intervals
+reflect the misfit actually seen and an unseen parameter keeps its prior interval.
 """
 
 from __future__ import annotations
@@ -446,7 +447,11 @@ def _calibrate(d, series_list, method, max_iter, verbose) -> Fit:
     J = final.jacobian
     dof = max(final.n_data - layout.size, 1)
     chi2_reduced = float(r @ r / dof)
-    covariance_all = np.linalg.pinv(J.T @ J) * max(1.0, chi2_reduced)
+    # the data's noise is inflated by the misfit, the priors stay what they are: a parameter
+    # the data do not see keeps its prior interval instead of one blown up by the misfit
+    J_data, J_prior = J[: final.n_data], J[final.n_data:]
+    information = J_data.T @ J_data / max(1.0, chi2_reduced) + J_prior.T @ J_prior
+    covariance_all = np.linalg.pinv(information)
     covariance = covariance_all[: layout.n_s, : layout.n_s]
     sd = np.sqrt(np.diag(covariance))
     correlation = covariance / np.outer(sd, sd)
