@@ -154,3 +154,17 @@ def test_simulate_plot_writes_the_figure_beside_the_recording(tmp_path, capsys):
     assert "quick.png" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["quick.csv", "quick.json",
                                                           "quick.png"]
+
+
+def test_the_shared_speed_axis_shows_the_fastest_recording():
+    """Each column set its own rpm limit on a shared axis: the last (1250 rpm) one hid 5000."""
+    import matplotlib.pyplot as plt
+
+    fast, slow = full_frame(), full_frame()
+    slow["spindle_speed_rpm"] = 1250.0
+    fig = recordings_figure([fast, slow], ["fast", "slow"])
+    try:
+        inputs = [ax for ax in fig.axes if ax.get_title(loc="left") == "inputs"]
+        assert all(ax.get_ylim()[1] > 4000 for ax in inputs)
+    finally:
+        plt.close(fig)

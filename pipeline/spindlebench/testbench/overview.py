@@ -114,8 +114,11 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
                              gridspec_kw={"height_ratios": heights})
     try:
         colours = _colours([s for p in panels for s in p.sensors])
+        # the input rows share their y axis: scale it to the fastest spindle of all columns
+        speed_top = max([float(np.nanmax(f[SPEED])) for f in frames if SPEED in f] + [1.0])
         for column, (frame, title) in enumerate(zip(frames, titles, strict=True)):
-            _draw_column(frame, axes[:, column], panels, colours, rises, target, has_inputs)
+            _draw_column(frame, axes[:, column], panels, colours, rises, target,
+                         speed_top if has_inputs else None)
             axes[0, column].set_title(title, fontsize=10)
         for row, panel in enumerate(panels):
             axes[row, 0].set_ylabel("rise since start (K)" if rises else "temperature (°C)")
@@ -139,7 +142,9 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
 
 
 def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel],
-                 colours: dict[str, tuple], rises: bool, target: str, has_inputs: bool) -> None:
+                 colours: dict[str, tuple], rises: bool, target: str,
+                 speed_top: float | None) -> None:
+    """One recording's panels; ``speed_top`` is the input row's rpm scale (None: no row)."""
     hours = frame[TIME_COLUMN].to_numpy(float) / 3600.0
 
     def values(name: str) -> np.ndarray:
@@ -169,18 +174,17 @@ def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel]
                     fontsize=8, loc="left", color="0.3")
     error.legend(fontsize=7, loc="upper left")
     error.grid(alpha=0.3)
-    if has_inputs:
-        _draw_inputs(axes[len(panels) + 1], frame, hours)
+    if speed_top is not None:
+        _draw_inputs(axes[len(panels) + 1], frame, hours, speed_top)
 
 
-def _draw_inputs(ax: Axes, frame: pd.DataFrame, hours: np.ndarray) -> None:
+def _draw_inputs(ax: Axes, frame: pd.DataFrame, hours: np.ndarray, speed_top: float) -> None:
     ax.set_title("inputs", fontsize=8, loc="left", color="0.3")
     handles = []
     if SPEED in frame:
         handles += ax.plot(hours, frame[SPEED], color="black", lw=1.1, label="spindle (rpm)")
     ax.set_ylabel("rpm")
-    top = max(float(np.nanmax(frame[SPEED])) if SPEED in frame else 0.0, 1.0)
-    ax.set_ylim(0, top * 1.15)
+    ax.set_ylim(0, speed_top * 1.15)
     ax.grid(alpha=0.3)
     feeds = [c for c in FEEDS if c in frame]
     if feeds:
