@@ -51,6 +51,9 @@ def test_monitor_flags_a_jump_and_a_stuck_reading_not_a_healthy_one():
                           FaultMonitor(stuck_window_s=600.0, jump_C=0.5))
     assert [(d.sensor, d.kind, d.sample) for d in found] == [("b", "jump", 100),
                                                            ("c", "stuck", 110)]
+    # a fast but sustained rise (0.6 K per reading for two minutes) is not a step
+    ramp = healthy + np.clip((t - 1000) * 0.06, 0, 7.2)
+    assert detect_faults(t, ramp[:, None], ["d"], FaultMonitor(600.0, 0.5)) == []
 
 
 @pytest.mark.parametrize("replace, message", [
@@ -136,7 +139,7 @@ def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
     assert cli.main(["compensate", str(TINY), "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "uncompensated" in printed
-    for name in ("README.md", "days.csv", "summary.csv", "timeseries.csv",
+    for name in ("README.md", "days.csv", "summary.csv", "timeseries.csv.gz",
                  "compensation.png", "provenance.json"):
         assert (out / name).is_file(), name
     assert (out / "compensation.png").read_bytes()[:4] == b"\x89PNG"

@@ -8,9 +8,11 @@ middle of a cut). The residual error of the machine is then the true drift minus
 offset: that, not the model's RMSE against a probe, is what a user finally gets.
 
 Fault monitor: a sensor whose reading stays exactly constant for ``stuck_window_s`` (real
-readings of a noisy, quantised sensor flicker) or jumps by more than ``jump_C`` between two
-consecutive readings (a knocked or re-seated probe; heating changes a reading by hundredths
-of a kelvin per reading) is declared faulty at that sample.
+readings of a noisy, quantised sensor flicker) or *steps*: changes by more than ``jump_C``
+between two consecutive readings and by more than ``JUMP_RATIO`` times the median change of
+the readings around it (a knocked or re-seated probe). The second condition keeps the fast
+but sustained rise of a spindle-near sensor after a start (several tenths of a kelvin per
+reading at 10 s, for minutes) from counting as a fault.
 """
 
 from __future__ import annotations
@@ -81,6 +83,12 @@ def applied_offset(time_s: np.ndarray, predicted_um: np.ndarray,
     return out
 
 
+#: A step is this many times larger than the median change of the readings around it ...
+JUMP_RATIO = 5.0
+#: ... taken over this many readings on each side.
+JUMP_NEIGHBOURS = 6
+
+
 @dataclass(frozen=True)
 class FaultMonitor:
     """Thresholds of the fault monitor (see the module docstring)."""
@@ -114,15 +122,10 @@ def detect_faults(time_s: np.ndarray, readings_C: np.ndarray, sensors: list[str]
     found = []
     for j, name in enumerate(sensors):
         column = readings_C[:, j]
-        jumps = np.flatnonzero(np.abs(np.diff(column)) > monitor.jump_C) + 1
-        same = np.r_[False, np.diff(column) == 0]
-        run_start = np.zeros(column.size)  # time since the reading last changed
-        start_t = time_s[0]
-        for i in range(column.size):
-            if not same[i]:
-                start_t = time_s[i]
-            run_start[i] = time_s[i] - start_t
-        stuck = np.flatnonzero(run_start >= monitor.stuck_window_s)
+        jumps = np.flatnonzero(_steps(column, monitor.jump_C)) + 1
+        changed = np.r_[True, np.diff(column) != 0]
+        last_change = np.maximum.accumulate(np.where(changed, np.arange(column.size), 0))
+        stuck = np.flatnonzero(time_s - time_s[last_change] >= monitor.stuck_window_s)
         candidates = []
         if jumps.size:
             candidates.append(Detection(name, "jump", int(jumps[0])))
@@ -131,3 +134,14 @@ def detect_faults(time_s: np.ndarray, readings_C: np.ndarray, sensors: list[str]
         if candidates:
             found.append(min(candidates, key=lambda d: d.sample))
     return found
+
+
+def _steps(column: np.ndarray, jump_C: float) -> np.ndarray:
+    """Which consecutive changes of ``column`` are steps (see the module docstring)."""
+    change = np.abs(np.diff(column))
+    if change.size == 0:
+        return change.astype(bool)
+    padded = np.pad(change, JUMP_NEIGHBOURS, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * JUMP_NEIGHBOURS + 1)
+    around = np.delete(windows, JUMP_NEIGHBOURS, axis=1)  # the neighbours, not the change
+    return (change > jump_C) & (change > JUMP_RATIO * np.median(around, axis=1))
