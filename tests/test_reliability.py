@@ -415,3 +415,58 @@ def test_warnings_from_sweep_workers_are_one_line_each(tmp_path):
     assert child.returncode == 0, stderr
     for line in stderr.splitlines():
         assert line.startswith("warning: "), stderr  # no Python source lines, no traceback
+
+
+# --------------------------------------------------------------------------- case 6: units
+
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+def edited_models(tmp_path: Path, old: str, new: str) -> Path:
+    folder = tmp_path / "models"
+    folder.mkdir()
+    text = (MODELS / "SpindleBench.mo").read_text(encoding="utf-8")
+    assert old in text
+    (folder / "SpindleBench.mo").write_text(text.replace(old, new, 1), encoding="utf-8")
+    return folder
+
+
+def line_of(folder: Path, text: str) -> int:
+    lines = (folder / "SpindleBench.mo").read_text(encoding="utf-8").splitlines()
+    return next(i for i, line in enumerate(lines, start=1) if text in line)
+
+
+def test_an_unknown_unit_is_file_and_line(tmp_path):
+    models = edited_models(tmp_path, 'unit = "W/K"', 'unit = "W/Kelvinn"')
+    child = spindlebench("build", "--models", str(models), "--out", str(tmp_path / "o.fmu"))
+    _, stderr = child.communicate(timeout=600)
+    assert child.returncode == 2
+    line = one_error_line(stderr)
+    where = f"{models / 'SpindleBench.mo'}:{line_of(models, 'W/Kelvinn')}:"
+    assert line.startswith(f"error: {where} unknown unit 'W/Kelvinn'"), line
+    assert not (tmp_path / "o.fmu").exists()
+
+
+def test_a_unit_error_in_an_equation_is_file_and_line(tmp_path):
+    from spindlebench.errors import SpindlebenchError
+    from spindlebench.modelica.frontend import translate
+
+    models = edited_models(tmp_path, "T20_C = sensor_T20.T - 273.15;",
+                           "T20_C = sensor_T20.T - 273.15 + sensor_T20.port.Q_flow;")
+    with pytest.raises(SpindlebenchError) as caught:
+        translate(models, 2)
+    message = str(caught.value)
+    where = f"{models / 'SpindleBench.mo'}:{line_of(models, 'sensor_T20.port.Q_flow')}:"
+    assert message.startswith(f"{where} unit error in the equation of T20_C: a sum of "
+                              "[temperature] and [mass] * [length] ** 2 / [time] ** 3"), message
+
+
+def test_the_shipped_model_passes_the_unit_check():
+    from spindlebench.modelica.frontend import model_source, translate
+    from spindlebench.modelica.units import check_declared_units, dimension_of
+
+    check_declared_units(model_source(MODELS))
+    assert dimension_of("W/(m2.K)") == dimension_of("W") / dimension_of("m2") / dimension_of("K")
+    assert dimension_of("rev/min") == dimension_of("1/s")
+    translate(MODELS, 2)  # the equations check out too

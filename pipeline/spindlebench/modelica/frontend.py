@@ -18,6 +18,7 @@ import casadi as ca
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import MAX_SEGMENTS, MODEL_CLASS, MODEL_FILE
+from spindlebench.modelica.units import check_declared_units, check_equations
 
 # pymoca 0.12 still calls the Python 2 division hook on CasADi 3.8 expressions.
 ca.MX.__div__ = ca.MX.__truediv__
@@ -89,6 +90,7 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
 
     check_segments(segments)
     path = model_source(model_dir)
+    check_declared_units(path)  # file:line of a unit pint does not know, before parsing
     text = path.read_text(encoding="utf-8")
     chatter = io.StringIO()
     try:
@@ -113,6 +115,7 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
     except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
         raise SpindlebenchError(_semantic_error(path, exc)) from None
     (flat_class,) = flat.classes.values()
+    check_equations(flat_class, path)  # dimensions, from the declared units (pint)
     symbols = {
         name: SymbolInfo(
             description=str(sym.comment or ""),
