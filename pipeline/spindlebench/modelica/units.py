@@ -7,9 +7,10 @@ unit, ``der(x)`` is x's unit per second, products and quotients multiply dimensi
 the operands of ``+``, ``-``, ``min``, ``max`` and the two sides of ``=`` must agree
 (``T - 273.15 + port.Q_flow`` adds a temperature and a power). A literal number adopts the
 dimension of what it is added to (Modelica's numbers carry no unit); a variable without a
-unit, and a fractional power of a dimensioned quantity (an empirical fit such as Palmgren's
-``(nu n)^(2/3) dm^3``, whose coefficient hides the units), are not checked. Degrees Celsius
-and kelvin share the dimension temperature.
+unit, a fractional power of a dimensioned quantity (an empirical fit such as Palmgren's
+``(nu n)^(2/3) dm^3``, whose coefficient hides the units) and exp/log of one (Walther's
+``log(log(nu + 0.7))`` on the number of mm2/s) are not checked. Degrees Celsius and kelvin
+share the dimension temperature.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from spindlebench.errors import SpindlebenchError
 #: Marker for a literal number (dimension not fixed) and for "unknown, not checked".
 LITERAL = "literal"
 UNKNOWN = None
-#: Functions whose argument must be dimensionless; their result is dimensionless.
+#: Functions of a dimensionless argument (dimensionless result); of a dimensioned one: unchecked.
 _TRANSCENDENTAL = {"exp", "log", "log10", "sin", "cos", "tan", "asin", "acos", "atan",
                    "sinh", "cosh", "tanh"}
 #: Functions whose result has their (first) argument's dimension.
@@ -144,9 +145,8 @@ def check_equations(flat_class: Any, path: Path) -> None:
         if op == "sqrt" and len(args) == 1:
             return UNKNOWN if args[0] in (UNKNOWN, LITERAL) else args[0] ** 0.5
         if op in _TRANSCENDENTAL and len(args) == 1:
-            if args[0] not in (UNKNOWN, LITERAL) and args[0]:
-                raise _MismatchError(f"{op}() of {show(args[0])} (needs a dimensionless argument)")
-            return LITERAL
+            # log(nu + 0.7) of a viscosity in mm2/s: an empirical law on numerical values
+            return LITERAL if args[0] == LITERAL or args[0] == {} else UNKNOWN
         return UNKNOWN
 
     def equations(items: list[Any]) -> Any:
