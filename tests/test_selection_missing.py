@@ -241,5 +241,5 @@ def test_paper_study_option_and_config_key(simulated, tmp_path, capsys):
         assert len(cell.predictions_um["faults"]) == N
         np.testing.assert_array_equal(np.isnan(cell.predictions_um["faults"]), gap)
     toml.write_text('missing = "fill"\n')
-    with pytest.raises(SpindlebenchError, match="missing: 'fill' is not one of"):
+    with pytest.raises(SpindlebenchError, match="key 'missing': 'fill' is not one of"):
         study_config.load(toml)
