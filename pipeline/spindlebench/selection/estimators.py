@@ -31,11 +31,9 @@ import numpy as np
 from sklearn.base import (
     BaseEstimator,
     OneToOneFeatureMixin,
-    RegressorMixin,
     TransformerMixin,
     _fit_context,
 )
-from sklearn.feature_selection import SelectorMixin
 from sklearn.pipeline import Pipeline
 from sklearn.utils.validation import (
     FLOAT_DTYPES,
@@ -48,7 +46,9 @@ from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.differences import difference_names, pairwise_differences
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.regression import fit_ols
+from spindlebench.selection.regressors import LinearRiseModel
 from spindlebench.selection.select import select_sensitive_points
+from spindlebench.selection.selectors import SupportFromSelected
 
 
 class PairwiseDifferences(TransformerMixin, BaseEstimator):
@@ -128,7 +128,7 @@ class RiseTransformer(OneToOneFeatureMixin, TransformerMixin, BaseEstimator):
         return X - self.reference_.astype(X.dtype, copy=False)
 
 
-class FuzzyClusterSelector(SelectorMixin, BaseEstimator):
+class FuzzyClusterSelector(SupportFromSelected):
     """Keep one candidate per fuzzy cluster: the one most correlated with the error.
 
     Parameters
@@ -178,19 +178,8 @@ class FuzzyClusterSelector(SelectorMixin, BaseEstimator):
         self.closure_ = selection.closure
         return self
 
-    def _get_support_mask(self):
-        check_is_fitted(self)
-        mask = np.zeros(self.n_features_in_, dtype=bool)
-        mask[self.selected_] = True
-        return mask
 
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.target_tags.required = True
-        return tags
-
-
-class RiseRegressor(RegressorMixin, BaseEstimator):
+class RiseRegressor(LinearRiseModel):
     """Ordinary least squares with intercept of the thermal error on temperature rises.
 
     Attributes
@@ -210,12 +199,6 @@ class RiseRegressor(RegressorMixin, BaseEstimator):
         self.coef_ = fit.coefficients
         self.r2_ = fit.r2
         return self
-
-    def predict(self, X):
-        """Predicted error for rises ``X``."""
-        check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
-        return self.intercept_ + X @ self.coef_
 
 
 def make_selection_pipeline(

@@ -55,7 +55,18 @@ def blocked_cv_alpha(X: np.ndarray, y: np.ndarray, alphas: np.ndarray = RIDGE_AL
     return float(alphas[int(np.argmin(errors))])
 
 
-class RidgeRiseRegressor(RegressorMixin, BaseEstimator):
+class LinearRiseModel(RegressorMixin, BaseEstimator):
+    """A fitted ``error = intercept_ + rises @ coef_``: the prediction every rise regressor
+    shares (OLS, ridge, PLS); subclasses fit ``intercept_`` and ``coef_``."""
+
+    def predict(self, X):
+        """Predicted error for rises ``X``."""
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        return self.intercept_ + X @ self.coef_
+
+
+class RidgeRiseRegressor(LinearRiseModel):
     """Ridge regression on standardised rises, penalty by blocked cross-validation.
 
     Parameters
@@ -111,14 +122,8 @@ class RidgeRiseRegressor(RegressorMixin, BaseEstimator):
         self.r2_ = r2_score(y, self.intercept_ + X @ self.coef_)
         return self
 
-    def predict(self, X):
-        """Predicted error for rises ``X``."""
-        check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
-        return self.intercept_ + X @ self.coef_
 
-
-class PLSRiseRegressor(RegressorMixin, BaseEstimator):
+class PLSRiseRegressor(LinearRiseModel):
     """Partial least squares (scikit-learn ``PLSRegression``) on rises.
 
     Parameters
@@ -166,9 +171,3 @@ class PLSRiseRegressor(RegressorMixin, BaseEstimator):
         self.intercept_ = float(np.ravel(self.pls_.intercept_)[0] - X.mean(axis=0) @ self.coef_)
         self.r2_ = r2_score(y, self.intercept_ + X @ self.coef_)
         return self
-
-    def predict(self, X):
-        """Predicted error for rises ``X``."""
-        check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
-        return self.intercept_ + X @ self.coef_

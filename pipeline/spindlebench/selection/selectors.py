@@ -65,8 +65,9 @@ def _abs_psi(X: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
-class _Selector(SelectorMixin, BaseEstimator):
-    """``selected_`` (input columns, in the order the method chose them) -> support mask."""
+class SupportFromSelected(SelectorMixin, BaseEstimator):
+    """``selected_`` (input columns, in the order the method chose them) -> support mask;
+    the target is required. Every selector of the package derives from it."""
 
     def _get_support_mask(self):
         check_is_fitted(self)
@@ -78,6 +79,10 @@ class _Selector(SelectorMixin, BaseEstimator):
         tags = super().__sklearn_tags__()
         tags.target_tags.required = True
         return tags
+
+
+class _Selector(SupportFromSelected):
+    """A selector of this module: checked data, a target that is not constant."""
 
     def _data(self, X, y):
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
