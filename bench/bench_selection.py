@@ -92,7 +92,7 @@ def child(*args: str) -> dict:
 def write_recording(path: Path, raw: np.ndarray, y: np.ndarray) -> None:
     import pandas as pd
 
-    frame = pd.DataFrame(raw, columns=[f"S{i:03d}" for i in range(raw.shape[1])])
+    frame = pd.DataFrame(raw, columns=[f"T{i + 1}_C" for i in range(raw.shape[1])])
     frame.insert(0, "time_s", np.arange(len(raw)) * 60.0)
     frame["drift_um"] = y - y[0]
     frame.to_csv(path, index=False)

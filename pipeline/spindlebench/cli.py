@@ -17,21 +17,26 @@ from typing import NoReturn
 from spindlebench import __version__, interrupts
 from spindlebench.errors import SpindlebenchError
 
-COMMAND_MODULES: tuple[str, ...] = (
-    "spindlebench.adapters.command",
-    "spindlebench.calibration.command",
-    "spindlebench.compensation.command",
-    "spindlebench.demo",
-    "spindlebench.fingerprint_command",
-    "spindlebench.modelica.build",
-    "spindlebench.paper_study.command",
-    "spindlebench.selection.command",
-    "spindlebench.selection.methods_command",
-    "spindlebench.studies.placement.run",
-    "spindlebench.studies.sweep",
-    "spindlebench.testbench.plot",
-    "spindlebench.testbench.simulate",
-)
+#: Each sub-command and the module that registers it. ``spindlebench CMD ...`` imports only
+#: CMD's module: importing all of them (SciPy, scikit-learn, matplotlib, CasADi, dask ...)
+#: took most of a short command's time (~20 s of 22 s for a 100-sensor ``evaluate`` on a
+#: busy machine). ``--help`` and unknown names still import them all.
+COMMANDS: dict[str, str] = {
+    "adapt": "spindlebench.adapters.command",
+    "build": "spindlebench.modelica.build",
+    "calibrate": "spindlebench.calibration.command",
+    "compensate": "spindlebench.compensation.command",
+    "demo": "spindlebench.demo",
+    "evaluate": "spindlebench.selection.command",
+    "fingerprint": "spindlebench.fingerprint_command",
+    "methods": "spindlebench.selection.methods_command",
+    "paper": "spindlebench.paper_study.command",
+    "place": "spindlebench.studies.placement.run",
+    "plot": "spindlebench.testbench.plot",
+    "simulate": "spindlebench.testbench.simulate",
+    "sweep": "spindlebench.studies.sweep",
+}
+COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
@@ -45,8 +50,9 @@ class _OneLineErrorParser(argparse.ArgumentParser):
         self.exit(2, f"error: {self.prog}: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> _OneLineErrorParser:
-    """The full argument parser with every sub-command registered."""
+def build_parser(command: str | None = None) -> _OneLineErrorParser:
+    """The argument parser with every sub-command registered, or only ``command`` (a key of
+    ``COMMANDS``)."""
     parser = _OneLineErrorParser(
         prog="spindlebench",
         description="Modelica/FMU testbench and temperature-sensitive point selection "
@@ -54,7 +60,8 @@ def build_parser() -> _OneLineErrorParser:
     )
     parser.add_argument("--version", action="version", version=f"spindlebench {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module_name in COMMAND_MODULES:
+    modules = COMMAND_MODULES if command is None else (COMMANDS[command],)
+    for module_name in modules:
         importlib.import_module(module_name).register(subparsers)
     parser.commands = dict(subparsers.choices)
     return parser
@@ -93,7 +100,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     warnings one ``warning:`` line each."""
     interrupts.install()
     try:
-        args = parse_args(build_parser(), argv)  # imports every command: Ctrl-C can land here
+        argv = list(sys.argv[1:] if argv is None else argv)
+        command = argv[0] if argv and argv[0] in COMMANDS else None
+        args = parse_args(build_parser(command), argv)  # imports commands: Ctrl-C can land here
     except KeyboardInterrupt as exc:
         return _interrupted(exc)
     with warnings.catch_warnings():
