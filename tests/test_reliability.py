@@ -8,6 +8,7 @@ traceback, nothing half-written, and identical bytes for identical inputs.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -21,7 +22,7 @@ from spindlebench import cli
 from spindlebench.atomic import atomic_path, write_text
 from spindlebench.selection.similarity import constant_columns
 from spindlebench.studies.store import ResultStore
-from spindlebench.testbench.runner import DEFAULT_FMU
+from spindlebench.testbench.runner import DEFAULT_FMU, declared_bounds, inspect_fmu
 
 QUICK = """\
 duration_s = 600
@@ -343,52 +344,53 @@ def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_p
 # --------------------------------------------------------------------------- case 5: bounds
 
 
-def bounded_copy(tmp_path: Path) -> Path:
-    """The default FMU whose model description declares min/max on two parameters (what the
-    model's Modelica min/max become); the binary is untouched."""
-    target = tmp_path / "bounded.fmu"
+def unbounded_copy(tmp_path: Path) -> Path:
+    """The default FMU with every min/max removed from its model description (the binary is
+    untouched): how a model without declared bounds lets an unphysical value through."""
+    target = tmp_path / "unbounded.fmu"
     with zipfile.ZipFile(DEFAULT_FMU) as source, zipfile.ZipFile(target, "w") as out:
         for info in source.infolist():
             data = source.read(info)
             if info.filename == "modelDescription.xml":
-                text = data.decode("utf-8")
-                text = text.replace('name="front_bearing_C"', 'min="1e-06" name="front_bearing_C"')
-                text = text.replace('name="h_nat"', 'max="100" min="0" name="h_nat"')
-                data = text.encode("utf-8")
+                data = re.sub(rb' (min|max)="[^"]*"', b"", data)
             out.writestr(info, data)
     return target
 
 
-@pytest.mark.parametrize(("setting", "message"), [
-    ("front_bearing_C = 0", "must be ≥ 1e-06, got 0"),
-    ("front_bearing_C = -1850", "must be ≥ 1e-06, got -1850"),
-    ("h_nat = -100", "must be ≥ 0, got -100"),
-    ("h_nat = 1e6", "must be ≤ 100, got 1e+06"),
+def bound_message(name: str, value: float) -> str:
+    """What the FMU's own declared bounds say about ``value`` (read, not hard-coded)."""
+    low, high = declared_bounds(inspect_fmu(DEFAULT_FMU).parameters[name])
+    if low is not None and value < low:
+        return f"must be ≥ {low:g}, got {value:g}"
+    assert high is not None and value > high
+    return f"must be ≤ {high:g}, got {value:g}"
+
+
+@pytest.mark.parametrize(("name", "value"), [
+    ("front_bearing_C", 0.0), ("front_bearing_C", -1850.0), ("h_nat", -100.0),
+    ("h_nat", 1e6), ("front_bearing_friction_f0", 1e6), ("alpha_steel", 1e6),
 ])
 def test_a_scenario_parameter_outside_the_fmus_declared_bounds_is_refused(
-        tmp_path, setting, message):
-    fmu = bounded_copy(tmp_path)
+        tmp_path, name, value):
     scenario = tmp_path / "bad.toml"
-    scenario.write_text(QUICK + f"\n[parameters]\n{setting}\n", encoding="utf-8")
-    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"), "--fmu", str(fmu))
+    scenario.write_text(QUICK + f"\n[parameters]\n{name} = {value!r}\n", encoding="utf-8")
+    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"))
     _, stderr = child.communicate(timeout=120)
     assert child.returncode == 2
-    name = setting.split()[0]
-    assert one_error_line(stderr) == f"error: {scenario}: key 'parameters.{name}': {message}"
+    assert one_error_line(stderr) == (f"error: {scenario}: key 'parameters.{name}': "
+                                      f"{bound_message(name, value)}")
     assert not (tmp_path / "out").exists()
 
 
 def test_a_study_parameter_outside_the_declared_bounds_is_refused(tmp_path):
-    fmu = bounded_copy(tmp_path)
     text = TINY.read_text(encoding="utf-8")
     study = tmp_path / "study.toml"
-    study.write_text(text.replace("[study]", f"[study]\nfmu = {str(fmu)!r}", 1)
-                     + "\n[parameters]\nh_nat = -100\n", encoding="utf-8")
+    study.write_text(text + "\n[parameters]\nh_nat = -100.0\n", encoding="utf-8")
     child = spindlebench("sweep", str(study), "-o", str(tmp_path / "out"), "--workers", "0")
     _, stderr = child.communicate(timeout=120)
     assert child.returncode == 2
     line = one_error_line(stderr)
-    assert f"{study}: key 'parameters.h_nat': must be ≥ 0, got -100" in line
+    assert f"{study}: key 'parameters.h_nat': {bound_message('h_nat', -100.0)}" in line
     assert not (tmp_path / "out").exists()
 
 
@@ -396,7 +398,9 @@ def test_a_diverging_simulation_names_the_scenario_and_the_parameters_it_changes
     scenario = tmp_path / "hot.toml"
     scenario.write_text(QUICK + "\n[parameters]\nfront_bearing_friction_f0 = 1e6\n",
                         encoding="utf-8")
-    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"))
+    fmu = unbounded_copy(tmp_path)  # the bounds refuse 1e6 before it can diverge
+    child = spindlebench("simulate", str(scenario), "-o", str(tmp_path / "out"), "--fmu",
+                         str(fmu))
     _, stderr = child.communicate(timeout=120)
     assert child.returncode == 2
     line = one_error_line(stderr)
