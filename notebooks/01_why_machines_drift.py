@@ -35,6 +35,7 @@
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import pandas as pd
 from IPython.display import Image, display
 
 from spindlebench import course
@@ -113,14 +114,16 @@ plt.show()
 
 # %% [markdown]
 # The bearing heat *falls* during the first hour: as the bearing warms, its oil gets
-# thinner and the friction drops. The sources are a few tens of watts, like a light bulb,
-# but they act on a few hundred kilograms of iron for hours.
+# thinner and the friction drops. Together the sources are a few hundred watts, a small
+# electric heater, acting on a few tonnes of iron for hours.
 #
 # ## The structural loop
 #
-# The drift is a sum: parts that grow push the tool towards the table (spindle, headstock,
-# table) and parts that grow lift the head away (column, bed). The recording has each
-# term; we draw them together with their sum.
+# The drift is a signed sum around the loop: parts whose growth pushes the tool towards the
+# table (spindle, tool, headstock, Z screw) or the table up towards the tool (table,
+# fixture) add; parts whose growth lifts the head away (column, bed) subtract
+# (`docs/model.md` lists every term). The recording has each term; we draw each one's
+# growth with the signed sum.
 
 # %%
 terms = [c for c in run.columns
@@ -162,12 +165,26 @@ for name in ("base", "slow", "warming_room"):
           f"T1 rise {recording['T1'].iloc[-1] - recording['T1'].iloc[0]:4.1f} K")
 
 # %% [markdown]
+# Where did the warming room's extra heat go? Each term after 4 hours, in both runs:
+
+# %%
+ends = {}
+for name in ("base", "warming_room"):
+    recording = read_recording(work / f"{name}.csv")
+    ends[name] = {c[5:-3]: recording[c].iloc[-1] - recording[c].iloc[0] for c in terms}
+growth = pd.DataFrame(ends).round(1)
+growth["difference"] = growth["warming_room"] - growth["base"]
+growth
+
+# %% [markdown]
 # What to notice:
 #
 # - Half the speed gives much less heat in the bearings, and so a smaller drift.
-# - A warming room warms the *whole* machine, also the parts far from the spindle. The
-#   column grows and lifts the head, so the room changes the drift even where the spindle
-#   load is the same. A model that only looks at the spindle temperature misses this.
+# - A warming room warms the *whole* machine, also the parts far from the spindle, and the
+#   sensors rise much more. But the room makes parts on **both** sides of the loop grow:
+#   the table shows which terms gained, and how much of that the column takes back. The
+#   drift changes far less than the temperatures. A model that reads the rise of a
+#   spindle sensor as drift would be fooled by the room.
 #
 # ## Exercises
 #

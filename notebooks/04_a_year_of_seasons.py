@@ -128,13 +128,18 @@ table = measured[measured["k"] == 2].pivot_table(
 table
 
 # %%
+print("best method (k = 2) for each kind of held-out day:")
+print(table.idxmin(axis=1).to_string())
+
+# %%
 display(Image(filename=work / "sweep" / "plots" / "rmse_by_month.png"))
 
 # %% [markdown]
-# What to notice: the errors depend much more on *which day* is predicted (its speed, its
-# month) than on small differences between methods, and the method with the smallest
-# median is not always the one with the smallest worst day. "Stable" is a separate
-# question from "low", and a study over many days is needed to answer either.
+# What to notice: the table above says which method is best on each kind of held-out day.
+# When the best method changes with the speed or the month of the day it predicts, no
+# single number ranks the methods. The median says which is lower on a typical day; the
+# IQR and the worst day say how much it varies from day to day: that is what "stable"
+# means, and a study over many days is needed to answer either question.
 #
 # ## Exercises
 #
