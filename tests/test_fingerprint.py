@@ -248,3 +248,25 @@ def test_reference_key_changes_with_the_testbench_code(monkeypatch):
     assert before["code_sha256"] == source_sha256(*reference.REFERENCE_CODE)
     monkeypatch.setattr(reference, "REFERENCE_CODE", reference.REFERENCE_CODE[:-1])
     assert reference.inputs_key()["code_sha256"] != before["code_sha256"]
+
+
+def test_a_named_machine_gets_its_own_reference(tmp_path):
+    scenarios = tmp_path / "scenarios"
+    scenarios.mkdir()
+    (scenarios / "exp1.toml").write_text(QUICK, encoding="utf-8")
+    said: list[str] = []
+    default = cached_reference(tmp_path / "cache", DEFAULT_FMU, scenarios, tmp_path / "none",
+                               said.append)
+    other = cached_reference(tmp_path / "cache", DEFAULT_FMU, scenarios, tmp_path / "none",
+                             said.append, machine="ambient-following")
+    assert other.recordings[0].parent == tmp_path / "cache" / "ambient-following"
+    assert "ambient-following machine" in said[1]
+    assert other.source["machine"]["name"] == "ambient-following"
+    assert other.recordings[0].read_bytes() != default.recordings[0].read_bytes()
+
+
+def test_machine_and_reference_exclude_each_other(tmp_path, capsys):
+    recording = hand_made(tmp_path / "r.csv")
+    assert cli.main(["fingerprint", str(recording), "--machine", "default", "--reference",
+                     str(reference_folder(tmp_path))]) == 2
+    assert "--machine and --reference" in capsys.readouterr().err

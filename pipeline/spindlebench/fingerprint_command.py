@@ -188,6 +188,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--figure", type=Path, metavar="OUT.png",
                         help="write the comparison figure here (default: OUT.png beside "
                         "--json; none without either)")
+    parser.add_argument("--machine", metavar="NAME",
+                        help="compare with this machine's paper experiments instead of the "
+                        "default's (a name from scenarios/machines/ or a .toml file; "
+                        "simulated once into results/fingerprint_reference/NAME/)")
     parser.add_argument("--reference", type=Path, metavar="DIR",
                         help="recordings of the default machine to compare with (default: "
                         "the paper experiments simulated once with the committed FMU into "
@@ -198,6 +202,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def recording_files(paths: list[Path]) -> list[Path]:
     """The recordings named: files as given, a folder as its ``*.csv`` in name order."""
     return expand_folders(paths, ".csv", "recording")
+
+
+def reference_label(args: argparse.Namespace) -> str:
+    """What the reference is called in the table, the figure and the JSON."""
+    if args.reference is not None:
+        return f"reference {args.reference}"
+    return "default machine" if args.machine is None else f"machine {args.machine}"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -214,9 +225,13 @@ def run(args: argparse.Namespace) -> int:
     figure = args.figure or (args.json.with_suffix(".png") if args.json else None)
     reference: Reference | None = None
     ref_results: list[Fingerprinted] = []
-    if figure is not None or args.reference is not None:
+    if args.machine is not None and args.reference is not None:
+        raise SpindlebenchError("--machine and --reference: give one (--reference is a folder "
+                                "of recordings, --machine simulates its paper experiments)")
+    label = reference_label(args)
+    if figure is not None or args.reference is not None or args.machine is not None:
         reference = (explicit_reference(args.reference) if args.reference is not None
-                     else cached_reference())
+                     else cached_reference(machine=args.machine))
         ref_results = [fingerprint_recording(path, REFERENCE_TARGET)
                        for path in reference.recordings]
     median = median_stats([item.stats for item in results])
@@ -225,14 +240,15 @@ def run(args: argparse.Namespace) -> int:
     ref_median = None
     if ref_results:
         ref_median = median_stats([item.stats for item in ref_results])
-        rows.append(("default machine (median)", ref_median))
+        rows.append((f"{label} (median)", ref_median))
     text = None
     if args.json is not None:
         text = _json_text(results, median, reference, ref_results, ref_median, figure, args,
                           sensors)
     if figure is not None:
         from spindlebench.fingerprint_figure import write_figure  # matplotlib only when drawn
-        write_figure(figure, results, ref_results)
+        write_figure(figure, results, ref_results, f"{label}, paper experiments"
+                     if args.reference is None else label)
     print(table(rows))
     if text is not None:
         atomic.write_text(args.json, text)
@@ -252,6 +268,7 @@ def _json_text(results: list[Fingerprinted], median: dict[str, float],
     }
     if reference is not None and ref_median is not None:
         record["reference"] = {
+            "label": reference_label(args),
             "recordings": [item.row() for item in ref_results],
             "median": json_stats(ref_median),
         }

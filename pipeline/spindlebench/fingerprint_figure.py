@@ -74,9 +74,10 @@ def _panel(ax: Axes, items: Sequence[Fingerprinted], title: str) -> None:
 
 
 def write_figure(path: Path, items: Sequence[Fingerprinted],
-                 reference: Sequence[Fingerprinted]) -> None:
+                 reference: Sequence[Fingerprinted],
+                 reference_title: str = "default machine, paper experiments") -> None:
     """Draw the reference and the given recordings side by side into ``path`` (atomic)."""
-    panels = [(reference, "default machine, paper experiments"), (items, "given recordings")]
+    panels = [(reference, reference_title), (items, "given recordings")]
     panels = [(group, title) for group, title in panels if group]
     fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 4.6), sharey=True,
                              squeeze=False)

@@ -6,7 +6,8 @@ places:
 
 - ``--reference DIR``: any folder of recordings, e.g. ``results/paper`` from ``make run``
   (every ``*.csv`` in it is used, with ``drift_um`` as the error);
-- otherwise a cache, ``results/fingerprint_reference/``: the five experiments simulated with
+- otherwise a cache, ``results/fingerprint_reference/`` (``.../<machine>/`` with
+  ``--machine``): the five experiments simulated with
   the committed FMU the first time they are needed (a few seconds each), reused while the
   FMU, the scenario files (``scenarios/paper/*.toml`` and ``scenarios/machines/*.toml``
   when present), the testbench's source and the package versions have the hashes recorded in
@@ -25,6 +26,7 @@ from typing import Any
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, write_recording
+from spindlebench.machines import load_machine
 from spindlebench.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file, source_sha256
 from spindlebench.testbench.simulate import check_batch, plan_batch, record
@@ -75,21 +77,29 @@ def explicit_reference(folder: Path) -> Reference:
 
 def cached_reference(cache: Path = DEFAULT_CACHE, fmu: Path = DEFAULT_FMU,
                      scenarios: Path = PAPER_SCENARIOS, machines: Path = MACHINES,
-                     say=print) -> Reference:
-    """The paper experiments on the default machine, simulated once into ``cache``."""
+                     say=print, machine: str | None = None) -> Reference:
+    """The paper experiments on the default machine (or on ``machine``, a name or a .toml
+    file, in ``cache/<its name>/``), simulated once into ``cache``."""
+    label = "default"
+    machine_entry: dict[str, Any] = {}
+    if machine is not None:
+        variant = load_machine(machine)
+        label = variant.name
+        machine_entry = {"machine": variant.provenance()}
+        cache = cache / variant.name
     if not fmu.is_file():
         raise SpindlebenchError(f"reference: FMU {fmu} not found (run 'spindlebench build', "
                                 "or pass --reference DIR)")
     files = sorted(scenarios.glob("*.toml"))
     if not files:
         raise SpindlebenchError(f"reference: no scenario in {scenarios} (pass --reference DIR)")
-    key = inputs_key(fmu, scenarios, machines)
+    key = {**inputs_key(fmu, scenarios, machines), **machine_entry}
     targets = [cache / f"{path.stem}.csv" for path in files]
     if _cache_matches(cache / KEY_FILE, key) and all(path.is_file() for path in targets):
         return Reference(targets, {"kind": "cache", "path": str(cache), **key})
-    say(f"simulating the default machine's {len(files)} paper experiments ({shown(scenarios)}, "
+    say(f"simulating the {label} machine's {len(files)} paper experiments ({shown(scenarios)}, "
         f"{shown(fmu)}) into {cache} once")
-    plan = plan_batch(files, targets)
+    plan = plan_batch(files, targets, machine)
     check_batch(plan, fmu)
     (cache / KEY_FILE).unlink(missing_ok=True)
     for i in plan.order:
