@@ -115,10 +115,12 @@ def test_command_prints_rows_and_median_and_writes_json(tmp_path, capsys):
     frame.to_csv(b, index=False)
     out = tmp_path / "fp.json"
     figure = tmp_path / "figure.png"
+    reference = reference_folder(tmp_path)
     assert cli.main(["fingerprint", str(a), str(b), "--json", str(out), "--figure", str(figure),
-                     "--reference", str(reference_folder(tmp_path))]) == 0
+                     "--reference", str(reference)]) == 0
     printed = capsys.readouterr().out
-    assert "median" in printed and str(a) in printed and "default machine" in printed
+    assert "median" in printed and str(a) in printed
+    assert f"reference {reference} (median)" in printed
     record = json.loads(out.read_text(encoding="utf-8"))
     first = record["recordings"][0]
     assert first["sensors"] == ["T1", "T2", "T3", "T4"] and first["target"] == "drift_um"
@@ -129,6 +131,7 @@ def test_command_prints_rows_and_median_and_writes_json(tmp_path, capsys):
     assert record["provenance"]["command"] == "fingerprint"
     assert [entry["path"] for entry in record["provenance"]["recordings"]] == [str(a), str(b)]
     assert record["provenance"]["reference"]["kind"] == "folder"
+    assert record["reference"]["label"] == f"reference {reference}"
     assert figure.read_bytes()[:4] == b"\x89PNG" and record["figure"] == str(figure)
 
 
