@@ -43,10 +43,12 @@ def test_place_writes_every_output(tiny_run):
                  "schematic/placement_m3.png"):
         assert (out / name).is_file(), name
     assert not list(out.rglob("*.part"))  # atomic writes leave no temporary files
-    # 3 methods x 2 candidate sets x budgets 2, 3
-    assert len(table) == 12
+    # 5 methods (the three searches and two of 'spindlebench methods') x 2 candidate sets x
+    # budgets 2, 3
+    assert len(table) == 20
     assert set(table["label"]) == {"fuzzy", "greedy", "exhaustive", "fuzzy+diff",
-                                   "greedy+diff", "exhaustive+diff"}
+                                   "greedy+diff", "exhaustive+diff", "kmeans+grey",
+                                   "kmeans+grey+diff", "lasso", "lasso+diff"}
     skipped = table[table["variables"].isna()]
     assert set(skipped["label"]) == {"exhaustive+diff"}
     assert skipped["note"].str.contains("exhaustive_limit").all()
@@ -143,7 +145,8 @@ def study_text(**replace: str) -> str:
         ({"budgets = [2, 3]": "budgets = [0, 3]"},
          "key 'placement.budgets': item 1 (0): must be in [1, 10]"),
         ({"budgets = [2, 3]": "budgets = [2, 99]"}, "key 'placement.budgets': item 2 (99)"),
-        ({'methods = ["fuzzy", "greedy", "exhaustive"]': 'methods = ["fuzzy", "random"]'},
+        ({'methods = ["fuzzy", "greedy", "exhaustive", "kmeans+grey", "lasso"]':
+          'methods = ["fuzzy", "random"]'},
          "key 'placement.methods': item 2 ('random'): must be one of fuzzy, greedy, "
          "exhaustive"),
         ({"with_differences = [false, true]": 'with_differences = "yes"'},

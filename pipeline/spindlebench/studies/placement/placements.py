@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from spindlebench.errors import SpindlebenchError
 from spindlebench.selection import (
     CandidateSet,
     SelectionWarning,
@@ -28,6 +29,7 @@ from spindlebench.selection import (
     rmse,
     select_sensitive_points,
 )
+from spindlebench.selection.registry import parse_method, select_with
 from spindlebench.studies.placement.candidates import (
     Run,
     block,
@@ -163,7 +165,32 @@ def find_placements(study: PlacementStudy, train_runs: Sequence[Run],
             placements += greedy_placements(study, differences, train, valid)
         if "exhaustive" in study.methods:
             placements += exhaustive_placements(study, differences, train, valid)
+        for label in study.methods:
+            if label not in ("fuzzy", "greedy", "exhaustive"):
+                placements += method_placements(study, differences, train, label)
     return placements
+
+
+def method_placements(study: PlacementStudy, differences: bool, train: Block,
+                      label: str) -> list[Placement]:
+    """A selection method of the registry (``spindlebench methods``) on the training run(s),
+    m inputs per budget; scored like every placement (OLS refit)."""
+    candidates = candidate_set(study, differences)
+    choice = parse_method(label)
+    out = []
+    for m in study.budgets:
+        start = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SelectionWarning)
+                selection = select_with(choice, train.X, train.y, m, study.similarity,
+                                        candidates.names)
+        except SpindlebenchError as exc:
+            out.append(_skipped(choice.label, differences, m, " ".join(str(exc).split())))
+            continue
+        out.append(_placement(choice.label, differences, m, candidates, selection.selected,
+                              math.nan, time.perf_counter() - start))
+    return out
 
 
 def score_placement(study: PlacementStudy, placement: Placement, train_runs: Sequence[Run],

@@ -8,7 +8,9 @@ specific to placement:
 - ``budgets``: numbers m of model variables (sensors, or differences of two sensors) to place.
 - ``methods``: ``fuzzy`` (the paper's selection on the training run, k = m clusters),
   ``greedy`` (forward selection by validation RMSE), ``exhaustive`` (every m-subset, when
-  C(n, m) <= ``exhaustive_limit``).
+  C(n, m) <= ``exhaustive_limit``), or any other label of ``spindlebench methods``
+  (``kmeans``, ``ward+grey``, ``lasso``, ...: that method on the training run(s), m inputs,
+  its regressor ignored since every placement is scored by the same OLS refit).
 - ``with_differences``: false, true, or [false, true] for both candidate sets (nodes alone;
   nodes and every pairwise node difference).
 - ``measured``: read the node temperatures through the study's noise level (default) or use
@@ -38,6 +40,22 @@ METHODS = ("fuzzy", "greedy", "exhaustive")
 DEFAULT_EXHAUSTIVE_LIMIT = 500_000
 MAX_EXHAUSTIVE_LIMIT = 10**9
 MAX_BUDGET = 10
+
+
+def _placement_method(name: str) -> str | None:
+    """``fuzzy``, ``greedy``, ``exhaustive`` or a selection method label (not ``closure``:
+    that is ``fuzzy`` here)."""
+    if name in METHODS:
+        return None
+    from spindlebench.selection.registry import parse_method
+
+    try:
+        choice = parse_method(name)
+    except SpindlebenchError as exc:
+        return f"must be one of {', '.join(METHODS)} or a method label; {exc}"
+    if choice.is_paper:
+        return "the paper's closure is 'fuzzy' in a placement study"
+    return None
 
 
 @dataclass(frozen=True)
@@ -120,8 +138,7 @@ def load_placement_study(path: str | Path, machine: str | None = None) -> Placem
         "budgets", int, default=[2, 3, 4, 5, 6],
         check=in_range(1, MAX_BUDGET))))
     methods = tuple(table.get_list(
-        "methods", str, default=list(METHODS),
-        check=lambda v: one_of(v, METHODS)))
+        "methods", str, default=list(METHODS), check=_placement_method))
     with_differences = _bool_or_list(table, "with_differences")
     measured = table.get("measured", bool, default=True)
     limit = table.get("exhaustive_limit", int, default=DEFAULT_EXHAUSTIVE_LIMIT,
