@@ -15,6 +15,7 @@ budget: at most 2 minutes on this 2-core machine), and the two solvers against e
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import tempfile
 import time
@@ -78,7 +79,9 @@ def run(hours: float, compare_h: float, segments: int) -> None:
         print(f"gauss-newton, {hours:g} h at 60 s, {len(FIT)} parameters, {segments} segments: "
               f"{seconds:.1f} s, {fit.evaluations} evaluations, peak RSS {peak_mb:.0f} MB; "
               f"{inside}/{len(FIT)} true values inside the 95 % intervals, worst relative "
-              f"error {100 * worst:.1f} %, reduced chi-square {fit.chi2_reduced:.2f}")
+              f"error {100 * worst:.1f} %, reduced chi-square {fit.chi2_reduced:.2f}; "
+              f"{seconds / fit.evaluations:.1f} s per evaluation, {len(ode.states)} states, "
+              f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
 
         short = load_series(folder / "twin.csv", recording_map, None)
         keep = short.time_s <= compare_h * 3600

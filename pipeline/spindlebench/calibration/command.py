@@ -21,6 +21,7 @@ from spindlebench.calibration.problem import Discretisation, Fit, calibrate
 from spindlebench.calibration.series import load_series
 from spindlebench.errors import SpindlebenchError
 from spindlebench.listflags import split_list_flag
+from spindlebench.machines import DEFAULT_MACHINE, load_machine
 from spindlebench.modelica import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
 from spindlebench.modelica.equations import explicit_ode
 from spindlebench.paths import MODELS_DIR
@@ -49,6 +50,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--segments", type=int, default=DEFAULT_SEGMENTS,
                         help=f"segments per large part of the model (default {DEFAULT_SEGMENTS})")
     parser.add_argument("--models", default=str(MODELS_DIR), help="Modelica model folder")
+    parser.add_argument("--machine", default=DEFAULT_MACHINE, metavar="NAME",
+                        help="machine to start from: a name from scenarios/machines/ or a .toml "
+                        "file (default: 'default'); its parameters are kept in the output")
     parser.add_argument("--method", choices=("gauss-newton", "ipopt"), default="gauss-newton",
                         help="reduced-space Gauss-Newton (default) or IPOPT on the full "
                         "discretisation")
@@ -102,7 +106,8 @@ def _run(args: argparse.Namespace) -> int:
         if series.ignored:
             ignored[str(path)] = list(series.ignored)
             print(f"{path}: ignored (not in the map): {', '.join(series.ignored)}")
-    base = ode.parameter_vector()
+    machine = load_machine(args.machine)
+    base = ode.parameter_vector(**machine.parameters)
     discretisation = Discretisation(ode, fit_names, base)
     fit = calibrate(discretisation, series_list, method=args.method, max_iter=args.max_iter,
                     verbose=args.verbose)
@@ -117,12 +122,14 @@ def _run(args: argparse.Namespace) -> int:
         segments=args.segments,
         step_s=args.step_s,
         fit=fit_names,
+        machine=machine.provenance(),
     )
     name = out.stem
     description = args.description or (
-        f"Calibrated to {', '.join(s.path.name for s in series_list)} "
+        f"Machine '{machine.name}' calibrated to {', '.join(s.path.name for s in series_list)} "
         f"({len(fit_names)} parameters fitted)")
-    machine = report.machine_text(name, description, fit.values, fit, record)
+    machine_text = report.machine_text(name, description, {**machine.parameters, **fit.values},
+                                       fit, record)
     report_path, figure_path = report.report_paths(out)
     content = report.report_dict(fit, record, ignored)
     if args.design:
@@ -134,7 +141,7 @@ def _run(args: argparse.Namespace) -> int:
             print(line)
     report.figure(fit, figure_path, title=f"{name}: measured (dots) vs calibrated (lines)")
     report.write_report(report_path, content)
-    atomic.write_text(out, machine)
+    atomic.write_text(out, machine_text)
     print(f"wrote {out} (+ {report_path.name}, {figure_path.name}); "
           f"{fit.evaluations} evaluations, {fit.seconds:.0f} s, {fit.status}")
     return 0
