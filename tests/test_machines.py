@@ -125,3 +125,27 @@ def test_a_study_names_its_machine_and_every_run_uses_it(tmp_path):
     bad = write(tmp_path, text.replace('"ambient-following"', '"lathe"'), "bad.toml")
     with pytest.raises(SpindlebenchError, match=r"bad\.toml: key 'study\.machine': .*'lathe'"):
         load_study(bad)
+
+
+def test_a_study_can_run_over_machines(tmp_path):
+    """[axes] machines: the study runs once per machine, each into its own folder."""
+    from spindlebench.studies.study import load_study, machine_runs
+
+    tiny = SCENARIOS / "studies" / "tiny_sweep.toml"
+    text = tiny.read_text().replace("[axes]\n", '[axes]\nmachines = ["default", '
+                                    '"ambient-following"]\n', 1)
+    text = text.replace('climate = "chongqing"',
+                        'climate = "' + str(SCENARIOS / "seasons" / "chongqing.toml") + '"')
+    study = load_study(write(tmp_path, text, "m.toml"))
+    assert study.machines == ("default", "ambient-following")
+    out = tmp_path / "out"
+    assert machine_runs(study, None, out) == [("default", out / "default"),
+                                              ("ambient-following", out / "ambient-following")]
+    assert machine_runs(study, "default", out) == [("default", out)]  # --machine: one run
+    both = write(tmp_path, text.replace("[study]\n", '[study]\nmachine = "default2"\n', 1)
+                 .replace('machine = "default2"', 'machine = "ambient-following"'), "b.toml")
+    with pytest.raises(SpindlebenchError, match=r"key 'axes\.machines': give either"):
+        load_study(both)
+    unknown = write(tmp_path, text.replace('"ambient-following"]', '"lathe"]'), "u.toml")
+    with pytest.raises(SpindlebenchError, match=r"key 'axes\.machines': .*'lathe' not found"):
+        load_study(unknown)

@@ -176,6 +176,9 @@ class SweepStudy:
     indoor: IndoorAmbient | None = None
     #: The machine variant every run simulates (``[study] machine``, or ``--machine``).
     machine: Machine = field(default_factory=load_machine)
+    #: ``[axes] machines``: the study is run once per machine (``machine_runs``), each into
+    #: its own results folder; empty: one run on ``machine``.
+    machines: tuple[str, ...] = ()
 
     @property
     def sha256(self) -> str:
@@ -264,7 +267,17 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
     fault_names = axes.get_list("faults", str, default=[NO_FAULT])
+    machine_axis = tuple(axes.get_list("machines", str, default=[]))
     axes.finish()
+    if machine_axis and machine_name != DEFAULT_MACHINE:
+        raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
+    for name in machine_axis:
+        try:
+            variant = load_machine(name, source=path)
+            if fmu_parameters is not None:
+                _check_machine(variant, fmu_parameters, fmu)
+        except SpindlebenchError as exc:
+            raise axes.error("machines", str(exc)) from None
 
     programmes = tuple(_programme(definitions["programmes"], axes, n, duration_s)
                        for n in programme_names)
@@ -299,8 +312,18 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         feed=feed, feed_x_mm_per_min=feed_x, feed_y_mm_per_min=feed_y, months=months,
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
-        indoor=indoor, machine=machine_variant,
+        indoor=indoor, machine=machine_variant, machines=machine_axis,
     )
+
+
+def machine_runs(study: SweepStudy, machine: str | None,
+                 out: Path) -> list[tuple[str | None, Path]]:
+    """The (machine, results folder) of each run of a study command: one run on ``machine``
+    (``--machine``) or the study's own, or one per ``[axes] machines`` entry, each into
+    ``out/<machine name>``."""
+    if machine is not None or not study.machines:
+        return [(machine, out)]
+    return [(name, out / Path(name).stem) for name in study.machines]
 
 
 def _check_machine(machine: Machine, known: Mapping[str, Any], fmu: Path) -> None:

@@ -58,6 +58,7 @@ from spindlebench.studies.study import (
     check_fmu,
     describe,
     load_study,
+    machine_runs,
     pinned_content,
 )
 
@@ -325,9 +326,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     out = results_folder(args, lambda study: load_study(study).name)
+    for machine, folder in machine_runs(load_study(args.study), args.machine, out):
+        if machine is not None and folder != out:
+            print(f"machine {machine}:")
+        _run_one(args, folder, machine)
+    return 0
+
+
+def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     outcome = run_sweep(args.study, out, workers=args.workers,
                         dask_address=args.dask_address, progress=not args.no_progress,
-                        machine=args.machine)
+                        machine=machine)
     results = outcome.results
     failed = int((results["error"] != "").sum()) if len(results) else 0
     stats = outcome.stats
@@ -337,4 +346,3 @@ def _main(args: argparse.Namespace) -> int:
           f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
           f"{failed} with errors")
     print(f"results: {outcome.out_dir / 'README.md'}")
-    return 0

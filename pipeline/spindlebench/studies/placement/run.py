@@ -54,7 +54,7 @@ from spindlebench.studies.simulations import (
     register_study_command,
 )
 from spindlebench.studies.store import ResultStore, content_sha256
-from spindlebench.studies.study import check_fmu, pinned_content
+from spindlebench.studies.study import check_fmu, machine_runs, pinned_content
 
 
 @dataclass
@@ -227,9 +227,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     out = results_folder(args, lambda study: load_placement_study(study).name)
+    for machine, folder in machine_runs(load_placement_study(args.study).family, args.machine,
+                                        out):
+        if machine is not None and folder != out:
+            print(f"machine {machine}:")
+        _run_one(args, folder, machine)
+    return 0
+
+
+def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     outcome = run_placement(args.study, out, workers=args.workers,
                             dask_address=args.dask_address, progress=not args.no_progress,
-                            machine=args.machine)
+                            machine=machine)
     found = [p for p in outcome.placements if p.found]
     print(f"{'resumed' if outcome.resumed else 'ran'}: {outcome.stats.total('simulation')} "
           f"simulation(s) in {outcome.stats.seconds:.1f} s; {len(found)} placement(s) found "
@@ -238,7 +247,6 @@ def _main(args: argparse.Namespace) -> int:
     print(search_times(outcome.placements))
     print(report_best(outcome.table))
     print(f"results: {outcome.out_dir / 'README.md'}")
-    return 0
 
 
 def search_times(placements: list[Placement]) -> str:
