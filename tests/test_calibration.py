@@ -157,3 +157,16 @@ def test_calibrated_machine_runs_through_sweep_unchanged(twin, repo):
                  "--machine", str(machine_file)]) == 0
     provenance = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
     assert "twin" in json.dumps(provenance)
+
+
+def test_fit_bounds_respect_the_fmus_declared_range():
+    """A factor range that would leave the FMU's min/max is narrowed to it (h_nat <= 100)."""
+    from spindlebench.calibration.problem import Discretisation
+    from spindlebench.modelica.equations import explicit_ode
+
+    ode = explicit_ode(MODELS, segments=2)
+    assert ode.bounds["h_nat"][1] == 100.0
+    lower, upper = Discretisation(ode, ["h_nat"], ode.parameter_vector(h_nat=50.0)).log_bounds()
+    assert np.exp(upper[0]) == pytest.approx(2.0) and np.exp(lower[0]) == pytest.approx(0.1)
+    with pytest.raises(SpindlebenchError, match="h_nat: the start value is outside"):
+        Discretisation(ode, ["h_nat"], ode.parameter_vector(h_nat=150.0)).log_bounds()

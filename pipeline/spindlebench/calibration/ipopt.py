@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from spindlebench.calibration.fitset import PRIOR_SD_LN, log_bounds
+from spindlebench.calibration.fitset import PRIOR_SD_LN
 from spindlebench.calibration.mapping import INPUTS
 from spindlebench.calibration.problem import (
     AMBIENT_LEVEL_SD_K,
@@ -83,11 +83,10 @@ def solve_ipopt(d: Discretisation, series_list: Sequence[Series], layout: Layout
         start_states.append(states[:, 1:].T.ravel())  # vec() is column-major: sample by sample
     w = ca.vertcat(*free, *dependent)
     objective = 0.5 * (ca.sumsqr(ca.vertcat(*residuals)) + ca.sumsqr(ca.vertcat(*priors)))
-    lo_s, hi_s = log_bounds()
     n_free = layout.size
     lbw = np.full(w.numel(), -np.inf)
     ubw = np.full(w.numel(), np.inf)
-    lbw[: layout.n_s], ubw[: layout.n_s] = lo_s, hi_s
+    lbw[: layout.n_s], ubw[: layout.n_s] = d.log_bounds()
     solver = ca.nlpsol("calibration", "ipopt", {"x": w, "f": objective,
                                                 "g": ca.vertcat(*constraints)}, {
         "ipopt.print_level": 5 if verbose else 0, "print_time": False, "ipopt.sb": "yes",

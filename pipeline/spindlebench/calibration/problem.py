@@ -131,6 +131,23 @@ class Discretisation:
                            [y, ca.jacobian(y, self._z), ca.jacobian(y, self._s),
                             ca.jacobian(y, self._u[AMBIENT])])
 
+    def log_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the log-factors: the factor range of ``fitset``, narrowed to the FMU's
+        declared min/max of each parameter (a calibrated machine must load in the FMU)."""
+        lo_s, hi_s = log_bounds()
+        lower, upper = np.full(len(self.fit), lo_s), np.full(len(self.fit), hi_s)
+        for k, (name, i) in enumerate(zip(self.fit, self.fit_index, strict=True)):
+            minimum, maximum = self.ode.bounds.get(name, (None, None))
+            if minimum is not None and minimum > 0:
+                lower[k] = max(lower[k], np.log(minimum / self.base[i]))
+            if maximum is not None:
+                upper[k] = min(upper[k], np.log(maximum / self.base[i]))
+        if np.any(lower > 0) or np.any(upper < 0):
+            bad = self.fit[int(np.flatnonzero((lower > 0) | (upper < 0))[0])]
+            raise SpindlebenchError(f"{bad}: the start value is outside the FMU's declared "
+                                    "min/max")
+        return lower, upper
+
     @property
     def n_x(self) -> int:
         return len(self.ode.states)
@@ -409,10 +426,9 @@ def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
             cache[key] = evaluate(d, series_list, layout, theta)
         return cache[key]
 
-    lo_s, hi_s = log_bounds()
     lower = np.full(layout.size, -np.inf)
     upper = np.full(layout.size, np.inf)
-    lower[: layout.n_s], upper[: layout.n_s] = lo_s, hi_s
+    lower[: layout.n_s], upper[: layout.n_s] = d.log_bounds()
     result = scipy.optimize.least_squares(
         lambda t: at(t).residuals, theta0, jac=lambda t: at(t).jacobian,
         bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
