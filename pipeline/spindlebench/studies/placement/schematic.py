@@ -82,7 +82,7 @@ LABEL_LEFT = ("spindle_shaft",)
 LABEL_NUDGE = {"x_motor": (-0.01, 0.05), "x_bearing_seat": (0.0, -0.05),
                "x_screw": (0.0, 0.05), "x_nut": (0.0, -0.05),
                "y_screw": (0.0, 0.045), "y_bearing_seat": (0.0, 0.045),
-               "y_motor": (-0.075, -0.05)}
+               "y_motor": (-0.075, -0.05), "z_nut": (0.10, -0.02)}
 #: Part labels moved off the top-left corner where something is drawn over them (the
 #: spindle and its node labels cover the headstock's corner): (y, z) of the label.
 PART_LABEL_AT = {"housing": (0.97, 2.38)}
