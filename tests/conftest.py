@@ -17,6 +17,27 @@ SCENARIOS = REPO / "scenarios"
 #: The real recordings, outside the repository (never copied in).
 SHARED_RECORDINGS = REPO.parent / "shared" / "recordings"
 REAL_RECORDING = SHARED_RECORDINGS / "caiviac-fl-thermal" / "data.csv"
+#: A 10-minute constant-speed scenario: the smallest real simulation, for tests that feed it
+#: bad variations or interrupt it.
+QUICK = """\
+duration_s = 600
+step_s = 10.0
+sample_interval_s = 60
+seed = 2
+
+[speed]
+kind = "constant"
+rpm = 3000
+
+[feed]
+kind = "with_spindle"
+x_mm_per_min = 1500
+y_mm_per_min = 1500
+
+[ambient]
+kind = "constant"
+temperature_C = 18.0
+"""
 
 
 @pytest.fixture(scope="session")

@@ -16,32 +16,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import QUICK, REPO
 from selection_data import synthetic_experiment
 from spindlebench import cli
 from spindlebench.paths import DEFAULT_FMU
 
-REPO = Path(__file__).resolve().parents[1]
 TINY = (REPO / "scenarios" / "studies" / "tiny_sweep.toml").read_text(encoding="utf-8")
 
-QUICK = """\
-duration_s = 600
-step_s = 10.0
-sample_interval_s = 60
-seed = 2
-
-[speed]
-kind = "constant"
-rpm = 3000
-
-[feed]
-kind = "with_spindle"
-x_mm_per_min = 1500
-y_mm_per_min = 1500
-
-[ambient]
-kind = "constant"
-temperature_C = 18.0
-"""
 
 AIR = "time_s,ambient_C\n0,18\n300,18.5\n600,19\n"
 

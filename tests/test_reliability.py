@@ -18,31 +18,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import QUICK
 from spindlebench import cli
 from spindlebench.atomic import atomic_path, write_text
 from spindlebench.selection.similarity import constant_columns
 from spindlebench.studies.store import ResultStore
 from spindlebench.testbench.runner import DEFAULT_FMU, declared_bounds, inspect_fmu
-
-QUICK = """\
-duration_s = 600
-step_s = 10.0
-sample_interval_s = 60
-seed = 2
-
-[speed]
-kind = "constant"
-rpm = 3000
-
-[feed]
-kind = "with_spindle"
-x_mm_per_min = 1500
-y_mm_per_min = 1500
-
-[ambient]
-kind = "constant"
-temperature_C = 18.0
-"""
 
 #: A month at 60 s steps: minutes of simulation, long enough to be interrupted.
 LONG = QUICK.replace("duration_s = 600", "duration_s = 2592000").replace(
