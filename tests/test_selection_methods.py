@@ -40,8 +40,9 @@ SIX = ["T1", "T6", "T8", "T10", "T13", "T16"]
 
 @parametrize_with_checks(
     [ClusterSelector(), ClusterSelector(2, "fcm", "grey"), ClusterSelector(2, "kmeans"),
-     ClusterSelector(2, "average"), ClusterSelector(2, "ward"), TopCorrelatedSelector(),
-     LassoPathSelector(), StabilitySelector(n_subsamples=5),
+     ClusterSelector(2, "average"), ClusterSelector(2, "complete"), ClusterSelector(2, "ward"),
+     ClusterSelector(2, "kmeans", "grey"), TopCorrelatedSelector(), LassoPathSelector(),
+     LassoPathSelector(l1_ratio=0.5), StabilitySelector(n_subsamples=5),
      GreedyForwardSelector(), RidgeRiseRegressor(), PLSRiseRegressor()]
 )
 def test_sklearn_estimator_checks(estimator, check):
@@ -99,6 +100,53 @@ def test_hierarchical_linkages_by_hand():
     for method in ("complete", "average"):
         assert cut(method, 2) == [[0, 1], [2, 3, 4]]
         assert cut(method, 3) == [[0, 1], [2, 3], [4]]
+
+
+#: Five points on a line at 0, 1, 2.1, 3.3, 4.6 (the linkage case above), laid on an arc of
+#: the unit circle (0.05 rad per unit) spanned by two centred orthonormal series: these are
+#: the standardised candidates themselves, and their chords are the line's distances to 0.1 %.
+LINE = np.array([0.0, 1.0, 2.1, 3.3, 4.6])
+
+
+def _arc_candidates(n: int = 8) -> np.ndarray:
+    e1 = np.tile([1.0, -1.0], n // 2)
+    e2 = np.repeat([1.0, -1.0], n // 2)
+    angle = 0.05 * LINE
+    return np.outer(e1 / np.linalg.norm(e1), np.cos(angle)) + \
+        np.outer(e2 / np.linalg.norm(e2), np.sin(angle))
+
+
+def test_ward_and_kmeans_by_hand():
+    # Ward (SciPy's distance sqrt(2 |A||B| / (|A| + |B|)) |cA - cB|) on 0, 1, 2.1, 3.3, 4.6:
+    # 0-1 (1); {01}-2 = sqrt(4/3) 1.6 = 1.85, 2-3 = 1.2, 3-4 = 1.3 -> 2-3; then
+    # {01}-{23} = sqrt(2) 2.2 = 3.11, {23}-4 = sqrt(4/3) 1.9 = 2.19 -> {234}: k = 2 is
+    # {01}{234}, k = 3 {01}{23}{4}. k-means minimises the within sum of squares over the four
+    # splits of a line: {0}{1234} 7.21, {01}{234} 3.63, {012}{34} 3.05, {0123}{4} 6.06 ->
+    # {012}{34}, not Ward's merge. The closure (single linkage) chains: {0123}{4}.
+    X = _arc_candidates()
+    assert [c.tolist() for c in cluster_candidates(X, 2, "ward")] == [[0, 1], [2, 3, 4]]
+    assert [c.tolist() for c in cluster_candidates(X, 3, "ward")] == [[0, 1], [2, 3], [4]]
+    assert [c.tolist() for c in cluster_candidates(X, 2, "kmeans")] == [[0, 1, 2], [3, 4]]
+    assert [c.tolist() for c in cluster_candidates(X, 2, "closure")] == [[0, 1, 2, 3], [4]]
+
+
+def test_fcm_memberships_are_the_fixed_point_by_hand():
+    # Fuzzy c-means with m = 2 on the arc: centres v_j = sum u_ij^2 x_i / sum u_ij^2 and
+    # memberships u_ij = 1 / sum_l (d_ij / d_il)^2, iterated here from a split start until
+    # they stop changing; scikit-fuzzy's cmeans must reach the same fixed point.
+    X = _arc_candidates()
+    points = X.T
+    u = np.array([[1.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0, 1.0]])
+    for _ in range(500):
+        v = (u**2 @ points) / (u**2).sum(axis=1, keepdims=True)
+        d = np.linalg.norm(points[None, :, :] - v[:, None, :], axis=2)
+        u = 1.0 / ((d[:, None, :] / d[None, :, :]) ** 2).sum(axis=1)
+    found = clustering.fcm_memberships(points, 2, random_state=0)
+    order = np.argsort(found[:, 0])[::-1]  # cluster of point 0 first, as u above
+    np.testing.assert_allclose(found[order], u, atol=1e-4)
+    # the point at 2.1 leans left (membership 0.64), as in k-means' split
+    assert u[0].round(2).tolist() == [0.96, 1.0, 0.64, 0.04, 0.04]
+    assert [c.tolist() for c in cluster_candidates(X, 2, "fcm")] == [[0, 1, 2], [3, 4]]
 
 
 def _two_families(n: int = 60) -> np.ndarray:
