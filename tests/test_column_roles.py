@@ -170,3 +170,119 @@ def test_paper_without_its_time_column_says_so(tmp_path, capsys):
                        "--time-column (or time_column)")
     assert not (folder / "paper_study").exists()
     assert cli.main(["paper", "--recordings", str(folder), "--time-column", "Time [s]"]) == 0
+
+
+# --------------------------------------------------------------------------- other commands
+
+
+def test_plot_takes_the_roles_and_needs_the_time_column(tmp_path, capsys):
+    out = tmp_path / "runs.png"
+    args = ["plot", str(EXAMPLE / "run1.csv"), str(EXAMPLE / "run2.csv"), "--target", TARGET,
+            "-o", str(out)]
+    assert cli.main(args) == 2
+    _, err = capsys.readouterr()
+    assert err == (f"error: recording {EXAMPLE / 'run1.csv'}: no time column 'time_s'; a plot "
+                   "over time needs one: name it with --time-column (or time_column)\n")
+    assert not out.exists()
+    assert cli.main([*args, "--time-column", "Time [s]", "--exclude", "Bed*"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith(f"sensors (temperature-looking columns) in {EXAMPLE / 'run1.csv'}"
+                               ": took Spindle front [degC], ")
+    assert "Bed [degC] (--exclude)" in lines[0] and "dx [um] (displacement" in lines[0]
+    assert lines[2] == str(out) and out.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plot_draws_only_the_named_sensors(tmp_path, capsys):
+    from spindlebench.formats.columns import read_with_roles
+    from spindlebench.testbench.overview import recordings_figure
+
+    roles = ColumnRoles(time_column="Time [s]", sensors=("Spindle*",), exclude=("*[rpm]",))
+    frame, choice = read_with_roles(EXAMPLE / "run1.csv", TARGET, roles, extra=("dx [um]",))
+    assert list(frame.columns) == ["time_s", "Spindle front [degC]", "Spindle rear [degC]",
+                                   "dz [um]", "dx [um]"]  # the time axis renamed, dx kept
+    figure = recordings_figure([frame], ["run1"], target=TARGET, sensors=[choice.sensors])
+    try:
+        drawn = {line.get_label() for line in figure.axes[0].get_lines()}
+        assert drawn == {"Spindle front [degC]", "Spindle rear [degC]"}
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(figure)
+
+
+def test_fingerprint_takes_the_roles_and_refuses_a_copy_of_the_target(tmp_path, capsys):
+    out = tmp_path / "fp.json"
+    base = ["fingerprint", str(EXAMPLE / "run1.csv"), "--target", TARGET, "--json", str(out)]
+    assert cli.main(base) == 2
+    assert "no time column 'time_s'; the fingerprint (t63 is a time)" in capsys.readouterr().err
+    assert cli.main([*base, "--time-column", "Time [s]", "--sensors", "*[degC]",
+                     "dx [um]"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "sensor 'dx [um]' follows the target 'dz [um]'" in err
+    assert not out.exists()
+    assert cli.main([*base, "--time-column", "Time [s]"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0].startswith("sensors (temperature-looking columns) in ")
+    import json
+
+    row = json.loads(out.read_text(encoding="utf-8"))["recordings"][0]
+    assert row["sensors"] == SENSORS and row["time_column"] == "Time [s]"
+    assert row["samples"] == len(pd.read_csv(EXAMPLE / "run1.csv", sep=";"))
+
+
+CALIBRATION_MAP = """
+[inputs]
+spindle_speed_rpm = "Spindle speed [rpm]"
+feed_x_mm_per_min = 0.0
+feed_y_mm_per_min = 0.0
+ambient_C = "Workshop air [degC]"
+[error]
+column = "dz [um]"
+[temperatures]
+"Spindle front [degC]" = "T1"
+"Motor housing [degC]" = "T8"
+"""
+
+
+def test_calibrate_reads_another_loggers_recording_with_its_roles(tmp_path):
+    from spindlebench.calibration.mapping import read_map
+    from spindlebench.calibration.series import load_series
+
+    outputs = [f"T{i}_C" for i in range(1, 21)] + ["drift_um"]
+    path = tmp_path / "map.toml"
+    path.write_text(CALIBRATION_MAP, encoding="utf-8")
+    run1 = EXAMPLE / "run1.csv"
+    with pytest.raises(SpindlebenchError, match=r"run1.csv: no time column 'time_s'; the "
+                       r"calibration integrates the model over time"):
+        load_series(run1, read_map(path, outputs), None)
+    roles = ColumnRoles(time_column="Time [s]")
+    series = load_series(run1, read_map(path, outputs), None, roles)
+    frame = pd.read_csv(run1, sep=";", decimal=",")
+    assert np.array_equal(series.time_s, frame["Time [s]"].to_numpy())
+    assert [c.column for c in series.channels] == ["Spindle front [degC]",
+                                                   "Motor housing [degC]", "dz [um]"]
+    assert "Time [s]" not in series.ignored and "dx [um]" in series.ignored
+    path.write_text(CALIBRATION_MAP + '"dx [um]" = "T2"\n', encoding="utf-8")
+    with pytest.raises(SpindlebenchError, match=r"sensor 'dx \[um\]' follows the target "
+                       r"'dz \[um\]' with \|r\| = 1.0000"):
+        load_series(run1, read_map(path, outputs), None, roles)
+    load_series(run1, read_map(path, outputs), None,
+                ColumnRoles(time_column="Time [s]", allow_target_copy=True))
+
+
+def test_every_command_that_reads_recordings_has_the_role_flags():
+    """compensate simulates its days and adapt converts a data set whose columns it names
+    itself: neither reads a user's recording, so neither has the flags."""
+    parser = cli.build_parser()
+    flags = {name: {a for action in sub._actions for a in action.option_strings}
+             for name, sub in parser.commands.items()}
+    common = {"--time-column", "--delimiter", "--decimal"}
+    for name in ("evaluate", "fingerprint", "plot", "paper", "calibrate"):
+        assert common <= flags[name], name
+    for name in ("evaluate", "fingerprint", "plot"):
+        assert {"--sensors", "--exclude"} <= flags[name], name
+    for name in ("evaluate", "fingerprint", "paper", "calibrate"):
+        assert "--allow-target-copy" in flags[name], name
+    assert "--allow-target-copy" not in flags["plot"]  # nothing is fitted; a copy is drawn
+    for name in ("compensate", "adapt", "simulate", "sweep", "place", "methods", "build"):
+        assert not common & flags[name], name

@@ -157,10 +157,14 @@ def test_target_from_the_sidecar(tmp_path, capsys):
 
 @pytest.mark.parametrize(("args", "message"), [
     (["missing.csv"], "file not found"),
-    (["{r}", "--target", "nope_um"], "--target column(s) not found: nope_um"),
-    (["{r}", "--sensors", "T1", "T9"], "--sensors column(s) not found: T9"),
-    (["{r}", "--time-column", "t_min"], "--time-column column(s) not found: t_min"),
-    (["{r}", "--time-column", "T2"], "--time-column 'T2' does not increase"),
+    (["{r}", "--target", "nope_um"], "target column 'nope_um' not found"),
+    (["{r}", "--sensors", "T1", "T9"], "sensor column(s) not found: T9"),
+    (["{r}", "--time-column", "t_min"], "--time-column 't_min' not found"),
+    (["{r}", "--time-column", "T2"], "line 3: the time column does not increase"),
+    (["{r}", "--sensors", "T1", "drift_um"], "the target 'drift_um' is also listed"),
+    (["{r}", "--sensors", "T1", "T2", "E2"], "follows the target 'drift_um' with |r| = 1.0000"),
+    (["{notime}"], "no time column 'time_s'; the fingerprint (t63 is a time) needs one"),
+    (["{semi}", "--delimiter", ","], "read as one column"),
     (["{r}", "--sensors", "T3"], "no temperature column rises"),
     (["{r}", "--json", "{d}/x.txt"], "must be a .json file"),
     (["{r}", "--reference", "{d}/nowhere"], "--reference"),
@@ -172,7 +176,12 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, messag
     (tmp_path / "empty").mkdir()
     plain = tmp_path / "plain.csv"
     pd.read_csv(recording).rename(columns={"drift_um": "z_um"}).to_csv(plain, index=False)
-    argv = [arg.format(r=recording, d=tmp_path, plain=plain) for arg in args]
+    frame = pd.read_csv(recording)
+    frame.assign(E2=2 * frame["drift_um"]).to_csv(recording, index=False)  # a target copy
+    frame.drop(columns="time_s").to_csv(tmp_path / "notime.csv", index=False)
+    frame.to_csv(tmp_path / "semi.csv", index=False, sep=";", decimal=",")
+    argv = [arg.format(r=recording, d=tmp_path, plain=plain, notime=tmp_path / "notime.csv",
+                       semi=tmp_path / "semi.csv") for arg in args]
     before = sorted(tmp_path.iterdir())
     assert cli.main(["fingerprint", *argv, "--json", str(tmp_path / "o.json")]
                     if "--json" not in argv else ["fingerprint", *argv]) == 2

@@ -133,7 +133,7 @@ def test_plot_command_draws_one_or_several_recordings(tmp_path, capsys):
 
 @pytest.mark.parametrize(("extra", "message"), [
     (["-o", "x.pdf"], "x.pdf: the figure is written as PNG"),
-    (["--target", "ch3_um"], "no thermal-error column 'ch3_um'"),
+    (["--target", "ch3_um"], "target column 'ch3_um' not found"),
     (["SECOND"], "2 recordings go into one figure; name it with -o FIG.png"),
 ])
 def test_plot_command_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, extra,

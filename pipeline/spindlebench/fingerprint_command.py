@@ -11,8 +11,12 @@ from is :mod:`spindlebench.fingerprint_reference` (``--reference DIR`` or a cach
 once with the committed FMU).
 
 The error column is ``--target``; without it ``drift_um`` when the recording has it, else the
-``axial_target`` its JSON sidecar names (``adapt caiviac`` writes one). Sensors are
-``--sensors`` or every temperature column (:func:`spindlebench.formats.recording.default_sensors`).
+``axial_target`` its JSON sidecar names (``adapt caiviac`` writes one). The time column,
+sensors, excluded columns and CSV dialect are the column roles of
+:mod:`spindlebench.formats.columns` (``--time-column``, ``--sensors``, ``--exclude``,
+``--delimiter``, ``--decimal``): without ``--sensors`` the temperature-looking columns, listed
+on stdout with what was skipped and why. A time column other than ``time_s`` is drawn in
+its own numbers.
 """
 
 from __future__ import annotations
@@ -25,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from spindlebench import atomic, provenance
 from spindlebench.errors import SpindlebenchError
@@ -36,16 +39,17 @@ from spindlebench.fingerprint_reference import (
     cached_reference,
     explicit_reference,
 )
-from spindlebench.formats.recording import (
-    DRIFT_COLUMN,
-    TIME_COLUMN,
-    default_sensors,
-    read_recording,
-    recording_name,
-    require_columns,
-    sidecar_path,
+from spindlebench.formats.columns import (
+    ColumnRoles,
+    RoleChoice,
+    add_role_arguments,
+    detect_dialect,
+    read_with_roles,
+    refuse_target_copies,
+    require_time,
 )
-from spindlebench.listflags import expand_folders, split_list_flag
+from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, read_header, sidecar_path
+from spindlebench.listflags import expand_folders
 
 #: The error column of a recording that has it and no ``--target`` is given.
 DEFAULT_TARGET = DRIFT_COLUMN
@@ -86,54 +90,38 @@ def median_stats(rows: list[dict[str, float]]) -> dict[str, float]:
 
 
 def fingerprint_recording(path: Path, target: str | None = None,
-                          time_column: str = TIME_COLUMN,
-                          sensors: list[str] | None = None) -> Fingerprinted:
-    """Read one recording and compute its fingerprint, or raise one error line."""
-    columns = None
-    if sensors is not None:  # read and check only the columns used
-        targets = [target] if target else [DEFAULT_TARGET, _sidecar_target(path) or ""]
-        columns = [time_column, *sensors, *targets]
-    frame = read_recording(path, columns=columns)
-    target = target or _default_target(path, frame)
-    require_columns(frame, [time_column], "--time-column")
-    require_columns(frame, [target], "--target")
-    time = frame[time_column].to_numpy(dtype=float)
-    if time_column != TIME_COLUMN and np.any(np.diff(time) <= 0):
-        line = int(np.flatnonzero(np.diff(time) <= 0)[0]) + 3
-        raise SpindlebenchError(f"recording {path}, line {line}: --time-column "
-                                f"'{time_column}' does not increase")
-    if sensors is None:
-        names = [name for name in default_sensors(frame, target) if name != time_column]
-    else:
-        require_columns(frame, sensors, "--sensors")
-        names = list(sensors)
-    if target in names or time_column in names:
-        raise SpindlebenchError(f"recording {path}: --sensors must not hold the target "
-                                f"'{target}' or the time column '{time_column}'")
-    if not names:
-        raise SpindlebenchError(f"recording {recording_name(frame)}: no sensor column (give "
-                                "--sensors)")
-    temps = frame[names].to_numpy(dtype=float)
+                          roles: ColumnRoles | None = None
+                          ) -> tuple[Fingerprinted, RoleChoice]:
+    """Read one recording under the column ``roles`` and compute its fingerprint, or raise
+    one error line. The time column is required (t63 is a time); a sensor that copies the
+    target (|r| > 0.999) is refused unless the roles allow it (it would give ψ = 1)."""
+    roles = roles or ColumnRoles()
+    delimiter, _ = detect_dialect(path, roles.delimiter, roles.decimal)
+    target = target or _default_target(path, read_header(path, delimiter))
+    frame, choice = read_with_roles(path, target, roles)
+    require_time(choice, str(path), "the fingerprint (t63 is a time)")
+    refuse_target_copies(frame, target, choice.sensors, str(path), roles.allow_target_copy)
+    time = frame[TIME_COLUMN].to_numpy(dtype=float)
+    temps = frame[choice.sensors].to_numpy(dtype=float)
     error = frame[target].to_numpy(dtype=float)
     try:
         stats = fingerprint(time, temps, error)
     except SpindlebenchError as exc:
         raise SpindlebenchError(f"recording {path}: {exc}") from exc
-    return Fingerprinted(path, target, time_column, names, time, temps - temps[0],
-                         error - error[0], stats)
+    return Fingerprinted(path, target, str(choice.time_column), list(choice.sensors), time,
+                         temps - temps[0], error - error[0], stats), choice
 
 
-def _default_target(path: Path, frame: pd.DataFrame) -> str:
+def _default_target(path: Path, header: list[str]) -> str:
     """``drift_um`` if present, else the sidecar's ``axial_target``, else one error line."""
-    if DEFAULT_TARGET in frame:
+    if DEFAULT_TARGET in header:
         return DEFAULT_TARGET
     named = _sidecar_target(path)
-    if named is not None and named in frame:
+    if named is not None and named in header:
         return named
     raise SpindlebenchError(
         f"recording {path}: no --target given, no '{DEFAULT_TARGET}' column and no "
-        f"axial_target in {sidecar_path(path).name} (columns are: "
-        f"{', '.join(map(str, frame.attrs.get('header', frame.columns)))})")
+        f"axial_target in {sidecar_path(path).name} (columns are: {', '.join(header)})")
 
 
 def _sidecar_target(path: Path) -> str | None:
@@ -178,12 +166,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="recording CSV(s), or folders of them (every *.csv inside)")
     parser.add_argument("--target", help=f"error column (default: {DEFAULT_TARGET}, else the "
                         "axial_target of the recording's JSON sidecar)")
-    parser.add_argument("--time-column", default=TIME_COLUMN, metavar="COL",
-                        help=f"time column, strictly increasing (default: {TIME_COLUMN}, "
-                        "drawn in hours; another column is drawn in its own unit)")
-    parser.add_argument("--sensors", nargs="+", metavar="NAME",
-                        help="temperature columns, space- or comma-separated (default: every "
-                        "temperature column)")
+    add_role_arguments(parser)
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="write the result here")
     parser.add_argument("--figure", type=Path, metavar="OUT.png",
                         help="write the comparison figure here (default: OUT.png beside "
@@ -213,15 +196,19 @@ def reference_label(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Fingerprint every recording, print the table, write JSON and figure if asked."""
-    sensors = split_list_flag("--sensors", args.sensors, what="name")
+    roles = ColumnRoles.from_args(args)
     for out, suffix in ((args.json, ".json"), (args.figure, ".png")):
         if out is not None and out.suffix.lower() != suffix:
             raise SpindlebenchError(f"{out}: must be a {suffix} file")
         if out is not None and out.is_dir():
             raise SpindlebenchError(f"{out}: is a directory")
     args.recordings = recording_files(args.recordings)
-    results = [fingerprint_recording(path, args.target, args.time_column, sensors)
-               for path in args.recordings]
+    results = []
+    for path in args.recordings:
+        result, choice = fingerprint_recording(path, args.target, roles)
+        results.append(result)
+        if choice.by_rule:
+            print(choice.report(str(path)))
     figure = args.figure or (args.json.with_suffix(".png") if args.json else None)
     reference: Reference | None = None
     ref_results: list[Fingerprinted] = []
@@ -232,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
     if figure is not None or args.reference is not None or args.machine is not None:
         reference = (explicit_reference(args.reference) if args.reference is not None
                      else cached_reference(machine=args.machine))
-        ref_results = [fingerprint_recording(path, REFERENCE_TARGET)
+        ref_results = [fingerprint_recording(path, REFERENCE_TARGET)[0]
                        for path in reference.recordings]
     median = median_stats([item.stats for item in results])
     rows = [(str(item.path), item.stats) for item in results]
@@ -244,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
     text = None
     if args.json is not None:
         text = _json_text(results, median, reference, ref_results, ref_median, figure, args,
-                          sensors)
+                          roles)
     if figure is not None:
         from spindlebench.fingerprint_figure import write_figure  # matplotlib only when drawn
         write_figure(figure, results, ref_results, f"{label}, paper experiments"
@@ -261,7 +248,7 @@ def run(args: argparse.Namespace) -> int:
 def _json_text(results: list[Fingerprinted], median: dict[str, float],
                reference: Reference | None, ref_results: list[Fingerprinted],
                ref_median: dict[str, float] | None, figure: Path | None,
-               args: argparse.Namespace, sensors: list[str] | None) -> str:
+               args: argparse.Namespace, roles: ColumnRoles) -> str:
     record: dict[str, Any] = {
         "recordings": [item.row() for item in results],
         "median": json_stats(median),
@@ -277,8 +264,10 @@ def _json_text(results: list[Fingerprinted], median: dict[str, float],
         command="fingerprint",
         recordings=[provenance.file_entry(path) for path in args.recordings],
         target=args.target,
-        time_column=args.time_column,
-        sensors=sensors,
+        time_column=roles.time_column or TIME_COLUMN,
+        sensors=None if roles.sensors is None else list(roles.sensors),
+        exclude=list(roles.exclude),
+        allow_target_copy=roles.allow_target_copy,
         reference=None if reference is None else {
             **reference.source,
             "files": [provenance.file_entry(path) for path in reference.recordings]},

@@ -4,7 +4,10 @@
 the default parameter set (``calibration.fitset.DEFAULT_FIT``) or the named FMU parameters to
 the recordings, prints estimates with 95 % intervals, the strongest correlations and each
 channel's residual, and writes the machine file, ``NAME.calibration.json`` (report) and
-``NAME.calibration.png`` (measured vs calibrated). ``--design`` then ranks excitations that
+``NAME.calibration.png`` (measured vs calibrated). The map names every column used; the time
+column and CSV dialect are ``--time-column``/``--delimiter``/``--decimal`` (column roles,
+``formats.columns``), and a mapped temperature that copies the error column is refused
+unless ``--allow-target-copy``. ``--design`` then ranks excitations that
 would separate the parameters the recordings could not.
 """
 
@@ -20,6 +23,7 @@ from spindlebench.calibration.mapping import read_map
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate
 from spindlebench.calibration.series import load_series
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.columns import ColumnRoles, add_role_arguments
 from spindlebench.listflags import split_list_flag
 from spindlebench.machines import DEFAULT_MACHINE, load_machine
 from spindlebench.modelica import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
@@ -62,6 +66,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "parameters")
     parser.add_argument("--description", default=None, help="machine description")
     parser.add_argument("--verbose", action="store_true", help="print the solver's progress")
+    add_role_arguments(parser, sensors=False, exclude=False)  # the map names the columns
     parser.set_defaults(func=_run)
 
 
@@ -94,6 +99,7 @@ def _run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--segments {args.segments}: must be in [2, {MAX_SEGMENTS}]")
     if args.step_s is not None and not args.step_s > 0:
         raise SpindlebenchError(f"--step-s {args.step_s:g}: must be > 0")
+    roles = ColumnRoles.from_args(args)
     ode = explicit_ode(args.models, segments=args.segments)
     recording_map = read_map(args.map_file, ode.outputs)
     fit_names = check_fit_names(
@@ -101,7 +107,7 @@ def _run(args: argparse.Namespace) -> int:
         ode.parameters, "--fit")
     series_list, ignored = [], {}
     for path in args.recordings:
-        series = load_series(path, recording_map, args.step_s)
+        series = load_series(path, recording_map, args.step_s, roles)
         series_list.append(series)
         if series.ignored:
             ignored[str(path)] = list(series.ignored)

@@ -80,8 +80,10 @@ class RecordingMap:
             used.append(self.error_column)
         return list(dict.fromkeys(used))
 
-    def check_columns(self, header: Iterable[str], recording: Path) -> list[str]:
-        """Raise naming the key whose column ``recording`` lacks; return the unmapped columns."""
+    def check_columns(self, header: Iterable[str], recording: Path,
+                      time_column: str = TIME_COLUMN) -> list[str]:
+        """Raise naming the key whose column ``recording`` lacks; return the unmapped columns
+        (other than the time axis ``time_column``)."""
         header = list(header)
         present = set(header)
         for key, value in self.inputs.items():
@@ -95,7 +97,7 @@ class RecordingMap:
             if column not in present:
                 raise SpindlebenchError(f"{self.path}: key 'temperatures.{column}': column is "
                                         f"not in {recording}")
-        used = set(self.columns()) | {TIME_COLUMN}
+        used = set(self.columns()) | {time_column}
         return [c for c in header if c not in used]
 
 

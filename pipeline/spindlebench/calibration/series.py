@@ -14,7 +14,14 @@ import numpy as np
 
 from spindlebench.calibration.mapping import DRIFT_OUTPUT, INPUTS, UNKNOWN, RecordingMap
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import TIME_COLUMN, read_recording
+from spindlebench.formats.columns import (
+    ColumnRoles,
+    as_time_s,
+    detect_dialect,
+    refuse_implausible_temperatures,
+    refuse_target_copies,
+)
+from spindlebench.formats.recording import TIME_COLUMN, read_header, read_recording
 from spindlebench.provenance import sha256_file
 
 #: Smallest noise a channel is given: a logger that quantises to 0.1 K on a slow signal shows
@@ -99,12 +106,32 @@ def noise_estimate(values: np.ndarray, kind: str) -> float:
     return float(max(mad, MIN_NOISE[kind]))
 
 
-def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None) -> Series:
-    """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given."""
+def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None,
+                roles: ColumnRoles | None = None) -> Series:
+    """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given.
+
+    The map names every column used; ``roles`` (``formats.columns``) gives the time column
+    (required: the model is integrated over it), the CSV dialect and whether a temperature
+    column that copies the error column (|r| > 0.999) is allowed.
+    """
     path = Path(path)
-    frame = read_recording(path, allow_missing=True, columns=recording_map.columns())
+    roles = roles or ColumnRoles()
+    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
+    time_column = roles.time_column or TIME_COLUMN
+    if time_column not in read_header(path, delimiter):
+        raise SpindlebenchError(f"recording {path}: no time column {time_column!r}; the "
+                                "calibration integrates the model over time and needs one: "
+                                "name it with --time-column")
+    frame = read_recording(path, allow_missing=True,
+                           columns=[*recording_map.columns(), time_column],
+                           delimiter=delimiter, decimal=decimal)
     header = frame.attrs.get("header", list(frame.columns))
-    ignored = recording_map.check_columns(header, path)
+    ignored = recording_map.check_columns(header, path, time_column)
+    frame = as_time_s(frame, time_column, path)
+    refuse_implausible_temperatures(frame, list(recording_map.temperatures), str(path))
+    if recording_map.error_column:
+        refuse_target_copies(frame, recording_map.error_column, list(recording_map.temperatures),
+                             str(path), roles.allow_target_copy)
     time_s = frame[TIME_COLUMN].to_numpy(dtype=float)
     steps = np.diff(time_s)
     if step_s is not None:

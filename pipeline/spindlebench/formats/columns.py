@@ -36,6 +36,8 @@ from spindlebench.names import KELVIN_OFFSET
 
 #: |Pearson r| with the target above which a candidate is taken for a copy of the target.
 COPY_R = 0.999
+#: Columns skipped for one reason that :meth:`RoleChoice.report` names one by one.
+LISTED = 3
 #: Delimiters the detection chooses from, and the decimal marks a user may give.
 DELIMITERS = (",", ";", "\t", "|")
 DECIMALS = (".", ",")
@@ -62,11 +64,12 @@ class ColumnRoles:
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> ColumnRoles:
         """The roles given on a command line built with :func:`add_role_arguments`."""
-        sensors = split_list_flag("--sensors", args.sensors, what="name")
-        exclude = split_list_flag("--exclude", args.exclude, what="name") or []
+        sensors = split_list_flag("--sensors", getattr(args, "sensors", None), what="name")
+        exclude = split_list_flag("--exclude", getattr(args, "exclude", None), what="name")
         return cls(time_column=args.time_column,
                    sensors=None if sensors is None else tuple(sensors),
-                   exclude=tuple(exclude), allow_target_copy=args.allow_target_copy,
+                   exclude=tuple(exclude or ()),
+                   allow_target_copy=getattr(args, "allow_target_copy", False),
                    delimiter=_delimiter(args.delimiter, "--delimiter"),
                    decimal=_decimal(args.decimal, "--decimal"))
 
@@ -80,15 +83,36 @@ class RoleChoice:
     skipped: list[tuple[str, str]] = field(default_factory=list)  # (column, why)
     by_rule: bool = True
 
-    def report(self) -> str:
-        """One line: the sensors taken and the columns skipped with the reason."""
+    def report(self, where: str | None = None) -> str:
+        """One line: the sensors taken (``in <where>`` for a command reading several
+        recordings) and the columns skipped with the reason; more than
+        :data:`LISTED` columns skipped for one reason (a synthetic recording's ``true_*``
+        truth) are named by their first two and counted."""
         how = "temperature-looking columns" if self.by_rule else "--sensors"
-        skipped = "; ".join(f"{name} ({why})" for name, why in self.skipped) or "none"
-        return f"sensors ({how}): took {', '.join(self.sensors)}; skipped: {skipped}"
+        by_reason: dict[str, list[str]] = {}
+        for name, why in self.skipped:
+            by_reason.setdefault(why, []).append(name)
+        parts: list[str] = []
+        for name, why in self.skipped:
+            group = by_reason[why]
+            if len(group) <= LISTED:
+                parts.append(f"{name} ({why})")
+            elif name == group[0]:
+                parts.append(f"{group[0]}, {group[1]}, ... ({len(group)} columns: {why})")
+        skipped = "; ".join(parts) or "none"
+        place = "" if where is None else f" in {where}"
+        return f"sensors ({how}){place}: took {', '.join(self.sensors)}; skipped: {skipped}"
 
 
-def add_role_arguments(parser: argparse.ArgumentParser, *, sensors: bool = True) -> None:
-    """The column-role flags every command that reads user recordings shares."""
+def add_role_arguments(parser: argparse.ArgumentParser, *, sensors: bool = True,
+                       exclude: bool = True, copies: bool = True) -> None:
+    """The column-role flags every command that reads user recordings shares.
+
+    ``sensors=False``: the command names its sensors another way (a study's
+    ``sensors_all``), so no ``--sensors``; ``exclude=False``: every column it uses is
+    named (a calibration map), so no ``--exclude``; ``copies=False``: the command fits
+    nothing, so a copy of the target is not refused and ``--allow-target-copy`` is absent.
+    """
     parser.add_argument("--time-column", metavar="NAME", default=None,
                         help=f"the time column in seconds (default: {TIME_COLUMN})")
     if sensors:
@@ -97,11 +121,13 @@ def add_role_arguments(parser: argparse.ArgumentParser, *, sensors: bool = True)
             help="sensor columns: names or glob patterns ('T*', '*[degC]'), space- or "
             "comma-separated; only these, the target and the time column are read and "
             "checked (default: the columns that look like temperatures, listed on stdout)")
-    parser.add_argument("--exclude", nargs="+", metavar="NAME", default=None,
-                        help="columns (names or glob patterns) never used as sensors")
-    parser.add_argument("--allow-target-copy", action="store_true",
-                        help=f"keep a sensor whose |r| with the target exceeds {COPY_R} "
-                        "(refused by default as a likely copy of the target)")
+    if exclude:
+        parser.add_argument("--exclude", nargs="+", metavar="NAME", default=None,
+                            help="columns (names or glob patterns) never used as sensors")
+    if copies:
+        parser.add_argument("--allow-target-copy", action="store_true",
+                            help=f"keep a sensor whose |r| with the target exceeds {COPY_R} "
+                            "(refused by default as a likely copy of the target)")
     parser.add_argument("--delimiter", default=None, metavar="CHAR",
                         help="CSV field delimiter: ',', ';', 'tab' or '|' (default: detected)")
     parser.add_argument("--decimal", default=None, metavar="CHAR",
@@ -302,10 +328,12 @@ def refuse_implausible_temperatures(frame: pd.DataFrame, sensors: Sequence[str],
 
 
 def read_with_roles(path: Path, target: str, roles: ColumnRoles, *,
-                    allow_missing: bool = False) -> tuple[pd.DataFrame, RoleChoice]:
+                    allow_missing: bool = False,
+                    extra: Sequence[str] = ()) -> tuple[pd.DataFrame, RoleChoice]:
     """Read a user recording under ``roles``: dialect, time column, sensors, checks.
 
-    Only the target, the time column and the sensors are read and checked. The time column
+    Only the target, the time column, the sensors and those of ``extra`` the file has (a
+    plot's driver inputs) are read and checked. The time column
     is renamed to ``time_s`` in the frame (so downstream code has one name), the sensors are
     checked for implausible temperatures and (unless allowed) copies of the target.
     """
@@ -314,14 +342,26 @@ def read_with_roles(path: Path, target: str, roles: ColumnRoles, *,
     delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
     header = read_header(path, delimiter)
     choice = choose(header, target, roles, str(path))
-    wanted = [target, *choice.sensors] + ([choice.time_column] if choice.time_column else [])
+    wanted = [target, *choice.sensors] + ([choice.time_column] if choice.time_column else []) \
+        + [name for name in extra if name in header]
     frame = read_recording(path, allow_missing=allow_missing, columns=wanted,
                            delimiter=delimiter, decimal=decimal)
-    if choice.time_column and choice.time_column != TIME_COLUMN:
-        frame = frame.rename(columns={choice.time_column: TIME_COLUMN})
-        _check_increasing(frame, path)
+    if choice.time_column:
+        frame = as_time_s(frame, choice.time_column, path)
     refuse_implausible_temperatures(frame, choice.sensors, str(path))
     return frame, choice
+
+
+def as_time_s(frame: pd.DataFrame, time_column: str, path: Path) -> pd.DataFrame:
+    """``frame`` with its time axis ``time_column`` named ``time_s`` (downstream code has one
+    name), checked to increase; ``read_recording`` keeps a ``time_s`` column whenever the
+    file has one, so a named time axis replaces it."""
+    if time_column == TIME_COLUMN:
+        return frame
+    frame = frame.drop(columns=[TIME_COLUMN], errors="ignore").rename(
+        columns={time_column: TIME_COLUMN})
+    _check_increasing(frame, path)
+    return frame
 
 
 def _check_increasing(frame: pd.DataFrame, path: Path) -> None:

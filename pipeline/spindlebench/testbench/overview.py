@@ -56,11 +56,13 @@ class _Panel:
     sensors: tuple[str, ...]
 
 
-def _temperature_panels(frames: Sequence[pd.DataFrame], target: str) -> list[_Panel]:
-    """The temperature panels every recording shares, in the order of the part table."""
+def _temperature_panels(frames: Sequence[pd.DataFrame], target: str,
+                        chosen: Sequence[Sequence[str]] | None = None) -> list[_Panel]:
+    """The temperature panels every recording shares, in the order of the part table;
+    ``chosen``: each frame's sensors (column roles), else ``default_sensors``."""
     sensors: list[str] = []
-    for frame in frames:
-        for name in default_sensors(frame, target):
+    for i, frame in enumerate(frames):
+        for name in (default_sensors(frame, target) if chosen is None else chosen[i]):
             if name not in sensors:
                 sensors.append(name)
     panels = []
@@ -92,8 +94,12 @@ def _colours(sensors: Sequence[str]) -> dict[str, tuple]:
 
 def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | None = None, *,
                       rises: bool = False, target: str = DRIFT_COLUMN,
-                      suptitle: str | None = None) -> Figure:
+                      suptitle: str | None = None,
+                      sensors: Sequence[Sequence[str]] | None = None) -> Figure:
     """Temperature panels by part, the thermal error ``target`` and the inputs, over hours.
+
+    ``sensors`` gives each frame's temperature columns (``plot``'s column roles); without
+    it, every column ``default_sensors`` counts.
 
     ``rises`` draws every temperature (and the ambient driver) as its change since the first
     sample, which shows the shapes that absolute values of different levels hide.
@@ -106,7 +112,7 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
                 f"recording {recording_name(frame)}: no thermal-error column {target!r} "
                 f"(columns are: {', '.join(map(str, frame.columns))}; choose one with --target)")
     titles = list(titles) if titles is not None else [recording_name(f) for f in frames]
-    panels = _temperature_panels(frames, target)
+    panels = _temperature_panels(frames, target, sensors)
     has_inputs = any(SPEED in f or any(c in f for c in FEEDS) for f in frames)
     heights = [3.0] * len(panels) + [1.9] + ([1.4] if has_inputs else [])
     fig, axes = plt.subplots(len(heights), len(frames), squeeze=False, sharex="col",

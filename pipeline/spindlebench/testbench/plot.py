@@ -1,7 +1,12 @@
 """``spindlebench plot``: recordings → one figure (temperatures by part, error, inputs).
 
-Works on any canonical recording (synthetic or real, ``spindlebench adapt`` output); the
-figure itself is ``testbench.overview.recordings_figure``.
+Works on any recording (synthetic, ``spindlebench adapt`` output, another logger's CSV): the
+time column, sensors, excluded columns and CSV dialect are the column roles of
+``formats.columns`` (``--time-column``, ``--sensors``, ``--exclude``, ``--delimiter``,
+``--decimal``); without ``--sensors`` the temperature-looking columns are drawn and the
+command prints which it took and skipped. A recording without a time column is refused. A
+copy of the target is not refused here (nothing is fitted; the plot shows it). The figure
+itself is ``testbench.overview.recordings_figure``.
 """
 
 from __future__ import annotations
@@ -10,8 +15,23 @@ import argparse
 from pathlib import Path
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import DRIFT_COLUMN, read_recording
-from spindlebench.testbench.overview import recordings_figure, save_figure
+from spindlebench.formats.columns import (
+    ColumnRoles,
+    add_role_arguments,
+    read_with_roles,
+    require_time,
+)
+from spindlebench.formats.recording import DRIFT_COLUMN, true_column
+from spindlebench.testbench.overview import (
+    AMBIENT_DRIVER,
+    FEEDS,
+    SPEED,
+    recordings_figure,
+    save_figure,
+)
+
+#: Columns drawn besides the sensors and the error when a recording has them.
+INPUT_COLUMNS = (SPEED, *FEEDS, AMBIENT_DRIVER, true_column(DRIFT_COLUMN))
 
 
 def default_output(recordings: list[Path]) -> Path:
@@ -30,10 +50,19 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"-o {out}: the figure is written as PNG; name it *.png")
     if out.is_dir():
         raise SpindlebenchError(f"-o {out}: is a directory; give a file name FIG.png")
-    frames = [read_recording(path, allow_missing=True) for path in recordings]
+    roles = ColumnRoles.from_args(args)
+    frames, sensors = [], []
+    for path in recordings:
+        frame, choice = read_with_roles(path, args.target, roles, allow_missing=True,
+                                        extra=INPUT_COLUMNS)
+        require_time(choice, str(path), "a plot over time")
+        if choice.by_rule:
+            print(choice.report(str(path)))
+        frames.append(frame)
+        sensors.append(choice.sensors)
     titles = [path.stem for path in recordings]
     save_figure(recordings_figure(frames, titles, rises=args.rises, target=args.target,
-                                  suptitle=args.title), out)
+                                  suptitle=args.title, sensors=sensors), out)
     print(out)
     return 0
 
@@ -57,4 +86,5 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--target", default=DRIFT_COLUMN,
                         help="thermal-error column (default: drift_um; e.g. ch3_um)")
     parser.add_argument("--title", default=None, help="title above the figure")
+    add_role_arguments(parser, copies=False)
     parser.set_defaults(func=run)
