@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -72,6 +73,84 @@ def test_a_signal_during_simulate_ends_it_at_once_with_one_line_and_nothing_writ
     assert "ctypes" not in stderr
     assert not out.exists() or not any(out.iterdir())
     assert not any(unzip.iterdir())  # the extracted FMU is removed too
+
+
+TINY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "tiny_sweep.toml"
+
+
+@pytest.fixture(scope="module")
+def tiny_sweep(tmp_path_factory) -> Path:
+    """The tiny sweep run once without interruption (in-process, one worker: the process)."""
+    out = tmp_path_factory.mktemp("tiny") / "sweep"
+    assert cli.main(["sweep", str(TINY), "-o", str(out), "--workers", "0",
+                     "--no-progress"]) == 0
+    return out
+
+
+def files_of(folder: Path) -> dict[str, bytes]:
+    """Every file below ``folder`` (hidden ones too) by relative path, but the lock."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name != ".lock"}
+
+
+def interrupt_study(command: str, study: Path, out: Path, signum: int, workers: str) -> None:
+    """Run ``command`` in a child, send ``signum`` once its first simulation is stored
+    (well before the end: more simulations, evaluations and figures follow), and assert
+    the promise: exit 130 within seconds, one line naming the signal, no traceback, no
+    half-written (``.part``) file, no final output."""
+    child = spindlebench(command, str(study), "-o", str(out), "--workers", workers,
+                         "--no-progress")
+    deadline = time.monotonic() + 300
+    while not list(out.glob("runs/*/*.csv")):
+        assert child.poll() is None and time.monotonic() < deadline, child.communicate()
+        time.sleep(0.02)
+    child.send_signal(signum)
+    sent = time.monotonic()
+    _, stderr = child.communicate(timeout=120)
+    assert time.monotonic() - sent < 30  # seconds unloaded; generous for a busy CI
+    assert child.returncode == 130, stderr
+    assert one_error_line(stderr) == (f"error: interrupted by {signal.Signals(signum).name}; "
+                                      "the unfinished output was not written")
+    assert not list(out.rglob("*.part"))
+    assert not (out / "README.md").exists()
+
+
+def test_ctrl_c_during_sweep_stops_it_and_the_rerun_resumes_to_the_same_bytes(tmp_path,
+                                                                            tiny_sweep):
+    out = tmp_path / "sweep"
+    interrupt_study("sweep", TINY, out, signal.SIGINT, "0")
+    kept = len(list(out.glob("runs/*/*.csv")))
+    assert cli.main(["sweep", str(TINY), "-o", str(out), "--workers", "0",
+                     "--no-progress"]) == 0
+    assert files_of(out) == files_of(tiny_sweep)
+    assert kept >= 1
+
+
+#: tiny_placement.toml cut to one month, one budget, two methods (4 short simulations).
+MINI_PLACEMENT = (Path(__file__).resolve().parents[1] / "scenarios" / "studies"
+                  / "tiny_placement.toml")
+
+
+def test_sigterm_during_place_stops_it_and_the_rerun_resumes_to_the_same_bytes(tmp_path):
+    study = tmp_path / "mini_placement.toml"
+    text = MINI_PLACEMENT.read_text(encoding="utf-8")
+    for old, new in (('months = ["Jan", "Jul"]', 'months = ["Jan"]'),
+                     ("budgets = [2, 3]", "budgets = [2]"),
+                     ('methods = ["fuzzy", "greedy", "exhaustive", "kmeans+grey", "lasso"]',
+                      'methods = ["fuzzy", "greedy"]'),
+                     ("with_differences = [false, true]", "with_differences = [false]")):
+        assert old in text
+        text = text.replace(old, new)
+    study.write_text(text, encoding="utf-8")
+    reference = tmp_path / "reference"
+    assert cli.main(["place", str(study), "-o", str(reference), "--workers", "0",
+                     "--no-progress"]) == 0
+    out = tmp_path / "place"
+    interrupt_study("place", study, out, signal.SIGTERM, "1")  # the worker-pool path
+    # resumed in-process like the reference (provenance.json names the executor)
+    assert cli.main(["place", str(study), "-o", str(out), "--workers", "0",
+                     "--no-progress"]) == 0
+    assert files_of(out) == files_of(reference)
 
 
 # --------------------------------------------------------------------------- case 8: full disk
@@ -231,9 +310,6 @@ def test_one_outlier_cell_does_not_make_the_other_columns_constant():
 # --------------------------------------------------------------------------- case 12: lock
 
 
-TINY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "tiny_sweep.toml"
-
-
 def test_a_second_study_process_in_a_locked_folder_is_refused_naming_the_holder(tmp_path):
     out = tmp_path / "sweep"
     holder = subprocess.Popen(
@@ -300,10 +376,11 @@ def test_kill_9_of_a_sweep_leaves_no_worker_forkserver_or_tracker_behind(tmp_pat
 # ----------------------------------------------------------------- case 3: damaged results
 
 
-def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_path):
+def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_path,
+                                                                          tiny_sweep):
     out = tmp_path / "sweep"
+    shutil.copytree(tiny_sweep, out)
     args = ["sweep", str(TINY), "-o", str(out), "--workers", "0", "--no-progress"]
-    assert cli.main(args) == 0
     reference = (out / "results.csv").read_bytes()
     evaluation = sorted(out.glob("evals/*/*/*.csv"))[0]
     evaluation.write_bytes(np.random.default_rng(3).bytes(2000))  # random bytes
