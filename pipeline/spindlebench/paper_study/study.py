@@ -34,10 +34,9 @@ from spindlebench.formats.recording import TIME_COLUMN, MissingValueError, read_
 from spindlebench.names import ALL_RAW, DEFAULT_METHOD, GROUPS, SIX_DIFF
 from spindlebench.paper_study.config import AUTO_SIX, CONFIG_NAME, StudyConfig
 from spindlebench.selection import SelectionWarning, evaluate
-from spindlebench.selection.closure import transitive_closure
-from spindlebench.selection.cut import cut_for_clusters
+from spindlebench.selection.clustering import cluster_candidates
 from spindlebench.selection.registry import parse_method
-from spindlebench.selection.similarity import constant_columns, similarity_matrix
+from spindlebench.selection.similarity import constant_columns
 
 AUTO_SIX_RULE = (
     "six = auto: the fuzzy equivalence hierarchy (same similarity, t(R)) of all raw sensors on "
@@ -193,12 +192,9 @@ def choose_six(frame: pd.DataFrame, sensors: Sequence[str], similarity: str) -> 
     varying = [name for name, fixed in zip(sensors, constant, strict=True) if not fixed]
     if len(varying) < 6:
         raise SpindlebenchError(f"six = auto needs 6 varying sensors, have {len(varying)}")
-    closure = transitive_closure(similarity_matrix(raw[varying].to_numpy(), similarity))
+    clusters = cluster_candidates(raw[varying].to_numpy(), 6, "closure", similarity)
     ranges = (raw[varying].max() - raw[varying].min()).to_numpy()
-    picks = {
-        varying[int(members[np.argmax(ranges[members])])]
-        for members in cut_for_clusters(closure, 6).clusters
-    }
+    picks = {varying[int(members[np.argmax(ranges[members])])] for members in clusters}
     return tuple(name for name in sensors if name in picks)
 
 

@@ -45,10 +45,10 @@ from spindlebench.selection.errors import (
     SelectionWarning,
     column_list,
 )
-from spindlebench.selection.pairs import ROW_WISE_ABOVE, select_among_pairs
+from spindlebench.selection.pairs import ROW_WISE_ABOVE, PairCandidates
 from spindlebench.selection.registry import MethodChoice, fit_with, select_with
 from spindlebench.selection.regression import LinearFit, rises, rmse
-from spindlebench.selection.select import Selection, select_sensitive_points
+from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
 
 RecordingLike = str | os.PathLike[str] | pd.DataFrame
@@ -455,16 +455,12 @@ def evaluate(
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
     with _naming(train_name):
-        if choice.is_paper and row_wise(candidates, similarity, closure):
-            raw = _finite(candidates.matrix(train_frame, range(len(chosen))), chosen)
-            selection = select_among_pairs(raw, y_train, k, names=names)
+        if choice.is_paper and row_wise(candidates, similarity, closure):  # R too large
+            matrix = PairCandidates(
+                _finite(candidates.matrix(train_frame, range(len(chosen))), chosen))
         else:
             matrix = _finite(candidates.matrix(train_frame), names)
-            if choice.is_paper:  # the paper's method, with the chosen closure implementation
-                selection = select_sensitive_points(matrix, y_train, k, similarity, closure,
-                                                    names=names)
-            else:
-                selection = select_with(choice, matrix, y_train, k, similarity, names, seed)
+        selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure)
         selected_names = [names[i] for i in selection.selected]
         fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
                        names=selected_names)

@@ -78,6 +78,10 @@ class MethodChoice:
         return {"method": self.method, "within": self.within, "regressor": self.regressor}
 
 
+#: The paper's method exactly (closure, |psi|, OLS): ``place``'s ``fuzzy``.
+PAPER_METHOD = MethodChoice()
+
+
 def parse_method(label: str) -> MethodChoice:
     """``method[+within][+regressor]`` -> ``MethodChoice``; one-line error otherwise."""
     if not isinstance(label, str) or not label.strip():
@@ -169,33 +173,44 @@ def listing() -> str:
 
 
 def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SIMILARITY,
-                names=None, random_state: int = DEFAULT_METHOD_SEED):
-    """Steps 2-5 by any method: a ``select.Selection`` over the columns of ``X``.
+                names=None, random_state: int = DEFAULT_METHOD_SEED, closure: str = "fast"):
+    """Steps 2-5 by any method: a ``select.Selection`` over the candidates ``X``.
+
+    The one front door to selection: ``evaluate`` (hence ``paper``, ``sweep`` and
+    ``compensate``) and ``place`` select through here, so every command runs the code the
+    scikit-learn estimators wrap. The paper's method is ``select_sensitive_points`` (what
+    ``FuzzyClusterSelector`` wraps, ``closure`` choosing the implementation of t(R)); every
+    other method is its selector of ``make_selector``.
+
+    ``X`` is the candidate matrix, or a ``pairs.PairCandidates`` (raw rises standing for
+    themselves plus every pairwise difference): the paper's method (|psi|, fast closure) then
+    selects row-wise without forming the candidates or R (``pairs.select_among_pairs``, same
+    clusters and psi, eta to rounding); other methods get the formed matrix.
 
     Constant candidates are dropped with a ``SelectionWarning`` first, as the paper's
     selector does, so every method sees the same candidates. Fields a method does not have
     are empty: ``similarity``/``closure`` (0 x 0) and ``eta`` (NaN); the clusters of a method
     without clusters are its selected candidates, one each.
     """
-    import warnings
-
     import numpy as np
 
-    from spindlebench.selection.errors import SelectionWarning, column_list
-    from spindlebench.selection.select import Selection, _check_inputs, select_sensitive_points
+    from spindlebench.selection.pairs import PairCandidates, select_among_pairs
+    from spindlebench.selection.select import (
+        Selection,
+        _check_inputs,
+        select_sensitive_points,
+        split_constant,
+    )
     from spindlebench.selection.similarity import constant_columns, correlation_with
 
+    if isinstance(X, PairCandidates):
+        if choice.is_paper and similarity == DEFAULT_SIMILARITY and closure == "fast":
+            return select_among_pairs(X.raw, y, k, X.include_raw, names=names)
+        X = X.columns(np.arange(X.n_candidates))
     if choice.method == DEFAULT_METHOD and choice.within == DEFAULT_WITHIN:
-        return select_sensitive_points(X, y, k, similarity, names=names)
+        return select_sensitive_points(X, y, k, similarity, closure, names=names)
     X, y = _check_inputs(X, y, k)
-    constant = constant_columns(X)
-    kept, dropped = np.flatnonzero(~constant), np.flatnonzero(constant)
-    if dropped.size:
-        warnings.warn(f"dropping {dropped.size} constant candidate(s) (zero variance): "
-                      f"{column_list(dropped, names)}", SelectionWarning, stacklevel=2)
-    if k > kept.size:
-        raise SelectionError(f"cannot select {k}: only {kept.size} candidate(s) vary "
-                             f"({dropped.size} constant one(s) dropped)")
+    kept, dropped = split_constant(constant_columns(X), names, k, making=f"select {k}")
     kept_names = None if names is None else [str(names[i]) for i in kept]
     selector = make_selector(choice, k, similarity, random_state).fit(X[:, kept], y)
     selected = kept[np.asarray(selector.selected_, dtype=np.intp)]
@@ -208,12 +223,20 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
                      eta=float("nan"), clusters=clusters, psi=psi, selected=selected)
 
 
-def fit_with(choice: MethodChoice, X, y, names=None):
-    """The regression of ``choice`` on rises ``X`` as a ``regression.LinearFit``."""
+def fit_regressor(regressor: str, X, y, names=None):
+    """The regression ``regressor`` (``names.REGRESSORS``) on rises ``X`` as a
+    ``regression.LinearFit``: ``ols`` is ``regression.fit_ols`` (what ``RiseRegressor``
+    wraps), the others their estimator of ``make_regressor``. Refits that are OLS by
+    definition (the placement score, the sweep's oracle) call it with ``DEFAULT_REGRESSOR``."""
     from spindlebench.selection.regression import LinearFit, fit_ols
 
-    if choice.regressor == DEFAULT_REGRESSOR:
+    if regressor == DEFAULT_REGRESSOR:
         return fit_ols(X, y, names=names)
-    model = make_regressor(choice).fit(X, y)
+    model = make_regressor(MethodChoice(regressor=regressor)).fit(X, y)
     return LinearFit(intercept=float(model.intercept_), coefficients=model.coef_,
                      r2=float(model.r2_))
+
+
+def fit_with(choice: MethodChoice, X, y, names=None):
+    """The regression of ``choice`` on rises ``X`` as a ``regression.LinearFit``."""
+    return fit_regressor(choice.regressor, X, y, names)

@@ -24,6 +24,7 @@ from spindlebench.selection.errors import (
     SelectionWarning,
     check_n_clusters,
     check_names,
+    column_list,
 )
 from spindlebench.selection.similarity import (
     constant_columns,
@@ -95,24 +96,26 @@ def check_counts(n_samples: int, n_candidates: int, y: np.ndarray, n_clusters: i
 
 
 def split_constant(
-    constant: np.ndarray, names: Sequence[str] | None, n_clusters: int
+    constant: np.ndarray, names: Sequence[str] | None, n_clusters: int,
+    making: str | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(kept, dropped) candidate indices; dropping warns, too few kept is an error."""
+    """(kept, dropped) candidate indices; dropping warns, too few kept is an error.
+
+    ``making`` says what k counts in that error (default ``"{k} clusters"``); every method
+    of the registry drops constant candidates through here, so all see the same ones."""
     kept = np.flatnonzero(~constant)
     dropped = np.flatnonzero(constant)
     if dropped.size:
-        labels = [str(names[i]) if names is not None else f"column {i}" for i in dropped[:11]]
-        shown = ", ".join(labels[:10])
-        if dropped.size > 10:
-            shown += f" and {dropped.size - 10} more"
         warnings.warn(
-            f"dropping {dropped.size} constant candidate(s) (zero variance): {shown}",
+            f"dropping {dropped.size} constant candidate(s) (zero variance): "
+            f"{column_list(dropped, names)}",
             SelectionWarning,
             stacklevel=3,
         )
     if n_clusters > kept.size:
+        what = making or f"make {n_clusters} clusters"
         raise SelectionError(
-            f"cannot make {n_clusters} clusters: only {kept.size} candidate(s) vary "
+            f"cannot {what}: only {kept.size} candidate(s) vary "
             f"({dropped.size} constant one(s) dropped)"
         )
     return kept, dropped

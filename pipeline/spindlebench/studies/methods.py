@@ -45,20 +45,20 @@ from spindlebench.names import (
     ALL_RAW,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
+    DEFAULT_REGRESSOR,
     PAPER_SIX,
     SENSORS,
     SIX_DIFF,
     SIX_RAW,
 )
-from spindlebench.selection import (
-    PairwiseDifferences,
-    correlation_with,
-    evaluate,
-    fit_ols,
-    rises,
-    rmse,
+from spindlebench.selection import PairwiseDifferences, evaluate, rises, rmse
+from spindlebench.selection.registry import (
+    MethodChoice,
+    fit_regressor,
+    fit_with,
+    parse_method,
+    select_with,
 )
-from spindlebench.selection.registry import MethodChoice, parse_method
 from spindlebench.selection.regressors import blocked_cv_alpha
 from spindlebench.studies.executor import one_line_error
 from spindlebench.studies.study import Methods
@@ -71,6 +71,8 @@ ORACLE = "oracle"
 GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
 #: Between a group and a selection method in a method's name (``six_diff:kmeans+grey``).
 GROUP_SEPARATOR = ":"
+#: The ``top-k-correlated`` baseline is that selection method on the raw sensors, then OLS.
+TOP_K = parse_method("top-k-correlated")
 
 
 @dataclass(frozen=True)
@@ -182,10 +184,11 @@ def _top_k_correlated(spec: MethodSpec, train: pd.DataFrame,
                       tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
     X = _raw_rises(train)
     y = train[TARGET].to_numpy(float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        psi = np.nan_to_num(np.abs(correlation_with(X, y)), nan=-1.0)
-    chosen = np.argsort(-psi, kind="stable")[: spec.k]
-    fit = fit_ols(X[:, chosen], y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
+        selection = select_with(TOP_K, X, y, spec.k, names=SENSORS)
+    chosen = selection.selected
+    fit = fit_with(TOP_K, X[:, chosen], y)
     predictions = {name: fit.predict(_raw_rises(frame)[:, chosen])
                    for name, frame in tests.items()}
     return _scores(tests, predictions, ";".join(SENSORS[i] for i in chosen))
@@ -204,7 +207,8 @@ def _oracle(tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
     predictions = {}
     for name, frame in tests.items():
         X = _raw_rises(frame)
-        predictions[name] = fit_ols(X, frame[TARGET].to_numpy(float)).predict(X)
+        fit = fit_regressor(DEFAULT_REGRESSOR, X, frame[TARGET].to_numpy(float))
+        predictions[name] = fit.predict(X)
     return _scores(tests, predictions, "all 20 sensors, fitted on the held-out run itself")
 
 

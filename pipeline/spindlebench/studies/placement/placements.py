@@ -22,14 +22,14 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.selection import (
-    CandidateSet,
-    SelectionWarning,
-    fit_ols,
-    rmse,
-    select_sensitive_points,
+from spindlebench.names import DEFAULT_REGRESSOR
+from spindlebench.selection import CandidateSet, SelectionWarning, rmse
+from spindlebench.selection.registry import (
+    PAPER_METHOD,
+    fit_regressor,
+    parse_method,
+    select_with,
 )
-from spindlebench.selection.registry import parse_method, select_with
 from spindlebench.studies.placement.candidates import (
     Run,
     block,
@@ -96,8 +96,8 @@ def fuzzy_placements(study: PlacementStudy, differences: bool,
         start = time.perf_counter()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", SelectionWarning)
-            selection = select_sensitive_points(train.X, train.y, m, study.similarity,
-                                                names=candidates.names)
+            selection = select_with(PAPER_METHOD, train.X, train.y, m, study.similarity,
+                                    candidates.names)
         notes = [str(w.message) for w in caught if "tied similarities" in str(w.message)]
         out.append(_placement(
             "fuzzy", differences, m, candidates, selection.selected, math.nan,
@@ -199,7 +199,7 @@ def score_placement(study: PlacementStudy, placement: Placement, train_runs: Seq
     assert placement.columns is not None
     candidates = candidate_set(study, placement.differences)
     train = block(train_runs, candidates, placement.columns)
-    fit = fit_ols(train.X, train.y)
+    fit = fit_regressor(DEFAULT_REGRESSOR, train.X, train.y)  # the same OLS for every method
     rows = []
     for run in test_runs:
         X = candidates.matrix(run.nodes, placement.columns)
