@@ -496,8 +496,20 @@ def sidecar_record(*, provenance: dict[str, Any], initial_state_K: Mapping[str, 
             "end_state": {"time_s": end_time_s, "states_K": dict(end_state_K)}}
 
 
+@dataclass(frozen=True)
+class EndState:
+    """A previous run's end state as its sidecar holds it, parsed: what a ``continue``
+    scenario starts from. The runner gets this, never the file, and checks the states and
+    values against its model; ``source`` and ``where`` (the key that named the file) make
+    its messages one line naming both."""
+
+    states_K: Mapping[str, Any]  # noqa: N815  (as written: values not checked yet)
+    source: str
+    where: str
+
+
 def read_end_state(source: str | os.PathLike[str], where: str,
-                   missing: str | None = None) -> dict[str, Any]:
+                   missing: str | None = None) -> EndState:
     """The ``end_state.states_K`` table of a recording's sidecar, as written (values unchecked:
     the caller knows which states and values its model accepts).
 
@@ -524,4 +536,4 @@ def read_end_state(source: str | os.PathLike[str], where: str,
     if not isinstance(saved, dict):
         raise SpindlebenchError(f"{where}: {source}: end_state.states_K must map state names "
                                 f"to kelvin, got a {type(saved).__name__}")
-    return saved
+    return EndState(states_K=saved, source=str(source), where=where)

@@ -45,7 +45,7 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 
 from spindlebench import interrupts
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, read_end_state
+from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState
 from spindlebench.names import KELVIN_OFFSET
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
@@ -282,9 +282,10 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
 STATE_RANGE_K = (200.0, 600.0)
 
 
-def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> dict[str, float]:
+def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float,
+                  start: EndState | None = None) -> dict[str, float]:
     """Initial value (K) of every state: a cold soak, a soak history (``testbench.soak``), or
-    a previous run's end state."""
+    a previous run's end state (``start``, parsed by the caller: ``scenario.start_state``)."""
     initial = scenario.initial
     if initial.kind == "cold":
         start_C = ambient0_C if initial.temperature_C is None else initial.temperature_C
@@ -293,27 +294,22 @@ def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float) -> d
         from spindlebench.testbench.soak import soak_state
 
         return soak_state(scenario, fmu.path)
-    return saved_state(scenario, fmu)
+    if start is None:
+        what = (f"the scenario {initial.from_scenario!r}" if initial.from_file is None
+                else str(initial.from_file))
+        raise SpindlebenchError(f"{scenario.path}: key 'initial.from': names {what}, a previous "
+                                "run's end state, which the runner is given, not read: pass "
+                                "start=start_state(scenario) (simulate_scenario() does)")
+    return saved_state(start, fmu)
 
 
-def saved_state(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
+def saved_state(start: EndState, fmu: FmuInterface) -> dict[str, float]:
     """The end state a ``continue`` scenario starts from, checked name by name and value by value.
 
     The sidecar is user-reachable input (any file can be named), so everything about it that
     could break the run later is one line naming the scenario, the key and the sidecar.
     """
-    initial = scenario.initial
-    source = initial.from_file
-    where = f"{scenario.path}: key 'initial.from'"
-    if source is None:  # a sibling name, not yet placed in an output folder
-        raise SpindlebenchError(f"{where}: names the scenario {initial.from_scenario!r}, whose "
-                                "recording is looked up in the output folder; simulate with "
-                                "simulate_scenario() or resolve_initial() first")
-    missing = None
-    if initial.from_scenario is not None:
-        missing = (f"no recording of scenario {initial.from_scenario!r} at {source} "
-                   "(simulate it into the same output folder first)")
-    saved = read_end_state(source, where, missing)
+    where, source, saved = start.where, start.source, start.states_K
     missing = [n for n in fmu.state_names if n not in saved]
     extra = [n for n in saved if n not in fmu.state_names]
     if missing or extra:
@@ -333,20 +329,20 @@ def saved_state(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
 
 
 def check_scenario(scenario: Scenario, fmu: FmuInterface, *,
-                   check_saved_state: bool = True) -> None:
+                   start: EndState | None = None) -> None:
     """Everything about a scenario that needs the FMU, checked without simulating.
 
     A batch runs this for every scenario before the first simulation, so a bad parameter
-    name or continue-from file in its last scenario writes nothing. ``check_saved_state``
-    False skips the continue-from file: an earlier run of the same batch will write it, or
-    the caller reads it next anyway.
+    name or continue-from file in its last scenario writes nothing. ``start`` is the parsed
+    end state a ``continue`` scenario starts from, checked against the FMU when given (an
+    earlier run of the same batch may not have written it yet).
     """
     problem = step_count_problem(scenario.duration_s, scenario.step_s)
     if problem:
         raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
     parameter_values(scenario, fmu)
-    if scenario.initial.kind == "continue" and check_saved_state:
-        saved_state(scenario, fmu)
+    if scenario.initial.kind == "continue" and start is not None:
+        saved_state(start, fmu)
 
 
 def _row_pointer(matrix: np.ndarray, row: int) -> Any:
@@ -369,18 +365,21 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
 
 @interrupts.deferring  # Ctrl-C inside CVode's ctypes callbacks would be swallowed
 def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
-                progress: bool = False) -> Simulation:
-    """Run a scenario through the FMU and return the noise-free sampled outputs."""
+                progress: bool = False, start: EndState | None = None) -> Simulation:
+    """Run a scenario through the FMU and return the noise-free sampled outputs.
+
+    A ``continue`` scenario needs ``start``, the parsed end state of the run it continues
+    (``scenario.start_state``); the runner reads no recording files."""
     from fmpy.sundials import CVodeSolver
 
     set_stop_time = _cvode_set_stop_time()
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
-    check_scenario(scenario, fmu_info, check_saved_state=False)  # initial_state() reads it
+    check_scenario(scenario, fmu_info)  # initial_state() checks the start state
     signals = drive(scenario)
     inputs = np.ascontiguousarray(signals.matrix)
     jumps = signals.jumps()
-    x0 = initial_state(scenario, fmu_info, float(signals.ambient_C[0]))
+    x0 = initial_state(scenario, fmu_info, float(signals.ambient_C[0]), start)
     params = parameter_values(scenario, fmu_info)
 
     n_steps, every = scenario.n_steps, scenario.steps_per_sample

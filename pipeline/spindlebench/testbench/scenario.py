@@ -14,12 +14,15 @@ import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.tables import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines import DEFAULT_MACHINE, Machine, load_machine
 from spindlebench.names import SENSORS
+
+if TYPE_CHECKING:
+    from spindlebench.formats.recording import EndState
 
 #: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
 KELVIN_SUSPECT_C = 60.0
@@ -695,6 +698,26 @@ def resolve_initial(scenario: Scenario, output_dir: str | Path) -> Scenario:
         return scenario
     source = Path(output_dir) / f"{initial.from_scenario}.json"
     return replace(scenario, initial=replace(initial, from_file=source))
+
+
+def start_state(scenario: Scenario) -> EndState | None:
+    """The parsed end state a ``continue`` scenario starts from (None for other kinds): the
+    sidecar named by ``initial.from``, read once by the caller and handed to the runner."""
+    initial = scenario.initial
+    if initial.kind != "continue":
+        return None
+    where = f"{scenario.path}: key 'initial.from'"
+    if initial.from_file is None:  # a sibling name, not yet placed in an output folder
+        raise SpindlebenchError(f"{where}: names the scenario {initial.from_scenario!r}, whose "
+                                "recording is looked up in the output folder; simulate with "
+                                "simulate_scenario() or resolve_initial() first")
+    missing = None
+    if initial.from_scenario is not None:
+        missing = (f"no recording of scenario {initial.from_scenario!r} at "
+                   f"{initial.from_file} (simulate it into the same output folder first)")
+    from spindlebench.formats.recording import read_end_state  # pandas: only when continuing
+
+    return read_end_state(initial.from_file, where, missing)
 
 
 def _read_parameters(top: Table) -> dict[str, float]:

@@ -43,6 +43,7 @@ from spindlebench.testbench.scenario import (
     Scenario,
     load_scenario,
     resolve_initial,
+    start_state,
     with_machine,
 )
 from spindlebench.testbench.sensors import measure
@@ -86,7 +87,7 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
     """
     fmu = Path(DEFAULT_FMU if fmu_path is None else fmu_path)
     seed = scenario.seed if seed is None else seed
-    simulation = co_simulate(scenario, fmu, progress=progress)
+    simulation = co_simulate(scenario, fmu, progress=progress, start=start_state(scenario))
     check_physical(simulation, scenario)
     truth = simulation.outputs
     measured_C, measured_drift = measure(
@@ -230,7 +231,9 @@ def check_batch(plan: BatchPlan, fmu_path: str | Path | None) -> None:
     """
     fmu = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     for i in plan.order:
-        check_scenario(plan.scenarios[i], fmu, check_saved_state=not plan.state_from_batch[i])
+        scenario = plan.scenarios[i]
+        start = None if plan.state_from_batch[i] else start_state(scenario)
+        check_scenario(scenario, fmu, start=start)
 
 
 def run(args: argparse.Namespace) -> int:
