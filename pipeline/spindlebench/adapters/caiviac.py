@@ -28,8 +28,6 @@ them configures ``spindlebench paper`` for these runs (see ``study_config_text``
 
 from __future__ import annotations
 
-import hashlib
-import json
 import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -40,6 +38,7 @@ import pandas as pd
 
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.recording import check_recording_targets, write_recording
 from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.paths import shared_recordings_dir
 from spindlebench.provenance import file_entry, provenance
@@ -53,6 +52,8 @@ SAMPLE_STEP_S = 15.0
 #: A spindle-on block shorter than this (2.5 min at 15 s) is a jog, not a run: it is skipped
 #: with a warning (the readers need 2 samples, a regression at k = 4 more than 4).
 MIN_RUN_SAMPLES = 10
+#: The logger's precision (micrometres and degrees to 6 places), kept in the canonical CSVs.
+SOURCE_FLOAT_FORMAT = "%.6f"
 
 Phase = Literal["heating", "cycle"]
 PHASES: tuple[str, ...] = ("heating", "cycle")
@@ -232,8 +233,10 @@ def write_runs(
     """Write every run as ``<out_dir>/<name>.csv`` + ``<name>.json``, and a study config
     (``paper_study.toml``) for ``spindlebench paper``; return the CSV paths.
 
-    Every file's content is made before the first one is written, so a source the adapter
-    cannot cut (no constant-speed run, nothing to predict) writes nothing.
+    Every run's table and sidecar is made, and every target checked, before the first file
+    is written, so a source the adapter cannot cut (no constant-speed run, nothing to
+    predict) writes nothing. The recordings go through ``formats.recording.write_recording``
+    like simulated ones.
     """
     if phase not in PHASES:
         raise SpindlebenchError(f"phase: {phase!r} is not one of {', '.join(PHASES)}")
@@ -246,12 +249,10 @@ def write_runs(
         raise SpindlebenchError(f"{source_path}: {exc}") from None
     source_entry = file_entry(source_path)
     out_dir = Path(out_dir)
-    files: list[tuple[Path, bytes]] = []
+    recordings: list[tuple[Path, pd.DataFrame, dict]] = []
     for run in schedule.runs:
         table, offsets = canonical_run(source, run, phase)
         rows = run.rows(phase)
-        # lineterminator fixed: the bytes hashed are the bytes written, on every platform.
-        data = table.to_csv(index=False, float_format="%.6f", lineterminator="\n").encode()
         record = provenance(
             dataset=DATASET,
             adapter="spindlebench.adapters.caiviac",
@@ -267,15 +268,15 @@ def write_runs(
             axial_target=AXIAL_TARGET,
             displacement_zero_offsets_um=offsets,
             license="MIT (c) 2024 CAIVIAC, see LICENSE-MIT-CAIVIAC.txt beside the source",
-            recording_sha256=hashlib.sha256(data).hexdigest(),
+            recording_sha256=None,  # its place; write_recording fills in the CSV's hash
         )
-        files.append((out_dir / f"{run.name}.csv", data))
-        files.append((out_dir / f"{run.name}.json",
-                      (json.dumps(record, indent=2) + "\n").encode()))
-    files.append((out_dir / STUDY_FILE, config_text.encode()))
-    blocked = [path for path, _ in files if path.is_dir()]
-    if blocked:
-        raise SpindlebenchError(f"{blocked[0]}: is a folder, where the adapter writes a file")
-    for path, data in files:
-        atomic.write_bytes(path, data)
-    return [path for path, _ in files if path.suffix == ".csv"]
+        recordings.append((out_dir / f"{run.name}.csv", table, record))
+    config_path = out_dir / STUDY_FILE
+    if config_path.is_dir():
+        raise SpindlebenchError(f"{config_path}: is a folder, where the adapter writes a file")
+    for path, _, _ in recordings:
+        check_recording_targets(path)
+    for path, table, record in recordings:
+        write_recording(path, table, record, float_format=SOURCE_FLOAT_FORMAT)
+    atomic.write_text(config_path, config_text)
+    return [path for path, _, _ in recordings]

@@ -426,9 +426,8 @@ def sidecar_path(csv_path: str | os.PathLike[str]) -> Path:
     return Path(csv_path).with_suffix(".json")
 
 
-def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
-                    sidecar: dict[str, Any]) -> Path:
-    """Write ``frame`` as CSV and ``sidecar`` as JSON beside it; return the CSV path."""
+def check_recording_targets(csv_path: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """(CSV, JSON) paths of a recording, or one line: not a .csv name, or a folder there."""
     csv_path = Path(csv_path)
     if csv_path.suffix.lower() != ".csv":
         raise SpindlebenchError(f"{csv_path}: a recording must be written to a .csv file")
@@ -436,10 +435,25 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     for path in (csv_path, json_path):
         if path.is_dir():
             raise SpindlebenchError(f"{path}: is a directory, cannot write a recording there")
+    return csv_path, json_path
+
+
+def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
+                    sidecar: dict[str, Any], float_format: str | None = FLOAT_FORMAT) -> Path:
+    """Write ``frame`` as CSV and ``sidecar`` as JSON beside it; return the CSV path.
+
+    The one writer of recordings (simulated and adapted). The sidecar gets
+    ``recording_sha256``, the hash of the CSV as written (newlines ``\n`` on every
+    platform); a sidecar that already holds the key (``None`` reserves its place) keeps it
+    there, with the writer's value. ``float_format`` is the CSV's number format: the
+    shortest round trip by default; an adapter of measured data keeps the source's
+    precision (``"%.6f"``).
+    """
+    csv_path, json_path = check_recording_targets(csv_path)
     # the JSON context is the outer one, so the CSV is moved into place first: if that move
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
     with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
-        frame.to_csv(tmp_csv, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+        frame.to_csv(tmp_csv, index=False, float_format=float_format, lineterminator="\n")
         paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
         text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
         tmp_json.write_text(text, encoding="utf-8")
