@@ -16,6 +16,7 @@ from spindlebench import atomic
 from spindlebench.adapters import caiviac
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import read_recording
+from spindlebench.machines import add_machine_argument
 from spindlebench.modelica import FMU_NAME
 from spindlebench.modelica.frontend import model_source
 from spindlebench.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, shown
@@ -41,9 +42,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--models", default=models, help=f"Modelica folder (default: {models})")
     parser.add_argument("--scenarios", default=scenarios,
                         help=f"scenario folder (default: {scenarios})")
-    parser.add_argument("--machine", default=None, metavar="NAME",
-                        help="machine variant to simulate (scenarios/machines/NAME.toml or a "
-                        ".toml file; default: each scenario's machine key, else 'default')")
+    add_machine_argument(parser, "machine variant to simulate",
+                         "each scenario's machine key, else 'default'")
     parser.set_defaults(func=run)
 
 

@@ -161,3 +161,13 @@ def target_problems(machine: Machine,
                 problems.append(f"{machine.name}: {target.describe()}: got {value:.3f}")
                 break
     return problems
+
+
+def add_machine_argument(parser, what: str, default_text: str,
+                         default: str | None = None) -> None:
+    """``--machine NAME``: a machine variant, by name (``scenarios/machines/NAME.toml``) or
+    as a .toml file, the same argument on every command that simulates (``demo``,
+    ``simulate``, the studies, ``calibrate``); ``what`` says what it is used for there."""
+    parser.add_argument("--machine", default=default, metavar="NAME",
+                        help=f"{what}: a name from scenarios/machines/ or a .toml file "
+                        f"(default: {default_text})")

@@ -25,7 +25,7 @@ from spindlebench.calibration.series import load_series
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.columns import ColumnRoles, add_role_arguments
 from spindlebench.listflags import split_list_flag
-from spindlebench.machines import DEFAULT_MACHINE, load_machine
+from spindlebench.machines import DEFAULT_MACHINE, add_machine_argument, load_machine
 from spindlebench.modelica import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
 from spindlebench.modelica.equations import explicit_ode
 from spindlebench.paths import MODELS_DIR
@@ -54,9 +54,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--segments", type=int, default=DEFAULT_SEGMENTS,
                         help=f"segments per large part of the model (default {DEFAULT_SEGMENTS})")
     parser.add_argument("--models", default=str(MODELS_DIR), help="Modelica model folder")
-    parser.add_argument("--machine", default=DEFAULT_MACHINE, metavar="NAME",
-                        help="machine to start from: a name from scenarios/machines/ or a .toml "
-                        "file (default: 'default'); its parameters are kept in the output")
+    add_machine_argument(parser, "machine to start from (its parameters are kept in the "
+                         "output)", f"{DEFAULT_MACHINE!r}", default=DEFAULT_MACHINE)
     parser.add_argument("--method", choices=("gauss-newton", "ipopt"), default="gauss-newton",
                         help="reduced-space Gauss-Newton (default) or IPOPT on the full "
                         "discretisation")

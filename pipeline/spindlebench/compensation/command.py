@@ -22,6 +22,7 @@ from spindlebench import atomic, provenance
 from spindlebench.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.compensation.study import CompensationStudy, load_compensation
 from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.executor import add_study_file_arguments, default_results_folder
 from spindlebench.studies.study import check_fmu
 
 FIGURE_DPI = 110
@@ -38,9 +39,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "(update interval, rate limit, dead band); report the residual (true drift minus "
         "applied offset) per day, the fraction of time within the tolerance, the effect of "
         "a sensor fault after training and of the retraining rule.")
-    parser.add_argument("study", type=Path, help="study TOML with a [compensate] table")
-    parser.add_argument("-o", "--out", type=Path, default=None,
-                        help="output folder (default results/<study.name>)")
+    add_study_file_arguments(parser, "scenarios/studies/compensate_month.toml, with a "
+                             "[compensate] table")
     parser.set_defaults(func=run)
 
 
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     """Load, simulate, write."""
     study = load_compensation(args.study)
     fmu = check_fmu(study.family)
-    out = args.out if args.out is not None else Path("results") / study.name
+    out = args.out if args.out is not None else default_results_folder(args.study, study.name)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
     truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))

@@ -29,16 +29,7 @@ from spindlebench.formats.columns import (
     refuse_target_copies,
 )
 from spindlebench.formats.recording import MissingValueError, read_header
-from spindlebench.names import (
-    DEFAULT_METHOD,
-    DEFAULT_METHOD_SEED,
-    DEFAULT_REGRESSOR,
-    DEFAULT_SIMILARITY,
-    DEFAULT_WITHIN,
-    METHODS,
-    REGRESSORS,
-    WITHIN,
-)
+from spindlebench.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import (
@@ -48,7 +39,7 @@ from spindlebench.selection.evaluate import (
     check_same_sensors,
     evaluate,
 )
-from spindlebench.selection.registry import MethodChoice
+from spindlebench.selection.registry import add_method_arguments, choice_from_args
 from spindlebench.selection.similarity import SIMILARITIES
 
 #: The same hint ``evaluate`` gives when it reads a file itself.
@@ -77,15 +68,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--clusters", required=True, type=int, metavar="K",
         help="number of clusters k (for a method without clusters: the number of inputs)"
     )
-    parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
-                        help="selection method (default: the paper's closure; "
-                        "'spindlebench methods' lists them)")
-    parser.add_argument("--within", choices=list(WITHIN), default=DEFAULT_WITHIN,
-                        help="choice inside a cluster (cluster methods only)")
-    parser.add_argument("--regressor", choices=list(REGRESSORS), default=DEFAULT_REGRESSOR,
-                        help="regression on the selected rises")
-    parser.add_argument("--seed", type=int, default=DEFAULT_METHOD_SEED,
-                        help="seed of fcm, kmeans and stability (recorded in --json)")
+    add_method_arguments(parser)
     parser.add_argument(
         "--differences", action="store_true", help="add every pairwise difference A-B"
     )
@@ -120,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     if args.clusters < 1:
         raise SelectionError(f"--clusters: must be at least 1, got {args.clusters}")
     roles = ColumnRoles.from_args(args)
-    choice = MethodChoice(args.method, args.within, args.regressor)  # checked before reading
+    choice = choice_from_args(args)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)
     refuse_target_copies(train, args.target, taken.sensors, str(args.train),
                          roles.allow_target_copy)

@@ -158,6 +158,25 @@ def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
     return Pipeline(steps)
 
 
+def add_method_arguments(parser) -> None:
+    """``--method``, ``--within``, ``--regressor`` and ``--seed`` of a command that runs one
+    method (``evaluate``); ``choice_from_args`` reads them back."""
+    parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
+                        help="selection method (default: the paper's closure; "
+                        "'spindlebench methods' lists them)")
+    parser.add_argument("--within", choices=list(WITHIN), default=DEFAULT_WITHIN,
+                        help="choice inside a cluster (cluster methods only)")
+    parser.add_argument("--regressor", choices=list(REGRESSORS), default=DEFAULT_REGRESSOR,
+                        help="regression on the selected rises")
+    parser.add_argument("--seed", type=int, default=DEFAULT_METHOD_SEED,
+                        help="seed of fcm, kmeans and stability (recorded in --json)")
+
+
+def choice_from_args(args) -> MethodChoice:
+    """The ``MethodChoice`` of ``add_method_arguments``' options (checked: one line)."""
+    return MethodChoice(args.method, args.within, args.regressor)
+
+
 def listing() -> str:
     """What ``spindlebench methods`` prints: every name with its line."""
     width = max(len(name) for name in (*METHODS, *WITHIN, *REGRESSORS))

@@ -34,6 +34,7 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from spindlebench.errors import SpindlebenchError
+from spindlebench.machines import add_machine_argument
 
 #: A study name that may serve as the default results folder ``results/<name>``.
 FOLDER_NAME = re.compile(r"[A-Za-z0-9._-]+")
@@ -361,19 +362,24 @@ def _run_quarantined(task: Task) -> Outcome:
     return Outcome(task, value, error, detail, seconds)
 
 
-def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
-    """The options every study command shares: study file, results folder, where to run."""
+def add_study_file_arguments(parser: argparse.ArgumentParser, example: str) -> None:
+    """The study file and its results folder (``-o``; default ``default_results_folder``):
+    every command that runs a study file (``sweep``, ``place``, ``compensate``)."""
     parser.add_argument("study", type=Path, help=f"study file (e.g. {example})")
     parser.add_argument("-o", "--out", type=Path, default=None,
                         help="results folder (default: results/<study name>)")
+
+
+def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
+    """The options every study command shares: study file, results folder, where to run."""
+    add_study_file_arguments(parser, example)
     parser.add_argument("--workers", type=int, default=None,
                         help="local worker processes (default: all cores; 0 = in-process)")
     parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
                         help="run on an existing Dask distributed cluster instead")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.add_argument("--machine", default=None, metavar="NAME",
-                        help="machine variant of every run: a name from scenarios/machines/ or "
-                        "a .toml file (default: the study's [study] machine, else 'default')")
+    add_machine_argument(parser, "machine variant of every run",
+                         "the study's [study] machine, else 'default'")
 
 
 def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) -> Path:
@@ -382,10 +388,15 @@ def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) 
         raise SpindlebenchError("give either --workers or --dask-address, not both")
     if args.out is not None:
         return args.out
-    name = study_name(args.study)
+    return default_results_folder(args.study, study_name(args.study))
+
+
+def default_results_folder(study_path: Path, name: str) -> Path:
+    """``results/<name>`` for a study without ``-o``, or one line if the study's name cannot
+    be a folder there."""
     # The name becomes a folder under results/: '../x', 'a/b' or '' would write elsewhere.
     if not FOLDER_NAME.fullmatch(name) or set(name) == {"."}:
         raise SpindlebenchError(
-            f"{args.study}: key 'study.name': {name!r} cannot name a folder under results/ "
+            f"{study_path}: key 'study.name': {name!r} cannot name a folder under results/ "
             "(use only letters, digits, '.', '_' and '-'), or give -o/--out")
     return Path("results") / name

@@ -28,6 +28,7 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.formats.recording import sidecar_record as recording_sidecar
 from spindlebench.listflags import expand_folders
+from spindlebench.machines import add_machine_argument
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.testbench.drivers import INPUT_NAMES
@@ -283,10 +284,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/)")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed of the sensor model (default: the scenario's)")
-    parser.add_argument("--machine", default=None, metavar="NAME",
-                        help="machine variant for every scenario: a name from "
-                        "scenarios/machines/ or a .toml file (default: each scenario's "
-                        "machine key, else 'default')")
+    add_machine_argument(parser, "machine variant for every scenario",
+                         "each scenario's machine key, else 'default'")
     parser.add_argument("--plot", action="store_true",
                         help="also draw each recording (as `spindlebench plot`) into "
                         "<recording>.png beside it")
