@@ -10,16 +10,17 @@ line every study shares (``register_study_command``) lives here too.
 from __future__ import annotations
 
 import argparse
+import functools
 from collections.abc import Callable
 from pathlib import Path
 
 from spindlebench.formats.recording import write_recording
 from spindlebench.provenance import sha256_file
-from spindlebench.studies.executor import Outcome, Task, add_study_arguments
+from spindlebench.studies.executor import Outcome, Task, add_study_arguments, results_folder
 from spindlebench.studies.experiments import Experiment, replicas, scenario_for
 from spindlebench.studies.jobs import simulate_job
 from spindlebench.studies.store import ResultStore
-from spindlebench.studies.study import SweepStudy, pinned_content
+from spindlebench.studies.study import SweepStudy, machine_runs, pinned_content
 
 
 def run_dir(replica: int) -> str:
@@ -88,8 +89,25 @@ class Simulations:
 
 def register_study_command(subparsers: argparse._SubParsersAction, name: str, *, help: str,
                            description: str, example: str,
-                           main: Callable[[argparse.Namespace], int]) -> None:
-    """Add a study sub-command with the options every study shares."""
+                           load_family: Callable[[Path], SweepStudy],
+                           run_one: Callable[[argparse.Namespace, Path, str | None], None]
+                           ) -> None:
+    """Add a study sub-command with the options every study shares.
+
+    ``load_family`` loads (and checks) the study file and gives its experiment family;
+    ``run_one`` runs the study on one machine into one results folder."""
     parser = subparsers.add_parser(name, help=help, description=description)
     add_study_arguments(parser, example)
-    parser.set_defaults(func=main)
+    parser.set_defaults(func=functools.partial(run_study_command, load_family=load_family,
+                                               run_one=run_one))
+
+
+def run_study_command(args: argparse.Namespace, *, load_family: Callable[[Path], SweepStudy],
+                      run_one: Callable[[argparse.Namespace, Path, str | None], None]) -> int:
+    """A study command: its results folder, then one run per machine (``machine_runs``)."""
+    out = results_folder(args, lambda study: load_family(study).name)
+    for machine, folder in machine_runs(load_family(args.study), args.machine, out):
+        if machine is not None and folder != out:
+            print(f"machine {machine}:")
+        run_one(args, folder, machine)
+    return 0

@@ -29,7 +29,6 @@ from spindlebench.studies.executor import (
     RunStats,
     Task,
     TaskRunner,
-    results_folder,
 )
 from spindlebench.studies.experiments import (
     Condition,
@@ -58,7 +57,6 @@ from spindlebench.studies.study import (
     check_fmu,
     describe,
     load_study,
-    machine_runs,
     pinned_content,
 )
 
@@ -321,16 +319,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
         "it on the others, and write results.csv, a summary, box plots and README.md.",
-        example="scenarios/studies/season_sweep.toml", main=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    out = results_folder(args, lambda study: load_study(study).name)
-    for machine, folder in machine_runs(load_study(args.study), args.machine, out):
-        if machine is not None and folder != out:
-            print(f"machine {machine}:")
-        _run_one(args, folder, machine)
-    return 0
+        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one)
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:

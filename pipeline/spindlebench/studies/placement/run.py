@@ -31,7 +31,6 @@ from spindlebench.studies.executor import (
     RunStats,
     Task,
     TaskRunner,
-    results_folder,
 )
 from spindlebench.studies.experiments import (
     experiments,
@@ -54,7 +53,7 @@ from spindlebench.studies.simulations import (
     register_study_command,
 )
 from spindlebench.studies.store import ResultStore, content_sha256
-from spindlebench.studies.study import check_fmu, machine_runs, pinned_content
+from spindlebench.studies.study import SweepStudy, check_fmu, pinned_content
 
 
 @dataclass
@@ -222,17 +221,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
         "seasons and write placements.csv, plots, schematic drawings and README.md.",
-        example="scenarios/studies/placement.toml", main=_main)
+        example="scenarios/studies/placement.toml", load_family=_family, run_one=_run_one)
 
 
-def _main(args: argparse.Namespace) -> int:
-    out = results_folder(args, lambda study: load_placement_study(study).name)
-    for machine, folder in machine_runs(load_placement_study(args.study).family, args.machine,
-                                        out):
-        if machine is not None and folder != out:
-            print(f"machine {machine}:")
-        _run_one(args, folder, machine)
-    return 0
+def _family(path: Path) -> SweepStudy:
+    return load_placement_study(path).family
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
