@@ -329,15 +329,9 @@ def machine_runs(study: SweepStudy, machine: str | None,
 def _check_machine(machine: Machine, known: Mapping[str, Any], fmu: Path) -> None:
     """The machine's parameters must be the FMU's, within its declared bounds (at load time,
     not once per simulation in the workers)."""
-    from spindlebench.testbench.runner import bound_problem
+    from spindlebench.testbench.runner import check_machine
 
-    for name, value in machine.parameters.items():
-        where = f"{machine.path}: key 'parameters.{name}'"
-        if name not in known:
-            raise SpindlebenchError(f"{where}: the FMU {fmu.name} has no parameter {name!r}")
-        problem = bound_problem(known[name], value)
-        if problem:
-            raise SpindlebenchError(f"{where}: {problem}")
+    check_machine(machine, known, fmu.name)
 
 
 def _soak_days(exp: Table) -> int | None:

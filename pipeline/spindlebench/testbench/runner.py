@@ -46,6 +46,7 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 from spindlebench import interrupts
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState
+from spindlebench.machines import Machine
 from spindlebench.names import KELVIN_OFFSET
 from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
@@ -237,18 +238,31 @@ def check_physical(simulation: Simulation, scenario: Scenario) -> None:
                 f"t = {simulation.time_s[i]:g} s is outside {low:g}..{high:g} °C{likely}")
 
 
+def _check_bounds(variable: ScalarVariable, value: float, where: str) -> None:
+    problem = bound_problem(variable, value)
+    if problem:
+        raise SpindlebenchError(f"{where}: {problem}")
+
+
+def check_machine(machine: Machine, known: Mapping[str, ScalarVariable], fmu_name: str) -> None:
+    """A machine file's parameters must be the FMU's (``known``: name -> variable), within
+    their declared bounds, and no cooling setting (a scenario's ``[cooling]`` table sets
+    those); one line naming the machine file and key. Studies call it at load time, so a bad
+    machine fails before any worker simulates."""
+    for name, value in machine.parameters.items():
+        where = f"{machine.path}: key 'parameters.{name}'"
+        if name in COOLING_PARAMETERS:
+            raise SpindlebenchError(f"{where}: a cooling setting; a scenario's [cooling] "
+                                    "table (mode, setpoint_C) sets it")
+        if name not in known:
+            raise SpindlebenchError(f"{where}: the FMU {fmu_name} has no parameter {name!r}")
+        _check_bounds(known[name], value, where)
+
+
 def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
     """Scenario parameters and cooling settings as FMU parameter values; unknown names fail."""
-    values: dict[str, float] = {}
-    machine = scenario.machine
-    for name, value in machine.parameters.items():  # the machine first, the scenario on top
-        if name in COOLING_PARAMETERS or name not in fmu.parameters:
-            raise SpindlebenchError(f"{machine.path}: key 'parameters.{name}': the FMU "
-                                    f"{fmu.path.name} has no machine parameter {name!r}")
-        problem = bound_problem(fmu.parameters[name], value)
-        if problem:
-            raise SpindlebenchError(f"{machine.path}: key 'parameters.{name}': {problem}")
-        values[name] = value
+    check_machine(scenario.machine, fmu.parameters, fmu.path.name)
+    values: dict[str, float] = dict(scenario.machine.parameters)  # the scenario's on top
     for name, value in scenario.parameters.items():
         if name in COOLING_PARAMETERS:
             raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': set cooling "
@@ -258,9 +272,7 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
             hint = f" (did you mean {near[0]!r}?)" if near else ""
             raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': the FMU "
                                     f"{fmu.path.name} has no parameter {name!r}{hint}")
-        problem = bound_problem(fmu.parameters[name], value)
-        if problem:
-            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': {problem}")
+        _check_bounds(fmu.parameters[name], value, f"{scenario.path}: key 'parameters.{name}'")
         values[name] = value
     cooling = scenario.cooling
     wanted = {
