@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 from spindlebench.calibration.fitset import DEFAULT_FIT
-from spindlebench.calibration.mapping import read_map
+from spindlebench.calibration.mapping import read_map, recording_map_text
 from spindlebench.calibration.problem import Discretisation, calibrate
 from spindlebench.calibration.series import load_series
 from spindlebench.cli import main
@@ -37,16 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: 10 of the default set (the table's expansion length and the Y feed loss left at default).
 FIT = [name for name in DEFAULT_FIT if name not in ("table_L", "c_y_motor")]
 FACTORS = (1.3, 0.8, 0.75, 1.2, 1.15, 0.85, 1.25, 1.3, 0.9, 0.8)
-MAP = """
-[inputs]
-spindle_speed_rpm = "spindle_speed_rpm"
-feed_x_mm_per_min = "feed_x_mm_per_min"
-feed_y_mm_per_min = "feed_y_mm_per_min"
-ambient_C = "ambient_C"
-[error]
-column = "drift_um"
-[temperatures]
-""" + "".join(f'T{i} = "T{i}"\n' for i in (1, 2, 4, 6, 7, 8, 9, 10, 12, 16))
+MAP = recording_map_text(f"T{i}" for i in (1, 2, 4, 6, 7, 8, 9, 10, 12, 16))
 
 
 def twin_scenario(path: Path, hours: float, truth: dict[str, float]) -> Path:

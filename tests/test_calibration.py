@@ -18,27 +18,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import MODELS
-from spindlebench.calibration.mapping import read_map
+from spindlebench.calibration.mapping import read_map, recording_map_text
 from spindlebench.cli import main
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import read_recording
 
 OUTPUTS = [f"T{i}_C" for i in range(1, 21)] + ["drift_um", "node_housing_1_C",
                                                  "node_spindle_motor_C"]
-TWIN_MAP = """
-[inputs]
-spindle_speed_rpm = "spindle_speed_rpm"
-feed_x_mm_per_min = "feed_x_mm_per_min"
-feed_y_mm_per_min = "feed_y_mm_per_min"
-ambient_C = "ambient_C"
-[error]
-column = "drift_um"
-[temperatures]
-T1 = "T1"
-T4 = "T4"
-T6 = "T6"
-T8 = "T8"
-"""
+TWIN_MAP = recording_map_text(["T1", "T4", "T6", "T8"])
 TRUE = {"front_bearing_friction_f0": 1.1 * 1.3, "P_spindle_motor_ref": 140.0 * 0.75,
         "spindle_shaft_L": 0.55 * 1.3}
 

@@ -26,6 +26,7 @@ from typing import Any
 from spindlebench import atomic
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, write_recording
+from spindlebench.listflags import expand_folders
 from spindlebench.machines import load_machine
 from spindlebench.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
 from spindlebench.provenance import sha256_file, source_sha256
@@ -69,9 +70,10 @@ def explicit_reference(folder: Path) -> Reference:
     if not folder.is_dir():
         raise SpindlebenchError(f"--reference {folder}: no such folder (give a folder of "
                                 "recordings, e.g. results/paper from 'make run')")
-    recordings = sorted(folder.glob("*.csv"))
-    if not recordings:
-        raise SpindlebenchError(f"--reference {folder}: holds no .csv recording")
+    try:
+        recordings = expand_folders([folder], ".csv", "recording")
+    except SpindlebenchError as exc:
+        raise SpindlebenchError(f"--reference {exc}") from None
     return Reference(recordings, {"kind": "folder", "path": str(folder)})
 
 

@@ -56,6 +56,20 @@ DRIFT_OUTPUT = DRIFT_COLUMN
 _SENSOR = re.compile(r"^T([1-9]|1[0-9]|20)$")
 
 
+def recording_map_text(sensors: Iterable[str]) -> str:
+    """The MAP.toml of a spindlebench recording: every input and ``drift_um`` under their own
+    names, and each of ``sensors`` (``T1`` ...) as itself. What a twin calibration (the model
+    against a recording it simulated, e.g. ``bench/bench_calibration.py``) maps with.
+
+    >>> print(recording_map_text(["T1"]).splitlines()[-1])
+    T1 = "T1"
+    """
+    lines = ["[inputs]", *(f'{name} = "{name}"' for name in INPUTS),
+             "[error]", f'column = "{DRIFT_COLUMN}"', "[temperatures]",
+             *(f'{name} = "{name}"' for name in sensors)]
+    return "\n".join(lines) + "\n"
+
+
 @dataclass(frozen=True)
 class RecordingMap:
     """The map of one MAP.toml file (see the module docstring)."""

@@ -145,9 +145,11 @@ class PLSRiseRegressor(LinearRiseModel):
 
     Examples
     --------
+    Two rises that are one rise (proportional) leave a single component:
+
     >>> import numpy as np
-    >>> X = np.linspace(0, 10, 40)[:, None] * [1.0, 0.5]
-    >>> model = PLSRiseRegressor().fit(X, 2.0 * X[:, 0])
+    >>> rise = np.linspace(0, 10, 40)
+    >>> model = PLSRiseRegressor().fit(np.column_stack([rise, 0.5 * rise]), 2.0 * rise)
     >>> model.n_components_
     1
     """
