@@ -148,3 +148,59 @@ def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
     table = pd.read_csv(out / "summary.csv")
     assert set(table["retrain"]) == {"after-fault", "never"}
     assert "## Residual over the run" in (out / "README.md").read_text()
+
+
+def test_continuous_days_carry_the_machine_state_and_keep_the_days_air(tiny):
+    """One machine day after day: with no night between the days, day 2 starts in the state
+    day 1 ended in; with the study's 4 h nights it starts warmer than a cold start, in the
+    same air as the cold-start day (the air of working hours is the day's own weather)."""
+    from dataclasses import replace
+
+    from spindlebench.compensation.continuous import continuous_scenario
+    from spindlebench.studies.experiments import ambient_for
+    from spindlebench.testbench.drivers import ambient_C
+
+    study, truths = tiny
+    assert study.days == "continuous" and study.off_h == 4
+    sensors = [f"true_T{i}_C" for i in range(1, 21)]
+    no_night = replace(study, off_h=0.0)
+    joined = simulate_days(no_night, study.family.fmu)
+    np.testing.assert_allclose(joined[2][sensors].iloc[0], joined[1][sensors].iloc[-1])
+    cold = simulate_days(replace(study, days="cold-starts"), study.family.fmu)
+    for day in (2, 3, 4):
+        start_air = cold[day]["true_T1_C"].iloc[0]
+        assert cold[day][sensors].iloc[0].max() - start_air < 1e-6  # a cold start
+        assert truths[day][sensors].iloc[0].max() > start_air + 0.2  # yesterday's heat
+    days = plan_days(study)
+    scenario = continuous_scenario(study, days)
+    local = np.arange(41) * 60.0
+    for day in days:
+        start = (day.number - 1) * (study.family.duration_s + 4 * 3600.0)
+        np.testing.assert_allclose(
+            ambient_C(scenario.ambient, start + local),
+            ambient_C(ambient_for(study.family, day.replica, day.experiment), local))
+    air = ambient_C(scenario.ambient, np.arange(0.0, scenario.duration_s, 60.0))
+    assert np.abs(np.diff(air)).max() < 0.05  # continuous through the nights
+
+
+def test_a_stuck_sensor_stays_stuck_on_the_following_days(tiny):
+    from spindlebench.compensation.loop import measure_days
+
+    study, truths = tiny
+    frames = measure_days(study, truths)
+    stuck = frames[3]["T8"].iloc[15:].to_numpy()  # 15 min into day 3, readings every minute
+    assert np.all(stuck == stuck[0]) and np.all(frames[4]["T8"] == stuck[0])
+    assert frames[2]["T8"].nunique() > 3  # healthy before the fault day
+
+
+@pytest.mark.parametrize("line, message", [
+    ('days = "weekly"', "key 'compensate.days': must be one of continuous, cold-starts"),
+    ('days = "cold-starts"\noff_h = 2', "key 'compensate.off_h': only a \"continuous\" run"),
+    ("off_h = -1", "key 'compensate.off_h'"),
+])
+def test_bad_day_mode_is_one_line(tmp_path, line, message):
+    text = TINY.read_text(encoding="utf-8").replace("off_h = 4\n", "")
+    path = tmp_path / "c.toml"
+    path.write_text(text.replace("[compensate]\n", f"[compensate]\n{line}\n"), encoding="utf-8")
+    with pytest.raises(SpindlebenchError, match=message):
+        load_compensation(path)

@@ -1,13 +1,17 @@
 """Day after day with the model in the controller: simulate, measure, predict, offset, score.
 
-Every day is one run of the synthetic machine (an experiment of the study family on one
-replica's weather), measured by the study's instruments. Day 1 trains every model (on its
-measured temperatures and the probe's drift, as a commissioning day would). On each later day
-the controller reads the sensors, the model predicts the drift from their rises since the
-day's first reading (the machine is referenced at power-on), the controller turns the
-predictions into an applied offset (``controller.applied_offset``), and the residual is the
-*true* drift minus that offset. A fault (``fault``, from ``fault_from_day`` on) changes what
-the sensors report, never the machine.
+Every day is an experiment of the study family on one replica's weather, measured by the
+study's instruments. By default (``days = "continuous"``, ``compensation.continuous``) the
+days follow each other on one machine: one simulation, the heat of each day carried through
+the night into the next; ``days = "cold-starts"`` simulates every day on its own. Day 1
+trains every model (on its measured temperatures and the probe's drift, as a commissioning
+day would). On each later day the controller reads the sensors, the model predicts the drift
+from their rises since the day's first reading (the machine is referenced at power-on), the
+controller turns the predictions into an applied offset (``controller.applied_offset``), and
+the residual is the *true* drift minus that offset. A fault (``fault``, from
+``fault_from_day`` on) changes what the sensors report, never the machine (continuous days:
+from ``start_h`` into that day to the end of the run; cold starts: from ``start_h`` into
+every day from that day on).
 
 Retraining rules:
 - ``never``: the commissioning model runs to the end.
@@ -29,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from spindlebench.compensation import continuous
 from spindlebench.compensation.controller import applied_offset, detect_faults
 from spindlebench.compensation.study import CompensationStudy
 from spindlebench.names import SENSORS, SIX_DIFF
@@ -149,10 +154,17 @@ def _day_row(study: CompensationStudy, day: Day, model: TrainedModel, residual: 
 
 def simulate_days(study: CompensationStudy, fmu: Path,
                   progress: Callable[[str], None] | None = None) -> dict[int, pd.DataFrame]:
-    """Every day's noise-free recording (the FMU's truth), by day number. The control loop
-    runs on these, so one simulation serves every controller setting and retraining rule."""
-    truths = {}
+    """Every day's noise-free recording (the FMU's truth, time from the day's power-on), by
+    day number. The control loop runs on these, so one simulation serves every controller
+    setting and retraining rule."""
     days = plan_days(study)
+    if study.days == "continuous":
+        if progress:
+            progress(f"simulating {len(days)} consecutive days as one run "
+                     f"({study.off_h:g} h standing between working days)")
+        truth, _ = record(continuous.continuous_scenario(study, days), fmu)
+        return continuous.split_days(study, days, truth)
+    truths = {}
     for day in days:
         if progress:
             progress(f"simulating day {day.number}/{len(days)}: {day.experiment.id}, "
@@ -162,6 +174,15 @@ def simulate_days(study: CompensationStudy, fmu: Path,
     return truths
 
 
+def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame]
+                 ) -> dict[int, pd.DataFrame]:
+    """What the controller reads on every day (``measured``), by day number."""
+    days = plan_days(study)
+    if study.days == "continuous":
+        return continuous.measure_continuous(study, days, truths)
+    return {day.number: measured(study, day, truths[day.number]) for day in days}
+
+
 def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
              retrain: str | None = None) -> Outcome:
     """Run every model of the study through the controller on the simulated days, retrained
@@ -169,13 +190,10 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
     retrain = study.retrain[0] if retrain is None else retrain
     days = plan_days(study)
     outcome = Outcome()
-    frames: dict[int, pd.DataFrame] = {}
+    frames = measure_days(study, truths)
     current: dict[str, TrainedModel] = {}
     for day in days:
-        frame = measured(study, day, truths[day.number])
-        frames[day.number] = frame
-        if day.number - 2 > 1:  # keep the commissioning day and the previous day only
-            frames.pop(day.number - 2, None)
+        frame = frames[day.number]
         if day.number == 1:
             for name in study.models:
                 current[name] = train(name, study, frame, 1)

@@ -19,9 +19,17 @@ every replica, replica by replica, in the order of the axes. ``[compensate]``::
     stuck_window_min = 30              # fault monitor: a reading constant this long is stuck
     jump_C = 0.5                       # fault monitor: a step larger than this is a fault
     seed = 0                           # seed of fcm, kmeans and stability selection
+    days = "continuous"                # one machine day after day (default), or
+                                       # "cold-starts": every day a separate cold start
+    off_h = 16                         # continuous: hours the machine stands between two
+                                       # working days (default 24 h minus the day's length)
 
 ``update_interval_s`` must be a multiple of the study's ``sample_interval_s`` (the controller
-sees the readings the logger makes).
+sees the readings the logger makes). ``days = "continuous"`` is
+``compensation.continuous``: one simulation, the machine's state carried from each day (and
+its night) to the next, and a fault that starts on ``fault_from_day`` stays to the end;
+``"cold-starts"`` simulates every day on its own from the family's start state and applies
+the fault from ``start_h`` into every day from ``fault_from_day`` on.
 """
 
 from __future__ import annotations
@@ -35,6 +43,7 @@ from spindlebench.names import DEFAULT_METHOD_SEED, GROUPS
 from spindlebench.studies.study import Fault, SweepStudy, load_study
 
 RETRAIN_RULES = ("never", "weekly", "after-fault")
+DAY_MODES = ("continuous", "cold-starts")
 #: Days between two retrainings under ``retrain = "weekly"``.
 WEEK_DAYS = 7
 
@@ -52,6 +61,8 @@ class CompensationStudy:
     seed: int
     retrain_every_days: int = WEEK_DAYS
     monitor: FaultMonitor = field(default_factory=FaultMonitor)
+    days: str = "continuous"  #: DAY_MODES
+    off_h: float = 16.0  #: continuous: hours standing between two working days
 
     @property
     def name(self) -> str:
@@ -112,9 +123,14 @@ def load_compensation(path) -> CompensationStudy:
                        check=in_range(positive=True, unit=" min"))
     jump = t.get("jump_C", float, default=0.5, check=in_range(positive=True, unit=" K"))
     seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
+    days = t.get("days", str, default="continuous", check=lambda v: one_of(v, DAY_MODES))
+    off_h = t.get("off_h", float, default=max(24.0 - family.duration_s / 3600.0, 0.0),
+                  check=in_range(0.0, None, unit=" h"))
+    if t.has("off_h") and days != "continuous":
+        raise t.error("off_h", "only a \"continuous\" run has nights between its days")
     t.finish()
     if "after-fault" in retrain and fault is None:
         raise t.error("retrain", "'after-fault' needs a fault to detect (set 'fault')")
     return CompensationStudy(family, models, k, ControllerSettings(update, rate, dead_band),
                              tolerance, fault, from_day, retrain, seed, every,
-                             FaultMonitor(window_min * 60.0, jump))
+                             FaultMonitor(window_min * 60.0, jump), days, off_h)
