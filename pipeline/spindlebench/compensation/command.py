@@ -94,7 +94,8 @@ def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Pa
                     "dead_band_um": study.controller.dead_band_um},
         tolerance_um=study.tolerance_um, retrain=list(study.retrain),
         fault=None if study.fault is None else study.fault.name,
-        fault_from_day=study.fault_from_day)
+        fault_from_day=study.fault_from_day, days=study.days,
+        off_h=study.off_h if study.days == "continuous" else None)
     atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
     atomic.write_text(out / "README.md", readme(study, study_path, days, table))
 
@@ -136,8 +137,10 @@ def figure(study: CompensationStudy, series: pd.DataFrame, days: pd.DataFrame,
             ax.axvline((d - 2) * duration_h, color="0.8", lw=0.4)
     top.set_ylabel("drift / offset (µm)")
     bottom.set_ylabel("residual (µm)")
+    nights = (f", the {study.off_h:g} h standing between them not shown"
+              if study.days == "continuous" else ", each a cold start")
     bottom.set_xlabel(f"operating hours (days 2–{int(days['day'].max())} side by side, "
-                      f"{duration_h:g} h each; red: fault active)")
+                      f"{duration_h:g} h each{nights}; red: fault active)")
     top.legend(loc="upper left", fontsize=8)
     bottom.legend(loc="upper left", fontsize=8, ncol=3)
     top.set_title(f"{study.name}: compensation in the loop (trained on day 1; retrain "
@@ -170,9 +173,13 @@ def readme(study: CompensationStudy, study_path: Path, days: pd.DataFrame,
              f"Made by `spindlebench compensate {study_path}`. Every number is computed from "
              "the simulated samples (`timeseries.csv.gz` holds those of the first rule).", "",
              "## Set-up", "",
-             f"- Days: {int(days['day'].max())} runs of {study.family.duration_s / 3600:g} h "
-             f"(the study family's experiments × {study.family.replicas} replica(s)); day 1 "
-             "trains every model, days 2 onward are compensated.",
+             f"- Days: {int(days['day'].max())} working days of "
+             f"{study.family.duration_s / 3600:g} h (the study family's experiments × "
+             f"{study.family.replicas} replica(s)), "
+             + (f"consecutive on one machine: one simulation, {study.off_h:g} h standing "
+                "between two days, each day starting in the state the night before left"
+                if study.days == "continuous" else "each simulated from its own cold start")
+             + "; day 1 trains every model, days 2 onward are compensated.",
              f"- Models (k = {study.k}): {', '.join(study.models)} (sweep method names; "
              "`spindlebench methods`).",
              f"- Controller: update every {c.update_interval_s:g} s, rate limit {rate}, dead "
