@@ -136,7 +136,8 @@ def test_weekly_rule_retrains_on_the_previous_day(tiny):
 
 def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
     out = tmp_path / "comp"
-    assert cli.main(["compensate", str(TINY), "-o", str(out)]) == 0
+    # --days overrides the study's continuous days (the other tests run those)
+    assert cli.main(["compensate", str(TINY), "-o", str(out), "--days", "cold-starts"]) == 0
     printed = capsys.readouterr().out
     assert "uncompensated" in printed
     for name in ("README.md", "days.csv", "summary.csv", "timeseries.csv.gz",
@@ -145,9 +146,11 @@ def test_cli_writes_report_figure_and_provenance(tmp_path, capsys):
     assert (out / "compensation.png").read_bytes()[:4] == b"\x89PNG"
     record = json.loads((out / "provenance.json").read_text())
     assert record["retrain"] == ["after-fault", "never"] and record["fmu"]["sha256"]
+    assert record["days"] == "cold-starts" and record["off_h"] is None
     table = pd.read_csv(out / "summary.csv")
     assert set(table["retrain"]) == {"after-fault", "never"}
-    assert "## Residual over the run" in (out / "README.md").read_text()
+    readme = (out / "README.md").read_text()
+    assert "## Residual over the run" in readme and "its own cold start" in readme
 
 
 def test_continuous_days_carry_the_machine_state_and_keep_the_days_air(tiny):

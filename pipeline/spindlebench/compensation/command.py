@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from matplotlib.figure import Figure
 
 from spindlebench import atomic, provenance
 from spindlebench.compensation.loop import run_loop, simulate_days, summary
-from spindlebench.compensation.study import CompensationStudy, load_compensation
+from spindlebench.compensation.study import DAY_MODES, CompensationStudy, load_compensation
 from spindlebench.errors import SpindlebenchError
 from spindlebench.studies.executor import add_study_file_arguments, default_results_folder
 from spindlebench.studies.study import check_fmu
@@ -41,12 +42,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "a sensor fault after training and of the retraining rule.")
     add_study_file_arguments(parser, "scenarios/studies/compensate_month.toml, with a "
                              "[compensate] table")
+    parser.add_argument("--days", choices=DAY_MODES, default=None,
+                        help="override [compensate] days: 'continuous' (one machine, the "
+                        "state carried from day to day) or 'cold-starts' (every day on its "
+                        "own)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Load, simulate, write."""
     study = load_compensation(args.study)
+    if args.days is not None and args.days != study.days:
+        study = replace(study, days=args.days)
     fmu = check_fmu(study.family)
     out = args.out if args.out is not None else default_results_folder(args.study, study.name)
     if out.exists() and not out.is_dir():
