@@ -7,29 +7,13 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import QUICK as QUICK_10S_STEP
 from conftest import REPO
 from spindlebench import cli
 from spindlebench.paths import DEFAULT_FMU
 
-QUICK = """\
-duration_s = 600
-step_s = 1.0
-sample_interval_s = 60
-seed = 2
-
-[speed]
-kind = "constant"
-rpm = 3000
-
-[feed]
-kind = "with_spindle"
-x_mm_per_min = 1500
-y_mm_per_min = 1500
-
-[ambient]
-kind = "constant"
-temperature_C = 18.0
-"""
+#: conftest's 10-minute scenario at a 1 s communication step.
+QUICK = QUICK_10S_STEP.replace("step_s = 10.0", "step_s = 1.0")
 
 
 def write(directory: Path, name: str, text: str) -> Path:
