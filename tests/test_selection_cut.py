@@ -88,3 +88,26 @@ def test_linkage_gives_the_same_clusters_as_the_cut():
         labels = fcluster(Z, k, criterion="maxclust")
         ours = cut.labels
         assert np.all((labels[:, None] == labels[None, :]) == (ours[:, None] == ours[None, :]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_forest_components_are_scipys_connected_components(seed):
+    """The cut's own component search (pointer jumping on the tree) against SciPy's graph
+    search, on random spanning trees with random edges removed: same partition, same order."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+    from spindlebench.selection.cut import _components
+
+    rng = np.random.default_rng(seed)
+    n = 300
+    order = rng.permutation(n)
+    child = order[1:]
+    parent = np.array([order[rng.integers(0, i)] for i in range(1, n)])
+    keep = rng.random(n - 1) < 0.9
+    ours = _components(n, child[keep], parent[keep])
+    graph = coo_array((np.ones(keep.sum()), (child[keep], parent[keep])), shape=(n, n))
+    count, labels = connected_components(graph, directed=False)
+    first = [np.flatnonzero(labels == label)[0] for label in range(count)]
+    theirs = [np.flatnonzero(labels == label) for label in np.argsort(first)]
+    assert len(ours) == count > 1
+    assert [c.tolist() for c in ours] == [c.tolist() for c in theirs]

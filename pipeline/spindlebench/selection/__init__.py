@@ -8,92 +8,79 @@ Beside it, the methods practitioners compare (``selectors``, ``regressors``): ot
 clusterings (fuzzy c-means, k-means, average/complete/Ward linkage), the grey relational grade
 inside a cluster, LASSO / elastic-net paths, stability selection, greedy forward selection,
 and ridge / PLS after any selector.
+
+Importing this package is cheap: each name is imported from its module on first use (PEP 562
+``__getattr__``), so ``from spindlebench.selection import evaluate`` does not pull in
+scikit-learn, SciPy's cluster module or Numba; only the methods that need them import them
+(together about 3 s of CPU on this busy machine, most of a command's start-up).
 """
 
-from spindlebench.selection.closure import (
-    closure_by_squaring,
-    closure_minimax,
-    maximum_spanning_tree,
-    transitive_closure,
-)
-from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
-from spindlebench.selection.cut import Cut, cut_at, cut_for_clusters
-from spindlebench.selection.differences import (
-    difference_names,
-    pairwise_differences,
-    with_differences,
-)
-from spindlebench.selection.errors import SelectionError, SelectionWarning
-from spindlebench.selection.estimators import (
-    FuzzyClusterSelector,
-    PairwiseDifferences,
-    RiseRegressor,
-    RiseTransformer,
-    make_selection_pipeline,
-)
-from spindlebench.selection.evaluate import CandidateSet, Evaluation, evaluate
-from spindlebench.selection.grey import grey_relational_grade
-from spindlebench.selection.hierarchy import linkage_from_similarity
-from spindlebench.selection.regression import LinearFit, fit_ols, r2_score, rises, rmse
-from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
-from spindlebench.selection.select import Selection, select_sensitive_points
-from spindlebench.selection.selectors import (
-    ClusterSelector,
-    GreedyForwardSelector,
-    LassoPathSelector,
-    StabilitySelector,
-    TopCorrelatedSelector,
-)
-from spindlebench.selection.similarity import (
-    SIMILARITIES,
-    constant_columns,
-    correlation_with,
-    similarity_matrix,
-)
-from spindlebench.selection.splitter import TrainOnOneExperiment
+from __future__ import annotations
 
-__all__ = [
-    "CLUSTERINGS",
-    "SIMILARITIES",
-    "CandidateSet",
-    "ClusterSelector",
-    "Cut",
-    "Evaluation",
-    "FuzzyClusterSelector",
-    "GreedyForwardSelector",
-    "LassoPathSelector",
-    "LinearFit",
-    "PLSRiseRegressor",
-    "PairwiseDifferences",
-    "RidgeRiseRegressor",
-    "RiseRegressor",
-    "RiseTransformer",
-    "Selection",
-    "SelectionError",
-    "SelectionWarning",
-    "StabilitySelector",
-    "TopCorrelatedSelector",
-    "TrainOnOneExperiment",
-    "closure_by_squaring",
-    "closure_minimax",
-    "cluster_candidates",
-    "constant_columns",
-    "correlation_with",
-    "cut_at",
-    "cut_for_clusters",
-    "difference_names",
-    "evaluate",
-    "fit_ols",
-    "grey_relational_grade",
-    "linkage_from_similarity",
-    "make_selection_pipeline",
-    "maximum_spanning_tree",
-    "pairwise_differences",
-    "r2_score",
-    "rises",
-    "rmse",
-    "select_sensitive_points",
-    "similarity_matrix",
-    "transitive_closure",
-    "with_differences",
-]
+import importlib
+from typing import Any
+
+#: Each public name and the module of this package that defines it.
+_HOMES: dict[str, str] = {
+    "closure_by_squaring": "closure",
+    "closure_minimax": "closure",
+    "maximum_spanning_tree": "closure",
+    "transitive_closure": "closure",
+    "CLUSTERINGS": "clustering",
+    "cluster_candidates": "clustering",
+    "Cut": "cut",
+    "cut_at": "cut",
+    "cut_for_clusters": "cut",
+    "difference_names": "differences",
+    "pairwise_differences": "differences",
+    "with_differences": "differences",
+    "SelectionError": "errors",
+    "SelectionWarning": "errors",
+    "FuzzyClusterSelector": "estimators",
+    "PairwiseDifferences": "estimators",
+    "RiseRegressor": "estimators",
+    "RiseTransformer": "estimators",
+    "make_selection_pipeline": "estimators",
+    "CandidateSet": "evaluate",
+    "Evaluation": "evaluate",
+    "evaluate": "evaluate",
+    "grey_relational_grade": "grey",
+    "linkage_from_similarity": "hierarchy",
+    "LinearFit": "regression",
+    "fit_ols": "regression",
+    "r2_score": "regression",
+    "rises": "regression",
+    "rmse": "regression",
+    "PLSRiseRegressor": "regressors",
+    "RidgeRiseRegressor": "regressors",
+    "Selection": "select",
+    "select_sensitive_points": "select",
+    "ClusterSelector": "selectors",
+    "GreedyForwardSelector": "selectors",
+    "LassoPathSelector": "selectors",
+    "StabilitySelector": "selectors",
+    "TopCorrelatedSelector": "selectors",
+    "SIMILARITIES": "similarity",
+    "constant_columns": "similarity",
+    "correlation_with": "similarity",
+    "similarity_matrix": "similarity",
+    "TrainOnOneExperiment": "splitter",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    """The public ``name``, imported from its module on first use and then kept."""
+    try:
+        module = _HOMES[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))
+

@@ -17,7 +17,8 @@ difference of two data columns does; forming the m x m covariance instead would 
 factor. The values of R differ from the matrix path's only by rounding (~1e-15).
 
 Constant candidates and overflowing differences are found from the candidate columns
-themselves, in chunks, with the matrix path's rule, so the same ones are dropped or refused.
+themselves, one sensor's differences at a time, with the matrix path's rule, so the same ones
+are dropped or refused.
 psi follows from the raw sensors' covariances with the target like R's rows do.
 
 The inner loop over the n candidates is compiled with Numba; the m x m product is BLAS, kept
@@ -45,8 +46,6 @@ from spindlebench.selection.errors import (
 from spindlebench.selection.select import Selection, assemble, check_counts, split_constant
 from spindlebench.selection.similarity import CONSTANT_RTOL, constant_columns, standardized
 
-#: Candidate columns formed at once for the per-column steps (bytes of one chunk).
-CHUNK_BYTES = 8 * 2**20
 #: ``evaluate`` selects row-wise above this many candidates (R would take over 32 MB) and
 #: forms R below, where the matrix path's results stay exactly as they were.
 ROW_WISE_ABOVE = 2000
@@ -81,28 +80,22 @@ class PairCandidates:
     def n_candidates(self) -> int:
         return self._pairs[0].size
 
-    @cached_property
-    def _padded_rows(self) -> np.ndarray:
-        """The raw rises as rows, and a row of zeros (x - 0.0 is exactly x: a raw candidate)."""
-        return np.vstack([self.raw.T, np.zeros((1, self.raw.shape[0]))])
+    def blocks(self, columns: np.ndarray) -> Iterator[tuple[slice, np.ndarray]]:
+        """The candidates built from ``columns`` (one per raw sensor, any leading shape) in
+        contiguous pieces: (candidate slice, values with the candidates on the last axis).
 
-    def rows(self, index: np.ndarray) -> np.ndarray:
-        """Values of candidates ``index`` as rows (len(index) x n_samples): gathering rows is
-        contiguous, so the per-column statistics run on this layout."""
-        first, second = self._pairs
-        return self._padded_rows[first[index]] - self._padded_rows[second[index]]
-
-    def columns(self, index: np.ndarray) -> np.ndarray:
-        """Values of candidates ``index`` as C-ordered columns (n_samples x len(index)), the
-        layout the matrix path correlates (same layout, same rounding)."""
-        return np.ascontiguousarray(self.rows(index).T)
-
-    def chunks(self, index: np.ndarray | None = None) -> Iterator[np.ndarray]:
-        """``index`` (default: every candidate) in pieces of at most ``CHUNK_BYTES`` columns."""
-        index = np.arange(self.n_candidates) if index is None else index
-        width = max(1, CHUNK_BYTES // (8 * max(1, self.raw.shape[0])))
-        for start in range(0, index.size, width):
-            yield index[start:start + width]
+        First the raw sensors (all of them, if included), then for each sensor i its
+        differences with every later sensor, ``columns[..., i] - columns[..., i+1:]``
+        (``pair_indices`` order), so no index array is gathered."""
+        m = self.n_sensors
+        start = 0
+        if self.include_raw:
+            yield slice(0, m), columns
+            start = m
+        for i in range(m - 1):
+            stop = start + m - 1 - i
+            yield slice(start, stop), columns[..., i:i + 1] - columns[..., i + 1:]
+            start = stop
 
 
 def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) -> np.ndarray:
@@ -112,17 +105,16 @@ def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) ->
     spread = np.empty(candidates.n_candidates)
     magnitude = np.empty(candidates.n_candidates)
     with np.errstate(over="ignore", invalid="ignore"):
-        for index in candidates.chunks():
-            values = candidates.rows(index)
-            finite = np.isfinite(values).all(axis=1)
+        for where, values in candidates.blocks(np.ascontiguousarray(candidates.raw.T).T):
+            high, low = values.max(axis=0), values.min(axis=0)
+            finite = np.isfinite(high) & np.isfinite(low)  # a NaN or inf reaches both
             if not finite.all():
                 raise SelectionOverflowError(
                     "values too large for rises and differences (overflow) in "
-                    f"{column_list(index[~finite], names)}"
+                    f"{column_list(np.arange(where.start, where.stop)[~finite], names)}"
                 )
-            high, low = values.max(axis=1), values.min(axis=1)
-            spread[index] = high - low
-            magnitude[index] = np.maximum(np.abs(high), np.abs(low))
+            spread[where] = high - low
+            magnitude[where] = np.maximum(np.abs(high), np.abs(low))
     scale = np.maximum(magnitude, spread.max(initial=0.0))
     return spread <= CONSTANT_RTOL * scale
 
@@ -142,11 +134,9 @@ class PairGeometry:
         with threadpool_limits(limits=1, user_api="blas"), np.errstate(all="ignore"):
             factor = np.linalg.qr(centred, mode="r")
         first, second = candidates._pairs
-        padded = np.hstack([factor, np.zeros((factor.shape[0], 1))])
         norms = np.empty(first.size)
-        for index in candidates.chunks():
-            vectors = padded[:, first[index]] - padded[:, second[index]]
-            norms[index] = np.sqrt(np.einsum("ij,ij->j", vectors, vectors))
+        for where, vectors in candidates.blocks(factor):
+            norms[where] = np.sqrt(np.einsum("ij,ij->j", vectors, vectors))
         with np.errstate(divide="ignore", invalid="ignore"):
             inverse = 1.0 / norms
         return cls(factor, first, second, inverse)

@@ -18,9 +18,7 @@ dict_keys(['differences', 'select', 'regress'])
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-from sklearn.base import BaseEstimator
-from sklearn.pipeline import Pipeline
+from typing import TYPE_CHECKING
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.names import (
@@ -35,6 +33,11 @@ from spindlebench.names import (
     WITHIN,
 )
 from spindlebench.selection.errors import SelectionError
+
+if TYPE_CHECKING:  # scikit-learn is imported only by the functions that build estimators:
+    # ``evaluate`` with the paper's method never needs it (~3 s of CPU at start-up here)
+    from sklearn.base import BaseEstimator
+    from sklearn.pipeline import Pipeline
 
 
 @dataclass(frozen=True)
@@ -150,6 +153,8 @@ def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
                   similarity: str = DEFAULT_SIMILARITY,
                   random_state: int = DEFAULT_METHOD_SEED) -> Pipeline:
     """differences (optional) -> selector -> regressor; feed it rises (``rises(X, groups)``)."""
+    from sklearn.pipeline import Pipeline
+
     from spindlebench.selection.estimators import PairwiseDifferences
 
     steps = [("differences", PairwiseDifferences())] if differences else []
