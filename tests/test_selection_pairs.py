@@ -22,6 +22,16 @@ from spindlebench.selection.similarity import LITERAL_MAX_CANDIDATES, similarity
 
 # the package exports the function ``evaluate`` under the module's name
 evaluate_module = importlib.import_module("spindlebench.selection.evaluate")
+pairs_module = importlib.import_module("spindlebench.selection.pairs")
+
+
+@pytest.fixture(autouse=True, params=["numpy-rows", "compiled"])
+def prim_path(request, monkeypatch):
+    """Every test twice: Prim's loop in NumPy rows (small candidate sets) and compiled
+    (``prim_kernel``, large ones; here forced for every size, squeezes included)."""
+    if request.param == "compiled":
+        monkeypatch.setattr(pairs_module, "COMPILED_ABOVE", 0)
+    return request.param
 
 
 def warm_up(n_sensors: int, n_samples: int, seed: int) -> np.ndarray:
@@ -158,3 +168,28 @@ def test_literal_similarity_states_its_size_limit():
     X = np.random.default_rng(0).normal(size=(3, LITERAL_MAX_CANDIDATES + 1))
     with pytest.raises(SelectionError, match=f"at most {LITERAL_MAX_CANDIDATES} candidates"):
         similarity_matrix(X, "literal")
+
+
+def test_compiled_and_numpy_rows_build_the_same_tree(monkeypatch, prim_path):
+    """60 sensors, two of them duplicated (ties), 1 830 candidates: many squeezes of the
+    compiled loop; the same order as the NumPy rows, weights to rounding, and the same
+    parents except where two tree members link equally to rounding (a sensor and its twin:
+    the two BLAS builds round their products differently, either tree is a maximum one)."""
+    if prim_path == "compiled":
+        pytest.skip("compares both paths itself")
+    base = warm_up(58, 400, 11)
+    raw = np.column_stack([base, base[:, 3], base[:, 40]])
+    candidates = PairCandidates(raw)
+    geometry = PairGeometry.of(candidates, standardized_centre(raw))
+    kept = np.arange(candidates.n_candidates)
+    rows = maximum_spanning_tree_of_pairs(geometry, kept)
+    monkeypatch.setattr(pairs_module, "COMPILED_ABOVE", 0)
+    compiled = maximum_spanning_tree_of_pairs(geometry, kept)
+    np.testing.assert_array_equal(compiled.order, rows.order)
+    np.testing.assert_allclose(compiled.weight, rows.weight, rtol=0, atol=1e-12)
+    R = geometry.similarity(kept)
+    differ = np.flatnonzero(compiled.parent != rows.parent)
+    assert differ.size < 10
+    np.testing.assert_allclose(R[differ, compiled.parent[differ]], R[differ, rows.parent[differ]],
+                               rtol=0, atol=1e-12)
+    assert (rows.weight[1:] > 1 - 1e-12).sum() > 1  # the duplicates link at 1

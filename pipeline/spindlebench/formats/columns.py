@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -178,7 +179,8 @@ def detect_dialect(path: Path, delimiter: str | None = None,
     return delimiter, decimal
 
 
-def _pattern(text: str) -> re.Pattern[str]:
+@functools.lru_cache(maxsize=1024)  # asked once per column and pattern: 15 000 times for
+def _pattern(text: str) -> re.Pattern[str]:  # 100 sensors, 0.4 s of a 2 s command uncached
     """A name pattern: ``*`` any run of characters, ``?`` one; everything else literal, so
     ``*[degC]`` means names ending in "[degC]" (not fnmatch's character class)."""
     return re.compile("".join(".*" if c == "*" else "." if c == "?" else re.escape(c)

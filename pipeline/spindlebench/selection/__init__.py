@@ -20,6 +20,11 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+# ``evaluate`` is also a submodule's name: importing the submodule (any ``from
+# spindlebench.selection.evaluate import ...``) sets the package attribute ``evaluate`` to the
+# module, which ``__getattr__`` cannot undo, so the function is bound here, after it.
+from spindlebench.selection.evaluate import evaluate as evaluate
+
 #: Each public name and the module of this package that defines it.
 _HOMES: dict[str, str] = {
     "closure_by_squaring": "closure",
@@ -43,7 +48,6 @@ _HOMES: dict[str, str] = {
     "make_selection_pipeline": "estimators",
     "CandidateSet": "evaluate",
     "Evaluation": "evaluate",
-    "evaluate": "evaluate",
     "grey_relational_grade": "grey",
     "linkage_from_similarity": "hierarchy",
     "LinearFit": "regression",
@@ -67,7 +71,7 @@ _HOMES: dict[str, str] = {
     "TrainOnOneExperiment": "splitter",
 }
 
-__all__ = sorted(_HOMES)
+__all__ = sorted([*_HOMES, "evaluate"])
 
 
 def __getattr__(name: str) -> Any:

@@ -12,6 +12,7 @@ the agreement is exact, not approximate):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,7 +79,13 @@ class SpanningTree:
 
 def maximum_spanning_tree(R: np.ndarray) -> SpanningTree:
     """Prim's algorithm on the dense similarity matrix, O(n^2) with vectorised rows."""
-    n = R.shape[0]
+    return prim_tree(R.shape[0], R.__getitem__)
+
+
+def prim_tree(n: int, row: Callable[[int], np.ndarray]) -> SpanningTree:
+    """Prim's algorithm on the complete graph of ``n`` vertices whose similarities to vertex
+    v are ``row(v)`` (asked once per vertex): start at vertex 0, take the largest link, the
+    first one on ties; a parent changes only on a strictly larger similarity."""
     in_tree = np.zeros(n, dtype=bool)
     best = np.full(n, -np.inf)  # best similarity linking each outside vertex to the tree
     parent = np.full(n, -1, dtype=np.intp)
@@ -92,9 +99,9 @@ def maximum_spanning_tree(R: np.ndarray) -> SpanningTree:
             weight[vertex] = best[vertex]
         order[position] = vertex
         in_tree[vertex] = True
-        row = R[vertex]
-        improves = (row > best) & ~in_tree
-        best[improves] = row[improves]
+        similarities = row(vertex)
+        improves = (similarities > best) & ~in_tree
+        best[improves] = similarities[improves]
         parent[improves] = vertex
     return SpanningTree(order=order, parent=parent, weight=weight)
 

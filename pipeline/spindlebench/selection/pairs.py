@@ -21,20 +21,21 @@ themselves, one sensor's differences at a time, with the matrix path's rule, so 
 are dropped or refused.
 psi follows from the raw sensors' covariances with the target like R's rows do.
 
-The inner loop over the n candidates is compiled with Numba; the m x m product is BLAS, kept
-single-threaded (a 500 x 500 product per row gains nothing from threads on a shared machine).
+Above ``COMPILED_ABOVE`` candidates the inner loop over the n candidates is compiled with
+Numba; the m x m product is BLAS, kept single-threaded (a 500 x 500 product per row gains
+nothing from threads on a shared machine).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from spindlebench.selection.closure import SpanningTree, closure_from_tree
+from spindlebench.selection.closure import SpanningTree, closure_from_tree, prim_tree
 from spindlebench.selection.cut import cut_tree_for_clusters
 from spindlebench.selection.differences import pair_indices
 from spindlebench.selection.errors import (
@@ -164,6 +165,21 @@ class PairGeometry:
                 f"{column_list(kept[norms_bad], names)}"
             )
 
+    def rows_of(self, kept: np.ndarray) -> Callable[[int], np.ndarray]:
+        """The row of R over ``kept`` for the v-th of them (``closure.prim_tree``'s ``row``):
+        the same arithmetic as the compiled kernel's rows."""
+        first, second = self.first[kept], self.second[kept]
+        inverse = self.inverse_norm[kept]
+        factor_rows = np.vstack([self.factor.T, np.zeros((1, self.factor.shape[0]))])
+        u = np.zeros(self.factor.shape[1] + 1)
+
+        def row(vertex: int) -> np.ndarray:
+            direction = (factor_rows[first[vertex]] - factor_rows[second[vertex]])
+            u[:-1] = self.factor.T @ (direction * inverse[vertex])
+            return np.minimum(np.abs(u[first] - u[second]) * inverse, 1.0)
+
+        return row
+
     def similarity(self, kept: np.ndarray) -> np.ndarray:
         """R over ``kept`` formed from the vectors (only for small candidate sets)."""
         if kept.size > MAX_FORMED_CANDIDATES:
@@ -192,6 +208,10 @@ def standardized_centre(X: np.ndarray) -> np.ndarray:
 
 #: Vertices per compiled call: between calls Python can act on Ctrl-C.
 PRIM_BATCH = 512
+#: Above this many candidates Prim's loop runs compiled (``prim_kernel``); below, NumPy rows
+#: (``closure.prim_tree``) cost less than importing Numba and loading its code (~1 s of CPU
+#: here; NumPy took 0.33 s for the 5 050 candidates of 100 sensors).
+COMPILED_ABOVE = 10000
 
 
 def maximum_spanning_tree_of_pairs(
@@ -203,25 +223,30 @@ def maximum_spanning_tree_of_pairs(
     candidate, take the largest link, the first one on ties, and a parent only changes on a
     strictly larger similarity), so on exact ties it builds the same tree.
     """
+    kept = np.asarray(kept, dtype=np.int64)
+    if kept.size <= COMPILED_ABOVE:
+        with threadpool_limits(limits=1, user_api="blas"):
+            return prim_tree(kept.size, geometry.rows_of(kept))
     from spindlebench.selection.prim_kernel import prim_steps
 
     n_all = geometry.first.size
-    kept = np.asarray(kept, dtype=np.int64)
-    ids = kept.copy()
-    first = geometry.first[kept].astype(np.int32)
-    second = geometry.second[kept].astype(np.int32)
+    m = geometry.factor.shape[1]
+    index = np.int16 if m < np.iinfo(np.int16).max else np.int32  # less memory traffic
+    ids = kept.astype(np.int32)
+    first = geometry.first[kept].astype(index)
+    second = geometry.second[kept].astype(index)
     inverse = geometry.inverse_norm[kept].copy()
     best = np.full(kept.size, -np.inf)
-    parent = np.full(kept.size, -1, dtype=np.int64)
+    parent = np.full(kept.size, -1, dtype=np.int32)
     state = np.array([0, kept.size, 0], dtype=np.int64)
     order = np.empty(kept.size, dtype=np.int64)
     weight = np.ones(n_all)
     tree_parent = np.full(n_all, -1, dtype=np.int64)
     factor_rows = np.vstack([geometry.factor.T, np.zeros((1, geometry.factor.shape[0]))])
-    factor_t = np.ascontiguousarray(geometry.factor.T)
+    factor = np.ascontiguousarray(geometry.factor)
     with threadpool_limits(limits=1, user_api="blas"):
         for start in range(0, kept.size, PRIM_BATCH):
-            prim_steps(factor_rows, factor_t, ids, first, second, inverse, best, parent,
+            prim_steps(factor_rows, factor, ids, first, second, inverse, best, parent,
                        state, order, weight, tree_parent, start,
                        min(start + PRIM_BATCH, kept.size))
     local = np.full(n_all, -1, dtype=np.intp)
