@@ -193,3 +193,41 @@ def test_compiled_and_numpy_rows_build_the_same_tree(monkeypatch, prim_path):
     np.testing.assert_allclose(R[differ, compiled.parent[differ]], R[differ, rows.parent[differ]],
                                rtol=0, atol=1e-12)
     assert (rows.weight[1:] > 1 - 1e-12).sum() > 1  # the duplicates link at 1
+
+
+def test_raw_sensors_with_differences_are_recognised_bit_for_bit():
+    from spindlebench.selection.pairs import sensors_with_differences
+
+    raw = warm_up(9, 50, 3)
+    X = np.hstack([raw, pairwise_differences(raw)])
+    assert sensors_with_differences(X) == 9
+    assert sensors_with_differences(pairwise_differences(raw)) is None  # no raw columns
+    assert sensors_with_differences(X[:, ::-1]) is None
+    nudged = X.copy()
+    nudged[7, -1] = np.nextafter(nudged[7, -1], np.inf)  # one value off by one ulp
+    assert sensors_with_differences(nudged) is None
+    assert sensors_with_differences(X[:, :-1]) is None  # not a triangular count
+
+
+def test_estimator_and_matrix_input_select_row_wise_with_the_same_result(monkeypatch):
+    """FuzzyClusterSelector after PairwiseDifferences (and select_sensitive_points on such a
+    matrix) above ROW_WISE_ABOVE columns runs row-wise: the matrix path's result."""
+    from spindlebench.selection.estimators import FuzzyClusterSelector, PairwiseDifferences
+
+    raw = warm_up(25, 300, 6)  # 325 candidates
+    y = 2.0 * (raw[:, 2] - raw[:, 20]) + np.random.default_rng(6).normal(0, 0.2, 300)
+    X = PairwiseDifferences().fit_transform(raw)
+    matrix = FuzzyClusterSelector(4).fit(X, y)
+    monkeypatch.setattr(pairs_module, "ROW_WISE_ABOVE", 100)
+    calls = []
+    real = pairs_module.select_among_pairs
+    monkeypatch.setattr(pairs_module, "select_among_pairs",
+                        lambda *args, **kwargs: calls.append(1) or real(*args, **kwargs))
+    rows = FuzzyClusterSelector(4).fit(X, y)
+    assert calls == [1]
+    assert_same(matrix.selection_, rows.selection_)
+    np.testing.assert_array_equal(rows.selected_, matrix.selected_)
+    np.testing.assert_allclose(rows.similarity_, matrix.similarity_, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(rows.transform(X), matrix.transform(X))
+    assert select_sensitive_points(X, y, 4).eta == pytest.approx(matrix.eta_, abs=1e-12)
+    assert len(calls) == 2

@@ -152,7 +152,10 @@ class FuzzyClusterSelector(SupportFromSelected):
         Pearson correlation of every input column with the error; NaN for constant columns,
         which are dropped with a ``SelectionWarning``.
     similarity_, closure_ : ndarray
-        R and t(R) over the non-constant columns ``kept_``.
+        R and t(R) over the non-constant columns ``kept_``, formed when first read. Inputs of
+        raw sensors and all their differences (``PairwiseDifferences``) above 2 000 columns
+        are selected without them (``select_sensitive_points``); there they are formed up to
+        6 000 columns, beyond that reading them is a ``SelectionError``.
     """
 
     def __init__(self, n_clusters: int = 2, similarity: str = DEFAULT_SIMILARITY,
@@ -174,9 +177,17 @@ class FuzzyClusterSelector(SupportFromSelected):
         self.selected_ = selection.selected
         self.psi_ = selection.psi
         self.kept_ = selection.kept
-        self.similarity_ = selection.similarity
-        self.closure_ = selection.closure
         return self
+
+    @property
+    def similarity_(self) -> np.ndarray:
+        check_is_fitted(self, "selection_")
+        return self.selection_.similarity
+
+    @property
+    def closure_(self) -> np.ndarray:
+        check_is_fitted(self, "selection_")
+        return self.selection_.closure
 
 
 class RiseRegressor(LinearRiseModel):

@@ -28,6 +28,7 @@ nothing from threads on a shared machine).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -47,8 +48,9 @@ from spindlebench.selection.errors import (
 from spindlebench.selection.select import Selection, assemble, check_counts, split_constant
 from spindlebench.selection.similarity import CONSTANT_RTOL, constant_columns, standardized
 
-#: ``evaluate`` selects row-wise above this many candidates (R would take over 32 MB) and
-#: forms R below, where the matrix path's results stay exactly as they were.
+#: ``evaluate``, ``select_sensitive_points`` (and so ``FuzzyClusterSelector`` and the
+#: placement study) select row-wise above this many candidates (R would take over 32 MB) and
+#: form R below, where the matrix path's results stay exactly as they were.
 ROW_WISE_ABOVE = 2000
 #: R and t(R) of the row-wise selection are formed on request only up to this many
 #: candidates (two 8 n^2-byte matrices).
@@ -97,6 +99,22 @@ class PairCandidates:
             stop = start + m - 1 - i
             yield slice(start, stop), columns[..., i:i + 1] - columns[..., i + 1:]
             start = stop
+
+
+def sensors_with_differences(X: np.ndarray) -> int | None:
+    """m if the columns of ``X`` are m raw sensors followed by every difference of them in
+    ``pair_indices`` order, bit for bit as ``PairwiseDifferences`` and ``CandidateSet`` form
+    them; otherwise None. Checked one sensor's differences at a time (no copy of ``X``); a
+    matrix of another shape or content fails at its first block."""
+    n = X.shape[1]
+    m = (math.isqrt(8 * n + 1) - 1) // 2
+    if m < 2 or m * (m + 1) // 2 != n:
+        return None
+    candidates = PairCandidates(X[:, :m])
+    for where, values in candidates.blocks(X[:, :m]):
+        if where.start >= m and not np.array_equal(X[:, where], values):
+            return None
+    return m
 
 
 def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) -> np.ndarray:

@@ -154,14 +154,25 @@ def select_sensitive_points(
     """Steps 2-5 on candidates ``X`` (n_samples x n_candidates) and thermal error ``y``.
 
     ``names`` (one per column of ``X``) only serve messages: the warning about dropped
-    constant candidates and the error about values too large to correlate. For raw sensors
-    plus all their pairwise differences, ``select_among_pairs``
-    (``spindlebench.selection.pairs``) gives the same result without the n x n matrix.
+    constant candidates and the error about values too large to correlate.
+
+    When ``X`` is raw sensors followed by all their pairwise differences (as
+    ``PairwiseDifferences`` and ``CandidateSet`` form them) and has more than
+    ``pairs.ROW_WISE_ABOVE`` columns, with |Pearson r| and the fast closure, the selection
+    runs row-wise (``pairs.select_among_pairs``): the same clusters and psi, eta to rounding,
+    without the n x n matrices (formed on request up to ``pairs.MAX_FORMED_CANDIDATES``).
     """
     X, y = _check_inputs(X, y, n_clusters)
     if names is not None:
         names = [str(name) for name in names]
         check_names(names, X.shape[1])
+    from spindlebench.selection import pairs  # (pairs builds on this module)
+
+    if (closure == "fast" and similarity == DEFAULT_SIMILARITY
+            and X.shape[1] > pairs.ROW_WISE_ABOVE):
+        m = pairs.sensors_with_differences(X)
+        if m is not None:
+            return pairs.select_among_pairs(X[:, :m], y, n_clusters, names=names)
     kept, dropped = split_constant(constant_columns(X), names, n_clusters)
     kept_names = None if names is None else [names[i] for i in kept]
     R = similarity_matrix(X[:, kept], similarity, kept_names)
