@@ -83,6 +83,14 @@ class PairCandidates:
     def n_candidates(self) -> int:
         return self._pairs[0].size
 
+    def columns(self, index: np.ndarray) -> np.ndarray:
+        """Values of candidates ``index`` as C-ordered columns (n_samples x len(index)), the
+        matrix ``CandidateSet.matrix`` forms (same subtraction, same bits), for the methods
+        that need it formed."""
+        first, second = self._pairs
+        padded = np.hstack([self.raw, np.zeros((self.raw.shape[0], 1))])  # x - 0.0 is x
+        return np.ascontiguousarray(padded[:, first[index]] - padded[:, second[index]])
+
     def blocks(self, columns: np.ndarray) -> Iterator[tuple[slice, np.ndarray]]:
         """The candidates built from ``columns`` (one per raw sensor, any leading shape) in
         contiguous pieces: (candidate slice, values with the candidates on the last axis).
