@@ -195,10 +195,10 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
       Real Q_flow(unit = "W") "Friction heat released into the bearing region";
       HeatTransfer.Interfaces.HeatPort port "Bearing rings: receive the heat, set the viscosity";
     equation
-      walther_B = (log(log(nu_40 + 0.7) / log(10.0)) - log(log(nu_100 + 0.7) / log(10.0))) / (log(373.15) - log(313.15));
-      walther_A = log(log(nu_40 + 0.7) / log(10.0)) / log(10.0) + walther_B * log(313.15) / log(10.0);
-      nu = exp(log(10.0) * exp(log(10.0) * (walther_A - walther_B * log(port.T) / log(10.0)))) - 0.7;
-      M = z * (1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm);
+      walther_B = (log(log(nu_40 + 0.7) / log(10.0)) - log(log(nu_100 + 0.7) / log(10.0))) / (log(373.15) - log(313.15)) "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
+      walther_A = log(log(nu_40 + 0.7) / log(10.0)) / log(10.0) + walther_B * log(313.15) / log(10.0) "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
+      nu = exp(log(10.0) * exp(log(10.0) * (walther_A - walther_B * log(port.T) / log(10.0)))) - 0.7 "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
+      M = z * (1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm) "unit check: empirical: Palmgren [SKF] on the numbers of nu in mm2/s, n in rev/min, dm in mm, M0 in N mm";
       Q_flow = M * abs(n_rpm) * 2.0 * 3.14159265358979 / 60.0;
       port.Q_flow = -Q_flow;
     end BearingFriction;

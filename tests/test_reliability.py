@@ -524,6 +524,129 @@ def test_a_unit_error_in_an_equation_is_file_and_line(tmp_path):
                               "[temperature] and [mass] * [length] ** 2 / [time] ** 3"), message
 
 
+SMALL = """package P
+  connector HeatPort
+    Real T(unit = "K");
+    flow Real Q_flow(unit = "W");
+  end HeatPort;
+  connector CelsiusPort
+    Real T(unit = "degC");
+    flow Real Q_flow(unit = "W");
+  end CelsiusPort;
+  model Body
+    HeatPort port;
+    parameter Real L(unit = "m") = 0.1;
+    parameter Real C(unit = "J/K") = 10.0;
+    parameter Real k(unit = "1") = 1.5;
+    Real A(unit = "m2");
+    Real y(unit = "1");
+  equation
+    C * der(port.T) = port.Q_flow;
+    A = L ^ 2;
+    y = exp(k * 0.5);
+  end Body;
+  model M
+    Body a;
+    Body b;
+    CelsiusPort c;
+  equation
+    connect(a.port, b.port);
+    c.T = 20.0;
+  end M;
+end P;
+"""
+
+
+def small_model_error(tmp_path: Path, old: str, new: str) -> tuple[str, int]:
+    """Check the small package with ``old`` replaced by ``new``: the one error line and the
+    line number of ``new``'s first line in the file."""
+    import pymoca.ast
+    import pymoca.parser
+    import pymoca.tree
+    from spindlebench.errors import SpindlebenchError
+    from spindlebench.modelica.units import check_connections, check_equations
+
+    assert old in SMALL
+    text = SMALL.replace(old, new, 1)
+    path = tmp_path / "P.mo"
+    path.write_text(text, encoding="utf-8")
+    tree = pymoca.parser.parse(text, bypass_cache=True)
+    line = text[: text.index(new.strip().splitlines()[0])].count("\n") + 1
+    with pytest.raises(SpindlebenchError) as caught:
+        check_connections(tree, path)
+        flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string("P.M"))
+        check_equations(next(iter(flat.classes.values())), path)
+    message = str(caught.value)
+    assert "\n" not in message
+    return message, line
+
+
+def test_the_small_model_passes_the_unit_check(tmp_path):
+    import pymoca.ast
+    import pymoca.parser
+    import pymoca.tree
+    from spindlebench.modelica.units import check_connections, check_equations
+
+    tree = pymoca.parser.parse(SMALL, bypass_cache=True)
+    check_connections(tree, tmp_path / "P.mo")
+    flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string("P.M"))
+    check_equations(next(iter(flat.classes.values())), tmp_path / "P.mo")
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), [
+    ("y = exp(k * 0.5);", "y = exp(L);",
+     "unit error in the equation of a.y: exp() of [length]: its argument must be "
+     "dimensionless"),
+    ("y = exp(k * 0.5);", "y = log(C / L);",
+     "log() of [mass] * [length] / [time] ** 2 / [temperature]"),
+    ("y = exp(k * 0.5);", "y = sin(L * 2.0);", "sin() of [length]"),
+    ("A = L ^ 2;", "A = L ^ 1.5;", "sides of [length] ** 2 and [length] ** 1.5"),
+    ("A = L ^ 2;", "A = sqrt(L);", "sides of [length] ** 2 and [length] ** 0.5"),
+    ("A = L ^ 2;", "A = L ^ k;", "a power of [length] with a variable exponent"),
+    ("y = exp(k * 0.5);", "y = if port.T > 1.0e3 * port.Q_flow then 1.0 else 0.0;",
+     "a comparison (>) of [temperature] and [mass] * [length] ** 2 / [time] ** 3"),
+    ("A = L ^ 2;", "A = if port.T > 300.0 then L ^ 2 else L;",
+     "the branches of an if-expression of [length] ** 2 and [length]"),
+    ("A = L ^ 2;", "A = L ^ 2 + 0.0 * time;", "a sum of [length] ** 2 and [time]"),
+])
+def test_a_unit_error_in_a_function_power_comparison_or_branch_is_file_and_line(
+        tmp_path, old, new, expected):
+    message, line = small_model_error(tmp_path, old, new)
+    assert message.startswith(f"{tmp_path / 'P.mo'}:{line}: unit error in the equation of "
+                              "a."), message
+    assert expected in message, message
+
+
+def test_a_real_without_a_unit_is_file_and_line_of_its_declaration(tmp_path):
+    message, line = small_model_error(tmp_path, 'Real y(unit = "1");', "Real y;")
+    assert message == (f"{tmp_path / 'P.mo'}:{line}: a.y declares no unit (give every Real a "
+                       'unit=, "1" for a pure number)')
+
+
+def test_a_connect_of_two_connector_types_is_file_and_line(tmp_path):
+    message, line = small_model_error(tmp_path, "connect(a.port, b.port);",
+                                      "connect(a.port, c);")
+    assert message.startswith(f"{tmp_path / 'P.mo'}:{line}: connect(a.port, c) joins a "
+                              "HeatPort and a CelsiusPort: a connection needs two connectors "
+                              "of one type"), message
+    assert "HeatPort: flow Q_flow [W], T [K]; CelsiusPort: flow Q_flow [W], T [degC]" in message
+
+
+def test_an_empirical_law_is_exempt_only_where_its_equation_says_so(tmp_path):
+    import pymoca.ast
+    import pymoca.parser
+    import pymoca.tree
+    from spindlebench.modelica.units import EMPIRICAL, check_equations
+
+    text = SMALL.replace("y = exp(k * 0.5);", f'y = exp(L) "{EMPIRICAL}: L in m";')
+    flat = pymoca.tree.flatten(pymoca.parser.parse(text, bypass_cache=True),
+                               pymoca.ast.ComponentRef.from_string("P.M"))
+    check_equations(next(iter(flat.classes.values())), tmp_path / "P.mo")
+    message, _ = small_model_error(tmp_path, "y = exp(k * 0.5);",
+                                   'y = exp(L) "an exponential law";')
+    assert "exp() of [length]" in message
+
+
 def test_the_shipped_model_passes_the_unit_check():
     from spindlebench.modelica.frontend import model_source, translate
     from spindlebench.modelica.units import check_declared_units, dimension_of
@@ -531,4 +654,7 @@ def test_the_shipped_model_passes_the_unit_check():
     check_declared_units(model_source(MODELS))
     assert dimension_of("W/(m2.K)") == dimension_of("W") / dimension_of("m2") / dimension_of("K")
     assert dimension_of("rev/min") == dimension_of("1/s")
-    translate(MODELS, 2)  # the equations check out too
+    translate(MODELS, 2)  # the equations and connections check out too
+    text = (MODELS / "SpindleBench.mo").read_text(encoding="utf-8")
+    exempt = [line for line in text.splitlines() if '"unit check: empirical' in line]
+    assert len(exempt) == 4  # Walther's three equations and Palmgren's torque, no more

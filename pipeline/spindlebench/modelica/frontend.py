@@ -18,7 +18,11 @@ import casadi as ca
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.modelica import MAX_SEGMENTS, MODEL_CLASS, MODEL_FILE
-from spindlebench.modelica.units import check_declared_units, check_equations
+from spindlebench.modelica.units import (
+    check_connections,
+    check_declared_units,
+    check_equations,
+)
 
 # pymoca 0.12 still calls the Python 2 division hook on CasADi 3.8 expressions.
 ca.MX.__div__ = ca.MX.__truediv__
@@ -104,9 +108,16 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
     if tree is None:
         raise SpindlebenchError(f"{path}: Modelica source could not be parsed")
     _set_segments(tree, path, segments)
+    check_connections(tree, path)  # file:line of a connect() of two different connectors
     try:
         with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
             flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string(MODEL_CLASS))
+        (flat_class,) = flat.classes.values()
+    except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
+        raise SpindlebenchError(_semantic_error(path, exc)) from None
+    check_equations(flat_class, path)  # dimensions, from the declared units (pint)
+    try:
+        with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
             # generator.generate() would flatten a second time; walk the flat tree ourselves.
             options = generator._merge_default_options(None)
             casadi_generator = generator.Generator(flat, MODEL_CLASS, options)
@@ -114,8 +125,6 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
             model = casadi_generator.model
     except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
         raise SpindlebenchError(_semantic_error(path, exc)) from None
-    (flat_class,) = flat.classes.values()
-    check_equations(flat_class, path)  # dimensions, from the declared units (pint)
     symbols = {
         name: SymbolInfo(
             description=str(sym.comment or ""),
