@@ -58,6 +58,17 @@ HAND_T = np.array([
 ])
 
 
+def experiment_files(folder, count: int = 3) -> list:
+    """``exp1.csv`` ... in ``folder``: ``synthetic_experiment`` at rising speeds, the
+    recordings the evaluate command and the method registry are run on."""
+    paths = []
+    for seed in range(count):
+        path = folder / f"exp{seed + 1}.csv"
+        synthetic_experiment(seed, speed=0.5 + 0.4 * seed).to_csv(path, index=False)
+        paths.append(path)
+    return paths
+
+
 def random_similarity(n: int, seed: int, levels: int | None = None) -> np.ndarray:
     rng = np.random.default_rng(seed)
     R = rng.random((n, n))

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from selection_data import REAL_RECORDING, synthetic_experiment
+from selection_data import REAL_RECORDING, experiment_files
 from spindlebench import cli
 from spindlebench.selection import SelectionWarning, evaluate
 
@@ -16,12 +16,7 @@ KEYS = ["selected", "psi", "eta", "clusters", "coefficients", "r2", "rmse_um", "
 
 @pytest.fixture
 def recordings(tmp_path):
-    paths = []
-    for seed in range(3):
-        path = tmp_path / f"exp{seed + 1}.csv"
-        synthetic_experiment(seed, speed=0.5 + 0.4 * seed).to_csv(path, index=False)
-        paths.append(path)
-    return paths
+    return experiment_files(tmp_path)
 
 
 def run_cli(capsys, *args):

@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
-from selection_data import synthetic_experiment
+from selection_data import experiment_files, synthetic_experiment
 from sklearn.pipeline import Pipeline
 from sklearn.utils.estimator_checks import parametrize_with_checks
 from spindlebench.selection import (
@@ -268,15 +268,6 @@ def test_every_selector_composes_with_every_regressor(selector, regressor):
 
 # --- the registry, evaluate --method and spindlebench methods --------------------------------
 
-def _recordings(tmp_path):
-    paths = []
-    for seed in range(3):
-        path = tmp_path / f"exp{seed + 1}.csv"
-        synthetic_experiment(seed, speed=0.5 + 0.4 * seed).to_csv(path, index=False)
-        paths.append(path)
-    return paths
-
-
 def test_method_labels_round_trip_and_refuse_nonsense():
     from spindlebench.names import METHODS, REGRESSORS
     from spindlebench.selection.registry import MethodChoice, parse_method
@@ -316,7 +307,7 @@ def test_cli_evaluate_method_within_regressor(tmp_path, capsys):
 
     from spindlebench import cli
 
-    train, *tests = _recordings(tmp_path)
+    train, *tests = experiment_files(tmp_path)
     out = tmp_path / "r.json"
     status = cli.main(["evaluate", "--train", str(train), "--test", *map(str, tests),
                        "--target", "drift_um", "--clusters", "2", "--differences",
