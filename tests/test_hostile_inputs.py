@@ -261,14 +261,16 @@ RECORDINGS = {
     "empty file": ("", ["train.csv", "empty"]),
     "header only": (recording_text().splitlines()[0] + "\n", ["train.csv", "row"]),
     "one row": ("\n".join(recording_text().splitlines()[:2]) + "\n", ["train.csv", "row"]),
-    "two rows": ("\n".join(recording_text().splitlines()[:3]) + "\n", ["train.csv"]),
+    "two rows": ("\n".join(recording_text().splitlines()[:3]) + "\n",
+                 ["train.csv", "2 clusters"]),
     "text cell": (edited(lambda ls: set_cell(ls, 5, 1, "hot")), ["train.csv", "line 5"]),
     "inf cell": (edited(lambda ls: set_cell(ls, 7, 1, "inf")), ["train.csv", "line 7"]),
     "empty cell": (edited(lambda ls: set_cell(ls, 9, 1, "")), ["train.csv", "line 9"]),
     "NaN cell": (edited(lambda ls: set_cell(ls, 9, 1, "NaN")), ["train.csv", "line 9"]),
     "short row": (edited(lambda ls: [*ls[:10], ",".join(ls[10].split(",")[:3]), *ls[11:]]),
                   ["train.csv", "line 11"]),
-    "long row": (edited(lambda ls: [*ls[:10], ls[10] + ",1", *ls[11:]]), ["train.csv"]),
+    "long row": (edited(lambda ls: [*ls[:10], ls[10] + ",1", *ls[11:]]),
+                 ["train.csv", "line 11", "field(s)"]),
     "repeated column": (edited(lambda ls: [ls[0].replace("T6", "T1"), *ls[1:]]),
                         ["train.csv", "line 1"]),
     "time goes back": (edited(lambda ls: set_cell(ls, 6, 0, "0")), ["train.csv", "line 6"]),
@@ -276,7 +278,7 @@ RECORDINGS = {
                         ["train.csv", "line 58", "column"]),
     "below absolute zero": (edited(lambda ls: set_cell(ls, 12, 2, "-9999")),
                             ["train.csv", "line 12", "column"]),
-    "not UTF-8": (recording_text().encode() + b"\xff\xfe\n", ["train.csv"]),
+    "not UTF-8": (recording_text().encode() + b"\xff\xfe\n", ["train.csv", "line", "UTF-8"]),
     "semicolons read with comma": (recording_text().replace(",", ";"),
                                    ["train.csv", "line 1", "';'"]),
     "empty column name": (edited(lambda ls: [ls[0].replace("T6", ""), *ls[1:]]),
@@ -303,7 +305,7 @@ EVALUATE_FLAGS = {
     "zero clusters": (["--clusters", "0"], ["--clusters"]),
     "too many clusters": (["--clusters", "99"], ["--clusters", "train.csv"]),
     "copy of the target": (["--sensors", "T1,T6,drift_copy"], ["train.csv", "drift_copy"]),
-    "json into a folder": (["--json", "."], ["."]),
+    "json into a folder": (["--json", "."], ["--json .", "is a directory"]),
 }
 for _label, (_flags, _expect) in EVALUATE_FLAGS.items():
     def _build(tmp: Path, flags: list[str] = _flags, expect: list[str] = _expect):
@@ -367,6 +369,114 @@ def _(tmp):
         write(tmp, f"recs/exp{i}.csv", recording_text(i))
     config = write(tmp, "p.toml", b"\xff\xfe")
     return ["paper", "--recordings", str(tmp / "recs"), "--config", str(config)], ["p.toml"]
+
+
+# ------------------------------------------------- column roles on the other commands
+
+
+def role_frame(time_column: str = "time_s"):
+    """A synthetic recording with a copy of the target; ``time_column=None`` drops time_s."""
+    frame = synthetic_experiment(0)
+    frame["drift_copy"] = 0.5 * frame["drift_um"] + 1e-6 * np.arange(len(frame))
+    return frame.drop(columns="time_s") if time_column is None else frame
+
+
+def role_recording(tmp: Path, frame=None, **csv) -> Path:
+    frame = role_frame() if frame is None else frame
+    return write(tmp, "rec.csv", frame.to_csv(index=False, **csv))
+
+
+def going_back(tmp: Path) -> Path:
+    frame = role_frame()
+    clock = frame["time_s"].to_numpy().copy()
+    clock[20] = clock[10]
+    return role_recording(tmp, frame.assign(clock_s=clock))
+
+
+def sentinel(tmp: Path) -> Path:
+    frame = role_frame()
+    frame.loc[56, "T6"] = 9.9e37
+    return role_recording(tmp, frame)
+
+
+ROLE_CASES = {
+    "copy of the target": (lambda t: role_recording(t), ["--sensors", "T1,T6,drift_copy"],
+                           ["rec.csv", "drift_copy", "|r|"]),
+    "no time column": (lambda t: role_recording(t, role_frame(None)), [],
+                       ["rec.csv", "no time column 'time_s'"]),
+    "time column not found": (lambda t: role_recording(t), ["--time-column", "Zeit"],
+                              ["rec.csv", "--time-column 'Zeit'"]),
+    "time column goes back": (going_back, ["--time-column", "clock_s"],
+                              ["rec.csv", "line 22", "does not increase"]),
+    "exclude matches nothing": (lambda t: role_recording(t), ["--exclude", "nothing"],
+                                ["rec.csv", "--exclude 'nothing'"]),
+    "sensor pattern matches nothing": (lambda t: role_recording(t), ["--sensors", "Q*"],
+                                       ["rec.csv", "Q*"]),
+    "decimal comma read as point": (lambda t: role_recording(t, sep=";", decimal=","),
+                                    ["--decimal", "."], ["rec.csv", "line 2", "column"]),
+    "semicolons read with comma": (lambda t: role_recording(t, sep=";"),
+                                   ["--delimiter", ","], ["rec.csv", "line 1", "';'"]),
+    "sentinel in a sensor": (sentinel, [], ["rec.csv", "line 58", "column 'T6'"]),
+    "bad decimal flag": (lambda t: role_recording(t), ["--decimal", ";"], ["--decimal"]),
+}
+#: What each command reading recordings is given besides the recording and the role flags.
+ROLE_COMMANDS = {
+    "fingerprint": lambda rec: ["fingerprint", str(rec), "--target", "drift_um"],
+    "plot": lambda rec: ["plot", str(rec), "--target", "drift_um", "-o", "fig.png"],
+}
+for _command, _argv in ROLE_COMMANDS.items():
+    for _label, (_make, _flags, _expect) in ROLE_CASES.items():
+        if _command == "plot" and _label == "copy of the target":
+            continue  # plot draws a copy of the target (it fits nothing)
+        def _build(tmp: Path, make=_make, flags=_flags, expect=_expect, argv=_argv):
+            return argv(make(tmp)) + flags, expect
+        case(f"{_command}: {_label}")(_build)
+
+
+CALIBRATION_MAP = """[inputs]
+spindle_speed_rpm = "spindle_speed_rpm"
+feed_x_mm_per_min = 0.0
+feed_y_mm_per_min = 0.0
+ambient_C = "unknown"
+[error]
+column = "drift_um"
+[temperatures]
+T1 = "T1"
+T6 = "T6"
+"""
+
+
+@case("calibrate: no time column")
+def _(tmp):
+    rec = role_recording(tmp, role_frame(None))
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    return (["calibrate", str(rec), "--map", str(mapping), "-o", "m.toml"],
+            ["rec.csv", "no time column 'time_s'"])
+
+
+@case("calibrate: semicolons read with comma")
+def _(tmp):
+    rec = role_recording(tmp, sep=";")
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    return (["calibrate", str(rec), "--map", str(mapping), "-o", "m.toml", "--delimiter", ","],
+            ["rec.csv", "line 1", "';'"])
+
+
+@case("paper: no time column")
+def _(tmp):
+    for i in range(1, 6):
+        write(tmp, f"recs/exp{i}.csv", synthetic_experiment(i).drop(columns="time_s")
+              .to_csv(index=False))
+    sensors = "T1,T6,T8,T10,T13,T16"
+    return (["paper", "--recordings", str(tmp / "recs"), "--sensors-all", sensors, "--six",
+             sensors], ["exp1.csv", "no time column 'time_s'"])
+
+
+@case("evaluate: decimal comma read as point")
+def _(tmp):
+    argv = evaluate_case(tmp, synthetic_experiment(0).to_csv(index=False, sep=";",
+                                                               decimal=","))
+    return [*argv, "--decimal", "."], ["train.csv", "line 2", "column"]
 
 
 # --------------------------------------------------------------------------- studies
@@ -441,6 +551,8 @@ def snapshot(folder: Path) -> set[str]:
 
 def test_there_are_at_least_60_hostile_inputs():
     assert len(CASES) >= 60, len(CASES)
+    commands = {name.split(":")[0] for name in CASES}
+    assert {"fingerprint", "plot", "calibrate", "paper", "evaluate", "recording"} <= commands
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -464,4 +576,8 @@ def test_a_hostile_input_is_one_line_naming_where_and_writes_nothing(
     assert "Traceback" not in err
     for text in expected:
         assert text in lines[0], (text, lines[0])
+    # it names where: one of the files or flags it was given, or a file they name (air.csv)
+    named = [Path(a).name for a in argv if Path(a).suffix or "/" in a] + \
+        [a for a in argv if a.startswith("--")] + [Path(p).name for p in before]
+    assert any(name in lines[0] for name in named), (named, lines[0])
     assert snapshot(tmp_path) == before

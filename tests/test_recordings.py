@@ -52,7 +52,7 @@ def test_default_sensors_exclude_truth_drivers_and_displacements():
     ("time_s,T1\n0,NaN\n15,21\n", "line 2, column 'T1': NaN value 'NaN'"),
     ("time_s,T1\n0,20\n15,inf\n", "line 3, column 'T1': infinite value"),
     ("time_s,T1\n0,True\n15,False\n", "line 2, column 'T1': non-numeric value 'True'"),
-    ("time_s,T1\n0,20\n15,21,99\n", "cannot parse CSV"),
+    ("time_s,T1\n0,20\n15,21,99\n", "line 3: 3 field\\(s\\), the header has 2"),
     ("time_s,T1\n0,20\n15,21\n15,22\n", "line 4: 'time_s' does not increase"),
 ])
 def test_bad_input_one_line_errors(tmp_path, text, message):

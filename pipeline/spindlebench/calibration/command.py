@@ -21,7 +21,7 @@ from spindlebench.calibration import report
 from spindlebench.calibration.fitset import DEFAULT_FIT, check_fit_names
 from spindlebench.calibration.mapping import read_map
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate
-from spindlebench.calibration.series import load_series
+from spindlebench.calibration.series import check_roles, load_series
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.columns import ColumnRoles, add_role_arguments
 from spindlebench.listflags import split_list_flag
@@ -99,6 +99,8 @@ def _run(args: argparse.Namespace) -> int:
     if args.step_s is not None and not args.step_s > 0:
         raise SpindlebenchError(f"--step-s {args.step_s:g}: must be > 0")
     roles = ColumnRoles.from_args(args)
+    for path in args.recordings:  # a wrong file or time column before the slow translation
+        check_roles(Path(path), roles)
     ode = explicit_ode(args.models, segments=args.segments)
     recording_map = read_map(args.map_file, ode.outputs)
     fit_names = check_fit_names(

@@ -106,6 +106,18 @@ def noise_estimate(values: np.ndarray, kind: str) -> float:
     return float(max(mad, MIN_NOISE[kind]))
 
 
+def check_roles(path: Path, roles: ColumnRoles) -> tuple[str, str, str]:
+    """The delimiter, decimal mark and time column of a recording, from its header alone:
+    ``calibrate`` checks them before the slow model translation."""
+    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
+    time_column = roles.time_column or TIME_COLUMN
+    if time_column not in read_header(path, delimiter):
+        raise SpindlebenchError(f"recording {path}: no time column {time_column!r}; the "
+                                "calibration integrates the model over time and needs one: "
+                                "name it with --time-column")
+    return delimiter, decimal, time_column
+
+
 def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None,
                 roles: ColumnRoles | None = None) -> Series:
     """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given.
@@ -116,12 +128,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
     """
     path = Path(path)
     roles = roles or ColumnRoles()
-    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
-    time_column = roles.time_column or TIME_COLUMN
-    if time_column not in read_header(path, delimiter):
-        raise SpindlebenchError(f"recording {path}: no time column {time_column!r}; the "
-                                "calibration integrates the model over time and needs one: "
-                                "name it with --time-column")
+    delimiter, decimal, time_column = check_roles(path, roles)
     frame = read_recording(path, allow_missing=True,
                            columns=[*recording_map.columns(), time_column],
                            delimiter=delimiter, decimal=decimal)

@@ -271,8 +271,17 @@ def _read_diagnosing(
             path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c",
             encoding=ENCODING, sep=dialect.delimiter,
         )
-    except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[: exc.start].count(b"\n") + 1
+        raise SpindlebenchError(f"recording {path}, line {line}: not UTF-8 text (byte "
+                                f"{exc.start}); save it as UTF-8") from exc
+    except (pd.errors.ParserError, ValueError) as exc:
         detail = " ".join(str(exc).split())
+        fields = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", detail)
+        if fields:
+            expected, line, saw = fields.groups()
+            raise SpindlebenchError(f"recording {path}, line {line}: {saw} field(s), the "
+                                    f"header has {expected}") from exc
         raise SpindlebenchError(f"recording {path}: cannot parse CSV: {detail}") from exc
     if raw.shape[1] != len(header):
         raise SpindlebenchError(f"recording {path}: header and data have different widths")

@@ -102,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
     if args.clusters < 1:
         raise SelectionError(f"--clusters: must be at least 1, got {args.clusters}")
+    if args.json is not None and args.json.is_dir():
+        raise SelectionError(f"--json {args.json}: is a directory; give a file OUT.json")
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)
