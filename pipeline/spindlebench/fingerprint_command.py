@@ -15,8 +15,7 @@ The error column is ``--target``; without it ``drift_um`` when the recording has
 sensors, excluded columns and CSV dialect are the column roles of
 :mod:`spindlebench.formats.columns` (``--time-column``, ``--sensors``, ``--exclude``,
 ``--delimiter``, ``--decimal``): without ``--sensors`` the temperature-looking columns, listed
-on stdout with what was skipped and why. A time column other than ``time_s`` is drawn in
-its own numbers.
+on stdout with what was skipped and why. The time column is in seconds, drawn in hours.
 """
 
 from __future__ import annotations

@@ -23,7 +23,6 @@ import numpy as np
 
 from spindlebench.atomic import atomic_path
 from spindlebench.fingerprint import MIN_SENSOR_RISE_K, final, smooth
-from spindlebench.formats.recording import TIME_COLUMN
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -52,8 +51,7 @@ def sensor_median(rises: np.ndarray) -> np.ndarray | None:
 def _panel(ax: Axes, items: Sequence[Fingerprinted], title: str) -> None:
     colours = plt.get_cmap("tab10").colors
     for item, colour in zip(items, colours * (len(items) // 10 + 1), strict=False):
-        hours = item.time / 3600.0 if item.time_column == TIME_COLUMN else item.time
-        hours = hours - hours[0]
+        hours = (item.time - item.time[0]) / 3600.0  # the time column is in seconds (roles)
         error = normalised(item.error)
         if error is not None:
             ax.plot(hours, error, color=colour, lw=1.6, label=item.path.stem)
@@ -67,8 +65,7 @@ def _panel(ax: Axes, items: Sequence[Fingerprinted], title: str) -> None:
         if (values := [s[key] for s in stats if math.isfinite(s[key])]))
     ax.set_title(f"{title}\nmedian: {summary}" if summary else title, fontsize=10)
     ax.axhline(1.0, color="grey", lw=0.6)
-    unit = "h" if items and items[0].time_column == TIME_COLUMN else items[0].time_column
-    ax.set_xlabel(f"time since start ({unit})")
+    ax.set_xlabel("time since start (h)")
     ax.legend(fontsize=7, loc="lower right")
     ax.grid(alpha=0.3)
 
