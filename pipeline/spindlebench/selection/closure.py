@@ -86,22 +86,21 @@ def prim_tree(n: int, row: Callable[[int], np.ndarray]) -> SpanningTree:
     """Prim's algorithm on the complete graph of ``n`` vertices whose similarities to vertex
     v are ``row(v)`` (asked once per vertex): start at vertex 0, take the largest link, the
     first one on ties; a parent changes only on a strictly larger similarity."""
-    in_tree = np.zeros(n, dtype=bool)
     best = np.full(n, -np.inf)  # best similarity linking each outside vertex to the tree
+    guard = best.copy()  # the same, +inf for tree members: no row raises them
     parent = np.full(n, -1, dtype=np.intp)
     weight = np.ones(n)
     order = np.empty(n, dtype=np.intp)
     vertex = 0
     for position in range(n):
         if position > 0:
-            candidates = np.where(in_tree, -np.inf, best)
-            vertex = int(np.argmax(candidates))
+            vertex = int(np.argmax(best))  # tree members hold -inf
             weight[vertex] = best[vertex]
         order[position] = vertex
-        in_tree[vertex] = True
+        best[vertex], guard[vertex] = -np.inf, np.inf
         similarities = row(vertex)
-        improves = (similarities > best) & ~in_tree
-        best[improves] = similarities[improves]
+        improves = similarities > guard
+        best[improves] = guard[improves] = similarities[improves]
         parent[improves] = vertex
     return SpanningTree(order=order, parent=parent, weight=weight)
 

@@ -253,7 +253,7 @@ def maximum_spanning_tree_of_pairs(
     if kept.size <= COMPILED_ABOVE:
         with threadpool_limits(limits=1, user_api="blas"):
             return prim_tree(kept.size, geometry.rows_of(kept))
-    from spindlebench.selection.prim_kernel import prim_steps
+    from spindlebench.selection.prim_kernel import prim_steps, tournament
 
     n_all = geometry.first.size
     m = geometry.factor.shape[1]
@@ -264,6 +264,9 @@ def maximum_spanning_tree_of_pairs(
     inverse = geometry.inverse_norm[kept].copy()
     best = np.full(kept.size, -np.inf)
     parent = np.full(kept.size, -1, dtype=np.int32)
+    threshold = np.full(kept.size, -np.inf)  # every candidate beats "no link yet"
+    tree = np.empty(2 * (1 << max(0, kept.size - 1).bit_length()), dtype=np.int32)
+    tournament(best, tree, kept.size)
     state = np.array([0, kept.size, 0], dtype=np.int64)
     order = np.empty(kept.size, dtype=np.int64)
     weight = np.ones(n_all)
@@ -273,7 +276,7 @@ def maximum_spanning_tree_of_pairs(
     with threadpool_limits(limits=1, user_api="blas"):
         for start in range(0, kept.size, PRIM_BATCH):
             prim_steps(factor_rows, factor, ids, first, second, inverse, best, parent,
-                       state, order, weight, tree_parent, start,
+                       threshold, tree, state, order, weight, tree_parent, start,
                        min(start + PRIM_BATCH, kept.size))
     local = np.full(n_all, -1, dtype=np.intp)
     local[kept] = np.arange(kept.size)
