@@ -243,3 +243,46 @@ def test_paper_study_option_and_config_key(simulated, tmp_path, capsys):
     toml.write_text('missing = "fill"\n')
     with pytest.raises(SpindlebenchError, match="key 'missing': 'fill' is not one of"):
         study_config.load(toml)
+
+
+def test_checked_recordings_reused_give_what_evaluate_gives_each_time(simulated):
+    """One load, many evaluations (a study's one pass): every k, group and method gives the
+    same predictions, rows, warnings and errors as ``evaluate`` reading the files afresh."""
+    import warnings
+
+    from spindlebench.selection.evaluate import evaluate_checked, load_recordings
+    from spindlebench.selection.registry import MethodChoice
+
+    faults, clean = simulated
+    train, tests = load_recordings(clean, [faults], "drop-rows")
+    cases = [dict(sensors=sensors, k=k, differences=differences, method=method)
+             for sensors in (None, ["T1", "T6", "T7", "T13"], ["T7"])
+             for k in (1, 2, 3) for differences in (False, True)
+             for method in ("closure", "kmeans")]
+    outcomes = {"ok": 0, "error": 0}
+    for case in cases:
+        kwargs = dict(case, method=MethodChoice(case["method"]))
+        with warnings.catch_warnings(record=True) as fresh_warnings:
+            warnings.simplefilter("always")
+            try:
+                fresh = evaluate(clean, [faults], TARGET, missing="drop-rows", **kwargs)
+            except SelectionError as exc:
+                fresh = exc
+        with warnings.catch_warnings(record=True) as reused_warnings:
+            warnings.simplefilter("always")
+            try:
+                reused = evaluate_checked(train, tests, TARGET, missing="drop-rows", **kwargs)
+            except SelectionError as exc:
+                reused = exc
+        assert [str(w.message) for w in reused_warnings] == \
+            [str(w.message) for w in fresh_warnings]
+        if isinstance(fresh, SelectionError):
+            assert str(reused) == str(fresh)
+            outcomes["error"] += 1
+            continue
+        outcomes["ok"] += 1
+        assert reused.selected == fresh.selected and reused.rmse_um == fresh.rmse_um
+        for name in fresh.predictions:
+            assert np.array_equal(reused.predictions[name], fresh.predictions[name])
+            assert np.array_equal(reused.test_rows[name], fresh.test_rows[name])
+    assert outcomes["ok"] and outcomes["error"]  # k > candidates fails for the one-sensor set

@@ -99,3 +99,82 @@ def test_rank_by_slice_orders_every_method_by_median():
     none = ranks[(ranks["axis"] == "fault") & (ranks["value"] == "none")]
     assert list(none.sort_values("rank")["method"]) == ["six_raw", "ridge", "six_diff"]
     assert "oracle" not in set(ranks["method"]) and set(ranks["of"]) == {3}
+
+
+def _old_scores(train, tests, spec, similarity="abs-pearson"):
+    """What each method scored before the one pass: every method on its own copies of the
+    frames, through the public ``evaluate`` or the baselines' frame-based formulas."""
+    from sklearn.linear_model import Ridge
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from spindlebench.selection import PairwiseDifferences, correlation_with, evaluate, fit_ols
+    from spindlebench.selection.regression import rises, rmse
+    from spindlebench.selection.regressors import blocked_cv_alpha
+    from spindlebench.studies.methods import GROUP_SENSORS, SIX_DIFF
+
+    train = train.copy()
+    tests = {name: frame.copy() for name, frame in tests.items()}
+
+    def raw(frame):
+        return rises(frame.loc[:, list(SENSORS)].to_numpy(dtype=float))
+
+    def scored(frames, predictions):
+        return {name: (rmse(frame["drift_um"].to_numpy(float), predictions[name]),
+                       rmse(frame["true_drift_rise_um"].to_numpy(float), predictions[name]))
+                for name, frame in frames.items()}
+
+    y = train["drift_um"].to_numpy(float)
+    if spec.group is not None:
+        import warnings
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = evaluate(train, tests, "drift_um", sensors=list(GROUP_SENSORS[spec.group]),
+                              k=spec.k, differences=spec.group == SIX_DIFF,
+                              similarity=similarity, missing="drop-rows", method=spec.choice,
+                              seed=spec.seed)
+        kept = {name: frame.iloc[result.test_rows[name]] for name, frame in tests.items()}
+        return scored(kept, result.predictions)
+    if spec.name == "top-k-correlated":
+        psi = np.nan_to_num(np.abs(correlation_with(raw(train), y)), nan=-1.0)
+        chosen = np.argsort(-psi, kind="stable")[: spec.k]
+        fit = fit_ols(raw(train)[:, chosen], y)
+        return scored(tests, {n: fit.predict(raw(f)[:, chosen]) for n, f in tests.items()})
+    if spec.name == "ridge":
+        alpha = blocked_cv_alpha(PairwiseDifferences().fit(raw(train)).transform(raw(train)), y)
+        model = make_pipeline(PairwiseDifferences(), StandardScaler(),
+                              Ridge(alpha=alpha)).fit(raw(train), y)
+        return scored(tests, {n: model.predict(raw(f)) for n, f in tests.items()})
+    return scored(tests, {n: fit_ols(raw(f), f["drift_um"].to_numpy(float)).predict(raw(f))
+                          for n, f in tests.items()})
+
+
+def test_one_pass_scores_equal_each_method_on_its_own_frames(tmp_path):
+    """score_all converts and checks the recordings once for every method and k: its scores
+    are those of each method run alone on fresh frames, to the last bit; also with a test
+    run that lost a sensor for good (NaN column) and one with a gap (NaN rows)."""
+    from spindlebench.studies.executor import one_line_error
+    from spindlebench.studies.methods import score_all
+
+    study = _study(tmp_path, 'methods = ["closure", "kmeans+grey"]\n'
+                             'baselines = ["top-k-correlated", "ridge"]\n'
+                             'ground_truth = true\ngroups = ["all_raw", "six_raw", "six_diff"]')
+    specs = method_specs(study.methods)
+    assert {s.name for s in specs} >= {"six_diff", "ridge", "oracle", "top-k-correlated"}
+    train = _frame(1, 1.0)
+    gap, lost = _frame(4, 0.9), _frame(5, 1.1)
+    gap.loc[30:33, "T6"] = np.nan
+    lost["T13"] = np.nan
+    tests = {"b": _frame(2, 0.6), "c": _frame(3, 1.3), "gap": gap, "lost": lost}
+    rows = pd.DataFrame(score_all(specs, train, tests, "abs-pearson"))
+    assert (rows["error"] != "").any() and (rows["error"] == "").any()  # both paths taken
+    for spec in specs:
+        mine = rows[(rows["method"] == spec.name)
+                    & (rows["k"].fillna(-1) == (-1 if spec.k is None else spec.k))]
+        try:
+            old = _old_scores(train, tests, spec)
+        except Exception as exc:  # the old path failed: the one pass records the same error
+            assert set(mine["error"]) == {one_line_error(exc)}
+            continue
+        assert (mine["error"] == "").all(), spec
+        for _, row in mine.iterrows():
+            assert (row["rmse_um"], row["rmse_true_um"]) == old[row["test_experiment"]], spec

@@ -7,6 +7,7 @@ T1-T2, T1-T3, ..., T1-Tn, T2-T3, ... as in the paper.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -15,9 +16,14 @@ import pandas as pd
 from spindlebench.selection.errors import SelectionError
 
 
+@functools.lru_cache(maxsize=32)
 def pair_indices(n_sensors: int) -> tuple[np.ndarray, np.ndarray]:
-    """Indices (first, second) of every pair, first before second."""
-    return np.triu_indices(n_sensors, k=1)
+    """Indices (first, second) of every pair, first before second (read-only arrays, made
+    once per size: a study asks for them thousands of times)."""
+    first, second = np.triu_indices(n_sensors, k=1)
+    first.flags.writeable = False
+    second.flags.writeable = False
+    return first, second
 
 
 def difference_names(names: Sequence[str]) -> list[str]:

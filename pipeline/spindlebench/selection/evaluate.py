@@ -62,6 +62,134 @@ SPARSE_SENSOR_FRACTION = 0.5
 _DROP_HINT = "missing='drop-rows' (--missing drop-rows) drops incomplete samples"
 
 
+class CheckedRecording:
+    """A recording's columns as float arrays, each converted and checked at most once.
+
+    Why: a study scores many methods and k on the same recordings; ``evaluate`` converting
+    and checking every column of every recording again per call was most of a sweep's time.
+    ``take(rows)`` is the same recording restricted to some samples (positions), sharing the
+    conversions; its values are exactly ``frame.iloc[rows][column].to_numpy(dtype=float)``.
+    """
+
+    def __init__(self, name: str, frame: pd.DataFrame) -> None:
+        self.name = name
+        self.frame = frame
+        self._rows: np.ndarray | None = None
+        self._parent: CheckedRecording | None = None
+        self._values: dict[str, np.ndarray] = {}
+        self._nan: dict[str, np.ndarray] = {}
+        self._problems: dict[tuple[str, str], str | None] = {}
+        self._block: np.ndarray | None = None
+        self._positions: dict[str, int] = {}
+
+    def __len__(self) -> int:
+        return len(self.frame) if self._rows is None else len(self._rows)
+
+    @property
+    def columns(self) -> pd.Index:
+        return self.frame.columns
+
+    def take(self, rows: np.ndarray) -> CheckedRecording:
+        """The samples at positions ``rows`` (of this recording) only."""
+        part = CheckedRecording(self.name, self.frame)
+        part._rows, part._parent = np.asarray(rows), self
+        return part
+
+    def values(self, column: str) -> np.ndarray:
+        """The column as float64 (read-only use: shared by every caller)."""
+        if column not in self._values:
+            if self._parent is not None:
+                self._values[column] = self._parent.values(column)[self._rows]
+            elif self._float_block() is not None and column in self._positions:
+                self._values[column] = self._float_block()[:, self._positions[column]]
+            else:
+                self._values[column] = self.frame[column].to_numpy(dtype=float)
+        return self._values[column]
+
+    def _float_block(self) -> np.ndarray | None:
+        """All columns as one float64 array when every column is float64 and named once
+        (a frame's own columns are then views of it; one conversion instead of one lookup
+        per column)."""
+        if self._block is None and not self._positions:
+            frame = self.frame
+            if frame.columns.is_unique and all(dtype == np.float64 for dtype in frame.dtypes):
+                self._block = frame.to_numpy(dtype=float)
+                self._positions = {column: i for i, column in enumerate(frame.columns)}
+            else:
+                self._positions = {"": -1}  # looked: not one float block
+        return self._block
+
+    def is_nan(self, column: str) -> np.ndarray:
+        """Where ``column`` is NaN (read-only use)."""
+        if column not in self._nan:
+            self._nan[column] = np.isnan(self.values(column))
+        return self._nan[column]
+
+    def stack(self, columns: Sequence[str]) -> np.ndarray:
+        """``columns`` side by side, (samples, len(columns))."""
+        out = np.empty((len(self), len(columns)))
+        for i, column in enumerate(columns):
+            out[:, i] = self.values(column)
+        return out
+
+    def missing(self, columns: Sequence[str]) -> np.ndarray:
+        """Where ``columns`` are missing (NaN), (samples, len(columns)); for checked columns."""
+        out = np.empty((len(self), len(columns)), dtype=bool)
+        for i, column in enumerate(columns):
+            out[:, i] = self.is_nan(column)
+        return out
+
+    def problem(self, column: str, missing: str) -> str | None:
+        """Why ``column`` cannot be used (one line without the recording's name), or None."""
+        key = (column, missing)
+        if key not in self._problems:
+            block = self._float_block()
+            values = block[:, self._positions[column]] if block is not None \
+                and column in self._positions else None
+            self._problems[key] = _column_problem(self.frame, column, missing, values)
+        return self._problems[key]
+
+
+def _column_problem(frame: pd.DataFrame, column: str, missing: str,
+                    values: np.ndarray | None = None) -> str | None:
+    """Text, booleans and infinities never pass; NaN only with ``missing="drop-rows"``.
+    ``values``: the column, known to be float64 (skips the frame lookup)."""
+    if values is None:
+        cells = frame[column]
+        if isinstance(cells, pd.Series) and cells.dtype == np.float64:
+            values = cells.to_numpy()
+    if values is not None:  # the common case: only infinities and NaN to look for
+        infinite = np.isinf(values)
+        if infinite.any():
+            first = int(np.flatnonzero(infinite)[0])
+            return (f"{_where(frame, first)}, column '{column}': infinite value "
+                    f"{str(frame[column].iloc[first])!r}")
+        nan = np.isnan(values)
+        if missing == "error" and nan.any():
+            first = int(np.flatnonzero(nan)[0])
+            return (f"{_where(frame, first)}, column '{column}': missing value "
+                    f"({int(nan.sum())} in this column); {_DROP_HINT}")
+        return None
+    cells = frame[column]
+    numeric = pd.to_numeric(cells, errors="coerce")
+    values = numeric.to_numpy(dtype=float)
+    nan = np.isnan(values)
+    given = cells.notna().to_numpy(dtype=bool)
+    if pd.api.types.is_bool_dtype(cells):
+        return f"column '{column}': boolean values"
+    bad = np.flatnonzero(np.isinf(values) | (nan & given))
+    if bad.size:
+        first = int(bad[0])
+        what = "infinite value" if np.isinf(values[first]) else "non-numeric value"
+        return (f"{_where(frame, first)}, column '{column}': {what} "
+                f"{str(cells.iloc[first])!r}")
+    if missing == "error" and nan.any():
+        first = int(np.flatnonzero(nan)[0])
+        return (f"{_where(frame, first)}, column '{column}': missing value "
+                f"({int(nan.sum())} in this column); {_DROP_HINT}")
+    return None
+
+
 @dataclass(frozen=True)
 class CandidateSet:
     """Raw sensors plus (optionally) their pairwise differences, as rises, any subset of columns."""
@@ -75,8 +203,10 @@ class CandidateSet:
         names = list(self.sensors)
         return names + difference_names(names) if self.differences else names
 
-    def matrix(self, frame: pd.DataFrame, columns: Sequence[int] | None = None) -> np.ndarray:
-        """Candidate values (rises) of ``frame``; only ``columns`` if given.
+    def matrix(self, frame: pd.DataFrame | CheckedRecording,
+               columns: Sequence[int] | None = None) -> np.ndarray:
+        """Candidate values (rises) of ``frame`` (or of a checked recording); only
+        ``columns`` if given.
 
         Only the sensors those candidates are made of are read: with ``missing="drop-rows"``
         a test recording is complete only in those, and an unused sensor's gap must not
@@ -87,9 +217,9 @@ class CandidateSet:
             raise SelectionError(f"candidate index out of range 0..{len(self.names) - 1}")
         needed = self.sensors_of(wanted)
         raw = np.full((len(frame), n), np.nan)
-        raw[:, [self.sensors.index(s) for s in needed]] = rises(
+        values = frame.stack(needed) if isinstance(frame, CheckedRecording) else \
             frame.loc[:, needed].to_numpy(dtype=float)
-        )
+        raw[:, [self.sensors.index(s) for s in needed]] = rises(values)
         is_raw = wanted < n
         pair = wanted[~is_raw] - n  # index into the pair list
         first, second = pair_indices(n)
@@ -261,41 +391,25 @@ def _where(frame: pd.DataFrame, position: int) -> str:
     return f"row {index[position]}"
 
 
-def _check_values(name: str, frame: pd.DataFrame, columns: Sequence[str], missing: str) -> None:
+def _check_values(recording: CheckedRecording, columns: Sequence[str], missing: str) -> None:
     """Frames handed in directly skip ``read_recording``: check the columns used. NaN passes
     only with ``missing="drop-rows"``; text, booleans and infinities never do."""
-    if len(frame) < 2:
+    if len(recording) < 2:
         raise SelectionError(
-            f"recording {name}: has {len(frame)} row(s); an experiment needs at least 2"
+            f"recording {recording.name}: has {len(recording)} row(s); an experiment needs at "
+            "least 2"
         )
     for column in columns:
-        cells = frame[column]
-        numeric = pd.to_numeric(cells, errors="coerce")
-        values = numeric.to_numpy(dtype=float)
-        nan = np.isnan(values)
-        given = cells.notna().to_numpy(dtype=bool)
-        if pd.api.types.is_bool_dtype(cells):
-            raise SelectionError(f"recording {name}, column '{column}': boolean values")
-        bad = np.flatnonzero(np.isinf(values) | (nan & given))
-        if bad.size:
-            first = int(bad[0])
-            what = "infinite value" if np.isinf(values[first]) else "non-numeric value"
-            raise SelectionError(
-                f"recording {name}, {_where(frame, first)}, column '{column}': {what} "
-                f"{str(cells.iloc[first])!r}"
-            )
-        if missing == "error" and nan.any():
-            first = int(np.flatnonzero(nan)[0])
-            raise SelectionError(
-                f"recording {name}, {_where(frame, first)}, column '{column}': missing value "
-                f"({int(nan.sum())} in this column); {_DROP_HINT}"
-            )
+        problem = recording.problem(column, missing)
+        if problem:
+            raise SelectionError(f"recording {recording.name}, {problem}")
 
 
-def _sparse_sensors(name: str, frame: pd.DataFrame, sensors: list[str]) -> list[str]:
+def _sparse_sensors(recording: CheckedRecording, sensors: list[str]) -> list[str]:
     """``sensors`` without those missing in more than ``SPARSE_SENSOR_FRACTION`` of the
-    samples of ``frame`` (warned); an error if none is left."""
-    fractions = {s: float(frame[s].isna().mean()) for s in sensors}
+    samples of ``recording`` (warned); an error if none is left."""
+    name = recording.name
+    fractions = {s: float(np.isnan(recording.values(s)).mean()) for s in sensors}
     sparse = [s for s in sensors if fractions[s] > SPARSE_SENSOR_FRACTION]
     if not sparse:
         return sensors
@@ -309,15 +423,16 @@ def _sparse_sensors(name: str, frame: pd.DataFrame, sensors: list[str]) -> list[
         f"recording {name}: left out sensor(s) missing in more than half of the samples: "
         f"{shown}",
         SelectionWarning,
-        stacklevel=3,
+        stacklevel=4,
     )
     return kept
 
 
-def _complete_rows(name: str, frame: pd.DataFrame, columns: Sequence[str]) -> np.ndarray:
+def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.ndarray:
     """Positions of the samples where every one of ``columns`` is present (warned when some
     are not); an error if fewer than 2 are left."""
-    missing = frame.loc[:, list(columns)].isna().to_numpy()
+    name, frame = recording.name, recording.frame
+    missing = recording.missing(list(columns))
     incomplete = missing.any(axis=1)
     rows = np.flatnonzero(~incomplete)
     if not incomplete.any():
@@ -334,7 +449,7 @@ def _complete_rows(name: str, frame: pd.DataFrame, columns: Sequence[str]) -> np
         f"missing values ({shown}); rises start at the first complete sample "
         f"({_where(frame, int(rows[0]))})",
         SelectionWarning,
-        stacklevel=3,
+        stacklevel=4,
     )
     return rows
 
@@ -424,11 +539,24 @@ def evaluate(
         )
     choice = method if isinstance(method, MethodChoice) else \
         MethodChoice(method, within, regressor)
+    train_recording, test_recordings = load_recordings(train, tests, missing)
+    return evaluate_checked(train_recording, test_recordings, target, sensors, k=k,
+                            differences=differences, similarity=similarity, closure=closure,
+                            missing=missing, method=choice, seed=seed)
+
+
+def load_recordings(
+    train: RecordingLike,
+    tests: RecordingLike | Sequence[RecordingLike] | Mapping[str, RecordingLike],
+    missing: str = "error",
+) -> tuple[CheckedRecording, dict[str, CheckedRecording]]:
+    """The training and test recordings of ``evaluate`` (read if paths), named as it names
+    them, ready for any number of ``evaluate_checked`` calls."""
     if isinstance(tests, (str, os.PathLike, pd.DataFrame)):
         tests = [tests]  # one test recording; a string would otherwise be read per character
     train_name, train_frame = _load(train, "train", missing)
     items = tests.items() if isinstance(tests, Mapping) else enumerate(tests, start=1)
-    test_frames: dict[str, pd.DataFrame] = {}
+    test_frames: dict[str, CheckedRecording] = {}
     for key, recording in items:
         name, frame = _load(
             recording, f"test{key}" if isinstance(key, int) else str(key), missing
@@ -436,21 +564,50 @@ def evaluate(
         name = str(key) if isinstance(tests, Mapping) else name
         if name in test_frames:
             raise SelectionError(f"test recording {name} given twice")
-        test_frames[name] = frame
+        test_frames[name] = CheckedRecording(name, frame)
     if not test_frames:
         raise SelectionError("at least one test recording is needed")
-    chosen = resolve_sensors(train_name, train_frame, test_frames, target, sensors)
-    for name, frame in [(train_name, train_frame), *test_frames.items()]:
-        _check_values(name, frame, [*chosen, target], missing)
+    return CheckedRecording(train_name, train_frame), test_frames
 
-    train_rows = np.arange(len(train_frame))
+
+def evaluate_checked(
+    train: CheckedRecording,
+    tests: Mapping[str, CheckedRecording],
+    target: str,
+    sensors: Sequence[str] | None = None,
+    k: int = 2,
+    differences: bool = False,
+    similarity: str = DEFAULT_SIMILARITY,
+    closure: str = "fast",
+    missing: str = "error",
+    method: MethodChoice | None = None,
+    seed: int = 0,
+) -> Evaluation:
+    """``evaluate`` on recordings from ``load_recordings``: the same result, messages and
+    warnings, but each column of each recording is converted and checked once however many
+    methods, k and sensor groups are evaluated on them (a study's one pass)."""
+    if missing not in MISSING_MODES:
+        raise SelectionError(
+            f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
+        )
+    if not tests:
+        raise SelectionError("at least one test recording is needed")
+    choice = MethodChoice() if method is None else method
+    train_name = train.name
+    frames = {name: recording.frame for name, recording in tests.items()}
+    chosen = resolve_sensors(train_name, train.frame, frames, target, sensors)
+    for recording in [train, *tests.values()]:
+        _check_values(recording, [*chosen, target], missing)
+
+    train_rows = np.arange(len(train))
+    train_frame = train
     if missing == "drop-rows":
-        chosen = _sparse_sensors(train_name, train_frame, chosen)
-        train_rows = _complete_rows(train_name, train_frame, [*chosen, target])
-        train_frame = train_frame.iloc[train_rows]
+        chosen = _sparse_sensors(train, chosen)
+        train_rows = _complete_rows(train, [*chosen, target])
+        train_frame = train.take(train_rows)
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
-    y_train = train_frame[target].to_numpy(dtype=float)
+    y_train = train_frame.values(target)
     if constant_columns(y_train[:, None])[0]:
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
@@ -466,12 +623,13 @@ def evaluate(
                        names=selected_names)
     used = [*candidates.sensors_of(selection.selected), target]
     predictions, measured, errors, test_rows = {}, {}, {}, {}
-    for name, frame in test_frames.items():
-        test_rows[name] = np.arange(len(frame))
+    for name, recording in tests.items():
+        test_rows[name] = np.arange(len(recording))
+        frame = recording
         if missing == "drop-rows":
-            test_rows[name] = _complete_rows(name, frame, used)
-            frame = frame.iloc[test_rows[name]]
-        measured[name] = frame[target].to_numpy(dtype=float)
+            test_rows[name] = _complete_rows(recording, used)
+            frame = recording.take(test_rows[name])
+        measured[name] = frame.values(target)
         with _naming(name):
             values = _finite(candidates.matrix(frame, selection.selected), selected_names)
             predictions[name] = fit.predict(values)

@@ -28,9 +28,10 @@ from spindlebench.testbench.scenario import Scenario
 from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.simulate import record
 
-#: Truth columns an evaluation needs from a recording.
 #: Pseudo-condition of the ground-truth rows.
 NOISE_FREE = "noise-free"
+#: Columns of the frames the methods see (``measured_frame``).
+MEASURED_COLUMNS = (TIME_COLUMN, *SENSORS, TARGET, TRUTH)
 
 
 def simulate_job(scenario: Scenario, fmu_path: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
@@ -70,19 +71,24 @@ def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
     temperatures = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
     drift = truth[TRUTH_COLUMNS[-1]].to_numpy(float)
     time_s = truth[TIME_COLUMN].to_numpy(float)
-    frame = pd.DataFrame({TIME_COLUMN: time_s})
+    # one float block, filled column group by column group: building the frame column by
+    # column was a third of an evaluation's time
+    values = np.empty((len(time_s), len(MEASURED_COLUMNS)))
+    values[:, 0] = time_s
     if job.condition is None:
-        frame[list(SENSORS)] = temperatures
-        frame[TARGET] = drift - drift[0]
+        values[:, 1:-2] = temperatures
+        values[:, -2] = drift - drift[0]
     else:
         fault = job.condition.fault if experiment != job.train else None
         model = sensor_model(job.condition.noise, fault)
         measured_C, measured_drift = measure(model, time_s, temperatures, drift, SENSORS,
                                              job.seeds[experiment.id])
-        frame[list(SENSORS)] = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
-        frame[TARGET] = measured_drift
-    frame[TRUTH] = drift - drift[0]
-    return frame
+        if np.isnan(measured_C).any():  # a dropout: hold the last good reading
+            measured_C = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
+        values[:, 1:-2] = measured_C
+        values[:, -2] = measured_drift
+    values[:, -1] = drift - drift[0]
+    return pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
 
 
 def evaluate_job(job: EvaluationJob) -> pd.DataFrame:

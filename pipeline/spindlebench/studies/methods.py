@@ -40,7 +40,7 @@ from sklearn.linear_model import Ridge
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
-from spindlebench.formats.recording import DRIFT_COLUMN
+from spindlebench.formats.recording import DRIFT_COLUMN, recording_name
 from spindlebench.names import (
     ALL_RAW,
     DEFAULT_METHOD,
@@ -51,7 +51,8 @@ from spindlebench.names import (
     SIX_DIFF,
     SIX_RAW,
 )
-from spindlebench.selection import PairwiseDifferences, evaluate, rises, rmse
+from spindlebench.selection import PairwiseDifferences, rises, rmse
+from spindlebench.selection.evaluate import CheckedRecording, evaluate_checked
 from spindlebench.selection.registry import (
     MethodChoice,
     fit_regressor,
@@ -135,32 +136,74 @@ class Score:
     selected: str
 
 
+class EvaluationData:
+    """One evaluation's recordings, converted and checked once for every method and k.
+
+    Why: each of a job's methods used to read, check and subtract the same frames again
+    (``evaluate`` per group and k, the raw rises per baseline): 99 % of an evaluation's time,
+    the selection maths 1 %. The frames are columns T1..T20, drift_um and
+    true_drift_rise_um; every method reads them through here, so the results are those of
+    the per-method path to the last bit (tests compare the two).
+    """
+
+    def __init__(self, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame]) -> None:
+        self.train = train
+        self.tests = dict(tests)
+        self.checked_train = CheckedRecording(recording_name(train, "train"), train)
+        self.checked_tests = {str(name): CheckedRecording(str(name), frame)
+                              for name, frame in self.tests.items()}
+        self._rises: dict[int, np.ndarray] = {}
+        self._names = {id(frame): str(name) for name, frame in self.tests.items()}
+
+    def raw_rises(self, frame: pd.DataFrame) -> np.ndarray:
+        """The rises of the 20 raw sensors of one of the frames (shared: do not modify).
+
+        Column-major, as ``frame.loc[:, SENSORS].to_numpy()`` gives them: the BLAS calls
+        of the fits below may round differently on another memory layout."""
+        key = id(frame)
+        if key not in self._rises:
+            recording = self.checked_train if frame is self.train else \
+                self.checked_tests[self._names[key]]
+            self._rises[key] = rises(np.asfortranarray(recording.stack(SENSORS)))
+        return self._rises[key]
+
+    def column(self, name: str, column: str) -> np.ndarray:
+        """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
+        return self.checked_tests[str(name)].values(column)
+
+
 def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
-               similarity: str) -> dict[str, Score]:
+               similarity: str, data: EvaluationData | None = None) -> dict[str, Score]:
     """Train ``spec`` on ``train`` (columns T1..T20, drift_um, true_drift_rise_um) and score
-    it on every frame of ``tests``."""
+    it on every frame of ``tests``; ``data`` (of the same frames) shares their conversions
+    with the job's other methods."""
+    if data is None:
+        data = EvaluationData(train, tests)
     if spec.group is not None:
-        return _paper_group(spec, train, tests, similarity)
+        return _paper_group(spec, data, similarity)
     if spec.name == "top-k-correlated":
-        return _top_k_correlated(spec, train, tests)
+        return _top_k_correlated(spec, data)
     if spec.name == "ridge":
-        return _ridge(train, tests)
+        return _ridge(data)
     if spec.name == ORACLE:
-        return _oracle(tests)
+        return _oracle(data)
     raise ValueError(f"unknown method {spec.name!r}")
 
 
-def _scores(tests: Mapping[str, pd.DataFrame], predictions: Mapping[str, np.ndarray],
-            selected: str) -> dict[str, Score]:
-    return {
-        name: Score(rmse(frame[TARGET].to_numpy(float), predictions[name]),
-                    rmse(frame[TRUTH].to_numpy(float), predictions[name]), selected)
-        for name, frame in tests.items()
-    }
+def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
+            rows: Mapping[str, np.ndarray] | None = None) -> dict[str, Score]:
+    """Scores of the predictions of every test run (on its samples ``rows`` if given)."""
+    scores = {}
+    for name in data.tests:
+        measured, truth = data.column(name, TARGET), data.column(name, TRUTH)
+        if rows is not None:
+            measured, truth = measured[rows[name]], truth[rows[name]]
+        scores[name] = Score(rmse(measured, predictions[name]),
+                             rmse(truth, predictions[name]), selected)
+    return scores
 
 
-def _paper_group(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
-                 similarity: str) -> dict[str, Score]:
+def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
     # A dropout reaches evaluate only as a whole-run NaN column (jobs.measured_frame holds a
     # dropped sensor at its last good reading): with "drop-rows" a group whose model does not
     # read that sensor is still scored; one that does fails with a one-line error.
@@ -168,48 +211,43 @@ def _paper_group(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.D
         raise ValueError(f"{spec.name} needs a number of clusters k")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
-        result = evaluate(train, dict(tests), TARGET, sensors=list(GROUP_SENSORS[spec.group]),
-                          k=spec.k, differences=spec.group == SIX_DIFF,
-                          similarity=similarity, missing="drop-rows", method=spec.choice,
-                          seed=spec.seed)
-    kept = {name: frame.iloc[result.test_rows[name]] for name, frame in tests.items()}
-    return _scores(kept, result.predictions, ";".join(result.selected))
+        result = evaluate_checked(data.checked_train, data.checked_tests, TARGET,
+                                  sensors=list(GROUP_SENSORS[spec.group]), k=spec.k,
+                                  differences=spec.group == SIX_DIFF, similarity=similarity,
+                                  missing="drop-rows", method=spec.choice, seed=spec.seed)
+    return _scores(data, result.predictions, ";".join(result.selected), result.test_rows)
 
 
-def _raw_rises(frame: pd.DataFrame) -> np.ndarray:
-    return rises(frame.loc[:, list(SENSORS)].to_numpy(dtype=float))
-
-
-def _top_k_correlated(spec: MethodSpec, train: pd.DataFrame,
-                      tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
-    X = _raw_rises(train)
-    y = train[TARGET].to_numpy(float)
+def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
+    X = data.raw_rises(data.train)
+    y = data.train[TARGET].to_numpy(float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         selection = select_with(TOP_K, X, y, spec.k, names=SENSORS)
     chosen = selection.selected
     fit = fit_with(TOP_K, X[:, chosen], y)
-    predictions = {name: fit.predict(_raw_rises(frame)[:, chosen])
-                   for name, frame in tests.items()}
-    return _scores(tests, predictions, ";".join(SENSORS[i] for i in chosen))
+    predictions = {name: fit.predict(data.raw_rises(frame)[:, chosen])
+                   for name, frame in data.tests.items()}
+    return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
 
 
-def _ridge(train: pd.DataFrame, tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
-    X, y = _raw_rises(train), train[TARGET].to_numpy(float)
+def _ridge(data: EvaluationData) -> dict[str, Score]:
+    X, y = data.raw_rises(data.train), data.train[TARGET].to_numpy(float)
     candidates = PairwiseDifferences().fit(X)
     alpha = blocked_cv_alpha(candidates.transform(X), y)
     model = make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha=alpha)).fit(X, y)
-    predictions = {name: model.predict(_raw_rises(frame)) for name, frame in tests.items()}
-    return _scores(tests, predictions, f"all 210 candidates (alpha={alpha:.3g})")
+    predictions = {name: model.predict(data.raw_rises(frame))
+                   for name, frame in data.tests.items()}
+    return _scores(data, predictions, f"all 210 candidates (alpha={alpha:.3g})")
 
 
-def _oracle(tests: Mapping[str, pd.DataFrame]) -> dict[str, Score]:
+def _oracle(data: EvaluationData) -> dict[str, Score]:
     predictions = {}
-    for name, frame in tests.items():
-        X = _raw_rises(frame)
+    for name, frame in data.tests.items():
+        X = data.raw_rises(frame)
         fit = fit_regressor(DEFAULT_REGRESSOR, X, frame[TARGET].to_numpy(float))
         predictions[name] = fit.predict(X)
-    return _scores(tests, predictions, "all 20 sensors, fitted on the held-out run itself")
+    return _scores(data, predictions, "all 20 sensors, fitted on the held-out run itself")
 
 
 def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
@@ -217,9 +255,10 @@ def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, 
     """Rows (method, k, test, scores or error) for every spec; a failing method is recorded,
     never raised, so one bad fit does not cost the others."""
     rows: list[dict[str, object]] = []
+    data = EvaluationData(train, tests)  # the one pass: every spec works on its arrays
     for spec in specs:
         try:
-            scores = run_method(spec, train, tests, similarity)
+            scores = run_method(spec, train, tests, similarity, data)
         except Exception as exc:  # failure isolation per method
             message = one_line_error(exc)
             rows.extend({"method": spec.name, "k": spec.k, "test_experiment": name,
