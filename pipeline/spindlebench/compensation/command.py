@@ -23,6 +23,7 @@ from spindlebench import atomic, provenance
 from spindlebench.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.compensation.study import DAY_MODES, CompensationStudy, load_compensation
 from spindlebench.errors import SpindlebenchError
+from spindlebench.names import SIX_DIFF
 from spindlebench.studies.executor import add_study_file_arguments, default_results_folder
 from spindlebench.studies.study import check_fmu
 
@@ -125,7 +126,7 @@ def figure(study: CompensationStudy, series: pd.DataFrame, days: pd.DataFrame,
     first = series[series["model"] == study.models[0]]
     hours = (first["day"] - 2) * duration_h + first["time_s"] / 3600.0
     top.plot(hours, first["true_drift_um"], color="black", lw=1.0, label="uncompensated drift")
-    shown = [best] + [m for m in study.models if m == "six_diff" and m != best]
+    shown = [best] + [m for m in study.models if m == SIX_DIFF and m != best]
     for name in shown:
         at = series[series["model"] == name]
         top.plot(hours.to_numpy(), at["offset_um"].to_numpy(), lw=0.9,

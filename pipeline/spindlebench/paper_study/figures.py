@@ -13,12 +13,12 @@ from matplotlib.figure import Figure
 from scipy.cluster.hierarchy import dendrogram
 
 from spindlebench import atomic
-from spindlebench.names import GROUP_LABELS
+from spindlebench.names import ALL_RAW, GROUP_LABELS, SIX_DIFF, SIX_RAW
 from spindlebench.paper_study.study import StudyResult
 from spindlebench.selection import linkage_from_similarity
 
 DPI = 110
-GROUP_COLORS = {"all_raw": "tab:blue", "six_raw": "tab:orange", "six_diff": "tab:green"}
+GROUP_COLORS = {ALL_RAW: "tab:blue", SIX_RAW: "tab:orange", SIX_DIFF: "tab:green"}
 
 
 def _save(figure: Figure, path: Path) -> Path:

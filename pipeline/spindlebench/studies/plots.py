@@ -11,11 +11,11 @@ import matplotlib.pyplot as plt
 import pandas as pd
 
 from spindlebench.atomic import atomic_path
-from spindlebench.names import GROUPS
+from spindlebench.names import ALL_RAW, GROUPS, SIX_DIFF, SIX_RAW
 from spindlebench.studies.seasons import MONTHS
 
 METHOD_ORDER = (*GROUPS, "top-k-correlated", "ridge", "oracle")
-COLOURS = {"all_raw": "#8c8c8c", "six_raw": "#5b8fc9", "six_diff": "#d9622b",
+COLOURS = {ALL_RAW: "#8c8c8c", SIX_RAW: "#5b8fc9", SIX_DIFF: "#d9622b",
            "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f0c419",
            "measured": "#4c72b0", "noise-free": "#d0d0d0"}
 #: Drawn over every box: black contrasts with each fill above (an orange median vanished on
