@@ -472,11 +472,31 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     # the JSON context is the outer one, so the CSV is moved into place first: if that move
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
     with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
-        frame.to_csv(tmp_csv, index=False, float_format=float_format, lineterminator="\n")
+        write_csv(tmp_csv, frame, float_format)
         paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
         text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
         tmp_json.write_text(text, encoding="utf-8")
     return csv_path
+
+
+def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame,
+              float_format: str | None = FLOAT_FORMAT) -> None:
+    """``frame.to_csv(path, index=False, float_format=..., lineterminator="\\n")``, the same
+    bytes (tested), 2-3x faster for the all-float frames the testbench writes in the
+    shortest round trip: each value is Python's ``repr`` (what pandas writes without a float
+    format), NaN an empty field. A sweep writes a thousand recordings of ~27 000 values in
+    its one coordinating process, where pandas' writer was a third of its CPU per run."""
+    names = [str(name) for name in frame.columns]
+    plain = float_format is None and frame.shape[1] > 1 and \
+        all(dtype == np.float64 for dtype in frame.dtypes) and \
+        not any(set(name) & set(',"\r\n') or not name for name in names)
+    if not plain:
+        frame.to_csv(path, index=False, float_format=float_format, lineterminator="\n")
+        return
+    lines = [",".join(names)]
+    lines.extend(",".join([repr(v) if v == v else "" for v in row])
+                 for row in frame.to_numpy().tolist())
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8", newline="")
 
 
 def read_sidecar(path: str | os.PathLike[str]) -> dict[str, Any]:
