@@ -61,6 +61,8 @@ class Outcome:
     error: str | None = None
     detail: str = ""
     seconds: float = 0.0
+    #: CPU seconds of the process that ran the task, spent inside the task function.
+    cpu_s: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -76,12 +78,16 @@ class RunStats:
     seconds: float = 0.0
     #: Seconds spent inside the task functions, summed over workers, per kind.
     busy_s: dict[str, float] = field(default_factory=dict)
+    #: CPU seconds spent inside the task functions, summed over workers, per kind (on a
+    #: shared machine the wall seconds above also hold other programs' time).
+    cpu_s: dict[str, float] = field(default_factory=dict)
 
     def count(self, outcome: Outcome) -> None:
         kind = outcome.task.kind
         bucket = self.done if outcome.ok else self.failed
         bucket[kind] = bucket.get(kind, 0) + 1
         self.busy_s[kind] = self.busy_s.get(kind, 0.0) + outcome.seconds
+        self.cpu_s[kind] = self.cpu_s.get(kind, 0.0) + outcome.cpu_s
 
     def total(self, kind: str | None = None) -> int:
         if kind is None:
@@ -90,14 +96,16 @@ class RunStats:
 
 
 def call_isolated(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, str | None, str,
-                                                                          float]:
-    """Run ``fn(*args)`` in a worker; an exception comes back as data, never as a raise."""
-    start = time.perf_counter()
+                                                                          float, float]:
+    """Run ``fn(*args)`` in a worker; an exception comes back as data, never as a raise.
+    Returns (value, error, traceback, wall seconds, CPU seconds)."""
+    start, cpu = time.perf_counter(), time.process_time()
     try:
         value = fn(*args)
     except Exception as exc:  # failure isolation: every error becomes a recorded outcome
-        return None, one_line_error(exc), traceback.format_exc(), time.perf_counter() - start
-    return value, None, "", time.perf_counter() - start
+        return (None, one_line_error(exc), traceback.format_exc(), time.perf_counter() - start,
+                time.process_time() - cpu)
+    return value, None, "", time.perf_counter() - start, time.process_time() - cpu
 
 
 def one_line_error(exc: BaseException) -> str:
@@ -331,14 +339,14 @@ class TaskRunner:
                     for future in done:
                         task = running.pop(future)
                         try:
-                            value, error, detail, seconds = future.result()
+                            value, error, detail, seconds, cpu_s = future.result()
                         except BrokenProcessPool:
                             victims.append(task)
                             continue
                         except Exception as exc:  # a Dask worker lost, an unpicklable result
                             finish(Outcome(task, error=one_line_error(exc), detail=repr(exc)))
                             continue
-                        finish(Outcome(task, value, error, detail, seconds))
+                        finish(Outcome(task, value, error, detail, seconds, cpu_s))
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
                 if not isinstance(executor, InlineExecutor) and not self.dask_address:
                     _stop_workers(executor)
@@ -353,13 +361,14 @@ class TaskRunner:
 def _run_quarantined(task: Task) -> Outcome:
     pool = _local_pool(1)
     try:
-        value, error, detail, seconds = pool.submit(call_isolated, task.fn, task.args).result()
+        value, error, detail, seconds, cpu_s = pool.submit(call_isolated, task.fn,
+                                                           task.args).result()
     except BrokenProcessPool:
         return Outcome(task, error="worker process died while running this task "
                                    "(crash in native code, e.g. the FMU?)")
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
-    return Outcome(task, value, error, detail, seconds)
+    return Outcome(task, value, error, detail, seconds, cpu_s)
 
 
 def add_study_file_arguments(parser: argparse.ArgumentParser, example: str) -> None:
