@@ -17,6 +17,11 @@ Simulates the paper's experiment 1 (6 h, 1 s communication grid) in this process
 Prints wall time per simulated hour and the ratios, plus the largest difference in drift and
 sensor temperatures against the runner, so a fast but wrong variant cannot look good.
 
+Last, issue 10's question whether the Jacobian from the FMU's directional derivatives pays
+(``bench/jacobian_variant.py``): CPU seconds of the default runner with CVode's own
+difference quotients against the same run with the FMU's Jacobian, on experiment 1 and on
+the start/stop example (the spindle standing still).
+
     .venv/bin/python bench/bench_simulation.py [--scenario FILE] [--fmu FILE] [--method LSODA]
 """
 
@@ -30,6 +35,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+import jacobian_variant  # bench/, beside this script
 import numpy as np
 from scipy.integrate import solve_ivp
 from spindlebench.testbench.drivers import INPUT_NAMES, drive
@@ -170,6 +176,11 @@ def main() -> None:
     report("solve_ivp in one call (not a co-simulation)", single_s, single)
     print(f"speed-up of the runner over solve_ivp doing the same co-simulation: "
           f"{stepped_s / runner_s:.1f}x")
+    print("Jacobian from the FMU's directional derivatives instead of CVode's difference "
+          "quotients (continuous inputs, best of 3, CPU seconds):")
+    jacobian_variant.report(args.scenario.name, continuous, args.fmu)
+    stops = load_scenario(ROOT / "scenarios/examples/start_stop_cycles.toml")
+    jacobian_variant.report(stops.path.name, stops, args.fmu)
 
 
 if __name__ == "__main__":
