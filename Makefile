@@ -17,9 +17,11 @@ $(STAMP): requirements.txt pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/spindlebench demo --out results
 
+## The suite on every core (pytest-xdist). `--dist loadfile` keeps each test module on one
+## worker, so a module-scoped fixture (an FMU build, a simulated study) is made once.
 test: $(STAMP)
 	$(VENV)/bin/ruff check pipeline tests bench
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadfile
 
 ## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
 notebooks: $(STAMP)
