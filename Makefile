@@ -18,10 +18,11 @@ run: $(STAMP)
 	$(VENV)/bin/spindlebench demo --out results
 
 ## The suite on every core (pytest-xdist). `--dist loadfile` keeps each test module on one
-## worker, so a module-scoped fixture (an FMU build, a simulated study) is made once.
+## worker, so a module-scoped fixture (an FMU build, a simulated study) is made once; the
+## slowest modules are collected first (tests/conftest.py: SLOW_FIRST) and start at once.
 test: $(STAMP)
 	$(VENV)/bin/ruff check pipeline tests bench
-	$(PY) -m pytest -n auto --dist loadfile
+	$(PY) -m pytest -n auto --dist loadfile --no-loadscope-reorder
 
 ## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
 notebooks: $(STAMP)

@@ -44,3 +44,19 @@ temperature_C = 18.0
 def repo() -> Path:
     """The repository root."""
     return REPO
+
+
+#: The slowest modules, longest first: each builds the FMU from the Modelica source (gcc on
+#: 1.5 MB of generated C) or executes the course's notebooks. They are collected first so
+#: that under ``make test`` (pytest-xdist, ``--dist loadfile --no-loadscope-reorder``) they
+#: start at once on different workers instead of being the last, lone, tail of the run.
+SLOW_FIRST = ("test_fmu_build.py", "test_install.py", "test_notebooks.py")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Run the modules of ``SLOW_FIRST`` first (in that order), every other in its order."""
+    def rank(item: pytest.Item) -> int:
+        name = item.path.name
+        return SLOW_FIRST.index(name) if name in SLOW_FIRST else len(SLOW_FIRST)
+
+    items.sort(key=rank)  # stable: the order inside each module is kept
