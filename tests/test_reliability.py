@@ -387,6 +387,12 @@ def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_p
     recording = sorted(out.glob("runs/*/*.csv"))[-1]
     text = recording.read_text()
     recording.write_text(text[: len(text) // 2])  # truncated
+    # killed between the writer's two moves: the CSV is in place, its sidecar is not
+    # (in the truncated recording's replica, whose evaluations are redone anyway)
+    lonely = next(path for path in sorted(recording.parent.glob("*.csv")) if path != recording)
+    sidecar = lonely.with_suffix(".json")
+    sidecar_bytes = sidecar.read_bytes()
+    sidecar.unlink()
     child = spindlebench(*args)
     stdout, stderr = child.communicate(timeout=600)
     assert child.returncode == 0, stderr
@@ -394,6 +400,9 @@ def test_resuming_over_damaged_results_names_and_redoes_the_damaged_pieces(tmp_p
     warned = [line for line in stderr.splitlines() if "damaged" in line]
     assert any(str(evaluation) in line for line in warned), stderr
     assert any(str(recording) in line for line in warned), stderr
+    assert any(str(lonely) in line and "sidecar" in line and "missing" in line
+               for line in stderr.splitlines()), stderr
+    assert sidecar.read_bytes() == sidecar_bytes  # redone, the same bytes
     assert all(line.startswith("warning: ") for line in stderr.splitlines())
     assert (out / "results.csv").read_bytes() == reference
     assert "ran" in stdout or "resumed" in stdout

@@ -56,7 +56,7 @@ class Simulations:
 
     def pending(self) -> dict[int, list[Experiment]]:
         """Per replica, the experiments without a recording yet."""
-        return {r: [e for e in self.family if not self.store.exists(recording_path(r, e))]
+        return {r: [e for e in self.family if not self.store.has_recording(recording_path(r, e))]
                 for r in replicas(self.study)}
 
     def failed(self) -> list[tuple[int, Experiment]]:

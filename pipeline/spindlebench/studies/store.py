@@ -123,6 +123,24 @@ class ResultStore:
         missing (so the caller redoes it)."""
         return self.path(relative).is_file() and self.intact(relative)
 
+    def has_recording(self, relative: str | Path) -> bool:
+        """Whether the recording CSV ``relative`` is there, intact and has its JSON sidecar.
+
+        The recording writer moves the CSV into place before its sidecar, so a study killed
+        between the two moves leaves a CSV alone; without its sidecar (provenance, the
+        ``recording_sha256`` it is checked against) it is not a finished recording: named in
+        a warning and redone, not taken on trust."""
+        if not self.exists(relative):
+            return False
+        key = Path(relative).as_posix()
+        sidecar = self.path(key).with_suffix(".json")
+        if sidecar.is_file():
+            return True
+        warnings.warn(f"{self.path(key)}: incomplete (its sidecar {sidecar.name} is missing); "
+                      "redoing it", DamagedResultWarning, stacklevel=2)
+        self._verified[key] = False
+        return False
+
     def intact(self, relative: str | Path) -> bool:
         """Whether the file still has the bytes the store (or the recording writer) wrote;
         a file written before the store kept hashes is taken on trust."""

@@ -119,7 +119,7 @@ class PlacementStudyRun:
         """(training runs, held-out runs) of a replica; None if a training run is missing."""
         loaded: dict[str, Run] = {}
         for experiment in self.family:
-            if self.store.exists(recording_path(replica, experiment)):
+            if self.store.has_recording(recording_path(replica, experiment)):
                 frame = read_recording(self.store.path(recording_path(replica, experiment)))
                 loaded[experiment.id] = prepare_run(self.study, replica, experiment, frame)
         if any(train.id not in loaded for train in self.trains):
