@@ -5,9 +5,12 @@ folders of processes killed before they could clean up."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import textwrap
+from pathlib import Path
 
 import numpy as np
 from conftest import QUICK
@@ -61,8 +64,16 @@ def test_main_and_worker_processes_remove_their_folder_at_exit(tmp_path):
     _quick(tmp_path)
     script = tmp_path / "run.py"
     script.write_text(textwrap.dedent(SCRIPT), encoding="utf-8")
-    temp = tmp_path / "tmp"
-    temp.mkdir()
+    # A short TMPDIR: the forkserver's socket is bound under it, and an AF_UNIX path has at
+    # most 107 bytes (tmp_path under pytest-xdist, .../popen-gw0/<test>/, is too long).
+    temp = Path(tempfile.mkdtemp(prefix="sb-cache-"))
+    try:
+        _run_and_check(tmp_path, script, temp)
+    finally:
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def _run_and_check(tmp_path, script, temp):
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
     orphan = temp / f"spindlebench-fmu-cache-{dead}-abc"  # a process killed by SIGTERM
