@@ -127,6 +127,31 @@ def test_ctrl_c_during_sweep_stops_it_and_the_rerun_resumes_to_the_same_bytes(tm
 
 
 #: tiny_placement.toml cut to one month, one budget, two methods (4 short simulations).
+@pytest.mark.parametrize("gap_s", [0.1, 0.2, 0.4])
+def test_a_second_signal_while_the_workers_stop_does_not_hang_the_sweep(tmp_path, gap_s):
+    """SIGTERM, then Ctrl-C while the pool shuts down: it hung at exit (a worker nobody
+    stopped) or died by the default SIGINT action (exit -2) before."""
+    out = tmp_path / "sweep"
+    child = spindlebench("sweep", str(TINY), "-o", str(out), "--workers", "2", "--no-progress")
+    deadline = time.monotonic() + 300
+    while not list(out.glob("runs/*/*.csv")):
+        assert child.poll() is None and time.monotonic() < deadline, child.communicate()
+        time.sleep(0.02)
+    child.send_signal(signal.SIGTERM)
+    time.sleep(gap_s)
+    if child.poll() is None:
+        child.send_signal(signal.SIGINT)
+    try:
+        _, stderr = child.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        child.communicate()
+        raise AssertionError("the sweep hung after the second signal") from None
+    assert child.returncode == 130, stderr
+    assert "interrupted by SIG" in one_error_line(stderr)
+    assert not list(out.rglob("*.part"))
+
+
 MINI_PLACEMENT = (Path(__file__).resolve().parents[1] / "scenarios" / "studies"
                   / "tiny_placement.toml")
 

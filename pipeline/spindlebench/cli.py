@@ -98,16 +98,21 @@ def print_warning(message: Warning | str, category: type[Warning], filename: str
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: run a sub-command; user errors become one ``error:`` line and status 2,
     warnings one ``warning:`` line each."""
+    own_process = argv is None  # the console script, not a caller in its own process
     interrupts.install()
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         command = argv[0] if argv and argv[0] in COMMANDS else None
         args = parse_args(build_parser(command), argv)  # imports commands: Ctrl-C can land here
     except KeyboardInterrupt as exc:
-        return _interrupted(exc)
-    with warnings.catch_warnings():
-        warnings.showwarning = print_warning
-        return _run(args)
+        status = _interrupted(exc)
+    else:
+        with warnings.catch_warnings():
+            warnings.showwarning = print_warning
+            status = _run(args)
+    if own_process and status == interrupts.EXIT_STATUS:
+        interrupts.ignore_further()  # the process is ending: a second Ctrl-C must not kill it
+    return status
 
 
 def _interrupted(exc: KeyboardInterrupt) -> int:

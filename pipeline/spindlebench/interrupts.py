@@ -99,3 +99,12 @@ def check() -> None:
         signum = _pending[0]
         _pending.clear()
         raise Interrupted(signum)
+
+
+def ignore_further() -> None:
+    """Ignore SIGINT and SIGTERM from now on (main thread only): for a process whose run has
+    ended by a signal and is exiting, where a second Ctrl-C would otherwise kill it by the
+    default action during interpreter shutdown (exit -2 instead of 130)."""
+    if _in_main_thread():
+        for signum in SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)

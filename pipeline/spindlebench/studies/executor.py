@@ -33,6 +33,7 @@ from typing import Any
 
 from tqdm.auto import tqdm
 
+from spindlebench import interrupts
 from spindlebench.errors import SpindlebenchError
 from spindlebench.machines import add_machine_argument
 
@@ -349,11 +350,15 @@ class TaskRunner:
                         finish(Outcome(task, value, error, detail, seconds, cpu_s))
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
                 if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    _stop_workers(executor)
+                    with interrupts.deferred():  # a second signal must not cut the stop short
+                        _stop_workers(executor)
                 raise
             finally:
                 if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    executor.shutdown(wait=True, cancel_futures=True)
+                    # a signal inside shutdown() left its manager thread waiting on a worker
+                    # nobody stopped, and the study hung at exit: finish it, then raise
+                    with interrupts.deferred():
+                        executor.shutdown(wait=True, cancel_futures=True)
             for task in victims:
                 finish(_run_quarantined(task))
 
