@@ -189,11 +189,18 @@ def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
 
 
 def _stop_workers(executor: cf.Executor) -> None:
-    """End a local pool's workers now (Ctrl-C: do not wait for their running simulations)."""
+    """End a local pool's workers now (Ctrl-C: do not wait for their running simulations).
+
+    SIGKILL, not SIGTERM: a worker inside a simulation defers SIGTERM
+    (``interrupts.deferred``), ends only that task and lives on, while one that was idle dies
+    at once, possibly holding the pool's task-queue lock; the survivor then waits on that lock
+    forever and the pool's shutdown with it (a study hung at exit). Workers hold nothing to
+    save: results are written by this process, and the unpacked FMU folder of a killed worker
+    is removed by the next process that unpacks (``runner.extracted_fmu``)."""
     processes = getattr(executor, "_processes", None) or {}
     for process in list(processes.values()):
         if process.is_alive():
-            process.terminate()
+            process.kill()
 
 
 @contextmanager
