@@ -27,8 +27,12 @@ from spindlebench.studies.store import ResultStore
 from spindlebench.testbench.runner import DEFAULT_FMU, declared_bounds, inspect_fmu
 
 #: A month at 60 s steps: minutes of simulation, long enough to be interrupted.
-LONG = QUICK.replace("duration_s = 600", "duration_s = 2592000").replace(
-    "step_s = 10.0", "step_s = 60.0").replace("sample_interval_s = 60", "sample_interval_s = 600")
+#: A simulation long enough to be inside its solver loop seconds after it starts: the longest
+#: scenario (90 days) at 2-minute samples (the issue's month at 10-minute samples runs in about
+#: a second with continuous inputs, so a signal sent after it landed in the interpreter's
+#: shutdown: exit -2, nothing left to interrupt).
+LONG = QUICK.replace("duration_s = 600", "duration_s = 7776000").replace(
+    "step_s = 10.0", "step_s = 60.0").replace("sample_interval_s = 60", "sample_interval_s = 120")
 
 
 def spindlebench(*args: str, env: dict[str, str] | None = None, **kwargs) -> subprocess.Popen:
@@ -51,18 +55,19 @@ def one_error_line(stderr: str) -> str:
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_during_simulate_ends_it_at_once_with_one_line_and_nothing_written(
         tmp_path, signum):
-    scenario = tmp_path / "month.toml"
+    scenario = tmp_path / "long.toml"
     scenario.write_text(LONG, encoding="utf-8")
     unzip = tmp_path / "tmp"  # FMPy extracts the FMU here: the simulation has started
     unzip.mkdir()
     out = tmp_path / "out"
-    child = spindlebench("simulate", str(scenario), "-o", str(out / "month.csv"),
+    child = spindlebench("simulate", str(scenario), "-o", str(out / "long.csv"),
                          env={"TMPDIR": str(unzip)})
     deadline = time.monotonic() + 120
     while not any(unzip.iterdir()):
         assert child.poll() is None and time.monotonic() < deadline, child.communicate()
         time.sleep(0.05)
     time.sleep(1.0)  # well inside the solver loop
+    assert child.poll() is None, "the simulation ended before the signal: make LONG longer"
     child.send_signal(signum)
     sent = time.monotonic()
     _, stderr = child.communicate(timeout=60)
