@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import QUICK as QUICK_BASE
 from spindlebench import cli
 from spindlebench.fingerprint import KEYS, fingerprint
 from spindlebench.fingerprint_reference import KEY_FILE, cached_reference
@@ -190,25 +191,9 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, messag
     assert sorted(tmp_path.iterdir()) == before
 
 
-QUICK = """\
-duration_s = 900
-step_s = 1.0
-sample_interval_s = 60
-seed = 2
-
-[speed]
-kind = "constant"
-rpm = 4000
-
-[feed]
-kind = "with_spindle"
-x_mm_per_min = 1500
-y_mm_per_min = 1500
-
-[ambient]
-kind = "constant"
-temperature_C = 18.0
-"""
+#: conftest's quick scenario at 15 minutes, 1 s steps and 4000 rpm (a reference run).
+QUICK = QUICK_BASE.replace("duration_s = 600", "duration_s = 900").replace(
+    "step_s = 10.0", "step_s = 1.0").replace("rpm = 3000", "rpm = 4000")
 
 
 def test_reference_is_simulated_once_and_redone_when_a_scenario_changes(tmp_path):
