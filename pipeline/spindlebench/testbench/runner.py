@@ -296,25 +296,29 @@ def check_physical(simulation: Simulation, scenario: Scenario) -> None:
                 f"t = {simulation.time_s[i]:g} s is outside {low:g}..{high:g} °C{likely}")
 
 
-def _check_bounds(variable: ScalarVariable, value: float, where: str) -> None:
-    problem = bound_problem(variable, value)
+def check_parameter(name: str, value: float, known: Mapping[str, ScalarVariable],
+                    fmu_name: str, source: str | Path) -> None:
+    """One ``[parameters]`` entry of a machine or scenario file (``source``): a parameter of
+    the FMU (``known``: name -> variable), within its declared bounds, and not a cooling
+    setting (a scenario's ``[cooling]`` table sets those); one line naming file and key."""
+    where = f"{source}: key 'parameters.{name}'"
+    if name in COOLING_PARAMETERS:
+        raise SpindlebenchError(f"{where}: a cooling setting; set it in a scenario's "
+                                "[cooling] table (mode, setpoint_C)")
+    if name not in known:
+        near = difflib.get_close_matches(name, list(known), n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise SpindlebenchError(f"{where}: the FMU {fmu_name} has no parameter {name!r}{hint}")
+    problem = bound_problem(known[name], value)
     if problem:
         raise SpindlebenchError(f"{where}: {problem}")
 
 
 def check_machine(machine: Machine, known: Mapping[str, ScalarVariable], fmu_name: str) -> None:
-    """A machine file's parameters must be the FMU's (``known``: name -> variable), within
-    their declared bounds, and no cooling setting (a scenario's ``[cooling]`` table sets
-    those); one line naming the machine file and key. Studies call it at load time, so a bad
-    machine fails before any worker simulates."""
+    """A machine file's parameters, each checked by ``check_parameter``. Studies call it at
+    load time, so a bad machine fails before any worker simulates."""
     for name, value in machine.parameters.items():
-        where = f"{machine.path}: key 'parameters.{name}'"
-        if name in COOLING_PARAMETERS:
-            raise SpindlebenchError(f"{where}: a cooling setting; a scenario's [cooling] "
-                                    "table (mode, setpoint_C) sets it")
-        if name not in known:
-            raise SpindlebenchError(f"{where}: the FMU {fmu_name} has no parameter {name!r}")
-        _check_bounds(known[name], value, where)
+        check_parameter(name, value, known, fmu_name, machine.path)
 
 
 def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
@@ -322,15 +326,7 @@ def parameter_values(scenario: Scenario, fmu: FmuInterface) -> dict[str, float]:
     check_machine(scenario.machine, fmu.parameters, fmu.path.name)
     values: dict[str, float] = dict(scenario.machine.parameters)  # the scenario's on top
     for name, value in scenario.parameters.items():
-        if name in COOLING_PARAMETERS:
-            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': set cooling "
-                                    "in the [cooling] table (mode, setpoint_C)")
-        if name not in fmu.parameters:
-            near = difflib.get_close_matches(name, list(fmu.parameters), n=1)
-            hint = f" (did you mean {near[0]!r}?)" if near else ""
-            raise SpindlebenchError(f"{scenario.path}: key 'parameters.{name}': the FMU "
-                                    f"{fmu.path.name} has no parameter {name!r}{hint}")
-        _check_bounds(fmu.parameters[name], value, f"{scenario.path}: key 'parameters.{name}'")
+        check_parameter(name, value, fmu.parameters, fmu.path.name, scenario.path)
         values[name] = value
     cooling = scenario.cooling
     wanted = {
