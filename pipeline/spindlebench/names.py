@@ -28,6 +28,10 @@ GROUP_LABELS: dict[str, str] = {
 SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
 DEFAULT_SIMILARITY = SIMILARITIES[0]
 
+#: How ``evaluate`` treats missing (NaN) values: one-line error, or drop incomplete samples
+#: (also a key of ``paper_study.toml``).
+MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
+
 #: Degrees Celsius to kelvin.
 KELVIN_OFFSET = 273.15
 

@@ -48,6 +48,7 @@ from spindlebench.names import (
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
     METHODS,
+    MISSING_MODES,
     PAPER_SIX,
     SENSORS,
     SIMILARITIES,
@@ -57,8 +58,6 @@ AUTO_SIX = "auto"
 #: A recordings folder's own study file (the CAIVIAC adapter writes one); ``spindlebench paper``
 #: uses it when no --config is given.
 CONFIG_NAME = "paper_study.toml"
-#: ``selection.evaluate``'s ``missing`` modes (kept here so the config needs no selection import).
-MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
 
 _KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
          "missing", "methods", "seed", "time_column", "exclude", "allow_target_copy",

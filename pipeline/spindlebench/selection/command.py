@@ -29,11 +29,10 @@ from spindlebench.formats.columns import (
     refuse_target_copies,
 )
 from spindlebench.formats.recording import MissingValueError, read_header
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import (
-    MISSING_MODES,
     Evaluation,
     RecordingLike,
     check_same_sensors,

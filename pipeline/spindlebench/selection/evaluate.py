@@ -37,7 +37,7 @@ from spindlebench.formats.recording import (
     read_recording,
     recording_name,
 )
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.selection.differences import difference_names, pair_indices
 from spindlebench.selection.errors import (
     SelectionError,
@@ -55,8 +55,6 @@ RecordingLike = str | os.PathLike[str] | pd.DataFrame
 #: Methods whose result depends on ``seed``.
 SEEDED_METHODS = ("fcm", "kmeans", "stability")
 
-#: How ``evaluate`` treats missing (NaN) values: one-line error, or drop incomplete samples.
-MISSING_MODES = ("error", "drop-rows")
 #: A sensor missing in more than this fraction of the training samples stops being a candidate.
 SPARSE_SENSOR_FRACTION = 0.5
 _DROP_HINT = "missing='drop-rows' (--missing drop-rows) drops incomplete samples"
@@ -501,6 +499,11 @@ def check_same_sensors(name: str, theirs: Sequence[str], chosen: Sequence[str],
         )
 
 
+def _check_missing_mode(missing: str) -> None:
+    if missing not in MISSING_MODES:
+        raise SelectionError(f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}")
+
+
 def evaluate(
     train: RecordingLike,
     tests: RecordingLike | Sequence[RecordingLike] | Mapping[str, RecordingLike],
@@ -533,10 +536,7 @@ def evaluate(
     differing sensor sets, missing (unless dropped) or non-finite values, fewer than 2 (complete)
     rows, k < 1 or k > candidates.
     """
-    if missing not in MISSING_MODES:
-        raise SelectionError(
-            f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
-        )
+    _check_missing_mode(missing)
     choice = method if isinstance(method, MethodChoice) else \
         MethodChoice(method, within, regressor)
     train_recording, test_recordings = load_recordings(train, tests, missing)
@@ -586,10 +586,7 @@ def evaluate_checked(
     """``evaluate`` on recordings from ``load_recordings``: the same result, messages and
     warnings, but each column of each recording is converted and checked once however many
     methods, k and sensor groups are evaluated on them (a study's one pass)."""
-    if missing not in MISSING_MODES:
-        raise SelectionError(
-            f"missing: {missing!r} is not one of {', '.join(MISSING_MODES)}"
-        )
+    _check_missing_mode(missing)
     if not tests:
         raise SelectionError("at least one test recording is needed")
     choice = MethodChoice() if method is None else method
