@@ -34,6 +34,7 @@ from matplotlib.figure import Figure
 from sklearn.linear_model import LinearRegression
 
 from spindlebench import atomic
+from spindlebench.adapters import caiviac
 from spindlebench.calibration.fitset import DEFAULT_FIT
 from spindlebench.calibration.mapping import RecordingMap
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate, trajectory
@@ -44,8 +45,9 @@ from spindlebench.paths import MODELS_DIR
 
 TRAIN = ("run1_1250rpm", "run2_2500rpm", "run3_3750rpm")
 TEST = ("run4_5000rpm", "run5_3500rpm", "run6_stepped")
-TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
-ERROR = "ch3_um"
+#: The CAIVIAC recording's sensors and axial error column, as its adapter names them.
+TEMPERATURES = caiviac.TEMPERATURES
+ERROR = caiviac.AXIAL_TARGET
 #: ch3 falls while the spindle heats up; the model's drift_um is positive toward the table.
 ERROR_SIGN = -1.0
 #: 2 min steps and 4 segments per part: three calibrations of 24 h of data in minutes; the

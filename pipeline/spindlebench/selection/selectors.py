@@ -36,6 +36,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.names import WITHIN as WITHIN_CHOICES
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
@@ -44,7 +45,8 @@ from spindlebench.selection.grey import DEFAULT_RHO, NORMALISATIONS, grey_relati
 from spindlebench.selection.regression import check_groups
 from spindlebench.selection.similarity import SIMILARITIES, constant_columns, correlation_with
 
-WITHIN: tuple[str, ...] = ("psi", "grey")
+#: The within-cluster choices (their names and descriptions: ``names.WITHIN``).
+WITHIN: tuple[str, ...] = tuple(WITHIN_CHOICES)
 #: Points on the LASSO / elastic-net path (log-spaced down to 1e-4 of the largest alpha).
 PATH_ALPHAS = 200
 PATH_EPS = 1e-4
