@@ -10,7 +10,8 @@ run are checked to be identical (same seeds, any executor).
 
 Then issue 10's goal row: the same example study with 42 replicas, i.e. 24 x 42 = 1 008
 experiments (FMU simulations of 6 h, as the study's) and 42 x 7 x 4 = 1 176 evaluations of 14
-methods each, on 2 worker processes, from scratch (goal: <= 3 min on this machine, results
+methods each (in 42 x 7 = 294 jobs: one per replica and condition covers its 4 training runs),
+on 2 worker processes, from scratch (goal: <= 3 min on this machine, results
 identical to the per-method evaluation, which tests check). It prints wall seconds,
 experiments per second, and CPU seconds (this process, which writes every recording and
 result, plus the workers' CPU inside their tasks): on the shared machine the wall time holds
@@ -103,9 +104,10 @@ def goal_row(study_path: Path) -> None:
           f"{'holds' if wall <= GOAL_S else 'NOT met'} in wall time; load average after {load}")
     print(f"CPU seconds: {total:.0f} = workers' simulations {sim_cpu:.0f} "
           f"({1000 * sim_cpu / max(1, stats.total('simulation')):.0f} ms each) + evaluations "
-          f"{eval_cpu:.0f} ({1000 * eval_cpu / max(1, stats.total('evaluation')):.0f} ms each, "
-          f"{stats.total('evaluation')}) + this process {here:.0f} (recordings written and read "
-          f"back, results, of which tables/plots/README {here - run_cpu:.0f})")
+          f"{eval_cpu:.0f} ({1000 * eval_cpu / max(1, outcome.evaluated):.0f} ms per replica x "
+          f"condition x training run, {outcome.evaluated} in {stats.total('evaluation')} jobs) "
+          f"+ this process {here:.0f} (recordings written and read back, results, of which "
+          f"tables/plots/README {here - run_cpu:.0f})")
     print(f"on 2 cores of our own that is >= {max(here, total / 2):.0f} s of wall time "
           f"(CPU seconds / 2, or this process's serial part if larger): the goal "
           f"{'holds' if max(here, total / 2) <= GOAL_S else 'is NOT met'} on an idle machine")

@@ -103,7 +103,7 @@ def test_conditions_remeasure_exactly_what_the_runner_recorded(reference):
     """The first noise level without faults reproduces the stored recording bit for bit."""
     sweep, _ = reference
     healthy = next(c for c in sweep.conditions if c is not None and c.fault is None)
-    job = sweep.evaluation_task(2, healthy, sweep.trains[0]).args[0]
+    job = sweep.evaluation_task(2, healthy, sweep.trains).args[0]
     columns = [f"T{i}" for i in range(1, 21)] + ["drift_um"]
     for experiment in sweep.family:
         stored = read_recording(sweep.store.path(recording_path(2, experiment)))
@@ -201,8 +201,8 @@ def test_a_failed_training_run_fails_its_replica_only(tmp_path):
 class BrokenEvaluation(Sweep):
     """Hands one evaluation a job without its data, so the whole evaluation raises."""
 
-    def evaluation_task(self, replica, condition, train):
-        task = super().evaluation_task(replica, condition, train)
+    def evaluation_task(self, replica, condition, trains):
+        task = super().evaluation_task(replica, condition, trains)
         if replica == 2 and condition is None:
             task = dataclasses.replace(task, args=(dataclasses.replace(task.args[0], truths={}),))
         return task
@@ -320,8 +320,8 @@ def test_when_every_simulation_fails_the_sweep_says_so_in_one_line(tmp_path):
 
 
 class EveryEvaluationBroken(Sweep):
-    def evaluation_task(self, replica, condition, train):
-        task = super().evaluation_task(replica, condition, train)
+    def evaluation_task(self, replica, condition, trains):
+        task = super().evaluation_task(replica, condition, trains)
         return dataclasses.replace(task, args=(dataclasses.replace(task.args[0], truths={}),))
 
 

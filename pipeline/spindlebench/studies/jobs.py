@@ -5,9 +5,10 @@
 instead of writing in the worker keeps Dask workers on other machines free of any shared
 file system.
 
-``evaluate_job``: one (replica, condition, training experiment): re-measure every experiment's
-noise-free truth with the condition's instruments, train every method on the training run
-and score it on all the others → tidy result rows.
+``evaluate_job``: one (replica, condition) and its training experiments: re-measure every
+experiment's noise-free truth with the condition's instruments (once for all training runs),
+train every method on each training run and score it on all the others → tidy result rows
+per training run.
 """
 
 from __future__ import annotations
@@ -22,8 +23,9 @@ from threadpoolctl import threadpool_limits
 
 from spindlebench.formats.recording import TIME_COLUMN, TRUTH_COLUMNS
 from spindlebench.names import SENSORS
+from spindlebench.studies.executor import one_line_error
 from spindlebench.studies.experiments import Condition, Experiment, sensor_model
-from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, score_all
+from spindlebench.studies.methods import TARGET, TRUTH, MethodSpec, SharedRuns, score_all
 from spindlebench.testbench.scenario import Scenario
 from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.simulate import record
@@ -43,14 +45,17 @@ def simulate_job(scenario: Scenario, fmu_path: Path) -> tuple[pd.DataFrame, dict
 class EvaluationJob:
     """Everything one evaluation needs, shipped to the worker (no file access there).
 
-    ``condition`` None means the noise-free ground truth. ``truths`` maps experiment ids to
-    their truth columns (``TRUTH_COLUMNS``); ``failures`` maps the ids of experiments whose
-    simulation failed to its error.
+    One job is one (replica, condition) and covers its training runs ``trains`` (all of the
+    study's, or those whose result files are missing): every run is measured and checked
+    once for all of them instead of once per training run. ``condition`` None means the
+    noise-free ground truth. ``truths`` maps experiment ids to their truth columns
+    (``TRUTH_COLUMNS``); ``failures`` maps the ids of experiments whose simulation failed to
+    its error.
     """
 
     replica: int
     condition: Condition | None
-    train: Experiment
+    trains: tuple[Experiment, ...]
     experiments: tuple[Experiment, ...]
     truths: dict[str, pd.DataFrame]
     failures: dict[str, str]
@@ -60,8 +65,15 @@ class EvaluationJob:
     similarity: str
 
 
-def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
-    """The run as the condition's instruments see it (faults only on held-out runs).
+#: What ``evaluate_job`` gives per training run: its result rows, or the one-line error of
+#: an evaluation of that run that raised (the other training runs keep their rows).
+TrainingResult = pd.DataFrame | str
+
+
+def measured_frame(job: EvaluationJob, experiment: Experiment,
+                   held_out: bool = True) -> pd.DataFrame:
+    """The run as the condition's instruments see it (the fault only when ``held_out``:
+    a training run is measured healthy, the fault comes after training).
 
     A sensor that drops out is held at its last good reading, as a compensation controller
     would; the columns are T1..T20 (degC), ``drift_um`` (probe, zeroed at the first sample)
@@ -79,7 +91,7 @@ def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
         values[:, 1:-2] = temperatures
         values[:, -2] = drift - drift[0]
     else:
-        fault = job.condition.fault if experiment != job.train else None
+        fault = job.condition.fault if held_out else None
         model = sensor_model(job.condition.noise, fault)
         measured_C, measured_drift = measure(model, time_s, temperatures, drift, SENSORS,
                                              job.seeds[experiment.id])
@@ -91,8 +103,9 @@ def measured_frame(job: EvaluationJob, experiment: Experiment) -> pd.DataFrame:
     return pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
 
 
-def evaluate_job(job: EvaluationJob) -> pd.DataFrame:
-    """Tidy rows: one per method × k × held-out experiment (failed ones carry the error).
+def evaluate_job(job: EvaluationJob) -> dict[str, TrainingResult]:
+    """Per training run (by id): tidy rows, one per method × k × held-out experiment (failed
+    ones carry the error), or the one-line error if that run's evaluation raised.
 
     BLAS runs single-threaded here: the matrices are small (hundreds of samples × at most
     210 candidates), where threads only cost; measured, an SVD of the ridge baseline took
@@ -102,19 +115,38 @@ def evaluate_job(job: EvaluationJob) -> pd.DataFrame:
         return _evaluate(job)
 
 
-def _evaluate(job: EvaluationJob) -> pd.DataFrame:
-    tests = [e for e in job.experiments if e != job.train]
+def _evaluate(job: EvaluationJob) -> dict[str, TrainingResult]:
+    # Every run as a held-out run, measured once for all training runs: same seed, so the
+    # same frame whichever run trains (one job per training run measured it once each).
+    held_out = {e.id: measured_frame(job, e) for e in job.experiments
+                if e.id not in job.failures}
+    runs = SharedRuns(held_out)
+    results: dict[str, TrainingResult] = {}
+    for train in job.trains:
+        try:
+            results[train.id] = _evaluate_training_run(job, train, runs)
+        except Exception as exc:  # failure isolation per training run, as one job each had
+            results[train.id] = one_line_error(exc)
+    return results
+
+
+def _evaluate_training_run(job: EvaluationJob, train: Experiment,
+                           runs: SharedRuns) -> pd.DataFrame:
+    tests = [e for e in job.experiments if e != train]
     rows: list[dict[str, Any]] = []
-    if job.train.id in job.failures:
-        message = f"training experiment failed: {job.failures[job.train.id]}"
+    if train.id in job.failures:
+        message = f"training experiment failed: {job.failures[train.id]}"
         rows = [{"method": s.name, "k": s.k, "test_experiment": e.id, "rmse_um": np.nan,
                  "rmse_true_um": np.nan, "selected": "", "error": message}
                 for s in job.specs for e in tests]
     else:
-        train = measured_frame(job, job.train)
-        available = {e.id: measured_frame(job, e) for e in tests if e.id not in job.failures}
+        healthy = job.condition is None or job.condition.fault is None
+        # without a fault the training run's frame is its held-out frame (same measurement)
+        train_frame = runs.frames[train.id] if healthy else \
+            measured_frame(job, train, held_out=False)
+        available = {e.id: runs.frames[e.id] for e in tests if e.id not in job.failures}
         if available:
-            rows = score_all(list(job.specs), train, available, job.similarity)
+            rows = score_all(list(job.specs), train_frame, available, job.similarity, runs)
         rows += [{"method": s.name, "k": s.k, "test_experiment": e.id, "rmse_um": np.nan,
                   "rmse_true_um": np.nan, "selected": "",
                   "error": f"simulation failed: {job.failures[e.id]}"}
@@ -125,7 +157,7 @@ def _evaluate(job: EvaluationJob) -> pd.DataFrame:
     frame.insert(1, "data", "measured" if job.condition else NOISE_FREE)
     frame.insert(2, "noise", job.condition.noise.name if job.condition else NOISE_FREE)
     frame.insert(3, "fault", job.condition.fault_name if job.condition else "none")
-    frame.insert(4, "train_experiment", job.train.id)
+    frame.insert(4, "train_experiment", train.id)
     tested = [by_id[name] for name in frame["test_experiment"]]
     frame["test_month"] = [e.month for e in tested]
     frame["test_season"] = [e.season for e in tested]

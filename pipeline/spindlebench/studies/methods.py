@@ -31,8 +31,9 @@ what a compensation actually achieves.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -74,6 +75,7 @@ GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
 GROUP_SEPARATOR = ":"
 #: The ``top-k-correlated`` baseline is that selection method on the raw sensors, then OLS.
 TOP_K = parse_method("top-k-correlated")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -136,6 +138,47 @@ class Score:
     selected: str
 
 
+class SharedRuns:
+    """The measured runs of one (replica, condition), converted and checked once for all of
+    its training runs.
+
+    Why: each training run of a (replica, condition) scores its methods on the same
+    held-out frames; one job per training run measured, checked and subtracted every run
+    again for each. The checks, rises and oracle fits here depend on the held-out run only,
+    so every training run reads the same arrays and gets the bits it got on its own (tests
+    compare the two).
+    """
+
+    def __init__(self, frames: Mapping[str, pd.DataFrame]) -> None:
+        self.frames = {str(name): frame for name, frame in frames.items()}
+        self._checked: dict[str, CheckedRecording] = {}
+        self._rises: dict[str, np.ndarray] = {}
+        self._memo: dict[tuple[str, str], Any] = {}
+
+    def checked(self, name: str, frame: pd.DataFrame) -> CheckedRecording:
+        """Run ``name`` as a checked recording; ``frame`` must be this object's frame."""
+        if self.frames.get(name) is not frame:
+            raise ValueError(f"run {name!r} is not one of the shared frames")
+        if name not in self._checked:
+            self._checked[name] = CheckedRecording(name, frame)
+        return self._checked[name]
+
+    def raw_rises(self, name: str) -> np.ndarray:
+        """The rises of the 20 raw sensors of run ``name`` (shared: do not modify)."""
+        if name not in self._rises:
+            self._rises[name] = rises(np.asfortranarray(self.checked(
+                name, self.frames[name]).stack(SENSORS)))
+        return self._rises[name]
+
+    def memo(self, what: str, name: str, compute: Callable[[], T]) -> T:
+        """``compute()`` the first time ``what`` of run ``name`` is asked for, then kept
+        (for results that depend on the held-out run only, like the oracle's)."""
+        key = (what, name)
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
+
+
 class EvaluationData:
     """One evaluation's recordings, converted and checked once for every method and k.
 
@@ -143,29 +186,31 @@ class EvaluationData:
     (``evaluate`` per group and k, the raw rises per baseline): 99 % of an evaluation's time,
     the selection maths 1 %. The frames are columns T1..T20, drift_um and
     true_drift_rise_um; every method reads them through here, so the results are those of
-    the per-method path to the last bit (tests compare the two).
+    the per-method path to the last bit (tests compare the two). ``runs`` (holding the test
+    frames) shares the test runs' conversions with other training runs.
     """
 
-    def __init__(self, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame]) -> None:
+    def __init__(self, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
+                 runs: SharedRuns | None = None) -> None:
         self.train = train
-        self.tests = dict(tests)
+        self.tests = {str(name): frame for name, frame in tests.items()}
+        self.runs = SharedRuns(self.tests) if runs is None else runs
         self.checked_train = CheckedRecording(recording_name(train, "train"), train)
-        self.checked_tests = {str(name): CheckedRecording(str(name), frame)
+        self.checked_tests = {name: self.runs.checked(name, frame)
                               for name, frame in self.tests.items()}
-        self._rises: dict[int, np.ndarray] = {}
-        self._names = {id(frame): str(name) for name, frame in self.tests.items()}
+        self._train_rises: np.ndarray | None = None
 
-    def raw_rises(self, frame: pd.DataFrame) -> np.ndarray:
-        """The rises of the 20 raw sensors of one of the frames (shared: do not modify).
+    def raw_rises(self, name: str | None = None) -> np.ndarray:
+        """The rises of the 20 raw sensors of test run ``name`` (None: the training run);
+        shared: do not modify.
 
         Column-major, as ``frame.loc[:, SENSORS].to_numpy()`` gives them: the BLAS calls
         of the fits below may round differently on another memory layout."""
-        key = id(frame)
-        if key not in self._rises:
-            recording = self.checked_train if frame is self.train else \
-                self.checked_tests[self._names[key]]
-            self._rises[key] = rises(np.asfortranarray(recording.stack(SENSORS)))
-        return self._rises[key]
+        if name is not None:
+            return self.runs.raw_rises(name)
+        if self._train_rises is None:
+            self._train_rises = rises(np.asfortranarray(self.checked_train.stack(SENSORS)))
+        return self._train_rises
 
     def column(self, name: str, column: str) -> np.ndarray:
         """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
@@ -193,14 +238,17 @@ def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.Dat
 def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
             rows: Mapping[str, np.ndarray] | None = None) -> dict[str, Score]:
     """Scores of the predictions of every test run (on its samples ``rows`` if given)."""
-    scores = {}
-    for name in data.tests:
-        measured, truth = data.column(name, TARGET), data.column(name, TRUTH)
-        if rows is not None:
-            measured, truth = measured[rows[name]], truth[rows[name]]
-        scores[name] = Score(rmse(measured, predictions[name]),
-                             rmse(truth, predictions[name]), selected)
-    return scores
+    return {name: _score(data, name, predictions[name], selected,
+                         None if rows is None else rows[name]) for name in data.tests}
+
+
+def _score(data: EvaluationData, name: str, prediction: np.ndarray, selected: str,
+           rows: np.ndarray | None = None) -> Score:
+    """Score of the prediction of test run ``name`` (on its samples ``rows`` if given)."""
+    measured, truth = data.column(name, TARGET), data.column(name, TRUTH)
+    if rows is not None:
+        measured, truth = measured[rows], truth[rows]
+    return Score(rmse(measured, prediction), rmse(truth, prediction), selected)
 
 
 def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
@@ -219,43 +267,49 @@ def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dic
 
 
 def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
-    X = data.raw_rises(data.train)
+    X = data.raw_rises()
     y = data.train[TARGET].to_numpy(float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         selection = select_with(TOP_K, X, y, spec.k, names=SENSORS)
     chosen = selection.selected
     fit = fit_with(TOP_K, X[:, chosen], y)
-    predictions = {name: fit.predict(data.raw_rises(frame)[:, chosen])
-                   for name, frame in data.tests.items()}
+    predictions = {name: fit.predict(data.raw_rises(name)[:, chosen]) for name in data.tests}
     return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
 
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
-    X, y = data.raw_rises(data.train), data.train[TARGET].to_numpy(float)
+    X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
     candidates = PairwiseDifferences().fit(X)
     alpha = blocked_cv_alpha(candidates.transform(X), y)
     model = make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha=alpha)).fit(X, y)
-    predictions = {name: model.predict(data.raw_rises(frame))
-                   for name, frame in data.tests.items()}
+    predictions = {name: model.predict(data.raw_rises(name)) for name in data.tests}
     return _scores(data, predictions, f"all 210 candidates (alpha={alpha:.3g})")
 
 
 def _oracle(data: EvaluationData) -> dict[str, Score]:
-    predictions = {}
-    for name, frame in data.tests.items():
-        X = data.raw_rises(frame)
-        fit = fit_regressor(DEFAULT_REGRESSOR, X, frame[TARGET].to_numpy(float))
-        predictions[name] = fit.predict(X)
-    return _scores(data, predictions, "all 20 sensors, fitted on the held-out run itself")
+    # Fitted on the held-out run itself, so the same for every training run: fitted and
+    # scored once per run (all fits first, then the scores: the errors of one pass each)
+    def prediction(name: str) -> Callable[[], np.ndarray]:
+        def fit() -> np.ndarray:
+            X = data.raw_rises(name)
+            return fit_regressor(DEFAULT_REGRESSOR, X,
+                                 data.tests[name][TARGET].to_numpy(float)).predict(X)
+        return fit
+
+    predictions = {name: data.runs.memo(ORACLE, name, prediction(name)) for name in data.tests}
+    selected = "all 20 sensors, fitted on the held-out run itself"
+    return {name: data.runs.memo(f"{ORACLE} score", name, lambda name=name: _score(
+        data, name, predictions[name], selected)) for name in data.tests}
 
 
 def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
-              similarity: str) -> list[dict[str, object]]:
+              similarity: str, runs: SharedRuns | None = None) -> list[dict[str, object]]:
     """Rows (method, k, test, scores or error) for every spec; a failing method is recorded,
-    never raised, so one bad fit does not cost the others."""
+    never raised, so one bad fit does not cost the others. ``runs`` (holding the frames of
+    ``tests``) shares the test runs' conversions with other training runs."""
     rows: list[dict[str, object]] = []
-    data = EvaluationData(train, tests)  # the one pass: every spec works on its arrays
+    data = EvaluationData(train, tests, runs)  # the one pass: every spec works on its arrays
     for spec in specs:
         try:
             scores = run_method(spec, train, tests, similarity, data)

@@ -14,7 +14,7 @@ the data) and ``provenance.json``.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -76,6 +76,9 @@ class SweepOutcome:
     stats: RunStats
     resumed: bool
     skipped: dict[str, int] = field(default_factory=dict)
+    #: (replica, condition, training run) evaluations done now; ``stats`` counts their jobs
+    #: (one per replica and condition)
+    evaluated: int = 0
 
 
 def condition_id(condition: Condition | None) -> str:
@@ -117,7 +120,10 @@ class Sweep:
         return self.simulations.task(replica, experiment)
 
     def evaluation_task(self, replica: int, condition: Condition | None,
-                        train: Experiment) -> Task:
+                        trains: Sequence[Experiment]) -> Task:
+        """The task that evaluates training runs ``trains`` of one (replica, condition): one
+        job for all of them measures and checks every run once (a seam: tests break one
+        here)."""
         truths: dict[str, pd.DataFrame] = {}
         failures: dict[str, str] = {}
         for experiment in self.family:
@@ -126,13 +132,15 @@ class Sweep:
             else:
                 truths[experiment.id] = self.truth(replica, experiment)
         job = EvaluationJob(
-            replica=replica, condition=condition, train=train,
+            replica=replica, condition=condition, trains=tuple(trains),
             experiments=tuple(self.family), truths=truths, failures=failures,
             seeds={e.id: sensor_seed(self.study, replica, e) for e in self.family},
             duration_s=self.study.duration_s, specs=self.specs,
             similarity=self.study.methods.similarity)
-        return Task(f"evaluate r{replica} {condition_id(condition)} {train.id}", evaluate_job,
-                    (job,), kind="evaluation")
+        key = f"evaluate r{replica} {condition_id(condition)}"
+        if list(trains) != self.trains:
+            key += " " + " ".join(train.id for train in trains)
+        return Task(key, evaluate_job, (job,), kind="evaluation")
 
     def truth(self, replica: int, experiment: Experiment) -> pd.DataFrame:
         key = (replica, experiment.id)
@@ -164,38 +172,56 @@ class Sweep:
                 tasks.extend(self.simulation_task(replica, e) for e in exps)
             else:
                 todo = self._evaluations_to_do(replica)
-                skipped["evaluation"] += len(self.evaluation_keys(replica)) - len(todo)
+                skipped["evaluation"] += len(self.evaluation_keys(replica)) - sum(
+                    len(task.args[0].trains) for task in todo)
                 tasks.extend(todo)
+
+        evaluated = [0]  # training-run evaluations written (a job holds several)
 
         def on_outcome(outcome: Outcome) -> Iterable[Task]:
             if outcome.task.kind == "simulation":
                 return self._record_simulation(outcome, waiting)
-            job: EvaluationJob = outcome.task.args[0]
-            path = evaluation_path(job.replica, job.condition, job.train)
-            if outcome.ok:
-                self.store.write_frame(path, outcome.value)
-                self.store.remove(error_path(path))
-            else:  # kept apart so that the next run retries it
-                condition = job.condition
-                self.store.write_frame(error_path(path), pd.DataFrame([{
-                    "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
-                    "noise": condition.noise.name if condition else NOISE_FREE,
-                    "fault": condition.fault_name if condition else "none",
-                    "train_experiment": job.train.id,
-                    "error": f"evaluation failed: {outcome.error}"}]))
+            self._record_evaluation(outcome)
+            evaluated[0] += len(outcome.task.args[0].trains)
             return ()
 
-        follow_ups = sum(len(self.evaluation_keys(r)) for r, exps in pending.items() if exps)
+        follow_ups = len(self.conditions) * sum(1 for exps in pending.values() if exps)
         stats = runner.run(tasks, on_outcome, expected_follow_ups=follow_ups)
         results = self.collect()
-        return SweepOutcome(self.store.root, results, stats, resumed, skipped)
+        return SweepOutcome(self.store.root, results, stats, resumed, skipped, evaluated[0])
 
     def _evaluations_to_do(self, replica: int) -> list[Task]:
-        tasks = [self.evaluation_task(replica, c, t) for c, t in self.evaluation_keys(replica)
-                 if not self.store.exists(evaluation_path(replica, c, t))]
+        """One task per condition of ``replica`` for its training runs without a result file
+        (a run whose file is lost is redone, the others are kept)."""
+        tasks = []
+        for condition in self.conditions:
+            missing = [train for train in self.trains
+                       if not self.store.exists(evaluation_path(replica, condition, train))]
+            if missing:
+                tasks.append(self.evaluation_task(replica, condition, missing))
         for experiment in self.family:  # the jobs hold their data now: free the cache
             self._truths.pop((replica, experiment.id), None)
         return tasks
+
+    def _record_evaluation(self, outcome: Outcome) -> None:
+        """Write each training run's rows, or its error file (kept apart so that the next run
+        retries it): a job that raised fails all its training runs, a training run whose
+        evaluation raised only itself."""
+        job: EvaluationJob = outcome.task.args[0]
+        condition = job.condition
+        for train in job.trains:
+            path = evaluation_path(job.replica, condition, train)
+            value = outcome.value[train.id] if outcome.ok else outcome.error
+            if isinstance(value, pd.DataFrame):
+                self.store.write_frame(path, value)
+                self.store.remove(error_path(path))
+                continue
+            self.store.write_frame(error_path(path), pd.DataFrame([{
+                "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                "noise": condition.noise.name if condition else NOISE_FREE,
+                "fault": condition.fault_name if condition else "none",
+                "train_experiment": train.id,
+                "error": f"evaluation failed: {value}"}]))
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self.simulations.store_outcome(outcome)
@@ -330,7 +356,7 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     failed = int((results["error"] != "").sum()) if len(results) else 0
     stats = outcome.stats
     print(f"{'resumed: ' if outcome.resumed else ''}ran {stats.total('simulation')} "
-          f"simulation(s) and {stats.total('evaluation')} evaluation(s) in "
+          f"simulation(s) and {outcome.evaluated} evaluation(s) in "
           f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
           f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
           f"{failed} with errors")

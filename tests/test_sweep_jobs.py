@@ -1,0 +1,124 @@
+"""The sweep's evaluation jobs: one job per (replica, condition) covers its training runs.
+
+Uses ``scenarios/studies/tiny_sweep.toml`` with ``rule = "each-season"`` (Jan and Jul at
+4000 rpm train), so every (replica, condition) has two training runs sharing one job.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+from conftest import REPO
+from spindlebench.studies import jobs
+from spindlebench.studies.executor import TaskRunner
+from spindlebench.studies.jobs import evaluate_job, measured_frame
+from spindlebench.studies.methods import score_all
+from spindlebench.studies.study import load_study
+from spindlebench.studies.sweep import Sweep, evaluation_path
+
+TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
+
+
+@pytest.fixture(scope="module")
+def seasons_study(tmp_path_factory):
+    text = TINY.read_text(encoding="utf-8").replace('[training]\nmonth = "Jan"',
+                                                    '[training]\nrule = "each-season"')
+    assert "each-season" in text
+    path = tmp_path_factory.mktemp("study") / "tiny_seasons.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def run(study_path, out):
+    sweep = Sweep(load_study(study_path), out)
+    return sweep, sweep.run(TaskRunner(workers=0, progress=False))
+
+
+@pytest.fixture(scope="module")
+def swept(seasons_study, tmp_path_factory):
+    return run(seasons_study, tmp_path_factory.mktemp("sweep") / "seasons")
+
+
+def rows_on_their_own(job, train):
+    """A training run's rows as one job per training run made them: its own frames, measured
+    (the training run without the fault) and checked for it alone."""
+    train_frame = measured_frame(job, train, held_out=False)
+    tests = {e.id: measured_frame(job, e) for e in job.experiments if e != train}
+    rows = pd.DataFrame(score_all(list(job.specs), train_frame, tests, job.similarity))
+    return rows.astype({"k": "Int64"})
+
+
+def test_one_job_per_condition_gives_each_training_runs_own_rows(swept):
+    sweep, outcome = swept
+    assert len(sweep.trains) == 2
+    assert outcome.stats.done == {"simulation": 8, "evaluation": 2 * len(sweep.conditions)}
+    assert outcome.evaluated == 2 * 2 * len(sweep.conditions)
+    assert {c.fault_name for c in sweep.conditions if c is not None} == {"none", "T1-stuck"}
+    for condition in sweep.conditions:
+        job = sweep.evaluation_task(2, condition, sweep.trains).args[0]
+        merged = evaluate_job(job)
+        assert list(merged) == [train.id for train in sweep.trains]
+        for train in sweep.trains:
+            alone = evaluate_job(sweep.evaluation_task(2, condition, [train]).args[0])
+            frame = merged[train.id]
+            assert frame.to_csv(index=False) == alone[train.id].to_csv(index=False)
+            own = rows_on_their_own(job, train)
+            columns = list(own.columns)
+            assert frame[columns].to_csv(index=False) == own.to_csv(index=False)
+            assert (frame["error"] == "").all()
+            assert len(frame) == len(sweep.family[1:]) * len(sweep.specs)
+
+
+def test_a_lost_training_run_file_redoes_only_that_run(swept, seasons_study, tmp_path):
+    import shutil
+
+    sweep, outcome = swept
+    out = tmp_path / "copy"
+    shutil.copytree(outcome.out_dir, out)
+    condition = next(c for c in sweep.conditions if c is not None and c.fault is not None)
+    lost = out / evaluation_path(1, condition, sweep.trains[1])
+    kept = out / evaluation_path(1, condition, sweep.trains[0])
+    before, kept_before = lost.read_bytes(), kept.stat().st_mtime_ns
+    lost.unlink()
+    _, again = run(seasons_study, out)
+    assert again.stats.done == {"evaluation": 1} and again.evaluated == 1
+    assert again.skipped["evaluation"] == 2 * 2 * len(sweep.conditions) - 1
+    assert lost.read_bytes() == before and kept.stat().st_mtime_ns == kept_before
+    pd.testing.assert_frame_equal(again.results, outcome.results)
+
+
+def test_a_training_run_whose_evaluation_raises_costs_only_itself(swept, seasons_study,
+                                                                  tmp_path, monkeypatch):
+    import shutil
+
+    sweep, outcome = swept
+    out = tmp_path / "broken"
+    shutil.copytree(outcome.out_dir, out)
+    for path in out.glob("evals/r001/*/*.csv"):
+        path.unlink()
+    broken = sweep.trains[0]
+    original = jobs._evaluate_training_run
+
+    def breaking(job, train, runs):
+        if train == broken:
+            raise RuntimeError("broken on purpose")
+        return original(job, train, runs)
+
+    monkeypatch.setattr(jobs, "_evaluate_training_run", breaking)
+    _, failing = run(seasons_study, out)
+    assert failing.stats.done == {"evaluation": len(sweep.conditions)}
+    results = failing.results
+    failed = results[results["error"] != ""]
+    assert set(failed["train_experiment"]) == {broken.id} and set(failed["replica"]) == {1}
+    assert (failed["error"] == "evaluation failed: RuntimeError: broken on purpose").all()
+    assert len(failed) == len(sweep.conditions)  # one error row per (condition, run)
+    for condition in sweep.conditions:
+        assert (out / evaluation_path(1, condition, broken).replace(".csv", ".error.csv")
+                ).is_file()
+        assert (out / evaluation_path(1, condition, sweep.trains[1])).is_file()
+
+    monkeypatch.setattr(jobs, "_evaluate_training_run", original)
+    _, fixed = run(seasons_study, out)
+    assert fixed.evaluated == len(sweep.conditions)
+    assert not list(out.glob("evals/**/*.error.csv"))
+    pd.testing.assert_frame_equal(fixed.results, outcome.results)
