@@ -26,14 +26,23 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import TIME_COLUMN, not_sensor_reason
+from spindlebench.formats.recording import (
+    TIME_COLUMN,
+    RecordingTable,
+    not_sensor_reason,
+    read_header,
+    read_table,
+)
 from spindlebench.listflags import split_list_flag
 from spindlebench.names import KELVIN_OFFSET
+
+if TYPE_CHECKING:  # a DataFrame only where a caller asks for one: ``evaluate`` needs none
+    import pandas as pd
 
 #: |Pearson r| with the target above which a candidate is taken for a copy of the target.
 COPY_R = 0.999
@@ -266,15 +275,15 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
     return RoleChoice(time_column, sensors, skipped, by_rule)
 
 
-def refuse_target_copies(frame: pd.DataFrame, target: str, sensors: Sequence[str],
-                         where: str, allow: bool) -> None:
+def refuse_target_copies(frame: pd.DataFrame | RecordingTable, target: str,
+                         sensors: Sequence[str], where: str, allow: bool) -> None:
     """Refuse a sensor whose |r| with the target exceeds :data:`COPY_R`: a target that leaks
     into the model gives ψ = 1 and R² = 1 and predicts nothing on a real machine."""
     if allow:
         return
-    y = frame[target].to_numpy(dtype=float)
+    y = np.asarray(frame[target], dtype=float)
     for name in sensors:
-        x = frame[name].to_numpy(dtype=float)
+        x = np.asarray(frame[name], dtype=float)
         keep = np.isfinite(x) & np.isfinite(y)
         if keep.sum() < 3 or np.ptp(x[keep]) == 0 or np.ptp(y[keep]) == 0:
             continue
@@ -309,24 +318,30 @@ def parse_decimal(value: str | None, where: str) -> str | None:
 PLAUSIBLE_C = (-KELVIN_OFFSET, 1.0e4)
 
 
-def refuse_implausible_temperatures(frame: pd.DataFrame, sensors: Sequence[str],
-                                    where: str) -> None:
+def refuse_implausible_temperatures(frame: pd.DataFrame | RecordingTable,
+                                    sensors: Sequence[str], where: str) -> None:
     """A temperature-looking sensor with a value no thermometer reads is one line naming the
     file, line and column (one 9.9e37 cell made every other sensor look constant)."""
     low, high = PLAUSIBLE_C
     for name in sensors:
         if not looks_like_temperature(name):
             continue
-        values = frame[name].to_numpy(dtype=float)
+        values = np.asarray(frame[name], dtype=float)
         bad = np.flatnonzero(~((values > low) & (values < high)) & ~np.isnan(values))
         if bad.size:
             row = int(bad[0])
-            line = int(frame.index[row]) + 2 if isinstance(frame.index, pd.RangeIndex) \
-                else row + 2
+            line = row + 2 if isinstance(frame, RecordingTable) else _line(frame, row)
             raise SpindlebenchError(
                 f"recording {where}, line {line}, column {name!r}: {values[row]:g} is not a "
                 f"plausible temperature ({low:g}..{high:g} °C; a logger's error value?); "
                 f"{bad.size} such cell(s); remove those samples or --exclude the column")
+
+
+def _line(frame: pd.DataFrame, row: int) -> int:
+    """The file line of a frame's ``row``-th sample (header = line 1)."""
+    import pandas as pd
+
+    return int(frame.index[row]) + 2 if isinstance(frame.index, pd.RangeIndex) else row + 2
 
 
 def read_with_roles(path: Path, target: str, roles: ColumnRoles, *,
@@ -339,35 +354,47 @@ def read_with_roles(path: Path, target: str, roles: ColumnRoles, *,
     is renamed to ``time_s`` in the frame (so downstream code has one name), the sensors are
     checked for implausible temperatures and (unless allowed) copies of the target.
     """
-    from spindlebench.formats.recording import read_header, read_recording
+    table, choice = read_table_with_roles(path, target, roles, allow_missing=allow_missing,
+                                          extra=extra, engine="pandas")
+    return table.frame(), choice
 
+
+def read_table_with_roles(path: Path, target: str, roles: ColumnRoles, *,
+                          allow_missing: bool = False, extra: Sequence[str] = (),
+                          engine: str = "numpy") -> tuple[RecordingTable, RoleChoice]:
+    """``read_with_roles`` as a ``RecordingTable`` (no pandas with ``engine="numpy"``; see
+    ``recording.ENGINES``): the same columns, checks, values and messages."""
     delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
     header = read_header(path, delimiter)
     choice = choose(header, target, roles, str(path))
     wanted = [target, *choice.sensors] + ([choice.time_column] if choice.time_column else []) \
         + [name for name in extra if name in header]
-    frame = read_recording(path, allow_missing=allow_missing, columns=wanted,
-                           delimiter=delimiter, decimal=decimal)
+    table = read_table(path, allow_missing=allow_missing, columns=wanted,
+                       delimiter=delimiter, decimal=decimal, engine=engine)
     if choice.time_column:
-        frame = as_time_s(frame, choice.time_column, path)
-    refuse_implausible_temperatures(frame, choice.sensors, str(path))
-    return frame, choice
+        table = as_time_s(table, choice.time_column, path)
+    refuse_implausible_temperatures(table, choice.sensors, str(path))
+    return table, choice
 
 
-def as_time_s(frame: pd.DataFrame, time_column: str, path: Path) -> pd.DataFrame:
+def as_time_s(frame: pd.DataFrame | RecordingTable, time_column: str,
+              path: Path) -> pd.DataFrame | RecordingTable:
     """``frame`` with its time axis ``time_column`` named ``time_s`` (downstream code has one
     name), checked to increase; ``read_recording`` keeps a ``time_s`` column whenever the
     file has one, so a named time axis replaces it."""
     if time_column == TIME_COLUMN:
         return frame
-    frame = frame.drop(columns=[TIME_COLUMN], errors="ignore").rename(
-        columns={time_column: TIME_COLUMN})
+    if isinstance(frame, RecordingTable):
+        frame = frame.renamed(time_column, TIME_COLUMN)
+    else:
+        frame = frame.drop(columns=[TIME_COLUMN], errors="ignore").rename(
+            columns={time_column: TIME_COLUMN})
     _check_increasing(frame, path)
     return frame
 
 
-def _check_increasing(frame: pd.DataFrame, path: Path) -> None:
-    steps = np.diff(frame[TIME_COLUMN].to_numpy(dtype=float))
+def _check_increasing(frame: pd.DataFrame | RecordingTable, path: Path) -> None:
+    steps = np.diff(np.asarray(frame[TIME_COLUMN], dtype=float))
     bad = np.flatnonzero(~(steps > 0))
     if bad.size:
         raise SpindlebenchError(f"recording {path}, line {bad[0] + 3}: the time column does not "

@@ -43,7 +43,9 @@ tell a pair that does not belong together (see ``sidecar_mismatch``).
 
 from __future__ import annotations
 
+import codecs
 import csv
+import functools
 import itertools
 import json
 import os
@@ -51,15 +53,17 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.atomic import atomic_path
 from spindlebench.errors import SpindlebenchError
 from spindlebench.names import SENSORS
 from spindlebench.provenance import sha256_file
+
+if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
+    import pandas as pd
 
 # --------------------------------------------------------------------------- column names
 
@@ -159,6 +163,60 @@ class MissingValueError(SpindlebenchError):
     case a caller can opt out of, so callers can point to their option."""
 
 
+#: How ``read_table`` turns text into numbers. ``"pandas"``: its C tokenizer (2-3x faster
+#: per file than NumPy's, for callers that build a DataFrame anyway); what it cannot take
+#: goes to the text path, which names the first bad cell. ``"numpy"``: ``np.loadtxt`` on a
+#: plain file first (no pandas import, half a second of a short command's start-up); a file
+#: it does not take exactly as pandas would (same values to the last bit, tested) goes on
+#: to pandas' way. The rules and the values do not depend on the engine.
+ENGINES = ("numpy", "pandas")
+
+
+@dataclass(frozen=True)
+class RecordingTable:
+    """A recording as read and checked: the kept columns' values in one float64 array.
+
+    ``read_table`` returns it, ``read_recording`` builds its DataFrame from it. A table is
+    what a command needs that only computes on the columns (``spindlebench evaluate``):
+    no pandas. ``table[name]`` is a column (a view of ``values``); row ``i`` is line
+    ``i + 2`` of the file."""
+
+    path: str
+    header: FileHeader  #: every column name of the file, also those not kept
+    columns: tuple[str, ...]  #: the kept columns, in file order
+    values: np.ndarray  #: (samples, len(columns)) float64
+
+    def __len__(self) -> int:
+        return self.values.shape[0]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.columns
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.values[:, self.columns.index(name)]
+        except ValueError:
+            raise KeyError(name) from None
+
+    def renamed(self, old: str, new: str) -> RecordingTable:
+        """The table with column ``old`` named ``new``, an existing ``new`` column dropped
+        (a named time axis replaces ``time_s``)."""
+        keep = [i for i, name in enumerate(self.columns) if name != new]
+        names = tuple(new if self.columns[i] == old else self.columns[i] for i in keep)
+        values = self.values if len(keep) == len(self.columns) else self.values[:, keep]
+        return RecordingTable(self.path, self.header, names, values)
+
+    def frame(self) -> pd.DataFrame:
+        """The table as the DataFrame ``read_recording`` returns (``attrs`` ``path`` and
+        ``header``)."""
+        import pandas as pd
+
+        frame = pd.DataFrame(self.values, columns=list(self.columns))
+        frame.attrs["path"] = self.path
+        frame.attrs["header"] = self.header
+        return frame
+
+
 def read_recording(
     path: str | os.PathLike[str],
     *,
@@ -178,7 +236,26 @@ def read_recording(
     ``frame.attrs["header"]`` every column name of the file. ``delimiter`` and ``decimal``
     give the CSV dialect (``formats.columns.detect_dialect`` finds them); a file that reads
     as one column whose name holds another delimiter is refused saying so.
+
+    The DataFrame of ``read_table(..., engine="pandas")``: the same checks and values.
     """
+    return read_table(path, allow_missing=allow_missing, columns=columns,
+                      delimiter=delimiter, decimal=decimal, engine="pandas").frame()
+
+
+def read_table(
+    path: str | os.PathLike[str],
+    *,
+    allow_missing: bool = False,
+    columns: Iterable[str] | None = None,
+    delimiter: str = ",",
+    decimal: str = ".",
+    engine: str = "numpy",
+) -> RecordingTable:
+    """Read and validate one recording as arrays (see ``read_recording`` for the rules and
+    ``ENGINES`` for ``engine``; the rules and the values do not depend on it)."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     path = Path(path)
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
@@ -187,24 +264,26 @@ def read_recording(
     dialect = _Dialect(delimiter, decimal)
     header = _read_header(path, dialect)
     keep = header if columns is None else _kept(header, columns)
-    frame = _read_clean(path, header, allow_missing, keep, dialect)
-    if frame is None:  # something is wrong: read as text to say exactly what and where
-        frame = _read_diagnosing(path, header, allow_missing, keep, dialect)
-    if len(frame) < 2:
+    values = None
+    if engine == "numpy":
+        values = _parse_with_numpy(path, header, allow_missing, keep, dialect)
+    if values is None:  # not a plain file: what pandas' tokenizer reads
+        values = _parse_with_pandas(path, header, allow_missing, keep, dialect)
+    if values is None:  # something is wrong: read as text to say exactly what and where
+        values = _read_diagnosing(path, header, allow_missing, keep, dialect)
+    if len(values) < 2:
         raise SpindlebenchError(
-            f"recording {path}: has {len(frame)} data row(s); an experiment needs at least 2"
+            f"recording {path}: has {len(values)} data row(s); an experiment needs at least 2"
         )
-    if TIME_COLUMN in frame:
-        steps = np.diff(frame[TIME_COLUMN].to_numpy())
-        bad = np.flatnonzero(steps <= 0)
+    if TIME_COLUMN in keep:
+        time_s = values[:, keep.index(TIME_COLUMN)]
+        bad = np.flatnonzero(np.diff(time_s) <= 0)
         if bad.size:
             raise SpindlebenchError(
                 f"recording {path}, line {bad[0] + 3}: '{TIME_COLUMN}' does not increase "
-                f"({frame[TIME_COLUMN].iloc[bad[0]]:g} -> {frame[TIME_COLUMN].iloc[bad[0] + 1]:g})"
+                f"({time_s[bad[0]]:g} -> {time_s[bad[0] + 1]:g})"
             )
-    frame.attrs["path"] = str(path)
-    frame.attrs["header"] = FileHeader(header)
-    return frame
+    return RecordingTable(str(path), FileHeader(header), tuple(keep), values)
 
 
 class FileHeader(list):
@@ -229,11 +308,23 @@ def _kept(header: list[str], columns: Iterable[str]) -> list[str]:
     return [name for name in header if name in wanted]
 
 
-def _read_clean(
+def _checked_values(values: np.ndarray, keep: list[str], allow_missing: bool) -> bool:
+    """Whether parsed ``values`` of the ``keep`` columns pass: finite, or NaN where
+    ``allow_missing`` permits it (never in ``time_s``)."""
+    if not allow_missing:
+        return bool(np.isfinite(values).all())
+    if np.isinf(values).any():
+        return False
+    return not (TIME_COLUMN in keep and np.isnan(values[:, keep.index(TIME_COLUMN)]).any())
+
+
+def _parse_with_pandas(
     path: Path, header: list[str], allow_missing: bool, keep: list[str], dialect: _Dialect
-) -> pd.DataFrame | None:
+) -> np.ndarray | None:
     """Fast path: the ``keep`` columns parse as finite floats throughout (or NaN where
     ``allow_missing`` permits it), and every line has all its fields; or None."""
+    import pandas as pd
+
     na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
         frame = pd.read_csv(
@@ -257,13 +348,82 @@ def _read_clean(
     if not numeric:
         return None
     values = frame.to_numpy(dtype=float)
-    if not allow_missing:
-        return frame.astype(float) if np.isfinite(values).all() else None
-    if np.isinf(values).any():
+    return values if _checked_values(values, keep, allow_missing) else None
+
+
+#: A NaN spelling with a sign, which ``float`` reads but the rules do not count as missing.
+_SIGNED_NAN = re.compile(r"[+-]nan", re.IGNORECASE)
+
+
+def _parse_with_numpy(
+    path: Path, header: list[str], allow_missing: bool, keep: list[str], dialect: _Dialect
+) -> np.ndarray | None:
+    """Fast path without pandas, for the plain files a logger or the testbench writes: ASCII
+    data lines, no quotes, every line with exactly the header's number of fields, every
+    ``keep`` cell a number ``float`` reads (empty or NaN where ``allow_missing`` permits
+    it), no "-0" in a column of integers; or None. ``np.loadtxt`` converts with Python's
+    correctly rounded ``float``, which is what pandas' parser gives on such cells (tested)."""
+    data = path.read_bytes()
+    data = data.removeprefix(codecs.BOM_UTF8)
+    newline = data.find(b"\n")
+    if newline < 0 or b'"' in data or data.count(b"\r") != data.count(b"\r\n"):
+        return None  # no data line, quoting, or a line break other than \n and \r\n
+    body = data[newline + 1:]
+    if not body.isascii():
         return None
-    if TIME_COLUMN in keep and np.isnan(values[:, keep.index(TIME_COLUMN)]).any():
-        return None  # time_s must be complete
-    return frame.astype(float)
+    text = body.decode("ascii")
+    lines = text.split("\n")
+    if lines[-1] == "":
+        lines.pop()  # the last line's newline
+    delimiter = dialect.delimiter
+    if any(line.count(delimiter) != len(header) - 1 for line in lines):
+        return None  # a short, long or blank line: the text path names it
+    if not lines:
+        return np.empty((0, len(keep)))
+    if dialect.decimal == ",":  # the delimiter is not a comma (detect_dialect)
+        lines = [line.replace(",", ".") for line in lines]
+    if allow_missing:
+        empty = _empty_field(delimiter)
+        lines = [empty.sub("nan", line) for line in lines]
+    try:
+        values = np.loadtxt(lines, delimiter=delimiter, comments=None, quotechar=None,
+                            usecols=[header.index(name) for name in keep], ndmin=2,
+                            dtype=float)
+    except ValueError:
+        return None
+    if values.shape != (len(lines), len(keep)) or \
+            not _checked_values(values, keep, allow_missing):
+        return None
+    if allow_missing and np.isnan(values).any() and any(map(_SIGNED_NAN.search, lines)):
+        return None  # "-nan" is not a missing-value spelling
+    if _integer_negative_zero(values, lines, [header.index(name) for name in keep],
+                              delimiter):
+        return None
+    return values
+
+
+#: A cell pandas reads as an integer (a column of them becomes int64, "-0" the integer 0).
+_INTEGER = re.compile(r"\s*[+-]?\d+\s*|\s*nan\s*", re.IGNORECASE)
+
+
+def _integer_negative_zero(values: np.ndarray, lines: list[str], positions: list[int],
+                           delimiter: str) -> bool:
+    """Whether a column with a -0.0 has only integer (or missing) cells: pandas reads those
+    as integers, so its -0 is +0.0 there (a column with a decimal point keeps -0.0)."""
+    negative_zero = (values == 0) & np.signbit(values)
+    for j in np.flatnonzero(negative_zero.any(axis=0)):
+        cells = (line.split(delimiter)[positions[j]] for line in lines)
+        if all(_INTEGER.fullmatch(cell) for cell in cells):
+            return True
+    return False
+
+
+@functools.lru_cache(maxsize=8)
+def _empty_field(delimiter: str) -> re.Pattern[str]:
+    """Where a line has an empty field: at its start or after a delimiter, before the next
+    delimiter or its end (a trailing carriage return is not empty: the text path)."""
+    d = re.escape(delimiter)
+    return re.compile(f"(?:^|(?<={d}))(?={d}|$)")
 
 
 def _all_fields_fast(path: Path, rows: int, width: int, delimiter: str = ",") -> bool:
@@ -274,8 +434,11 @@ def _all_fields_fast(path: Path, rows: int, width: int, delimiter: str = ",") ->
 
 def _read_diagnosing(
     path: Path, header: list[str], allow_missing: bool, keep: list[str], dialect: _Dialect
-) -> pd.DataFrame:
-    """Slow path: read every cell as text, raise naming the first bad cell of ``keep``."""
+) -> np.ndarray:
+    """Slow path: read every cell as text, raise naming the first bad cell of ``keep``, or
+    return their values."""
+    import pandas as pd
+
     try:
         raw = pd.read_csv(
             path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c",
@@ -300,13 +463,10 @@ def _read_diagnosing(
     if allow_missing or len(keep) < len(header):
         # pandas pads short rows with empty cells: those are not missing values
         _check_field_counts(path, len(header), len(raw), dialect.delimiter)
-    return pd.DataFrame(
-        {
-            name: _numeric_column(path, name, raw[name], allow_missing, dialect.decimal)
-            for name in keep
-        },
-        index=raw.index,
-    )
+    values = np.empty((len(raw), len(keep)))
+    for i, name in enumerate(keep):
+        values[:, i] = _numeric_column(path, name, raw[name], allow_missing, dialect.decimal)
+    return values
 
 
 def read_header(path: str | os.PathLike[str], delimiter: str = ",") -> list[str]:
@@ -364,12 +524,14 @@ def _drop_trailing_blank_rows(raw: pd.DataFrame) -> pd.DataFrame:
 
 
 def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool,
-                    decimal: str = ".") -> pd.Series:
+                    decimal: str = ".") -> np.ndarray:
     """One column as float64, or an error naming the first bad line (header = line 1).
 
     Empty and NaN cells raise ``MissingValueError`` (or pass as NaN with ``allow_missing``),
     except in ``time_s``, which must be complete.
     """
+    import pandas as pd
+
     optional = name != TIME_COLUMN
     stripped = cells.str.strip()
     as_numbers = stripped.str.replace(",", ".", regex=False) if decimal == "," else stripped
@@ -379,7 +541,7 @@ def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool
         bad_mask &= ~stripped.str.lower().isin(MISSING_SPELLINGS).to_numpy(dtype=bool)
     bad = np.flatnonzero(bad_mask)
     if not bad.size:
-        return values
+        return values.to_numpy()
     row = int(bad[0])
     cell = cells.iloc[row]
     text = "" if pd.isna(cell) else str(cell).strip()
@@ -402,8 +564,10 @@ def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool
     )
 
 
-def recording_name(frame: pd.DataFrame, fallback: str = "<data frame>") -> str:
-    """The file a frame was read from, for messages."""
+def recording_name(frame: pd.DataFrame | RecordingTable, fallback: str = "<data frame>") -> str:
+    """The file a frame (or a table) was read from, for messages."""
+    if isinstance(frame, RecordingTable):
+        return frame.path
     return str(frame.attrs.get("path", fallback))
 
 
@@ -419,19 +583,20 @@ def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> N
         )
 
 
-def default_sensors(frame: pd.DataFrame, target: str) -> list[str]:
+def default_sensors(frame: pd.DataFrame | RecordingTable, target: str) -> list[str]:
     """Sensor columns when none are given: every numeric column except the target,
     ``time_s``, ``true_*`` truth, driver/command columns (``ambient_C``, ``feed_*``,
     ``*_rpm``, ``*_mm_per_min``, heat flows ``*_W``) and other thermal-error or displacement
-    channels (``*_um``), which are outputs, not temperatures.
+    channels (``*_um``), which are outputs, not temperatures. (A table's columns are all
+    numeric.)
     """
-    return [
-        str(name)
-        for name in frame.columns
-        if name != target
-        and is_default_sensor(str(name))
-        and pd.api.types.is_numeric_dtype(frame[name])
-    ]
+    names = [str(name) for name in frame.columns
+             if name != target and is_default_sensor(str(name))]
+    if isinstance(frame, RecordingTable):
+        return names
+    import pandas as pd
+
+    return [name for name in names if pd.api.types.is_numeric_dtype(frame[name])]
 
 
 # --------------------------------------------------------------------------- writing
@@ -515,6 +680,8 @@ def recording_frame(
     truth: Mapping[str, np.ndarray],
 ) -> pd.DataFrame:
     """The canonical recording table (column order fixed by the contract)."""
+    import pandas as pd
+
     columns: dict[str, np.ndarray] = {TIME_COLUMN: time_s}
     for i in range(measured_C.shape[1]):
         columns[SENSORS[i]] = measured_C[:, i]

@@ -15,8 +15,7 @@ import json
 import sys
 import warnings
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from spindlebench import atomic, provenance
 from spindlebench.formats.columns import (
@@ -25,19 +24,21 @@ from spindlebench.formats.columns import (
     add_role_arguments,
     choose,
     detect_dialect,
-    read_with_roles,
+    read_table_with_roles,
     refuse_target_copies,
 )
-from spindlebench.formats.recording import MissingValueError, read_header
+from spindlebench.formats.recording import MissingValueError, RecordingTable, read_header
 from spindlebench.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import (
     Evaluation,
-    RecordingLike,
     check_same_sensors,
     evaluate,
 )
+
+if TYPE_CHECKING:
+    from spindlebench.selection.evaluate import RecordingLike
 from spindlebench.selection.registry import add_method_arguments, choice_from_args
 from spindlebench.selection.similarity import SIMILARITIES
 
@@ -88,11 +89,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _read_used(path: Path, target: str, roles: ColumnRoles,
-               missing: str) -> tuple[pd.DataFrame, RoleChoice]:
+               missing: str) -> tuple[RecordingTable, RoleChoice]:
     """One recording with only the target, time and sensor columns read and checked: a gap
-    or a note in a column nobody uses must not reject the file."""
+    or a note in a column nobody uses must not reject the file. As arrays: the command
+    never imports pandas (half a second of its start-up) unless a file needs its parser."""
     try:
-        return read_with_roles(path, target, roles, allow_missing=missing == "drop-rows")
+        return read_table_with_roles(path, target, roles, allow_missing=missing == "drop-rows")
     except MissingValueError as exc:
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
 

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.selection.errors import SelectionError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @functools.lru_cache(maxsize=32)
@@ -47,6 +50,8 @@ def pairwise_differences(X: np.ndarray) -> np.ndarray:
 
 def with_differences(frame: pd.DataFrame, sensors: Sequence[str]) -> pd.DataFrame:
     """The raw ``sensors`` of ``frame`` followed by all their pairwise differences."""
+    import pandas as pd
+
     sensors = list(sensors)
     raw = frame.loc[:, sensors].to_numpy(dtype=float)
     diffs = pd.DataFrame(

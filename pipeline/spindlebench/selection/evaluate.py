@@ -21,20 +21,21 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.formats.recording import (
     MissingValueError,
+    RecordingTable,
     default_sensors,
-    read_recording,
+    read_table,
     recording_name,
 )
 from spindlebench.names import DEFAULT_SIMILARITY, MISSING_MODES
@@ -51,7 +52,16 @@ from spindlebench.selection.regression import LinearFit, rises, rmse
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
 
-RecordingLike = str | os.PathLike[str] | pd.DataFrame
+if TYPE_CHECKING:  # pandas only where a DataFrame is given: the command line needs none
+    import pandas as pd
+
+RecordingLike = Union[str, os.PathLike[str], "pd.DataFrame", RecordingTable]
+
+
+def _is_frame(value: object) -> bool:
+    """Whether ``value`` is a DataFrame (none can be before pandas is imported)."""
+    pandas = sys.modules.get("pandas")
+    return pandas is not None and isinstance(value, pandas.DataFrame)
 #: Methods whose result depends on ``seed``.
 SEEDED_METHODS = ("fcm", "kmeans", "stability")
 
@@ -67,9 +77,11 @@ class CheckedRecording:
     and checking every column of every recording again per call was most of a sweep's time.
     ``take(rows)`` is the same recording restricted to some samples (positions), sharing the
     conversions; its values are exactly ``frame.iloc[rows][column].to_numpy(dtype=float)``.
+    ``frame`` is a DataFrame or a ``RecordingTable`` (``read_table``: already one float
+    block).
     """
 
-    def __init__(self, name: str, frame: pd.DataFrame) -> None:
+    def __init__(self, name: str, frame: pd.DataFrame | RecordingTable) -> None:
         self.name = name
         self.frame = frame
         self._rows: np.ndarray | None = None
@@ -84,7 +96,7 @@ class CheckedRecording:
         return len(self.frame) if self._rows is None else len(self._rows)
 
     @property
-    def columns(self) -> pd.Index:
+    def columns(self) -> pd.Index | tuple[str, ...]:
         return self.frame.columns
 
     def take(self, rows: np.ndarray) -> CheckedRecording:
@@ -110,7 +122,10 @@ class CheckedRecording:
         per column)."""
         if self._block is None and not self._positions:
             frame = self.frame
-            if frame.columns.is_unique and all(dtype == np.float64 for dtype in frame.dtypes):
+            if isinstance(frame, RecordingTable):
+                self._block = frame.values
+                self._positions = {column: i for i, column in enumerate(frame.columns)}
+            elif frame.columns.is_unique and all(dtype == np.float64 for dtype in frame.dtypes):
                 self._block = frame.to_numpy(dtype=float)
                 self._positions = {column: i for i, column in enumerate(frame.columns)}
             else:
@@ -148,11 +163,15 @@ class CheckedRecording:
         return self._problems[key]
 
 
-def _column_problem(frame: pd.DataFrame, column: str, missing: str,
+def _column_problem(frame: pd.DataFrame | RecordingTable, column: str, missing: str,
                     values: np.ndarray | None = None) -> str | None:
     """Text, booleans and infinities never pass; NaN only with ``missing="drop-rows"``.
     ``values``: the column, known to be float64 (skips the frame lookup)."""
+    if values is None and isinstance(frame, RecordingTable):
+        values = frame[column]
     if values is None:
+        import pandas as pd
+
         cells = frame[column]
         if isinstance(cells, pd.Series) and cells.dtype == np.float64:
             values = cells.to_numpy()
@@ -161,13 +180,15 @@ def _column_problem(frame: pd.DataFrame, column: str, missing: str,
         if infinite.any():
             first = int(np.flatnonzero(infinite)[0])
             return (f"{_where(frame, first)}, column '{column}': infinite value "
-                    f"{str(frame[column].iloc[first])!r}")
+                    f"{str(values[first])!r}")
         nan = np.isnan(values)
         if missing == "error" and nan.any():
             first = int(np.flatnonzero(nan)[0])
             return (f"{_where(frame, first)}, column '{column}': missing value "
                     f"({int(nan.sum())} in this column); {_DROP_HINT}")
         return None
+    import pandas as pd
+
     cells = frame[column]
     numeric = pd.to_numeric(cells, errors="coerce")
     values = numeric.to_numpy(dtype=float)
@@ -369,19 +390,24 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _load(recording: RecordingLike, fallback: str, missing: str) -> tuple[str, pd.DataFrame]:
-    if isinstance(recording, pd.DataFrame):
+def _load(recording: RecordingLike, fallback: str,
+          missing: str) -> tuple[str, pd.DataFrame | RecordingTable]:
+    if isinstance(recording, RecordingTable) or _is_frame(recording):
         return recording_name(recording, fallback), recording
     try:
-        return str(recording), read_recording(
+        return str(recording), read_table(
             Path(recording), allow_missing=missing == "drop-rows"
         )
     except MissingValueError as exc:
         raise SelectionError(f"{exc}; {_DROP_HINT}") from exc
 
 
-def _where(frame: pd.DataFrame, position: int) -> str:
+def _where(frame: pd.DataFrame | RecordingTable, position: int) -> str:
     """``line N`` of the file a frame was read from, else ``row <index label>``."""
+    if isinstance(frame, RecordingTable):
+        return f"line {position + 2}"
+    import pandas as pd
+
     index = frame.index
     if "path" in frame.attrs and isinstance(index, pd.RangeIndex) and index.start == 0 \
             and index.step == 1:
@@ -454,8 +480,8 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
 
 def resolve_sensors(
     train_name: str,
-    train: pd.DataFrame,
-    tests: Mapping[str, pd.DataFrame],
+    train: pd.DataFrame | RecordingTable,
+    tests: Mapping[str, pd.DataFrame | RecordingTable],
     target: str,
     sensors: Sequence[str] | None,
 ) -> list[str]:
@@ -521,7 +547,8 @@ def evaluate(
 ) -> Evaluation:
     """Select ``k`` points on ``train``, fit the rise model, and score it on every test.
 
-    Recordings are paths (read with ``read_recording``) or DataFrames; ``tests`` is a list of
+    Recordings are paths (read with ``read_table``), DataFrames or ``RecordingTable``s
+    (``read_table``, ``read_table_with_roles``); ``tests`` is a list of
     them, a single one, or a mapping from display name to recording (default names: the
     paths). ``sensors`` None means
     ``default_sensors`` of the training file, and every test file must then have exactly the
@@ -552,7 +579,7 @@ def load_recordings(
 ) -> tuple[CheckedRecording, dict[str, CheckedRecording]]:
     """The training and test recordings of ``evaluate`` (read if paths), named as it names
     them, ready for any number of ``evaluate_checked`` calls."""
-    if isinstance(tests, (str, os.PathLike, pd.DataFrame)):
+    if isinstance(tests, (str, os.PathLike, RecordingTable)) or _is_frame(tests):
         tests = [tests]  # one test recording; a string would otherwise be read per character
     train_name, train_frame = _load(train, "train", missing)
     items = tests.items() if isinstance(tests, Mapping) else enumerate(tests, start=1)
