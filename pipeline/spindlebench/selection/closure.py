@@ -79,29 +79,59 @@ class SpanningTree:
 
 def maximum_spanning_tree(R: np.ndarray) -> SpanningTree:
     """Prim's algorithm on the dense similarity matrix, O(n^2) with vectorised rows."""
-    return prim_tree(R.shape[0], R.__getitem__)
+    # a row of R is a view: gathering the outside vertices' entries would cost more than
+    # comparing all of them
+    return prim_tree(R.shape[0], lambda vertex, outside: R[vertex], compact_every=0)
 
 
-def prim_tree(n: int, row: Callable[[int], np.ndarray]) -> SpanningTree:
-    """Prim's algorithm on the complete graph of ``n`` vertices whose similarities to vertex
-    v are ``row(v)`` (asked once per vertex): start at vertex 0, take the largest link, the
-    first one on ties; a parent changes only on a strictly larger similarity."""
-    best = np.full(n, -np.inf)  # best similarity linking each outside vertex to the tree
-    guard = best.copy()  # the same, +inf for tree members: no row raises them
+#: Prim's loop drops the vertices that joined the tree from its working arrays every this
+#: many steps, so each row is asked only for the vertices still outside (half of them on
+#: average): fewer similarities computed and compared, the same tree. For rows computed
+#: on demand (``pairs``); 0: never (all vertices, every row).
+COMPACT_EVERY = 32
+
+
+def prim_tree(n: int, row: Callable[[int, np.ndarray], np.ndarray],
+              compact_every: int = COMPACT_EVERY) -> SpanningTree:
+    """Prim's algorithm on the complete graph of ``n`` vertices: start at vertex 0, take the
+    largest link, the first one (lowest index) on ties; a parent changes only on a strictly
+    larger similarity.
+
+    ``row(v, outside)`` gives the similarities from vertex ``v`` to the vertices ``outside``
+    (increasing indices; it may hold some that joined the tree already, which are ignored;
+    the same array object until it is compacted, every ``compact_every`` steps, so ``row``
+    can keep what it derives from it). It is asked once per vertex but the last.
+    """
     parent = np.full(n, -1, dtype=np.intp)
     weight = np.ones(n)
     order = np.empty(n, dtype=np.intp)
-    vertex = 0
+    # per entry of ``outside``: its best link to the tree so far and from which vertex;
+    # ``guard`` is the same, +inf once it joined (no row raises it), ``best`` then -inf
+    outside = np.arange(n)
+    best = np.full(n, -np.inf)
+    guard = best.copy()
+    link = np.full(n, -1, dtype=np.intp)
+    improves = np.empty(n, dtype=bool)
+    entry = 0
     for position in range(n):
         if position > 0:
-            vertex = int(np.argmax(best))  # tree members hold -inf
-            weight[vertex] = best[vertex]
+            entry = int(best.argmax())  # entries in the tree hold -inf
+        vertex = int(outside[entry])
         order[position] = vertex
-        best[vertex], guard[vertex] = -np.inf, np.inf
-        similarities = row(vertex)
-        improves = similarities > guard
-        best[improves] = guard[improves] = similarities[improves]
-        parent[improves] = vertex
+        if position > 0:
+            weight[vertex], parent[vertex] = best[entry], link[entry]
+        if position == n - 1:
+            break
+        best[entry], guard[entry] = -np.inf, np.inf
+        if compact_every and position % compact_every == compact_every - 1:
+            still = np.flatnonzero(guard != np.inf)
+            outside, best, guard, link = outside[still], best[still], guard[still], link[still]
+            improves = improves[:still.size]
+        similarities = row(vertex, outside)
+        np.greater(similarities, guard, out=improves)
+        np.copyto(best, similarities, where=improves)
+        np.copyto(guard, similarities, where=improves)
+        np.copyto(link, vertex, where=improves)
     return SpanningTree(order=order, parent=parent, weight=weight)
 
 

@@ -191,18 +191,28 @@ class PairGeometry:
                 f"{column_list(kept[norms_bad], names)}"
             )
 
-    def rows_of(self, kept: np.ndarray) -> Callable[[int], np.ndarray]:
-        """The row of R over ``kept`` for the v-th of them (``closure.prim_tree``'s ``row``):
-        the same arithmetic as the compiled kernel's rows."""
+    def rows_of(self, kept: np.ndarray) -> Callable[[int, np.ndarray], np.ndarray]:
+        """The row of R over ``kept`` for the v-th of them, at the positions ``outside`` of
+        ``kept`` (``closure.prim_tree``'s ``row``): the same arithmetic as the compiled
+        kernel's rows. What depends on ``outside`` alone is kept until it changes."""
         first, second = self.first[kept], self.second[kept]
         inverse = self.inverse_norm[kept]
         factor_rows = np.vstack([self.factor.T, np.zeros((1, self.factor.shape[0]))])
+        factor_t = self.factor.T
         u = np.zeros(self.factor.shape[1] + 1)
+        cached: list = [None, first, second, inverse]
 
-        def row(vertex: int) -> np.ndarray:
+        def row(vertex: int, outside: np.ndarray) -> np.ndarray:
+            if cached[0] is not outside:
+                cached[:] = [outside, first[outside], second[outside], inverse[outside]]
+            _, ahead, behind, scale = cached
             direction = (factor_rows[first[vertex]] - factor_rows[second[vertex]])
-            u[:-1] = self.factor.T @ (direction * inverse[vertex])
-            return np.minimum(np.abs(u[first] - u[second]) * inverse, 1.0)
+            u[:-1] = factor_t @ (direction * inverse[vertex])
+            values = u[ahead]
+            values -= u[behind]
+            np.abs(values, out=values)
+            values *= scale
+            return np.minimum(values, 1.0, out=values)
 
         return row
 
