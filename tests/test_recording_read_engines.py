@@ -162,7 +162,8 @@ def test_evaluate_command_does_not_import_pandas(tmp_path):
                   for t, (row, d) in enumerate(zip(raw.tolist(), drift.tolist(), strict=True))]
         (tmp_path / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     code = ("import sys; from spindlebench import cli; status = cli.main(sys.argv[1:]); "
-            "assert 'pandas' not in sys.modules, 'pandas was imported'; sys.exit(status)")
+            "assert 'pandas' not in sys.modules, 'pandas was imported'; "
+            "assert 'numpy.ma' not in sys.modules, 'numpy.ma was imported'; sys.exit(status)")
     result = subprocess.run(
         [sys.executable, "-c", code, "evaluate", "--train", str(tmp_path / "a.csv"), "--test",
          str(tmp_path / "b.csv"), "--target", "drift_um", "--clusters", "2", "--differences"],

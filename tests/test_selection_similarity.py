@@ -63,3 +63,21 @@ def test_correlation_keeps_sign():
     assert psi[1] < -0.9
     with pytest.raises(SelectionError, match=r"target .* is constant"):
         correlation_with(t[:, None], np.ones(50))
+
+
+def test_the_median_of_constant_columns_is_numpys_to_the_bit():
+    """similarity._median replaces np.median (which imports numpy.ma) in constant_columns."""
+    from spindlebench.selection.similarity import _median
+
+    rng = np.random.default_rng(3)
+    for n in [*range(1, 12), 100, 101]:
+        for trial in range(20):
+            values = rng.normal(size=n) * 10.0 ** rng.integers(-8, 8)
+            if trial % 3 == 0:
+                values = np.round(values, 1)  # ties and -0.0
+            if trial % 5 == 0 and n > 2:
+                values[rng.integers(n)] = np.nan
+            expected = np.median(values)
+            got = _median(values)
+            assert np.float64(got).tobytes() == np.float64(expected).tobytes() or \
+                (np.isnan(got) and np.isnan(expected)), (values, got, expected)

@@ -5,8 +5,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
-import platform
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +50,9 @@ def package_versions() -> dict[str, str]:
 
 @functools.cache
 def _package_versions() -> tuple[tuple[str, str], ...]:
+    import platform  # here: with importlib.metadata ~50 ms of the start-up of every command
+    from importlib import metadata  # that never writes provenance (a sha256 is all it uses)
+
     versions = {"python": platform.python_version(), "spindlebench": spindlebench.__version__}
     for name in TRACKED_PACKAGES:
         try:

@@ -96,8 +96,11 @@ def cut_tree_for_clusters(tree: SpanningTree, n_clusters: int) -> Cut:
     n = tree.order.size
     check_n_clusters(n_clusters, n)
     child, parent, weight = tree.edges()
-    levels = np.unique(np.append(weight, 1.0))  # distinct values of t(R), ascending
     sorted_weights = np.sort(weight)
+    # distinct values of t(R), ascending: np.unique's result without its import of numpy.ma
+    # (~30 ms of the start-up of ``spindlebench evaluate``)
+    levels = np.sort(np.append(weight, 1.0))
+    levels = levels[np.append(True, levels[1:] != levels[:-1])]
     counts = 1 + np.searchsorted(sorted_weights, levels, side="left")
     reachable = np.flatnonzero(counts >= n_clusters)
     if reachable.size == 0:
