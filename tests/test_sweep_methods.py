@@ -116,7 +116,7 @@ def _old_scores(train, tests, spec, similarity="abs-pearson"):
     tests = {name: frame.copy() for name, frame in tests.items()}
 
     def raw(frame):
-        return rises(frame.loc[:, list(SENSORS)].to_numpy(dtype=float))
+        return rises(np.asfortranarray(frame.loc[:, list(SENSORS)].to_numpy(dtype=float)))
 
     def scored(frames, predictions):
         return {name: (rmse(frame["drift_um"].to_numpy(float), predictions[name]),
@@ -152,7 +152,6 @@ def test_one_pass_scores_equal_each_method_on_its_own_frames(tmp_path):
     """score_all converts and checks the recordings once for every method and k: its scores
     are those of each method run alone on fresh frames, to the last bit; also with a test
     run that lost a sensor for good (NaN column) and one with a gap (NaN rows)."""
-    from spindlebench.studies.executor import one_line_error
     from spindlebench.studies.methods import score_all
 
     study = _study(tmp_path, 'methods = ["closure", "kmeans+grey"]\n'
@@ -167,6 +166,18 @@ def test_one_pass_scores_equal_each_method_on_its_own_frames(tmp_path):
     tests = {"b": _frame(2, 0.6), "c": _frame(3, 1.3), "gap": gap, "lost": lost}
     rows = pd.DataFrame(score_all(specs, train, tests, "abs-pearson"))
     assert (rows["error"] != "").any() and (rows["error"] == "").any()  # both paths taken
+    _assert_scores_as_before(rows, specs, train, tests)
+    # complete runs only: ridge standardises them stacked (with "lost" it goes run by run)
+    complete = {name: tests[name] for name in ("b", "c", "gap")}
+    complete["gap"] = complete["gap"].ffill()
+    rows = pd.DataFrame(score_all(specs, train, complete, "abs-pearson"))
+    assert (rows["error"] == "").all()
+    _assert_scores_as_before(rows, specs, train, complete)
+
+
+def _assert_scores_as_before(rows, specs, train, tests):
+    from spindlebench.studies.executor import one_line_error
+
     for spec in specs:
         mine = rows[(rows["method"] == spec.name)
                     & (rows["k"].fillna(-1) == (-1 if spec.k is None else spec.k))]
