@@ -88,6 +88,8 @@ class CheckedRecording:
         self._parent: CheckedRecording | None = None
         self._values: dict[str, np.ndarray] = {}
         self._nan: dict[str, np.ndarray] = {}
+        self._any_nan: dict[str, bool] = {}
+        self._rises: dict[tuple[str, ...], np.ndarray] = {}
         self._problems: dict[tuple[str, str], str | None] = {}
         self._block: np.ndarray | None = None
         self._positions: dict[str, int] = {}
@@ -138,12 +140,26 @@ class CheckedRecording:
             self._nan[column] = np.isnan(self.values(column))
         return self._nan[column]
 
+    def has_nan(self, column: str) -> bool:
+        """Whether ``column`` has a NaN anywhere."""
+        if column not in self._any_nan:
+            self._any_nan[column] = bool(self.is_nan(column).any())
+        return self._any_nan[column]
+
     def stack(self, columns: Sequence[str]) -> np.ndarray:
         """``columns`` side by side, (samples, len(columns))."""
         out = np.empty((len(self), len(columns)))
         for i, column in enumerate(columns):
             out[:, i] = self.values(column)
         return out
+
+    def rises(self, columns: Sequence[str]) -> np.ndarray:
+        """``rises(self.stack(columns))``, made once per column list (read-only use: every
+        method and k of a study reads the same sensors' rises of a test run again)."""
+        key = tuple(columns)
+        if key not in self._rises:
+            self._rises[key] = rises(self.stack(columns))
+        return self._rises[key]
 
     def missing(self, columns: Sequence[str]) -> np.ndarray:
         """Where ``columns`` are missing (NaN), (samples, len(columns)); for checked columns."""
@@ -236,9 +252,8 @@ class CandidateSet:
             raise SelectionError(f"candidate index out of range 0..{len(self.names) - 1}")
         needed = self.sensors_of(wanted)
         raw = np.full((len(frame), n), np.nan)
-        values = frame.stack(needed) if isinstance(frame, CheckedRecording) else \
-            frame.loc[:, needed].to_numpy(dtype=float)
-        raw[:, [self.sensors.index(s) for s in needed]] = rises(values)
+        raw[:, [self.sensors.index(s) for s in needed]] = frame.rises(needed) if isinstance(
+            frame, CheckedRecording) else rises(frame.loc[:, needed].to_numpy(dtype=float))
         is_raw = wanted < n
         pair = wanted[~is_raw] - n  # index into the pair list
         first, second = pair_indices(n)
@@ -456,6 +471,8 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
     """Positions of the samples where every one of ``columns`` is present (warned when some
     are not); an error if fewer than 2 are left."""
     name, frame = recording.name, recording.frame
+    if not any(recording.has_nan(column) for column in columns):
+        return np.arange(len(recording))
     missing = recording.missing(list(columns))
     incomplete = missing.any(axis=1)
     rows = np.flatnonzero(~incomplete)
@@ -652,7 +669,8 @@ def evaluate_checked(
         frame = recording
         if missing == "drop-rows":
             test_rows[name] = _complete_rows(recording, used)
-            frame = recording.take(test_rows[name])
+            if len(test_rows[name]) < len(recording):  # else its conversions serve again
+                frame = recording.take(test_rows[name])
         measured[name] = frame.values(target)
         with _naming(name):
             values = _finite(candidates.matrix(frame, selection.selected), selected_names)

@@ -263,7 +263,15 @@ def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dic
                                   sensors=list(GROUP_SENSORS[spec.group]), k=spec.k,
                                   differences=spec.group == SIX_DIFF, similarity=similarity,
                                   missing="drop-rows", method=spec.choice, seed=spec.seed)
-    return _scores(data, result.predictions, ";".join(result.selected), result.test_rows)
+    # evaluate scored the measured drift already (the same arrays): only the truth is left
+    selected, scores = ";".join(result.selected), {}
+    for name in data.tests:
+        truth, rows = data.column(name, TRUTH), result.test_rows[name]
+        if len(rows) < len(truth):
+            truth = truth[rows]
+        scores[name] = Score(result.rmse_um[name], rmse(truth, result.predictions[name]),
+                             selected)
+    return scores
 
 
 def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
