@@ -22,7 +22,7 @@ import pandas as pd
 
 from spindlebench.atomic import write_text
 from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.recording import TRUTH_COLUMNS, read_recording
+from spindlebench.formats.recording import TRUTH_COLUMNS, read_back, read_recording
 from spindlebench.provenance import file_entry, provenance
 from spindlebench.studies.executor import (
     Outcome,
@@ -143,6 +143,8 @@ class Sweep:
         return Task(key, evaluate_job, (job,), kind="evaluation")
 
     def truth(self, replica: int, experiment: Experiment) -> pd.DataFrame:
+        """The run's truth columns as read from its recording (kept from the write when the
+        recording was simulated now: ``read_back``)."""
         key = (replica, experiment.id)
         if key not in self._truths:
             frame = read_recording(self.store.path(recording_path(replica, experiment)))
@@ -225,6 +227,11 @@ class Sweep:
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self.simulations.store_outcome(outcome)
+        if outcome.ok:  # its truth as the file reads back, without reading it
+            truth = read_back(self.store.path(recording_path(replica, experiment)),
+                              outcome.value[0], TRUTH_COLUMNS)
+            if truth is not None:
+                self._truths[(replica, experiment.id)] = truth
         waiting[replica].discard(experiment.id)
         return self._evaluations_to_do(replica) if not waiting[replica] else []
 
