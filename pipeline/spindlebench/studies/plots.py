@@ -32,8 +32,14 @@ def _save(fig: plt.Figure, path: Path) -> Path:
     return path
 
 
+def _present(column: pd.Series) -> set:
+    """The distinct values of a column (``set(column)`` walks every cell of a pandas string
+    column in Python: most of the plots' time on a 1 000-run sweep's 380 000 rows)."""
+    return set(column.unique())
+
+
 def _methods(frame: pd.DataFrame) -> list[str]:
-    present = set(frame["method"])
+    present = _present(frame["method"])
     return [m for m in METHOD_ORDER if m in present]
 
 
@@ -80,7 +86,7 @@ def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
     fig, axes = plt.subplots(1, len(panels), figsize=(0.85 * sum(widths) + 1.2, 4.4),
                              sharey=True, squeeze=False, layout="constrained",
                              gridspec_kw={"width_ratios": widths})
-    series = [s for s in ("measured", "noise-free") if s in set(ok["data"])]
+    series = [s for s in ("measured", "noise-free") if s in _present(ok["data"])]
     for ax, (title, at) in zip(axes[0], panels, strict=True):
         _grouped_boxes(ax, at.rename(columns={"method": "category", "data": "method"}),
                        _methods(at), "category", series)
@@ -113,7 +119,7 @@ def by_month(results: pd.DataFrame, path: Path) -> Path | None:
     ks = sorted(int(k) for k in ok["k"].dropna().unique()) or [None]
     speeds = (sorted(float(v) for v in ok["test_speed_rpm"].dropna().unique())
               if "test_speed_rpm" in ok else [None])
-    months = [m for m in MONTHS if m in set(ok["test_month"])]
+    months = [m for m in MONTHS if m in _present(ok["test_month"])]
     n_methods = len(_methods(ok))
     fig, axes = plt.subplots(len(ks), len(speeds), squeeze=False, sharey=True,
                              figsize=(max(5.0, 0.22 * n_methods * len(months) + 1.5)
