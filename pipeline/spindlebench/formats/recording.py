@@ -680,6 +680,8 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     least 2 rows, every value finite (a NaN or inf is a read error) and ``time_s``
     strictly increasing.
     """
+    import pandas as pd
+
     names = [str(name) for name in frame.columns]
     wanted = [str(name) for name in columns]
     values = frame.to_numpy()
