@@ -47,3 +47,44 @@ def test_bad_regression_input():
         fit_ols(np.ones((1, 2)), np.ones(1))
     with pytest.raises(SelectionError, match="finite"):
         fit_ols(np.array([[1.0], [np.inf]]), np.array([1.0, 2.0]))
+
+
+def _low_rank_candidates(seed: int, n_sensors: int = 6, n: int = 120):
+    from spindlebench.selection.differences import pairwise_differences
+
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 1, n)[:, None]
+    rises = (1 - np.exp(-t * rng.uniform(1, 6, n_sensors))) * rng.uniform(1, 5, n_sensors) \
+        + rng.normal(0, 0.02, (n, n_sensors))
+    rises = rises - rises[0]
+    y = rises @ rng.normal(0, 2, n_sensors) + rng.normal(0, 0.1, n)
+    return rises, np.hstack([rises, pairwise_differences(rises)]), y
+
+
+def test_factored_cv_gives_the_full_svds_penalty(monkeypatch):
+    """blocked_cv_alpha with factors (the candidates as rises @ matrix) picks the penalty the
+    full SVDs pick; a race closer than FACTORED_MARGIN is decided by the full SVDs."""
+    from spindlebench.selection import regressors
+    from spindlebench.selection.differences import with_differences_matrix
+
+    for seed in range(8):
+        rises, X, y = _low_rank_candidates(seed)
+        assert np.array_equal(rises @ with_differences_matrix(6), X)
+        factors = (rises, with_differences_matrix(6))
+        full = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5)
+        factored = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5, factors)
+        assert np.allclose(full, factored, rtol=1e-9, atol=0)
+        assert regressors.blocked_cv_alpha(X, y, factors=factors) == \
+            regressors.blocked_cv_alpha(X, y)
+    calls = []
+    original = regressors._fold_errors
+    monkeypatch.setattr(regressors, "_fold_errors",
+                        lambda *args: calls.append(len(args)) or original(*args))
+    rises, X, y = _low_rank_candidates(0)
+    clear = np.array([1e-3, 1e2])
+    assert regressors.blocked_cv_alpha(X, y, clear, factors=(rises, with_differences_matrix(6)))
+    assert calls == [5]  # the factored errors only
+    calls.clear()
+    tie = np.array([1e-3, 1e-3, 1e2])  # no margin at all: the full SVDs decide
+    regressors.blocked_cv_alpha(X, y, tie, factors=(rises, with_differences_matrix(6)))
+    assert calls == [5, 4]

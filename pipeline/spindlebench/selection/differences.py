@@ -39,6 +39,20 @@ def difference_names(names: Sequence[str]) -> list[str]:
     return [f"{names[i]}-{names[j]}" for i, j in zip(first, second, strict=True)]
 
 
+@functools.lru_cache(maxsize=8)
+def with_differences_matrix(n_sensors: int) -> np.ndarray:
+    """The (n, n + n(n-1)/2) matrix ``M`` with ``X @ M`` = X's columns followed by their
+    pairwise differences (read-only; made once per size): the raw-plus-differences
+    candidates as a product, for algebra that wants their low rank."""
+    first, second = pair_indices(n_sensors)
+    pairs = np.zeros((n_sensors, first.size))
+    pairs[first, np.arange(first.size)] = 1.0
+    pairs[second, np.arange(first.size)] = -1.0
+    matrix = np.hstack([np.eye(n_sensors), pairs])
+    matrix.flags.writeable = False
+    return matrix
+
+
 def pairwise_differences(X: np.ndarray) -> np.ndarray:
     """Columns ``X[:, i] - X[:, j]`` for every pair i < j (n_samples x n(n-1)/2)."""
     X = np.asarray(X, dtype=float)

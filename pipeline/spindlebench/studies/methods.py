@@ -53,6 +53,7 @@ from spindlebench.names import (
     SIX_RAW,
 )
 from spindlebench.selection import PairwiseDifferences, rises, rmse
+from spindlebench.selection.differences import with_differences_matrix
 from spindlebench.selection.evaluate import CheckedRecording, evaluate_checked
 from spindlebench.selection.registry import (
     MethodChoice,
@@ -289,7 +290,9 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
 def _ridge(data: EvaluationData) -> dict[str, Score]:
     X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
     candidates = PairwiseDifferences().fit(X)
-    alpha = blocked_cv_alpha(candidates.transform(X), y)
+    # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
+    alpha = blocked_cv_alpha(candidates.transform(X), y,
+                             factors=(X, with_differences_matrix(X.shape[1])))
     model = make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha=alpha)).fit(X, y)
     return _scores(data, _ridge_predictions(model, data),
                    f"all 210 candidates (alpha={alpha:.3g})")
