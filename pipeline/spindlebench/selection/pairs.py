@@ -46,7 +46,11 @@ from spindlebench.selection.errors import (
     column_list,
 )
 from spindlebench.selection.select import Selection, assemble, check_counts, split_constant
-from spindlebench.selection.similarity import CONSTANT_RTOL, constant_columns, standardized
+from spindlebench.selection.similarity import (
+    constant_by_range,
+    constant_columns,
+    standardized,
+)
 
 #: ``evaluate``, ``select_sensitive_points`` (and so ``FuzzyClusterSelector`` and the
 #: placement study) select row-wise above this many candidates (R would take over 32 MB) and
@@ -126,9 +130,9 @@ def sensors_with_differences(X: np.ndarray) -> int | None:
 
 
 def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) -> np.ndarray:
-    """The constant candidates (``similarity.constant_columns``: same rule, same result; the
-    scale is each column's magnitude or the largest range of any column), in one pass that
-    also refuses, naming them, candidates where two finite values subtract to inf."""
+    """The constant candidates (``similarity.constant_columns``' rule, ``constant_by_range``:
+    the same mask as on the formed matrix), in one pass that also refuses, naming them,
+    candidates where two finite values subtract to inf."""
     spread = np.empty(candidates.n_candidates)
     magnitude = np.empty(candidates.n_candidates)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -142,8 +146,7 @@ def check_candidates(candidates: PairCandidates, names: Sequence[str] | None) ->
                 )
             spread[where] = high - low
             magnitude[where] = np.maximum(np.abs(high), np.abs(low))
-    scale = np.maximum(magnitude, spread.max(initial=0.0))
-    return spread <= CONSTANT_RTOL * scale
+    return constant_by_range(spread, magnitude)
 
 
 @dataclass(frozen=True)

@@ -51,9 +51,15 @@ def constant_columns(X: np.ndarray) -> np.ndarray:
     X = np.asarray(X, dtype=float)
     if X.shape[0] == 0:
         return np.ones(X.shape[1], dtype=bool)
-    spread = np.ptp(X, axis=0)
+    return constant_by_range(np.ptp(X, axis=0), np.max(np.abs(X), axis=0))
+
+
+def constant_by_range(spread: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
+    """``constant_columns``' rule from each column's range (max - min) and largest |value|,
+    for callers that gather those a block of columns at a time and never form the matrix
+    (``pairs.check_candidates``): the same mask, bit for bit."""
     typical = _median(spread) if spread.size else 0.0
-    scale = np.maximum(np.max(np.abs(X), axis=0), typical)
+    scale = np.maximum(magnitude, typical)
     return spread <= CONSTANT_RTOL * scale
 
 
