@@ -42,6 +42,7 @@ from spindlebench.selection.differences import pair_indices
 from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,
+    check_n_clusters,
     check_names,
     column_list,
 )
@@ -302,6 +303,62 @@ def maximum_spanning_tree_of_pairs(
     return SpanningTree(order=local[order], parent=parents, weight=weight[kept])
 
 
+class PairSelection:
+    """``select_among_pairs`` for several k on one candidate set and target: the checks, the
+    constant candidates, the geometry, psi and Prim's tree (which do not depend on k, and
+    take nearly all the time) are done once, then :meth:`select` cuts the tree for each k.
+
+    A placement study asks for k = m clusters for every budget m: with 500 nodes and all
+    their differences one tree takes ~40 s, so building it once per budget would multiply
+    that by the number of budgets for the same result.
+
+    ``n_clusters`` is the largest k that will be asked for: the counts are checked against
+    it (and constant candidates dropped, with their warning) here, as
+    ``select_among_pairs`` does for its one k.
+    """
+
+    def __init__(self, raw: np.ndarray, y: np.ndarray, n_clusters: int,
+                 include_raw: bool = True, names: Sequence[str] | None = None) -> None:
+        raw = np.asarray(raw, dtype=float)
+        y = np.asarray(y, dtype=float).ravel()
+        if raw.ndim != 2:
+            raise SelectionError(f"raw sensors must be a 2-D array, got shape {raw.shape}")
+        candidates = PairCandidates(raw, include_raw)
+        check_counts(raw.shape[0], candidates.n_candidates, y, n_clusters)
+        if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(y))):
+            raise SelectionError("candidates and target must be finite (no NaN or inf)")
+        if names is not None:
+            names = [str(name) for name in names]
+            check_names(names, candidates.n_candidates)
+        self.n_clusters = n_clusters
+        self.kept, self.dropped = split_constant(check_candidates(candidates, names), names,
+                                                 n_clusters)
+        centred = standardized_centre(raw)
+        self.geometry = PairGeometry.of(candidates, centred)
+        self.geometry.check_finite(self.kept, names)
+        self.psi = self.geometry.correlations(centred, self.kept, y)
+        self.tree = maximum_spanning_tree_of_pairs(self.geometry, self.kept)
+
+    def select(self, n_clusters: int) -> Selection:
+        """The selection with ``n_clusters`` clusters (at most the ``n_clusters`` given)."""
+        if n_clusters > self.n_clusters:
+            raise SelectionError(f"{n_clusters} clusters asked of a pair selection prepared "
+                                 f"for at most {self.n_clusters}")
+        check_n_clusters(n_clusters, self.psi.size, "feature(s)")
+        kept, geometry, tree = self.kept, self.geometry, self.tree
+        cut = cut_tree_for_clusters(tree, n_clusters)
+
+        def similarity() -> np.ndarray:
+            return geometry.similarity(kept)
+
+        def closure() -> np.ndarray:
+            if kept.size > MAX_FORMED_CANDIDATES:
+                geometry.similarity(kept)  # the same size error
+            return closure_from_tree(tree)
+
+        return assemble(kept, self.dropped, similarity, closure, cut, self.psi)
+
+
 def select_among_pairs(
     raw: np.ndarray,
     y: np.ndarray,
@@ -315,32 +372,4 @@ def select_among_pairs(
 
     ``names`` name the candidates (``CandidateSet.names`` order) for the messages.
     """
-    raw = np.asarray(raw, dtype=float)
-    y = np.asarray(y, dtype=float).ravel()
-    if raw.ndim != 2:
-        raise SelectionError(f"raw sensors must be a 2-D array, got shape {raw.shape}")
-    candidates = PairCandidates(raw, include_raw)
-    check_counts(raw.shape[0], candidates.n_candidates, y, n_clusters)
-    if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(y))):
-        raise SelectionError("candidates and target must be finite (no NaN or inf)")
-    if names is not None:
-        names = [str(name) for name in names]
-        check_names(names, candidates.n_candidates)
-    kept, dropped = split_constant(check_candidates(candidates, names), names, n_clusters)
-    centred = standardized_centre(raw)
-    geometry = PairGeometry.of(candidates, centred)
-    geometry.check_finite(kept, names)
-    psi = geometry.correlations(centred, kept, y)
-    tree = maximum_spanning_tree_of_pairs(geometry, kept)
-    cut = cut_tree_for_clusters(tree, n_clusters)
-
-    def similarity() -> np.ndarray:
-        return geometry.similarity(kept)
-
-    def closure() -> np.ndarray:
-        if kept.size > MAX_FORMED_CANDIDATES:
-            geometry.similarity(kept)  # the same size error
-        return closure_from_tree(tree)
-
-    return assemble(kept, dropped, similarity, closure, cut, psi)
-
+    return PairSelection(raw, y, n_clusters, include_raw, names).select(n_clusters)

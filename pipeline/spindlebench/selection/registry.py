@@ -247,6 +247,30 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
                      eta=float("nan"), clusters=clusters, psi=psi, selected=selected)
 
 
+def select_each(choice: MethodChoice, X, y, ks, similarity: str = DEFAULT_SIMILARITY,
+                names=None, random_state: int = DEFAULT_METHOD_SEED, closure: str = "fast"):
+    """``select_with`` for each k of ``ks``, one ``Selection`` per ``next()``: a generator,
+    so a caller can time and catch the warnings of each k on its own.
+
+    The same selections as calling ``select_with`` per k; on the row-wise path (the paper's
+    method on a ``pairs.PairCandidates``) the k-independent work, Prim's tree over every
+    candidate, is done once for all k (``pairs.PairSelection``), at the first ``next()``.
+    """
+    from spindlebench.selection.pairs import PairCandidates, PairSelection
+
+    ks = [int(k) for k in ks]
+    if (isinstance(X, PairCandidates) and choice.is_paper and similarity == DEFAULT_SIMILARITY
+            and closure == "fast"):
+        prepared = None
+        for k in ks:
+            if prepared is None:
+                prepared = PairSelection(X.raw, y, max(ks), X.include_raw, names=names)
+            yield prepared.select(k)
+        return
+    for k in ks:
+        yield select_with(choice, X, y, k, similarity, names, random_state, closure)
+
+
 def fit_regressor(regressor: str, X, y, names=None):
     """The regression ``regressor`` (``names.REGRESSORS``) on rises ``X`` as a
     ``regression.LinearFit``: ``ols`` is ``regression.fit_ols`` (what ``RiseRegressor``
