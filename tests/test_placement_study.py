@@ -81,6 +81,12 @@ def test_searches_rank_by_the_reported_design_score(tiny_run):
     assert greedy.loc[3].startswith(greedy.loc[2])  # one nested forward path
 
 
+def nodes_frame(study, run) -> pd.DataFrame:
+    """A run's node rises as the frame ``CandidateSet.matrix`` reads (its rises are the same
+    numbers: the first row is zero)."""
+    return pd.DataFrame(run.node_rises, columns=list(study.nodes))
+
+
 def test_test_scores_are_a_refit_on_the_test_replica(tiny_run):
     """Recompute one placement's test RMSE with numpy lstsq from the stored recordings."""
     out, table = tiny_run
@@ -89,12 +95,12 @@ def test_test_scores_are_a_refit_on_the_test_replica(tiny_run):
     candidates = candidate_set(study, True)
     columns = [candidates.names.index(v) for v in row["variables"].split(";")]
     train_runs, held_out = PlacementStudyRun(study, out).runs(2)
-    X = candidates.matrix(train_runs[0].nodes, columns)
+    X = candidates.matrix(nodes_frame(study, train_runs[0]), columns)
     coef, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), train_runs[0].drift_um,
                                rcond=None)
     errors = []
     for run in held_out:
-        predicted = coef[0] + candidates.matrix(run.nodes, columns) @ coef[1:]
+        predicted = coef[0] + candidates.matrix(nodes_frame(study, run), columns) @ coef[1:]
         errors.append(np.sqrt(np.mean((run.drift_um - predicted) ** 2)))
     assert row["test_mean_rmse_um"] == pytest.approx(np.mean(errors), rel=1e-6)
     scores = pd.read_csv(out / "scores.csv")

@@ -23,6 +23,8 @@ from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, node_column, true_column
 from spindlebench.selection import CandidateSet
 from spindlebench.selection.differences import pair_indices
+from spindlebench.selection.pairs import PairCandidates
+from spindlebench.selection.regression import rises
 from spindlebench.studies.experiments import Experiment, sensor_model
 from spindlebench.studies.placement.search import Block
 from spindlebench.studies.placement.study import PlacementStudy
@@ -34,17 +36,26 @@ TARGET = DRIFT_COLUMN
 
 @dataclass(frozen=True)
 class Run:
-    """One experiment on one replica's day, as the placement's instruments see it."""
+    """One experiment on one replica's day, as the placement's instruments see it.
+
+    The node readings are kept as rises in an array (samples x nodes, ``study.nodes``
+    order), not as a DataFrame: the searches and the scoring take a few candidate columns
+    of every run many times, and gathering them from a frame by name cost more than the
+    arithmetic.
+    """
 
     replica: int
     experiment: Experiment
-    nodes: pd.DataFrame  # node temperatures (degC), one column per node id
+    node_rises: np.ndarray  # node rises (K, measured or true), zero at the first sample
     drift_um: np.ndarray  # probe reading, zeroed at the first sample
     true_drift_um: np.ndarray  # true drift rise
 
     @property
     def key(self) -> tuple[int, str]:
         return (self.replica, self.experiment.id)
+
+    def __len__(self) -> int:
+        return self.node_rises.shape[0]
 
 
 def node_seed(study: PlacementStudy, replica: int, experiment: Experiment) -> int:
@@ -67,8 +78,7 @@ def prepare_run(study: PlacementStudy, replica: int, experiment: Experiment,
                             tuple(study.nodes), node_seed(study, replica, experiment))
     else:
         values = true_C
-    nodes = pd.DataFrame(values, columns=list(study.nodes))
-    return Run(replica, experiment, nodes, frame[TARGET].to_numpy(dtype=float),
+    return Run(replica, experiment, rises(values), frame[TARGET].to_numpy(dtype=float),
                true_drift - true_drift[0])
 
 
@@ -76,17 +86,39 @@ def candidate_set(study: PlacementStudy, differences: bool) -> CandidateSet:
     return CandidateSet(tuple(study.nodes), differences)
 
 
-def block(runs: Sequence[Run], candidates: CandidateSet,
+def candidate_columns(run_rises: np.ndarray, differences: bool,
+                      columns: Sequence[int] | None = None) -> np.ndarray:
+    """Values of candidates ``columns`` (default: every one) of node rises ``run_rises``:
+    the nodes, then (with ``differences``) every ``A-B``, bit for bit the columns
+    ``CandidateSet.matrix`` forms from the same readings (same subtraction)."""
+    n = run_rises.shape[1]
+    n_candidates = n * (n + 1) // 2 if differences else n
+    wanted = np.arange(n_candidates) if columns is None else np.asarray(columns, dtype=np.intp)
+    if wanted.size and (wanted.min() < 0 or wanted.max() >= n_candidates):
+        raise SpindlebenchError(f"candidate index out of range 0..{n_candidates - 1}")
+    if not differences:
+        return np.ascontiguousarray(run_rises[:, wanted])
+    return PairCandidates(run_rises).columns(wanted)
+
+
+def stacked_rises(runs: Sequence[Run]) -> np.ndarray:
+    """The node rises of ``runs``, stacked run by run (samples x nodes)."""
+    if not runs:
+        raise SpindlebenchError("no runs to build candidates from")
+    return np.vstack([run.node_rises for run in runs])
+
+
+def block(runs: Sequence[Run], differences: bool,
           columns: Sequence[int] | None = None, truth: bool = False) -> Block:
-    """Rises of ``columns`` (default: every candidate) of ``runs``, stacked run by run.
+    """Rises of candidates ``columns`` (default: every candidate) of ``runs``, stacked run
+    by run. Every candidate is n(n+1)/2 columns with differences: ask for the few a fit or a
+    score needs.
 
     ``truth`` puts the true drift rise into ``y`` instead of the probe reading.
     """
-    if not runs:
-        raise SpindlebenchError("no runs to build candidates from")
-    X = np.vstack([candidates.matrix(run.nodes, columns) for run in runs])
+    X = candidate_columns(stacked_rises(runs), differences, columns)
     y = np.concatenate([run.true_drift_um if truth else run.drift_um for run in runs])
-    lengths = np.array([len(run.nodes) for run in runs])
+    lengths = np.array([len(run) for run in runs])
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.intp)
     return Block(X, y, starts)
 

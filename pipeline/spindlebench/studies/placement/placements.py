@@ -17,6 +17,7 @@ import time
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -24,17 +25,22 @@ import pandas as pd
 from spindlebench.errors import SpindlebenchError
 from spindlebench.names import DEFAULT_REGRESSOR
 from spindlebench.selection import CandidateSet, SelectionWarning, rmse
+from spindlebench.selection.evaluate import row_wise
+from spindlebench.selection.pairs import PairCandidates, check_candidates
 from spindlebench.selection.registry import (
     PAPER_METHOD,
     fit_regressor,
     parse_method,
+    select_each,
     select_with,
 )
 from spindlebench.studies.placement.candidates import (
     Run,
     block,
+    candidate_columns,
     candidate_set,
     physical_nodes,
+    stacked_rises,
 )
 from spindlebench.studies.placement.search import (
     Block,
@@ -47,6 +53,85 @@ from spindlebench.studies.placement.study import PlacementStudy
 
 #: Above this many candidates the exhaustive search's Gram matrices (runs x p x p) get too big.
 EXHAUSTIVE_MAX_CANDIDATES = 600
+#: Greedy forward selection refuses design data of more candidate values than this
+#: (candidates x design samples; 8 bytes each, and the search holds about three copies).
+GREEDY_MAX_VALUES = 25_000_000
+
+
+class Design:
+    """The design replica's runs for one candidate set, as every method sees them.
+
+    The runs' node rises are stacked once; candidate columns are formed only when a method
+    needs them: the paper's selection over nodes and differences works from the node rises
+    (``pairs.PairCandidates``), the exhaustive search from the columns of its pool (at most
+    ``EXHAUSTIVE_MAX_CANDIDATES``), and only greedy search and the other registry methods
+    ask for every column (:attr:`train`, :attr:`valid`, each formed once). With 500 nodes
+    and all 124 750 differences the design matrix of 9 runs of 361 samples would take 3.3 GB.
+    """
+
+    def __init__(self, study: PlacementStudy, differences: bool, train_runs: Sequence[Run],
+                 valid_runs: Sequence[Run]) -> None:
+        self.study = study
+        self.differences = differences
+        self.candidates = candidate_set(study, differences)
+        self.train_runs = list(train_runs)
+        self.valid_runs = list(valid_runs)
+        self.train_rises = stacked_rises(self.train_runs)
+        self.train_y = np.concatenate([run.drift_um for run in self.train_runs])
+
+    @property
+    def n_candidates(self) -> int:
+        return len(self.candidates.names)
+
+    @property
+    def n_samples(self) -> int:
+        """Design samples: the training and the held-out runs'."""
+        return sum(len(run) for run in (*self.train_runs, *self.valid_runs))
+
+    @cached_property
+    def train(self) -> Block:
+        """Every candidate column of the training runs."""
+        return block(self.train_runs, self.differences)
+
+    @cached_property
+    def valid(self) -> Block:
+        """Every candidate column of the held-out design runs."""
+        return block(self.valid_runs, self.differences)
+
+    def selection_input(self) -> np.ndarray | PairCandidates:
+        """What the paper's selection is given: the node rises standing for every candidate
+        where it runs row-wise (``evaluate.row_wise``, the rule ``evaluate`` follows too),
+        else the training matrix (small candidate sets keep the matrix path's bits)."""
+        if row_wise(self.candidates, self.study.similarity, "fast"):
+            return PairCandidates(self.train_rises)
+        return self.train.X
+
+    @cached_property
+    def pool(self) -> np.ndarray:
+        """Candidates that vary on the training runs (``search.usable_candidates``' mask),
+        with differences found a node's differences at a time, without the matrix."""
+        if not self.differences:
+            return usable_candidates(self.train)
+        constant = check_candidates(PairCandidates(self.train_rises), self.candidates.names)
+        return np.flatnonzero(~constant)
+
+    @cached_property
+    def pool_blocks(self) -> tuple[Block, Block]:
+        """(training, held-out) columns of :attr:`pool` only."""
+        return (block(self.train_runs, self.differences, self.pool),
+                block(self.valid_runs, self.differences, self.pool))
+
+    def check_greedy(self) -> None:
+        """Greedy search scores every candidate on every design run at every step, from the
+        full design matrix: refused, naming the key, where that matrix is too large."""
+        values = self.n_candidates * self.n_samples
+        if "greedy" in self.study.methods and values > GREEDY_MAX_VALUES:
+            raise SpindlebenchError(
+                f"{self.study.path}: key 'placement.methods': 'greedy' with "
+                f"{'differences' if self.differences else 'nodes'} needs every one of "
+                f"{self.n_candidates:,} candidates on {self.n_samples:,} design samples "
+                f"({values:,} values, over the limit of {GREEDY_MAX_VALUES:,}); drop 'greedy' "
+                "or set with_differences = false")
 
 
 @dataclass(frozen=True)
@@ -87,32 +172,41 @@ def _skipped(method: str, differences: bool, budget: int, note: str) -> Placemen
     return Placement(method, differences, budget, None, (), (), math.nan, 0.0, note)
 
 
-def fuzzy_placements(study: PlacementStudy, differences: bool,
-                     train: Block) -> list[Placement]:
-    """The paper's selection on the training run(s), k = m clusters."""
-    candidates = candidate_set(study, differences)
+def fuzzy_placements(design: Design) -> list[Placement]:
+    """The paper's selection on the training run(s), k = m clusters, for every budget m
+    (row-wise, Prim's tree is built once for all budgets: ``registry.select_each``)."""
+    study, candidates = design.study, design.candidates
+    selections = select_each(PAPER_METHOD, design.selection_input(), design.train_y,
+                             study.budgets, study.similarity, candidates.names)
     out = []
     for m in study.budgets:
         start = time.perf_counter()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", SelectionWarning)
-            selection = select_with(PAPER_METHOD, train.X, train.y, m, study.similarity,
-                                    candidates.names)
+            selection = next(selections)
         notes = [str(w.message) for w in caught if "tied similarities" in str(w.message)]
         out.append(_placement(
-            "fuzzy", differences, m, candidates, selection.selected, math.nan,
+            "fuzzy", design.differences, m, candidates, selection.selected, math.nan,
             time.perf_counter() - start, "; ".join(notes),
             cluster_sizes=tuple(len(members) for members in selection.clusters),
             psi=tuple(float(v) for v in selection.selected_psi)))
     return out
 
 
-def greedy_placements(study: PlacementStudy, differences: bool, train: Block,
-                      valid: Block) -> list[Placement]:
-    """One forward path up to the largest budget; the set of size m is its first m steps."""
-    candidates = candidate_set(study, differences)
+def greedy_placements(design: Design) -> list[Placement]:
+    """One forward path up to the largest budget; the set of size m is its first m steps.
+
+    It needs every candidate column of every design run (each step scores all of them on
+    the held-out runs): ``Design.check_greedy`` refuses designs over ``GREEDY_MAX_VALUES``
+    before any method runs. Refused rather than worked in column chunks: the forward path's
+    state (every candidate's training residual, orthogonalised against the chosen ones) is
+    itself candidates x training samples, so chunks would have to replay every earlier
+    step's projections per chunk to give the same bits, and on 500 nodes with differences
+    the search would still cost minutes per step.
+    """
+    study, differences, candidates = design.study, design.differences, design.candidates
     start = time.perf_counter()
-    path = greedy_forward(train, valid, max(study.budgets), usable_candidates(train))
+    path = greedy_forward(design.train, design.valid, max(study.budgets), design.pool)
     seconds = time.perf_counter() - start
     out = []
     for m in study.budgets:
@@ -125,11 +219,11 @@ def greedy_placements(study: PlacementStudy, differences: bool, train: Block,
     return out
 
 
-def exhaustive_placements(study: PlacementStudy, differences: bool, train: Block,
-                          valid: Block) -> list[Placement]:
-    """Every m-subset where C(n, m) is within the study's limit; else skipped, saying why."""
-    candidates = candidate_set(study, differences)
-    pool = usable_candidates(train)
+def exhaustive_placements(design: Design) -> list[Placement]:
+    """Every m-subset where C(n, m) is within the study's limit; else skipped, saying why.
+    Only the pool's columns are formed (at most ``EXHAUSTIVE_MAX_CANDIDATES``)."""
+    study, differences, candidates = design.study, design.differences, design.candidates
+    pool = design.pool
     out = []
     for m in study.budgets:
         count = n_subsets(pool.size, m)
@@ -144,9 +238,10 @@ def exhaustive_placements(study: PlacementStudy, differences: bool, train: Block
                                 f"{EXHAUSTIVE_MAX_CANDIDATES} (Gram matrices too large)"))
             continue
         start = time.perf_counter()
-        result = exhaustive_search(train, valid, m, pool)
-        out.append(_placement("exhaustive", differences, m, candidates, result.chosen,
-                              result.score, time.perf_counter() - start,
+        train, valid = design.pool_blocks
+        result = exhaustive_search(train, valid, m, np.arange(pool.size))
+        out.append(_placement("exhaustive", differences, m, candidates,
+                              pool[result.chosen], result.score, time.perf_counter() - start,
                               f"{result.evaluated:,} subsets scored"))
     return out
 
@@ -154,28 +249,30 @@ def exhaustive_placements(study: PlacementStudy, differences: bool, train: Block
 def find_placements(study: PlacementStudy, train_runs: Sequence[Run],
                     valid_runs: Sequence[Run]) -> list[Placement]:
     """Every method × candidate set × budget the study asks for, on the design runs."""
+    designs = [Design(study, differences, train_runs, valid_runs)
+               for differences in study.with_differences]
+    for design in designs:  # before any search runs
+        design.check_greedy()
     placements: list[Placement] = []
-    for differences in study.with_differences:
-        candidates = candidate_set(study, differences)
-        train = block(train_runs, candidates)
-        valid = block(valid_runs, candidates)
+    while designs:  # each design's formed columns go with it
+        design = designs.pop(0)
         if "fuzzy" in study.methods:
-            placements += fuzzy_placements(study, differences, train)
+            placements += fuzzy_placements(design)
         if "greedy" in study.methods:
-            placements += greedy_placements(study, differences, train, valid)
+            placements += greedy_placements(design)
         if "exhaustive" in study.methods:
-            placements += exhaustive_placements(study, differences, train, valid)
+            placements += exhaustive_placements(design)
         for label in study.methods:
             if label not in ("fuzzy", "greedy", "exhaustive"):
-                placements += method_placements(study, differences, train, label)
+                placements += method_placements(design, label)
     return placements
 
 
-def method_placements(study: PlacementStudy, differences: bool, train: Block,
-                      label: str) -> list[Placement]:
+def method_placements(design: Design, label: str) -> list[Placement]:
     """A selection method of the registry (``spindlebench methods``) on the training run(s),
-    m inputs per budget; scored like every placement (OLS refit)."""
-    candidates = candidate_set(study, differences)
+    m inputs per budget; scored like every placement (OLS refit). These methods are given
+    every candidate column of the training run(s)."""
+    study, differences, candidates = design.study, design.differences, design.candidates
     choice = parse_method(label)
     out = []
     for m in study.budgets:
@@ -183,8 +280,8 @@ def method_placements(study: PlacementStudy, differences: bool, train: Block,
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", SelectionWarning)
-                selection = select_with(choice, train.X, train.y, m, study.similarity,
-                                        candidates.names)
+                selection = select_with(choice, design.train.X, design.train.y, m,
+                                        study.similarity, candidates.names)
         except SpindlebenchError as exc:
             out.append(_skipped(choice.label, differences, m, " ".join(str(exc).split())))
             continue
@@ -197,12 +294,11 @@ def score_placement(study: PlacementStudy, placement: Placement, train_runs: Seq
                     test_runs: Sequence[Run]) -> list[dict[str, object]]:
     """Refit on ``train_runs`` and score every run of ``test_runs``: one row per run."""
     assert placement.columns is not None
-    candidates = candidate_set(study, placement.differences)
-    train = block(train_runs, candidates, placement.columns)
+    train = block(train_runs, placement.differences, placement.columns)
     fit = fit_regressor(DEFAULT_REGRESSOR, train.X, train.y)  # the same OLS for every method
     rows = []
     for run in test_runs:
-        X = candidates.matrix(run.nodes, placement.columns)
+        X = candidate_columns(run.node_rises, placement.differences, placement.columns)
         predicted = fit.predict(X)
         rows.append({"experiment": run.experiment.id, "season": run.experiment.season,
                      "month": run.experiment.month, "speed_rpm": run.experiment.speed_rpm,

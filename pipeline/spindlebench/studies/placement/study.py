@@ -7,7 +7,8 @@ specific to placement:
 
 - ``budgets``: numbers m of model variables (sensors, or differences of two sensors) to place.
 - ``methods``: ``fuzzy`` (the paper's selection on the training run, k = m clusters),
-  ``greedy`` (forward selection by validation RMSE), ``exhaustive`` (every m-subset, when
+  ``greedy`` (forward selection by validation RMSE; refused over
+  ``placements.GREEDY_MAX_VALUES`` candidate values), ``exhaustive`` (every m-subset, when
   C(n, m) <= ``exhaustive_limit``), or any other label of ``spindlebench methods``
   (``kmeans``, ``ward+grey``, ``lasso``, ...: that method on the training run(s), m inputs,
   its regressor ignored since every placement is scored by the same OLS refit).
