@@ -11,16 +11,36 @@ the same result checked:
 - greedy forward selection to m = 6 (incremental Gram-Schmidt, all candidates scored per step)
   vs refitting ``numpy.linalg.lstsq`` for every candidate at every step;
 - exhaustive search over the 100 nodes, m = 2 and 3 (batched Gram matrices) vs one lstsq per
-  subset (m = 2 only for the baseline).
+  subset (m = 2 only for the baseline);
+- the placement study's fuzzy selection with all differences (``placements.fuzzy_placements``
+  for budgets m = 2..6, as ``place`` runs it: from the node rises, one Prim's tree for every
+  budget) on fields of 100 and 500 nodes, 9 runs of 361 samples (issue 10's row "500 sensors
+  + 124 750 differences: <= 60 s, <= 1 GB"). The model's FMU has only 81 nodes; a fine
+  temperature field is what this row is about, so the field is synthetic. Each size runs in
+  its own child process (peak memory by ``resource.getrusage``, which only grows); on 100
+  nodes the way the study selected before (every run's DataFrame through
+  ``CandidateSet.matrix``, the full design matrix, one selection per budget) runs after it
+  in the same process, with the same placements checked. The compiled Prim loop's cached
+  code is loaded before the clock starts (as in ``bench_selection.py``). These rows run
+  first: on Linux a child's maxrss starts at its parent's resident size at the fork.
 
-Run: .venv/bin/python bench/bench_placement.py
+The load average is printed first: on the shared machine wall times follow it, CPU seconds
+much less.
+
+Run: .venv/bin/python bench/bench_placement.py  (``make bench`` runs every bench script)
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+import json
+import os
+import subprocess
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 from spindlebench.selection import SelectionWarning, select_sensitive_points
@@ -28,6 +48,10 @@ from spindlebench.selection.differences import pairwise_differences
 from spindlebench.studies.placement.search import Block, exhaustive_search, greedy_forward
 
 N_NODES, N_SAMPLES, N_VALID = 100, 361, 8
+#: (nodes, run the old matrix way too, goal s, goal MB) of the placement study's fuzzy rows
+PLACEMENT_SIZES = [(100, True, None, None), (500, False, 60.0, 1000)]
+BUDGETS = (2, 3, 4, 5, 6)
+TINY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "tiny_placement.toml"
 
 
 def field(n_nodes: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -84,8 +108,107 @@ def fuzzy(train: Block, k: int, closure: str):
         return select_sensitive_points(train.X, train.y, k, closure=closure).selected
 
 
+def peak_mb() -> float:
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def placement_case(n_nodes: int):
+    """A placement study (tiny_placement.toml's family) whose candidates are ``n_nodes``
+    synthetic nodes with all differences, fuzzy only, and its 1 + 8 design runs."""
+    from spindlebench.studies.experiments import experiments
+    from spindlebench.studies.placement.candidates import Run
+    from spindlebench.studies.placement.study import load_placement_study
+
+    study = load_placement_study(TINY)
+    study = dataclasses.replace(study, nodes=tuple(f"node{i}" for i in range(n_nodes)),
+                                budgets=BUDGETS, methods=("fuzzy",), with_differences=(True,))
+    experiment = experiments(study.family)[0]
+    rng = np.random.default_rng(0)
+    runs = [Run(1, experiment, T, drift, drift)
+            for T, drift in (field(n_nodes, rng) for _ in range(1 + N_VALID))]
+    return study, runs[:1], runs[1:]
+
+
+def matrix_way_fuzzy(study, train_runs, valid_runs) -> list[tuple]:
+    """How the study selected before: every run's candidates from a DataFrame of its node
+    readings (``CandidateSet.matrix``), the training and held-out design matrices formed,
+    then one selection per budget on the training matrix."""
+    import pandas as pd
+    from spindlebench.selection.registry import PAPER_METHOD, select_with
+    from spindlebench.studies.placement.candidates import candidate_set
+
+    candidates = candidate_set(study, True)
+
+    def design(runs):
+        frames = [pd.DataFrame(run.node_rises, columns=list(study.nodes)) for run in runs]
+        return np.vstack([candidates.matrix(frame) for frame in frames])
+
+    X, _valid = design(train_runs), design(valid_runs)
+    y = np.concatenate([run.drift_um for run in train_runs])
+    out = []
+    for m in study.budgets:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SelectionWarning)
+            selection = select_with(PAPER_METHOD, X, y, m, study.similarity, candidates.names)
+        out.append((tuple(int(c) for c in selection.selected),
+                    tuple(len(c) for c in selection.clusters),
+                    tuple(float(v) for v in selection.selected_psi)))
+    return out
+
+
+def measure_placement(n_nodes: int, with_matrix: bool) -> dict:
+    """One field size in this (child) process: the study's way first, then the old one."""
+    from spindlebench.selection import pairs
+    from spindlebench.studies.placement.placements import Design, fuzzy_placements
+
+    study, train_runs, valid_runs = placement_case(n_nodes)
+    if n_nodes * (n_nodes + 1) // 2 > pairs.COMPILED_ABOVE:  # load the compiled kernel
+        above, pairs.COMPILED_ABOVE = pairs.COMPILED_ABOVE, 0  # (cached on disk)
+        pairs.select_among_pairs(train_runs[0].node_rises[:, :4], train_runs[0].drift_um, 2)
+        pairs.COMPILED_ABOVE = above
+    start, cpu = time.perf_counter(), time.process_time()
+    found = fuzzy_placements(Design(study, True, train_runs, valid_runs))
+    out = {"s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu,
+           "peak_MB": peak_mb(), "candidates": n_nodes * (n_nodes + 1) // 2,
+           "samples": sum(len(run) for run in (*train_runs, *valid_runs))}
+    if with_matrix:
+        start, cpu = time.perf_counter(), time.process_time()
+        old = matrix_way_fuzzy(study, train_runs, valid_runs)
+        out.update(matrix_s=time.perf_counter() - start, matrix_cpu_s=time.process_time() - cpu,
+                   matrix_peak_MB=peak_mb())
+        out["same"] = old == [(p.columns, p.cluster_sizes, p.psi) for p in found]
+    return out
+
+
+def placement_rows() -> None:
+    print("[placement study, fuzzy with all differences, m = 2..6] synthetic fields, "
+          f"1 training + {N_VALID} held-out runs of {N_SAMPLES} samples")
+    print(f"{'nodes':>6} {'candidates':>10} {'study':>9} {'(cpu)':>8} {'peak':>8} "
+          f"{'goal':>16}  matrix way (before)")
+    for n_nodes, with_matrix, goal_s, goal_mb in PLACEMENT_SIZES:
+        result = subprocess.run([sys.executable, __file__, "--placement", str(n_nodes),
+                                 str(with_matrix)], capture_output=True, text=True, check=True)
+        r = json.loads(result.stdout.strip().splitlines()[-1])
+        if with_matrix:
+            if not r["same"]:
+                raise SystemExit(f"{n_nodes} nodes: placements differ from the matrix way")
+            old = (f"{r['matrix_s']:.2f} s ({r['matrix_cpu_s']:.2f} s cpu), "
+                   f"{r['matrix_peak_MB']:.0f} MB peak; ratio {r['matrix_s'] / r['s']:.1f}x "
+                   f"(cpu {r['matrix_cpu_s'] / r['cpu_s']:.1f}x), same placements")
+        else:
+            old = (f"not run: its design matrix alone is "
+                   f"{8 * r['candidates'] * r['samples'] / 1e9:.1f} GB")
+        goal = f"<= {goal_s:g} s, {goal_mb} MB" if goal_s else "-"
+        print(f"{n_nodes:>6} {r['candidates']:>10} {r['s']:8.2f}s {r['cpu_s']:7.2f}s "
+              f"{r['peak_MB']:6.0f}MB {goal:>16}  {old}", flush=True)
+
+
 def main() -> None:
-    print(f"synthetic field: {N_NODES} nodes, {N_SAMPLES} samples per run, 1 training + "
+    print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
+    placement_rows()  # first: a child's maxrss starts at this process's size at the fork
+    print(f"\nsynthetic field: {N_NODES} nodes, {N_SAMPLES} samples per run, 1 training + "
           f"{N_VALID} validation runs")
     train, valid = blocks(N_NODES, differences=True)
     print(f"\n[fuzzy selection, k = 6] {train.X.shape[1]} candidates")
@@ -123,4 +246,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:2] == ["--placement"]:
+        print(json.dumps(measure_placement(int(sys.argv[2]), sys.argv[3] == "True")))
+    else:
+        main()
