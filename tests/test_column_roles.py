@@ -7,6 +7,7 @@ and on variants of it.
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -286,3 +287,43 @@ def test_every_command_that_reads_recordings_has_the_role_flags():
     assert "--allow-target-copy" not in flags["plot"]  # nothing is fitted; a copy is drawn
     for name in ("compensate", "adapt", "simulate", "sweep", "place", "methods", "build"):
         assert not common & flags[name], name
+
+
+def test_the_copy_screen_refuses_the_same_first_sensor_as_one_by_one():
+    """refuse_target_copies clears most sensors from |r| of all at once: the sensor it
+    refuses (and its |r|) is the one the one-by-one np.corrcoef check refuses."""
+    from spindlebench.formats.columns import COPY_R, refuse_target_copies
+
+    def one_by_one(frame, names):
+        y = frame["y"].to_numpy()
+        for name in names:
+            x = frame[name].to_numpy()
+            keep = np.isfinite(x) & np.isfinite(y)
+            if keep.sum() < 3 or np.ptp(x[keep]) == 0 or np.ptp(y[keep]) == 0:
+                continue
+            r = float(np.corrcoef(x[keep], y[keep])[0, 1])
+            if abs(r) > COPY_R:
+                return f"sensor {name!r} follows the target 'y' with |r| = {abs(r):.4f}"
+        return None
+
+    rng = np.random.default_rng(0)
+    refused = 0
+    for trial in range(120):
+        n, k = int(rng.integers(3, 40)), int(rng.integers(1, 6))
+        X, y = rng.normal(size=(n, k)), rng.normal(size=n)
+        X[:, rng.integers(k)] = y * rng.choice([-2, 3]) + rng.normal(
+            0, 10.0 ** rng.integers(-5, 1), n)  # a copy (|r| above or below COPY_R)
+        if trial % 5 == 0:
+            X[:, 0] = 1.0  # constant
+        if trial % 7 == 0:
+            X[rng.integers(n), rng.integers(k)] = np.nan
+        frame = pd.DataFrame(X, columns=[f"T{i}" for i in range(k)]).assign(y=y)
+        names = list(frame.columns[:-1])
+        expected = one_by_one(frame, names)
+        if expected is None:
+            refuse_target_copies(frame, "y", names, "r.csv", False)
+        else:
+            refused += 1
+            with pytest.raises(SpindlebenchError, match=re.escape(expected)):
+                refuse_target_copies(frame, "y", names, "r.csv", False)
+    assert 10 < refused < 120  # both outcomes occur
