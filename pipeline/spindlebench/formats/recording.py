@@ -674,11 +674,11 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     A sweep hands each recording's truth to its evaluations as a resumed sweep reads it from
     disk; reading back every recording just written was 40 % of its coordinating process.
     The values are the same bits: the writer writes each float as its ``repr``, which
-    round-trips exactly, and pandas' C parser rounds correctly (both tested on a simulated
-    recording and on edge values). Certain only where ``read_recording`` would take the file
-    as written: the writer's own float path, unique names without surrounding spaces, at
-    least 2 rows, every value finite (a NaN or inf is a read error) and ``time_s``
-    strictly increasing.
+    round-trips exactly, and the reader's parsers round correctly (both tested on a
+    simulated recording and on edge values). Certain only where ``read_recording`` would
+    take the file as written: the writer's own float path, unique names without
+    surrounding spaces, at least 2 rows, every value finite (a NaN or inf is a read error)
+    and ``time_s`` strictly increasing.
     """
     import pandas as pd
 
