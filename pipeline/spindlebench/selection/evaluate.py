@@ -23,7 +23,7 @@ import math
 import os
 import sys
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -90,12 +90,14 @@ class CheckedRecording:
         self._nan: dict[str, np.ndarray] = {}
         self._any_nan: dict[str, bool] = {}
         self._rises: dict[tuple[str, ...], np.ndarray] = {}
+        self._memo: dict[Any, Any] = {}
+        self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
         self._block: np.ndarray | None = None
         self._positions: dict[str, int] = {}
 
     def __len__(self) -> int:
-        return len(self.frame) if self._rows is None else len(self._rows)
+        return self._length
 
     @property
     def columns(self) -> pd.Index | tuple[str, ...]:
@@ -105,6 +107,7 @@ class CheckedRecording:
         """The samples at positions ``rows`` (of this recording) only."""
         part = CheckedRecording(self.name, self.frame)
         part._rows, part._parent = np.asarray(rows), self
+        part._length = len(part._rows)
         return part
 
     def values(self, column: str) -> np.ndarray:
@@ -152,6 +155,13 @@ class CheckedRecording:
         for i, column in enumerate(columns):
             out[:, i] = self.values(column)
         return out
+
+    def memo(self, key: Any, compute: Callable[[], Any]) -> Any:
+        """``compute()`` the first time ``key`` is asked for, then kept (for values that
+        depend on this recording and ``key`` only; read-only use)."""
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
 
     def rises(self, columns: Sequence[str]) -> np.ndarray:
         """``rises(self.stack(columns))``, made once per column list (read-only use: every
@@ -673,7 +683,13 @@ def evaluate_checked(
                 frame = recording.take(test_rows[name])
         measured[name] = frame.values(target)
         with _naming(name):
-            values = _finite(candidates.matrix(frame, selection.selected), selected_names)
+            def candidate_values(frame: CheckedRecording = frame) -> np.ndarray:
+                return _finite(candidates.matrix(frame, selection.selected), selected_names)
+
+            # a whole recording's values of these candidates serve every model that reads them
+            values = recording.memo(("candidates", candidates, tuple(selection.selected)),
+                                    candidate_values) if frame is recording else \
+                candidate_values()
             predictions[name] = fit.predict(values)
             if not np.all(np.isfinite(predictions[name])):
                 raise SelectionOverflowError("values too large to predict (overflow)")
