@@ -655,7 +655,8 @@ def evaluate_checked(
     if missing == "drop-rows":
         chosen = _sparse_sensors(train, chosen)
         train_rows = _complete_rows(train, [*chosen, target])
-        train_frame = train.take(train_rows)
+        if len(train_rows) < len(train):  # else its conversions serve again (every k)
+            train_frame = train.take(train_rows)
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
     y_train = train_frame.values(target)

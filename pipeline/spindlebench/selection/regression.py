@@ -15,6 +15,7 @@ minimum-norm one and their coefficients are not unique.
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -98,6 +99,10 @@ def _unique_in_order(values: np.ndarray) -> list:
 def _paired(y: np.ndarray, predicted: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
     """Measured and predicted as equally long 1-D arrays ((n, 1) counts as n samples); a
     length mismatch would otherwise broadcast into an n x n matrix or a numpy error."""
+    if type(y) is np.ndarray and type(predicted) is np.ndarray and y.ndim == 1 \
+            and y.dtype == np.float64 and predicted.dtype == np.float64 \
+            and y.shape == predicted.shape and y.size:  # already so: a study's many scores
+        return y, predicted
     y_in, p_in = np.asarray(y, dtype=float), np.asarray(predicted, dtype=float)
     y_flat, p_flat = _samples(y_in), _samples(p_in)
     if y_flat is None or p_flat is None or y_flat.shape != p_flat.shape:
@@ -139,7 +144,7 @@ def rmse(y: np.ndarray, predicted: np.ndarray) -> float:
     y, predicted = _paired(y, predicted, "rmse")
     with np.errstate(over="ignore", invalid="ignore"):
         value = float(np.sqrt(np.mean((y - predicted) ** 2)))
-    if not np.isfinite(value) and np.isfinite(y).all() and np.isfinite(predicted).all():
+    if not math.isfinite(value) and np.isfinite(y).all() and np.isfinite(predicted).all():
         raise SelectionOverflowError("values too large for the RMSE (overflow)")
     return value
 
