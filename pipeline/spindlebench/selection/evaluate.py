@@ -257,9 +257,10 @@ class CandidateSet:
         a test recording is complete only in those, and an unused sensor's gap must not
         matter."""
         n = len(self.sensors)
-        wanted = np.arange(len(self.names)) if columns is None else np.asarray(columns, int)
-        if wanted.size and (wanted.min() < 0 or wanted.max() >= len(self.names)):
-            raise SelectionError(f"candidate index out of range 0..{len(self.names) - 1}")
+        size = n + n * (n - 1) // 2 if self.differences else n  # len(self.names), unnamed
+        wanted = np.arange(size) if columns is None else np.asarray(columns, int)
+        if wanted.size and (wanted.min() < 0 or wanted.max() >= size):
+            raise SelectionError(f"candidate index out of range 0..{size - 1}")
         needed = self.sensors_of(wanted)
         raw = np.full((len(frame), n), np.nan)
         raw[:, [self.sensors.index(s) for s in needed]] = frame.rises(needed) if isinstance(
