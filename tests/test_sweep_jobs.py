@@ -122,3 +122,44 @@ def test_a_training_run_whose_evaluation_raises_costs_only_itself(swept, seasons
     assert fixed.evaluated == len(sweep.conditions)
     assert not list(out.glob("evals/**/*.error.csv"))
     pd.testing.assert_frame_equal(fixed.results, outcome.results)
+
+
+def _grown_frame(job, train, tests, rows):
+    """How a training run's rows were framed before: from the row dicts, then column by
+    column."""
+    by_id = {e.id: e for e in tests}
+    frame = pd.DataFrame(rows)
+    frame.insert(0, "replica", job.replica)
+    frame.insert(1, "data", "measured" if job.condition else "noise-free")
+    frame.insert(2, "noise", job.condition.noise.name if job.condition else "noise-free")
+    frame.insert(3, "fault", job.condition.fault_name if job.condition else "none")
+    frame.insert(4, "train_experiment", train.id)
+    tested = [by_id[name] for name in frame["test_experiment"]]
+    for column in ("month", "season", "speed_rpm", "programme", "cooling"):
+        frame[f"test_{column}"] = [getattr(e, column) for e in tested]
+    frame["k"] = frame["k"].astype("Int64")
+    return frame
+
+
+@pytest.mark.parametrize("ks, rmse, error", [
+    ([2, 3, None], [1.0, 2.5, 3.0], ""),
+    ([None, None], [float("nan")] * 2, "training experiment failed: x"),
+    ([2, 4], [float("nan"), 1.0], ""),
+    ([2, None], [float("nan")] * 2, "simulation failed: y"),
+])
+def test_result_frame_is_the_grown_frame_to_the_byte(swept, tmp_path, ks, rmse, error):
+    from spindlebench.studies.store import ResultStore
+
+    sweep, _ = swept
+    job = sweep.evaluation_task(1, sweep.conditions[0], sweep.trains).args[0]
+    train, tests = sweep.trains[0], [e for e in sweep.family if e != sweep.trains[0]]
+    rows = [{"method": "m", "k": k, "test_experiment": e.id, "rmse_um": r, "rmse_true_um": r,
+             "selected": "" if error else "T1", "error": error}
+            for k, r in zip(ks, rmse, strict=True) for e in tests]
+    grown, made = _grown_frame(job, train, tests, rows), jobs._result_frame(job, train, tests,
+                                                                            rows)
+    pd.testing.assert_frame_equal(made, grown)
+    store = ResultStore(tmp_path)
+    store.write_frame("grown.csv", grown)
+    store.write_frame("made.csv", made)
+    assert (tmp_path / "made.csv").read_bytes() == (tmp_path / "grown.csv").read_bytes()
