@@ -303,7 +303,8 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
     the time: a run's 210 candidates do not depend on the training run (made once per run),
     the standardisation is elementwise (one call on all runs stacked), and the ridge product
     runs per run on its own array in its own memory layout, as ``model.predict`` runs it (one
-    product on the stacked runs, or on another layout, rounds differently). When a run's
+    product on the stacked runs, or on another layout, rounds differently; test_sweep_methods
+    compares the two). When a run's
     rises or candidates fail or are not all finite, every run takes ``model.predict`` one by
     one, so the errors are those of that path, in its order."""
     scaler, ridge = model.steps[1][1], model.steps[2][1]
@@ -320,12 +321,16 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
     if len(blocks) != len(data.tests) or not all(np.isfinite(b).all() for b in blocks):
         return {name: model.predict(data.raw_rises(name)) for name in data.tests}
     scaled = scaler.transform(np.vstack(blocks))
+    if ridge.coef_.ndim != 1 or not np.isfinite(scaled).all():  # Ridge.predict would refuse
+        return {name: model.predict(data.raw_rises(name)) for name in data.tests}
     predictions, start = {}, 0
     for name, block in zip(data.tests, blocks, strict=True):
         # in the memory layout the scaler gives the run alone: the product rounds by layout
         alone = np.empty_like(block)
         alone[...] = scaled[start:start + len(block)]
-        predictions[name] = ridge.predict(alone)
+        # Ridge.predict's own product (LinearModel._decision_function) on these finite
+        # values, without re-validating the input for each of the 23 runs
+        predictions[name] = alone @ ridge.coef_ + ridge.intercept_
         start += len(block)
     return predictions
 
