@@ -88,3 +88,16 @@ def test_factored_cv_gives_the_full_svds_penalty(monkeypatch):
     tie = np.array([1e-3, 1e-3, 1e2])  # no margin at all: the full SVDs decide
     regressors.blocked_cv_alpha(X, y, tie, factors=(rises, with_differences_matrix(6)))
     assert calls == [5, 4]
+
+
+def test_rmse_is_the_textbook_formula_to_the_bit():
+    """rmse sums the squares without np.mean's wrapper: the same bits as np.mean, also
+    around the blocks of numpy's pairwise summation (8, 128 elements)."""
+    from spindlebench.selection.regression import rmse
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 7, 8, 9, 127, 128, 129, 181, 1000, 4099):
+        for _ in range(20):
+            y, p = rng.normal(size=n) * 50, rng.normal(size=n) * 50
+            assert rmse(y, p) == float(np.sqrt(np.mean((y - p) ** 2)))
+    assert np.isnan(rmse(np.array([1.0, np.nan]), np.array([1.0, 2.0])))

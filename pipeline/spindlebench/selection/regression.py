@@ -143,7 +143,10 @@ def rmse(y: np.ndarray, predicted: np.ndarray) -> float:
     """Root-mean-square error, in the unit of ``y`` (NaN where the inputs hold NaN)."""
     y, predicted = _paired(y, predicted, "rmse")
     with np.errstate(over="ignore", invalid="ignore"):
-        value = float(np.sqrt(np.mean((y - predicted) ** 2)))
+        residual = y - predicted
+        # np.mean(residual ** 2) is this sum divided by the count; without np.mean's
+        # Python-level wrapper (half of an RMSE's time, and a sweep takes ~400 per training run)
+        value = float(np.sqrt(np.add.reduce(residual * residual) / residual.size))
     if not math.isfinite(value) and np.isfinite(y).all() and np.isfinite(predicted).all():
         raise SelectionOverflowError("values too large for the RMSE (overflow)")
     return value
