@@ -186,3 +186,28 @@ def test_pair_candidates_drop_the_constant_ones_the_matrix_way_does():
     expected = constant_columns(X)
     assert not expected[2]
     assert np.array_equal(pairs.check_candidates(pairs.PairCandidates(raw), None), expected)
+
+
+def test_methods_that_form_an_n_by_n_matrix_are_refused_above_its_limit(small_study,
+                                                                         monkeypatch):
+    """With 105 candidates over a limit of 50 (patched): 'ward' is refused before any
+    search, naming the key; k-means (candidates as points) and the row-wise fuzzy are not;
+    the fuzzy selection with the literal similarity is refused naming placement.similarity."""
+    monkeypatch.setattr(pairs, "MAX_FORMED_CANDIDATES", 50)
+    monkeypatch.setattr(sys.modules["spindlebench.selection.evaluate"], "ROW_WISE_ABOVE", 0)
+    runs = field_runs(small_study, 14, 2, 40)
+    study = dataclasses.replace(small_study, methods=("fuzzy", "kmeans", "ward"),
+                                budgets=(2,))
+    with pytest.raises(SpindlebenchError) as caught:
+        find_placements(study, runs[:1], runs[1:])
+    assert str(caught.value) == (
+        f"{study.path}: key 'placement.methods': 'ward' forms an n x n matrix over 105 "
+        "candidates (0.0 GB per n x n matrix, at most 50 candidates); drop it or set "
+        "with_differences = false")
+    found = find_placements(dataclasses.replace(study, methods=("fuzzy", "kmeans")),
+                            runs[:1], runs[1:])
+    assert [p.found for p in found] == [True, True]
+    literal = dataclasses.replace(study, methods=("fuzzy",), similarity="literal")
+    with pytest.raises(SpindlebenchError, match=r"key 'placement.similarity': 'fuzzy' with "
+                       r"'literal' forms the similarity matrix of 105 candidates"):
+        find_placements(literal, runs[:1], runs[1:])

@@ -40,6 +40,9 @@ from spindlebench.selection.errors import SelectionError, SelectionWarning
 from spindlebench.selection.similarity import similarity_matrix, standardized
 
 CLUSTERINGS: tuple[str, ...] = ("closure", "fcm", "kmeans", "average", "complete", "ward")
+#: The clusterings that form an n x n matrix over the n candidates (R, or SciPy's condensed
+#: distances for ward); fcm and k-means work on the n candidate columns as points.
+PAIRWISE_CLUSTERINGS: tuple[str, ...] = ("closure", "average", "complete", "ward")
 #: The fuzzifier of fuzzy c-means (the usual value, and the issue's).
 FCM_FUZZIFIER = 2.0
 FCM_TOLERANCE = 1e-6

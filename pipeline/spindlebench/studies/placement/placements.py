@@ -24,7 +24,8 @@ import pandas as pd
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.names import DEFAULT_REGRESSOR
-from spindlebench.selection import CandidateSet, SelectionWarning, rmse
+from spindlebench.selection import CandidateSet, SelectionWarning, pairs, rmse
+from spindlebench.selection.clustering import PAIRWISE_CLUSTERINGS
 from spindlebench.selection.evaluate import row_wise
 from spindlebench.selection.pairs import PairCandidates, check_candidates
 from spindlebench.selection.registry import (
@@ -120,6 +121,29 @@ class Design:
         """(training, held-out) columns of :attr:`pool` only."""
         return (block(self.train_runs, self.differences, self.pool),
                 block(self.valid_runs, self.differences, self.pool))
+
+    def check_pairwise(self) -> None:
+        """Methods that form an n x n matrix over the candidates (the fuzzy selection where
+        it cannot run row-wise, the ``clustering.PAIRWISE_CLUSTERINGS``) are refused, naming
+        the key, above ``pairs.MAX_FORMED_CANDIDATES`` candidates, before any search: they
+        would fail on memory (500 nodes with differences: 125 GB per matrix)."""
+        n = self.n_candidates
+        if n <= pairs.MAX_FORMED_CANDIDATES:
+            return
+        size = f"{n:,} candidates ({8 * n * n / 1e9:,.1f} GB per n x n matrix, at most " \
+               f"{pairs.MAX_FORMED_CANDIDATES:,} candidates)"
+        if "fuzzy" in self.study.methods and not row_wise(self.candidates,
+                                                          self.study.similarity, "fast"):
+            raise SpindlebenchError(
+                f"{self.study.path}: key 'placement.similarity': 'fuzzy' with "
+                f"{self.study.similarity!r} forms the similarity matrix of {size}; only "
+                "abs-pearson selects row-wise over nodes and all their differences")
+        for label in self.study.methods:
+            if label not in ("fuzzy", "greedy", "exhaustive") and \
+                    parse_method(label).method in PAIRWISE_CLUSTERINGS:
+                raise SpindlebenchError(
+                    f"{self.study.path}: key 'placement.methods': {label!r} forms an n x n "
+                    f"matrix over {size}; drop it or set with_differences = false")
 
     def check_greedy(self) -> None:
         """Greedy search scores every candidate on every design run at every step, from the
@@ -253,6 +277,7 @@ def find_placements(study: PlacementStudy, train_runs: Sequence[Run],
                for differences in study.with_differences]
     for design in designs:  # before any search runs
         design.check_greedy()
+        design.check_pairwise()
     placements: list[Placement] = []
     while designs:  # each design's formed columns go with it
         design = designs.pop(0)
