@@ -36,3 +36,28 @@ def test_values_match_names():
 def test_repeated_names_rejected():
     with pytest.raises(SelectionError, match="repeated: T1"):
         difference_names(["T1", "T2", "T1"])
+
+
+def test_few_candidates_column_by_column_equal_the_block_path(monkeypatch):
+    """CandidateSet.matrix builds a model's few candidates column by column: the values (to
+    the bit, NaN where a sensor has none) and layout of the all-sensors block path."""
+    import importlib
+
+    from spindlebench.selection.evaluate import CandidateSet, CheckedRecording
+
+    evaluate = importlib.import_module("spindlebench.selection.evaluate")  # not the function
+
+    rng = np.random.default_rng(5)
+    sensors = [f"T{i}" for i in range(1, 9)]
+    frame = pd.DataFrame(rng.normal(size=(50, 8)).cumsum(axis=0), columns=sensors)
+    frame["T8"] = np.nan  # a sensor lost for the whole run
+    recording = CheckedRecording("r", frame)
+    candidates = CandidateSet(tuple(sensors), True)
+    for k in (1, 2, 4, evaluate.FEW_CANDIDATES):
+        for _ in range(20):
+            columns = sorted(rng.choice(len(candidates.names), k, replace=False).tolist())
+            few = candidates.matrix(recording, columns)
+            monkeypatch.setattr(evaluate, "FEW_CANDIDATES", 0)
+            block = candidates.matrix(recording, columns)
+            monkeypatch.undo()
+            assert few.tobytes() == block.tobytes() and few.strides == block.strides
