@@ -1,11 +1,12 @@
 """The array reader (``read_table``, NumPy engine, no pandas) and the DataFrame reader
 (``read_recording``, pandas' tokenizer) are one parser: the same values to the last bit, the
 same errors, on odd cells, odd files, the examples and the real recording (read in place);
-and ``spindlebench evaluate`` runs without importing pandas."""
+and ``spindlebench evaluate`` runs without importing pandas, with one OpenBLAS thread."""
 
 from __future__ import annotations
 
 import itertools
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -150,9 +151,7 @@ def test_a_named_time_axis_replaces_time_s_in_a_table(tmp_path):
     assert table["time_s"].tolist() == [0.0, 60.0, 120.0] == frame["time_s"].tolist()
 
 
-def test_evaluate_command_does_not_import_pandas(tmp_path):
-    """pandas' import was half a second of the command's start-up; the plain files of a
-    logger or the testbench never need it."""
+def two_recordings(folder: Path) -> list[str]:
     rng = np.random.default_rng(0)
     for name in ("a", "b"):
         raw = 20 + np.cumsum(rng.normal(0, 0.1, (40, 5)), axis=0)
@@ -160,13 +159,37 @@ def test_evaluate_command_does_not_import_pandas(tmp_path):
         lines = ["time_s," + ",".join(f"T{i}" for i in range(1, 6)) + ",drift_um"]
         lines += [f"{60 * t}," + ",".join(map(repr, row)) + f",{d!r}"
                   for t, (row, d) in enumerate(zip(raw.tolist(), drift.tolist(), strict=True))]
-        (tmp_path / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        (folder / f"{name}.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return ["evaluate", "--train", str(folder / "a.csv"), "--test", str(folder / "b.csv"),
+            "--target", "drift_um", "--clusters", "2", "--differences"]
+
+
+def run_checked(argv: list[str], check: str, env: dict[str, str] | None = None):
     code = ("import sys; from spindlebench import cli; status = cli.main(sys.argv[1:]); "
-            "assert 'pandas' not in sys.modules, 'pandas was imported'; "
-            "assert 'numpy.ma' not in sys.modules, 'numpy.ma was imported'; sys.exit(status)")
-    result = subprocess.run(
-        [sys.executable, "-c", code, "evaluate", "--train", str(tmp_path / "a.csv"), "--test",
-         str(tmp_path / "b.csv"), "--target", "drift_um", "--clusters", "2", "--differences"],
-        capture_output=True, text=True)
+            f"{check}; sys.exit(status)")
+    return subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True,
+                          env=env)
+
+
+def test_evaluate_command_does_not_import_pandas(tmp_path):
+    """pandas' import was half a second of the command's start-up; the plain files of a
+    logger or the testbench never need it (nor numpy.ma, another 30 ms)."""
+    result = run_checked(two_recordings(tmp_path),
+                         "assert 'pandas' not in sys.modules, 'pandas was imported'; "
+                         "assert 'numpy.ma' not in sys.modules, 'numpy.ma was imported'")
     assert result.returncode == 0, result.stderr
     assert "RMSE" in result.stdout
+
+
+@pytest.mark.parametrize("given", [None, "2"])
+def test_evaluate_runs_openblas_with_one_thread_unless_told(tmp_path, given):
+    """cli.ONE_BLAS_THREAD: OpenBLAS's idle worker threads cost evaluate ~0.15 s of CPU."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    expected = 1 if given is None else min(int(given), os.cpu_count() or 1)
+    check = ("import threadpoolctl; threads = {i['num_threads'] for i in "
+             "threadpoolctl.threadpool_info() if i['internal_api'] == 'openblas'}; "
+             f"assert threads == {{{expected}}}, threads")
+    result = run_checked(two_recordings(tmp_path), check, env)
+    assert result.returncode == 0, result.stderr
