@@ -301,12 +301,13 @@ def _ridge(data: EvaluationData) -> dict[str, Score]:
 def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.ndarray]:
     """``model.predict`` of every test run's raw rises, to the last bit, in a fraction of
     the time: a run's 210 candidates do not depend on the training run (made once per run),
-    the standardisation is elementwise (one call on all runs stacked), and the ridge product
-    runs per run on its own array in its own memory layout, as ``model.predict`` runs it (one
-    product on the stacked runs, or on another layout, rounds differently; test_sweep_methods
-    compares the two). When a run's
-    rises or candidates fail or are not all finite, every run takes ``model.predict`` one by
-    one, so the errors are those of that path, in its order."""
+    and the scaler's and the ridge's arithmetic (``StandardScaler.transform``: minus
+    ``mean_``, divided by ``scale_``; ``Ridge.predict``: ``X @ coef_ + intercept_``) runs on
+    each run's own array in its own memory layout, as ``model.predict`` runs it (one product
+    on the runs stacked, or on another layout, rounds differently; test_sweep_methods
+    compares the two), without scikit-learn validating each of the 23 inputs twice. When a
+    run's rises or candidates fail or a value is not finite, every run takes
+    ``model.predict`` one by one, so the errors are those of that path, in its order."""
     scaler, ridge = model.steps[1][1], model.steps[2][1]
 
     def candidates(name: str) -> Callable[[], np.ndarray]:
@@ -318,21 +319,12 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
                   for name in data.tests]
     except Exception:  # model.predict below raises it where it did
         blocks = []
-    if len(blocks) != len(data.tests) or not all(np.isfinite(b).all() for b in blocks):
+    scaled = [(block - scaler.mean_) / scaler.scale_ for block in blocks]
+    if len(blocks) != len(data.tests) or ridge.coef_.ndim != 1 or not all(
+            np.isfinite(values).all() for values in scaled):  # scikit-learn would refuse
         return {name: model.predict(data.raw_rises(name)) for name in data.tests}
-    scaled = scaler.transform(np.vstack(blocks))
-    if ridge.coef_.ndim != 1 or not np.isfinite(scaled).all():  # Ridge.predict would refuse
-        return {name: model.predict(data.raw_rises(name)) for name in data.tests}
-    predictions, start = {}, 0
-    for name, block in zip(data.tests, blocks, strict=True):
-        # in the memory layout the scaler gives the run alone: the product rounds by layout
-        alone = np.empty_like(block)
-        alone[...] = scaled[start:start + len(block)]
-        # Ridge.predict's own product (LinearModel._decision_function) on these finite
-        # values, without re-validating the input for each of the 23 runs
-        predictions[name] = alone @ ridge.coef_ + ridge.intercept_
-        start += len(block)
-    return predictions
+    return {name: values @ ridge.coef_ + ridge.intercept_
+            for name, values in zip(data.tests, scaled, strict=True)}
 
 
 def _oracle(data: EvaluationData) -> dict[str, Score]:
