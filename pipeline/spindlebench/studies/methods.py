@@ -38,7 +38,7 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 from sklearn.linear_model import Ridge
-from sklearn.pipeline import Pipeline, make_pipeline
+from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
 from spindlebench.formats.recording import DRIFT_COLUMN, recording_name
@@ -289,11 +289,16 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
     X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
-    candidates = PairwiseDifferences().fit(X)
+    differences = PairwiseDifferences().fit(X)
+    candidates = differences.transform(X)
     # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
-    alpha = blocked_cv_alpha(candidates.transform(X), y,
-                             factors=(X, with_differences_matrix(X.shape[1])))
-    model = make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha=alpha)).fit(X, y)
+    alpha = blocked_cv_alpha(candidates, y, factors=(X, with_differences_matrix(X.shape[1])))
+    # make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha)).fit(X, y), step
+    # by step as Pipeline.fit runs it, on the candidates made for the CV
+    scaler = StandardScaler().fit(candidates)
+    ridge = Ridge(alpha=alpha).fit(scaler.transform(candidates), y)
+    model = Pipeline([("pairwisedifferences", differences), ("standardscaler", scaler),
+                      ("ridge", ridge)])
     return _scores(data, _ridge_predictions(model, data),
                    f"all 210 candidates (alpha={alpha:.3g})")
 
