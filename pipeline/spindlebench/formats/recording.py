@@ -373,12 +373,16 @@ def _parse_with_numpy(
     body = data[newline + 1:].removesuffix(b"\n")  # without the last line's newline
     if not body.isascii():
         return None
-    lines = body.split(b"\n") if body else []
-    delimiter = dialect.delimiter.encode()
-    if any(line.count(delimiter) != len(header) - 1 for line in lines):
-        return None  # a short, long or blank line: the text path names it
-    if not lines:
+    if not body:
         return np.empty((0, len(keep)))
+    rows = body.count(b"\n") + 1
+    delimiter = dialect.delimiter.encode()
+    every_column = len(keep) == len(header)
+    # every line must have all its fields: np.loadtxt checks that itself when it reads every
+    # column (a line with another count is an error, a blank line is skipped: rows differ)
+    if not every_column and any(line.count(delimiter) != len(header) - 1
+                                for line in body.split(b"\n")):
+        return None  # a short, long or blank line: the text path names it
     if dialect.decimal == ",":  # the delimiter is not a comma (detect_dialect)
         body = body.replace(b",", b".")
     if allow_missing:
@@ -386,11 +390,11 @@ def _parse_with_numpy(
     positions = [header.index(name) for name in keep]
     try:
         values = np.loadtxt(io.BytesIO(body), delimiter=dialect.delimiter, comments=None,
-                            quotechar=None, usecols=positions, ndmin=2, dtype=float)
+                            quotechar=None, usecols=None if every_column else positions,
+                            ndmin=2, dtype=float)
     except ValueError:
         return None
-    if values.shape != (len(lines), len(keep)) or \
-            not _checked_values(values, keep, allow_missing):
+    if values.shape != (rows, len(keep)) or not _checked_values(values, keep, allow_missing):
         return None
     if allow_missing and np.isnan(values).any() and _SIGNED_NAN.search(body):
         return None  # "-nan" is not a missing-value spelling
