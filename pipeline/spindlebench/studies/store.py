@@ -35,6 +35,7 @@ import pandas as pd
 
 from spindlebench.atomic import atomic_path, write_text
 from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.table_csv import write_table
 from spindlebench.provenance import sha256_file
 
 STATE_FILE = "state.json"
@@ -207,7 +208,7 @@ class ResultStore:
     def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
         target = self.path(relative)
         with atomic_path(target) as tmp:
-            frame.to_csv(tmp, index=False, lineterminator="\n")
+            write_table(tmp, frame)
         self._written(relative)
         return target
 
