@@ -648,25 +648,17 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
 def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame,
               float_format: str | None = FLOAT_FORMAT) -> None:
     """``frame.to_csv(path, index=False, float_format=..., lineterminator="\\n")``, the same
-    bytes (tested), 2-3x faster for the all-float frames the testbench writes in the
-    shortest round trip: each value is Python's ``repr`` (what pandas writes without a float
-    format), NaN an empty field. A sweep writes a thousand recordings of ~27 000 values in
-    its one coordinating process, where pandas' writer was a third of its CPU per run."""
-    if not _plain(frame, float_format):
-        frame.to_csv(path, index=False, float_format=float_format, lineterminator="\n")
+    bytes (tested): in the shortest round trip through ``table_csv.write_table``, 2-3x
+    faster for the all-float frames the testbench writes (each value Python's ``repr``, what
+    pandas writes without a float format). A sweep writes a thousand recordings of ~27 000
+    values in its one coordinating process, where pandas' writer was a third of its CPU per
+    run."""
+    if float_format is None:
+        from spindlebench.formats.table_csv import write_table
+
+        write_table(path, frame)
         return
-    lines = [",".join(map(str, frame.columns))]
-    lines.extend(",".join([repr(v) if v == v else "" for v in row])
-                 for row in frame.to_numpy().tolist())
-    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8", newline="")
-
-
-def _plain(frame: pd.DataFrame, float_format: str | None) -> bool:
-    """Whether ``write_csv`` writes ``frame`` itself: every value as its ``repr`` (all
-    float64, shortest round trip, more than one column, names that need no quoting)."""
-    return float_format is None and frame.shape[1] > 1 and \
-        all(dtype == np.float64 for dtype in frame.dtypes) and \
-        not any(set(str(name)) & set(',"\r\n') or not str(name) for name in frame.columns)
+    frame.to_csv(path, index=False, float_format=float_format, lineterminator="\n")
 
 
 def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
@@ -686,12 +678,14 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     """
     import pandas as pd
 
+    from spindlebench.formats.table_csv import floats_only
+
     names = [str(name) for name in frame.columns]
     wanted = [str(name) for name in columns]
     values = frame.to_numpy()
-    if not _plain(frame, FLOAT_FORMAT) or len(frame) < 2 or len(set(names)) < len(names) \
-            or any(name != name.strip() for name in names) or not set(wanted) <= set(names) \
-            or not np.isfinite(values).all():
+    if FLOAT_FORMAT is not None or not floats_only(frame) or len(frame) < 2 \
+            or len(set(names)) < len(names) or any(name != name.strip() for name in names) \
+            or not set(wanted) <= set(names) or not np.isfinite(values).all():
         return None
     if TIME_COLUMN in names and not (np.diff(frame[TIME_COLUMN].to_numpy()) > 0).all():
         return None
