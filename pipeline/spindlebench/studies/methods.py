@@ -33,7 +33,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
@@ -153,8 +153,6 @@ class SharedRuns:
     def __init__(self, frames: Mapping[str, pd.DataFrame]) -> None:
         self.frames = {str(name): frame for name, frame in frames.items()}
         self._checked: dict[str, CheckedRecording] = {}
-        self._rises: dict[str, np.ndarray] = {}
-        self._memo: dict[tuple[str, str], Any] = {}
 
     def checked(self, name: str, frame: pd.DataFrame) -> CheckedRecording:
         """Run ``name`` as a checked recording; ``frame`` must be this object's frame."""
@@ -166,18 +164,15 @@ class SharedRuns:
 
     def raw_rises(self, name: str) -> np.ndarray:
         """The rises of the 20 raw sensors of run ``name`` (shared: do not modify)."""
-        if name not in self._rises:
-            self._rises[name] = rises(np.asfortranarray(self.checked(
-                name, self.frames[name]).stack(SENSORS)))
-        return self._rises[name]
+        checked = self.checked(name, self.frames[name])
+        return self.memo("raw rises", name,
+                         lambda: rises(np.asfortranarray(checked.stack(SENSORS))))
 
     def memo(self, what: str, name: str, compute: Callable[[], T]) -> T:
         """``compute()`` the first time ``what`` of run ``name`` is asked for, then kept
-        (for results that depend on the held-out run only, like the oracle's)."""
-        key = (what, name)
-        if key not in self._memo:
-            self._memo[key] = compute()
-        return self._memo[key]
+        (for results that depend on the held-out run only, like the oracle's): kept by the
+        run's checked recording (``CheckedRecording.memo``)."""
+        return self.checked(name, self.frames[name]).memo(what, compute)
 
 
 class EvaluationData:
