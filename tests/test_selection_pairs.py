@@ -172,9 +172,11 @@ def test_literal_similarity_states_its_size_limit():
 
 def test_compiled_and_numpy_rows_build_the_same_tree(monkeypatch, prim_path):
     """60 sensors, two of them duplicated (ties), 1 830 candidates: many squeezes of the
-    compiled loop; the same order as the NumPy rows, weights to rounding, and the same
-    parents except where two tree members link equally to rounding (a sensor and its twin:
-    the two BLAS builds round their products differently, either tree is a maximum one)."""
+    compiled loop; the same order as the NumPy rows except where two vertices tie to rounding
+    (a sensor and its twin: the two BLAS builds round their products differently, and which
+    of the two joins first depends on the CPU's kernel), the same multiset of edge weights
+    (every maximum spanning tree has it), every edge but the duplicates' an edge of R, and the
+    same parents but for those ties."""
     if prim_path == "compiled":
         pytest.skip("compares both paths itself")
     base = warm_up(58, 400, 11)
@@ -185,13 +187,18 @@ def test_compiled_and_numpy_rows_build_the_same_tree(monkeypatch, prim_path):
     rows = maximum_spanning_tree_of_pairs(geometry, kept)
     monkeypatch.setattr(pairs_module, "COMPILED_ABOVE", 0)
     compiled = maximum_spanning_tree_of_pairs(geometry, kept)
-    np.testing.assert_array_equal(compiled.order, rows.order)
-    np.testing.assert_allclose(compiled.weight, rows.weight, rtol=0, atol=1e-12)
+    moved = np.flatnonzero(compiled.order != rows.order)
+    assert moved.size < 10
+    assert set(compiled.order[moved]) == set(rows.order[moved])  # a tie, joined the other way
+    np.testing.assert_allclose(np.sort(compiled.weight), np.sort(rows.weight), rtol=0,
+                               atol=1e-12)
     R = geometry.similarity(kept)
+    for tree in (compiled, rows):  # duplicates join at 1 by their own rule, not through R
+        joined = tree.order[1:][tree.weight[tree.order[1:]] < 1 - 1e-12]
+        np.testing.assert_allclose(R[joined, tree.parent[joined]], tree.weight[joined],
+                                   rtol=0, atol=1e-12)
     differ = np.flatnonzero(compiled.parent != rows.parent)
     assert differ.size < 10
-    np.testing.assert_allclose(R[differ, compiled.parent[differ]], R[differ, rows.parent[differ]],
-                               rtol=0, atol=1e-12)
     assert (rows.weight[1:] > 1 - 1e-12).sum() > 1  # the duplicates link at 1
 
 
