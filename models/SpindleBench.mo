@@ -188,6 +188,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
       parameter Real nu_40(unit = "mm2/s", min = 2.0, max = 1000.0) = 22.0 "Base-oil kinematic viscosity at 40 degC [ISO]";
       parameter Real nu_100(unit = "mm2/s", min = 1.0, max = 100.0) = 4.3 "Base-oil kinematic viscosity at 100 degC (below nu_40) [ISO]";
       input Real n_rpm(unit = "rev/min") "Shaft speed";
+      input Real P_thermal(unit = "N") "Thermally induced preload added to P1 (inner ring and shaft hotter than outer ring and housing) [ST, BT]";
       Real walther_B(unit = "1") "Slope B of Walther's line (from nu_40 and nu_100)";
       Real walther_A(unit = "1") "Intercept A of Walther's line";
       Real nu(unit = "mm2/s") "Lubricant viscosity at the bearing temperature";
@@ -198,7 +199,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
       walther_B = (log(log(nu_40 + 0.7) / log(10.0)) - log(log(nu_100 + 0.7) / log(10.0))) / (log(373.15) - log(313.15)) "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
       walther_A = log(log(nu_40 + 0.7) / log(10.0)) / log(10.0) + walther_B * log(313.15) / log(10.0) "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
       nu = exp(log(10.0) * exp(log(10.0) * (walther_A - walther_B * log(port.T) / log(10.0)))) - 0.7 "unit check: empirical: Walther [D341] on the numbers of nu in mm2/s and T in K";
-      M = z * (1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * P1 * dm) "unit check: empirical: Palmgren [SKF] on the numbers of nu in mm2/s, n in rev/min, dm in mm, M0 in N mm";
+      M = z * (1.0e-10 * f0 * max(nu * abs(n_rpm), 2000.0) ^ (2.0 / 3.0) * (1000.0 * dm) ^ 3 + f1 * (P1 + P_thermal) * dm) "unit check: empirical: Palmgren [SKF] on the numbers of nu in mm2/s, n in rev/min, dm in mm, M0 in N mm";
       Q_flow = M * abs(n_rpm) * 2.0 * 3.14159265358979 / 60.0;
       port.Q_flow = -Q_flow;
     end BearingFriction;
@@ -272,6 +273,21 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     parameter Real cooling_setpoint_C(unit = "degC", min = -50.0, max = 80.0) = 0.0 "Coolant temperature (absolute) or offset from ambient (following)";
     parameter Real G_cooling(unit = "W/K", min = 0.0, max = 1.0e4) = 25.0 "Conductance coolant jacket - front bearing seat [HOL]";
 
+    // ---- spindle-driven mechanisms (issue 20): a gain of 0 switches each off (docs/model.md) ----
+    parameter Real front_preload_N_per_K(unit = "N/K", min = 0.0, max = 1.0e4) = 200.0 "Thermally induced preload of the front set per K of shaft (at the bearing) over housing seat [ST, LS]";
+    parameter Real rear_preload_N_per_K(unit = "N/K", min = 0.0, max = 1.0e4) = 0.0 "Thermally induced preload of the rear set per K of shaft over housing seat (sliding outer rings relieve the axial part) [ST, LS]";
+    parameter Real G_bearing_air_ref(unit = "W/K", min = 0.0, max = 1.0e3) = 2.0 "Front bearing rings - air at n_ref: sealing-air purge and the air the rotating cage pumps through the labyrinth (oil-air: the lubricating air) [BT, JS]";
+    parameter Real k_bearing_air(unit = "1", min = 0.0, max = 2.0) = 0.8 "Exponent of the bearing-air conductance in speed [JS]";
+    // built-in motor (motorized spindle): rotor on the shaft between the bearings, stator in the housing
+    parameter Real rotor_loss_fraction(unit = "1", min = 0.0, max = 1.0) = 0.0 "Share of the spindle motor losses released in the rotor on the shaft (0: separate belt-drive motor) [BT]";
+    parameter Real rotor_front_share(unit = "1", min = 0.0, max = 1.0) = 0.5 "Share of the rotor heat entering the shaft at the front bearing's place, the rest at the rear's";
+    // chiller jacket around stator and front bearing seat, supply set-point following the room
+    parameter Real jacket_enabled(unit = "1", min = 0.0, max = 1.0) = 0.0 "1: chiller jacket on, 0: no jacket";
+    parameter Real jacket_offset_K(unit = "K", min = -20.0, max = 20.0) = 0.0 "Chiller supply temperature minus room air (set-point following the room) [MAY]";
+    parameter Real G_jacket_stator(unit = "W/K", min = 0.0, max = 1.0e4) = 0.0 "Jacket coolant - stator sleeve (spiral groove jacket) [BT, HOL]";
+    parameter Real G_jacket_front(unit = "W/K", min = 0.0, max = 1.0e4) = 0.0 "Jacket coolant - front bearing seat sleeve [HOL]";
+    parameter Real jacket_flow_W_per_K(unit = "W/K", min = 1.0, max = 1.0e5) = 120.0 "Coolant capacity flow m_dot c_p (about 4 l/min of spindle oil)";
+
     // ---- heat sources -----------------------------------------------------------------
     parameter Real P_spindle_motor_ref(unit = "W", min = 0.0, max = 1.0e5) = 140.0 "Spindle motor no-load loss at n_ref (iron, friction, windage) [EST]";
     parameter Real k_spindle_motor(unit = "1", min = 0.0, max = 4.0) = 1.6 "Exponent of the motor loss in speed [EST]";
@@ -295,7 +311,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     parameter Real A_tool(unit = "m2", min = 0.0, max = 100.0) = 0.04 "Tool holder and test mandrel surface (d 40 mm x 0.2 m plus the BT40 flange)";
     parameter Real A_housing_out(unit = "m2", min = 0.0, max = 100.0) = 1.6 "Outer surface of the headstock";
     parameter Real A_housing_in(unit = "m2", min = 0.0, max = 100.0) = 0.8 "Inner surface of the headstock cavity";
-    parameter Real A_column(unit = "m2", min = 0.0, max = 100.0) = 12.0 "Column surface in air, outer walls and the inner ribs of the box casting";
+    parameter Real A_column(unit = "m2", min = 0.0, max = 100.0) = 4.5 "Column surface in air: the outer walls (the inner ribs of the box casting see little air movement) [EST]";
     parameter Real A_bed(unit = "m2", min = 0.0, max = 100.0) = 6.0 "Bed surface in air";
     parameter Real A_table(unit = "m2", min = 0.0, max = 100.0) = 3.0 "Table and saddle surface";
     parameter Real A_fixture(unit = "m2", min = 0.0, max = 100.0) = 0.12 "Probe fixture surface in air";
@@ -311,9 +327,9 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     SegmentedSolid housing(n = nSeg, C = 161000.0, G = 1.6, L = 0.6, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.4167, x2 = 0.8, x3 = 0.15, x_lo = 0.0, x_hi = 0.15)
       "Headstock housing, front bearing seat (x=0) to top (x=1): 350 kg cast iron; Z carriages at x1 (0.25 m above the seat), rear bearing seat at x2, Z nut bracket at x3";
-    SegmentedSolid column(n = nSeg, C = 736000.0, G = 2.7, L = 1.42, alpha = alpha_iron, T_nominal = T_ref,
+    SegmentedSolid column(n = nSeg, C = 500000.0, G = 2.7, L = 1.42, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.7, x2 = 0.5, x3 = 0.7, x_lo = 0.0, x_hi = 1.0)
-      "Column, bed face (x=0) to the Z screw top bearing (x=1): 1600 kg cast iron; headstock carriages at x1, spindle motor bracket and exhaust air at x3 (beside the carriages)";
+      "Column, bed face (x=0) to the Z screw top bearing (x=1): 1090 kg cast iron; headstock carriages at x1, spindle motor bracket and exhaust air at x3 (beside the carriages)";
     SegmentedSolid bed(n = nSeg, C = 1150000.0, G = 3.6, L = 2.0, alpha = alpha_iron, T_nominal = T_ref,
       x1 = 0.45, x2 = 0.1, x3 = 0.7, x_lo = 0.0, x_hi = 1.0)
       "Bed, front (x=0) to rear under the column (x=1): 2500 kg cast iron; saddle on the Y guides at x1";
@@ -350,8 +366,8 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     // ---- boundaries and sources --------------------------------------------------------
     PrescribedTemperature ambient "Workshop air";
     PrescribedTemperature coolant "Coolant of the spindle cooling unit";
-    BearingFriction front_bearing_friction(f0 = 1.0, z = 2.0, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, nu_100 = 4.3)
-      "Front bearings 7014 set (2 single-row angular contact), grease with ISO VG 22 base oil; f0 per bearing tuned to half the handbook 2 [SKF, HK, D341]";
+    BearingFriction front_bearing_friction(f0 = 0.75, z = 2.0, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, nu_100 = 4.3)
+      "Front bearings 7014 set (2 single-row angular contact), grease with ISO VG 22 base oil; f0 per bearing tuned to 0.75 (handbook 2, run-in spindle bearings lower) [SKF, HK, D341]";
     BearingFriction rear_bearing_friction(f0 = 1.0, z = 2.0, f1 = 4.0e-4, P1 = 600.0, dm = 0.0775, nu_40 = 22.0, nu_100 = 4.3)
       "Rear bearings 7012 pair (2 single-row angular contact) [SKF, HK, D341]";
     PrescribedHeatFlow spindle_motor_loss "Spindle motor losses";
@@ -414,6 +430,14 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     Convection tool_convection "Tool holder and mandrel - air (speed dependent)";
     Convection fixture_convection "Probe fixture - air";
     Convection cooling_bearing "Coolant jacket - front bearing seat";
+    // spindle-driven mechanisms and built-in motor (issue 20)
+    Convection bearing_air "Front bearing rings - air stream through the bearing (speed dependent)";
+    PrescribedHeatFlow rotor_loss_front "Rotor losses entering the shaft at the front bearing's place";
+    PrescribedHeatFlow rotor_loss_rear "Rotor losses entering the shaft at the rear bearing's place";
+    ThermalConductor stator_housing(G = 0.0) "Stator sleeve - housing between the bearings (built-in motor; 0: belt drive)";
+    PrescribedTemperature jacket_coolant "Chiller supply to the spindle jacket";
+    Convection jacket_stator "Jacket coolant - stator sleeve";
+    Convection jacket_front "Jacket coolant - front bearing seat sleeve (cap node)";
 
     // ---- the paper's 20 sensors (Xu et al. 2023, Table 1) ------------------------------------
     ContactSensor sensor_T1(C = 10.0, G_contact = 0.5, G_env = 0.02) "T1 spindle front: front bearing cap";
@@ -478,6 +502,12 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     output Real bed_tilt_um(unit = "um") "Bed growth under the column minus under the table (head away)";
     output Real table_growth_um(unit = "um") "Saddle and table growth (towards the tool)";
     output Real fixture_growth_um(unit = "um") "Probe fixture growth (probe towards the tool)";
+    output Real front_preload_thermal_N(unit = "N") "Thermally induced preload of the front set (per bearing)";
+    output Real Q_bearing_air_W(unit = "W") "Heat carried off the front bearing by the air stream through it";
+    output Real Q_rotor_W(unit = "W") "Spindle motor losses released in the rotor (built-in motor)";
+    output Real Q_jacket_W(unit = "W") "Heat removed by the chiller jacket";
+    output Real jacket_inlet_C(unit = "degC") "Chiller jacket supply (inlet) temperature";
+    output Real jacket_outlet_C(unit = "degC") "Chiller jacket return (outlet) temperature";
   equation
     // boundaries
     ambient.T = ambient_C + 273.15;
@@ -503,7 +533,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     // heat sources
     front_bearing_friction.n_rpm = spindle_speed_rpm;
     rear_bearing_friction.n_rpm = spindle_speed_rpm;
-    spindle_motor_loss.Q_flow = P_spindle_motor_ref * (abs(spindle_speed_rpm) / n_ref) ^ k_spindle_motor;
+    spindle_motor_loss.Q_flow = (1.0 - rotor_loss_fraction) * P_spindle_motor_ref * (abs(spindle_speed_rpm) / n_ref) ^ k_spindle_motor;
     x_nut_friction.Q_flow = c_x_nut * abs(feed_x_mm_per_min);
     y_nut_friction.Q_flow = c_y_nut * abs(feed_y_mm_per_min);
     x_bearing_friction.Q_flow = c_x_bearing * abs(feed_x_mm_per_min);
@@ -684,6 +714,36 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     connect(sensor_T20.port, y_bearing_seat.port);
     connect(sensor_T20.port_env, ambient.port);
 
+    // spindle-driven mechanisms and built-in motor (issue 20; every gain 0 = the earlier model)
+    // thermally induced preload: the inner ring and shaft grow radially more than the outer ring
+    // and housing while they are hotter, which loads the balls; it relaxes as the housing catches up
+    front_bearing_friction.P_thermal = front_preload_N_per_K * max(0.0, spindle_shaft.port_1.T - housing.port_a.T);
+    rear_bearing_friction.P_thermal = rear_preload_N_per_K * max(0.0, spindle_shaft.port_2.T - housing.port_2.T);
+    bearing_air.Gc = G_bearing_air_ref * (abs(spindle_speed_rpm) / n_ref) ^ k_bearing_air;
+    connect(front_bearing.port, bearing_air.solid);
+    connect(bearing_air.fluid, ambient.port);
+    // rotor losses into the shaft between the bearings (shared between their two places)
+    rotor_loss_front.Q_flow = rotor_front_share * Q_rotor_W;
+    rotor_loss_rear.Q_flow = (1.0 - rotor_front_share) * Q_rotor_W;
+    connect(rotor_loss_front.port, spindle_shaft.port_1);
+    connect(rotor_loss_rear.port, spindle_shaft.port_2);
+    connect(spindle_motor.port, stator_housing.port_a);
+    connect(stator_housing.port_b, housing.port_1);
+    // chiller jacket: supply at the room air plus an offset; heat taken at the mean coolant temperature
+    jacket_coolant.T = ambient_C + jacket_offset_K + 273.15;
+    jacket_stator.Gc = jacket_enabled * G_jacket_stator / (1.0 + (G_jacket_stator + G_jacket_front) / (2.0 * jacket_flow_W_per_K));
+    jacket_front.Gc = jacket_enabled * G_jacket_front / (1.0 + (G_jacket_stator + G_jacket_front) / (2.0 * jacket_flow_W_per_K));
+    connect(spindle_motor.port, jacket_stator.solid);
+    connect(jacket_stator.fluid, jacket_coolant.port);
+    connect(front_cap.port, jacket_front.solid);
+    connect(jacket_front.fluid, jacket_coolant.port);
+    front_preload_thermal_N = front_bearing_friction.P_thermal;
+    Q_bearing_air_W = bearing_air.Q_flow;
+    Q_rotor_W = rotor_loss_fraction * P_spindle_motor_ref * (abs(spindle_speed_rpm) / n_ref) ^ k_spindle_motor;
+    Q_jacket_W = jacket_stator.Q_flow + jacket_front.Q_flow;
+    jacket_inlet_C = jacket_coolant.T - 273.15;
+    jacket_outlet_C = jacket_inlet_C + Q_jacket_W / jacket_flow_W_per_K;
+
     // outputs
     T1_C = sensor_T1.T - 273.15;
     T2_C = sensor_T2.T - 273.15;
@@ -717,7 +777,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
       - bed_tilt_um + table_growth_um + fixture_growth_um;
     Q_front_bearing_W = front_bearing_friction.Q_flow;
     Q_rear_bearing_W = rear_bearing_friction.Q_flow;
-    Q_spindle_motor_W = spindle_motor_loss.Q_flow;
+    Q_spindle_motor_W = spindle_motor_loss.Q_flow + Q_rotor_W;
     Q_x_feed_W = x_nut_friction.Q_flow + x_bearing_friction.Q_flow + x_motor_loss.Q_flow;
     Q_y_feed_W = y_nut_friction.Q_flow + y_bearing_friction.Q_flow + y_motor_loss.Q_flow;
     Q_z_feed_W = z_nut_friction.Q_flow + z_bearing_friction.Q_flow + z_motor_loss.Q_flow;

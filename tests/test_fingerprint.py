@@ -48,6 +48,7 @@ BY_HAND = {
     "best_diff_psi": 1.0,
     "best_pair_r2": 1.0,
     "t63_ratio": 4 / 9,
+    "t63_fastest_ratio": 1.0,  # 120 / min(120, 420)
     "overshoot": 50 / 33,
     "early_fraction": 8 / 11,
 }

@@ -33,12 +33,21 @@ def test_feed_axis_and_structure_sensors_keep_rising_slowly(runs, sensor):
     assert rise(run, sensor, 300) - rise(run, sensor, 240) > 0.1  # still rising after 4 h
 
 
-def test_drift_reaches_tens_of_micrometres_within_a_few_hours(runs):
-    assert 20.0 < rise(runs[4000], "drift_um", 180) < 100.0
-    assert rise(runs[4000], "drift_um", 300) > rise(runs[4000], "drift_um", 180)
+def test_drift_reaches_tens_of_micrometres_then_falls_back(runs):
+    """Issue 20: at a constant ambient the column, heated by the headstock and the motor, pulls
+    the spindle back over hours while the spindle-near sensors have levelled off."""
+    drift = [rise(runs[4000], "drift_um", minute) for minute in range(0, 301, 10)]
+    assert 20.0 < max(drift) < 100.0
+    assert drift.index(max(drift)) * 10 < 180  # peaks within three hours
+    assert 0.6 * max(drift) < drift[-1] < 0.97 * max(drift)
 
 
 def test_2000_rpm_gives_less_than_4000_rpm(runs):
-    for column in ("drift_um", "T1_C", "T8_C"):
+    for column in ("T1_C", "T8_C"):
         assert rise(runs[2000], column, 300) < 0.7 * rise(runs[4000], column, 300)
+
+    def peak(run):  # the drift falls back more at 4000 rpm, so compare the peaks
+        return max(rise(run, "drift_um", minute) for minute in range(0, 301, 10))
+
+    assert peak(runs[2000]) < 0.8 * peak(runs[4000])
     assert rise(runs[2000], "drift_um", 300) > 5.0

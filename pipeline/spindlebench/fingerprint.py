@@ -10,6 +10,9 @@ machine with a real one:
 - ``best_diff_psi``: max over pairs ``i < j`` of ``|r(dT_i - dT_j, e)|``;
 - ``best_pair_r2``: max over pairs of the R² of the OLS fit ``e ~ 1 + dT_i + dT_j``;
 - ``t63_ratio``: ``t63(e)`` over the median ``t63`` of the sensors that rise by at least 0.1 K;
+- ``t63_fastest_ratio``: ``t63(e)`` over the smallest ``t63`` of those sensors (issue 20: in real
+  spindles the error settles before the fastest sensor, 0.44-0.90 of its time, because it is
+  driven by the shaft and the rotor, which no sensor touches);
 - ``overshoot``: ``max(s * smooth(e)) / |final(e)|`` with ``s = sign(final(e))``;
 - ``early_fraction``: ``smooth(e)[floor(0.1 (n - 1))] / final(e)``.
 
@@ -37,6 +40,7 @@ KEYS = (
     "best_diff_psi",
     "best_pair_r2",
     "t63_ratio",
+    "t63_fastest_ratio",
     "overshoot",
     "early_fraction",
 )
@@ -159,6 +163,8 @@ def fingerprint(time_s: np.ndarray, temps_2d: np.ndarray, error: np.ndarray) -> 
     error_t63 = t63(elapsed, e)
     median_t63 = float(np.median(sensor_t63)) if sensor_t63 else math.nan
     t63_ratio = error_t63 / median_t63 if median_t63 > 0 else math.nan
+    fastest_t63 = min(sensor_t63) if sensor_t63 else math.nan
+    t63_fastest_ratio = error_t63 / fastest_t63 if fastest_t63 > 0 else math.nan
     smoothed = smooth(e)
     final_e = final(e)
     if final_e == 0.0:
@@ -173,6 +179,7 @@ def fingerprint(time_s: np.ndarray, temps_2d: np.ndarray, error: np.ndarray) -> 
         "best_diff_psi": best_diff,
         "best_pair_r2": best_pair,
         "t63_ratio": float(t63_ratio),
+        "t63_fastest_ratio": float(t63_fastest_ratio),
         "overshoot": overshoot,
         "early_fraction": early,
     }

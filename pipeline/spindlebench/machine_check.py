@@ -1,7 +1,9 @@
 """Check a machine variant against its file's fingerprint targets.
 
 The paper's five experiments (``scenarios/paper/exp*.toml``) are simulated noise-free with the
-FMU and the machine's parameters (FMPy, CVode, a cold start through ``T_start``), and the
+FMU and the machine's parameters (FMPy, CVode, a cold start through ``T_start``), the other runs
+its targets name (``heating/room20_4000``, ``examples/realistic_day``: scenarios under
+``scenarios/``) with the testbench's runner (its noise-free outputs, soak included), and the
 fingerprint of each run (``spindlebench.fingerprint``: sensors T1-T20, error ``drift_um``) is
 compared with the machine's ``[[targets]]``. This is what the tests run and what the numbers in
 ``docs/model.md`` come from::
@@ -9,6 +11,8 @@ compared with the machine's ``[[targets]]``. This is what the tests run and what
     python -m spindlebench.machine_check                 # every shipped machine
     python -m spindlebench.machine_check default --hours 6
     python -m spindlebench.machine_check --ambient-step  # no-load ambient sensitivity (um/K)
+    python -m spindlebench.machine_check --mechanisms    # each issue-20 mechanism off alone
+    python -m spindlebench.machine_check --levels        # bearing rises, column time constant
 """
 
 from __future__ import annotations
@@ -26,7 +30,9 @@ from spindlebench.machines import (
     Machine,
     load_machine,
     machine_names,
+    run_scenario_path,
     target_problems,
+    target_runs,
 )
 from spindlebench.names import KELVIN_OFFSET, SENSORS
 from spindlebench.paths import DEFAULT_FMU, SCENARIOS_DIR
@@ -64,6 +70,23 @@ def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
     return frame
 
 
+def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU
+                          ) -> dict[str, np.ndarray]:
+    """Noise-free outputs of a non-paper run (a scenario under ``scenarios/``) on ``machine``,
+    from the testbench's runner (so a soak or continued start is what ``simulate`` does)."""
+    from dataclasses import replace
+
+    from spindlebench.testbench.runner import co_simulate
+    from spindlebench.testbench.scenario import start_state
+
+    scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
+    simulation = co_simulate(scenario, fmu_path, start=start_state(scenario))
+    frame = {name: np.asarray(simulation.outputs[name], dtype=float)
+             for name in [f"{s}_C" for s in SENSORS] + [ERROR]}
+    frame["time_s"] = np.asarray(simulation.time_s, dtype=float)
+    return frame
+
+
 def run_fingerprint(frame: Mapping[str, np.ndarray]) -> dict[str, float]:
     """The fingerprint of one simulated run."""
     temps = np.column_stack([frame[f"{s}_C"] for s in SENSORS])
@@ -75,6 +98,16 @@ def paper_fingerprints(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
                        hours: float | None = None) -> dict[str, dict[str, float]]:
     """Fingerprint of each paper run of ``machine`` (run name → statistics)."""
     return {run: run_fingerprint(simulate_run(machine, run, fmu_path, hours)) for run in runs}
+
+
+def machine_fingerprints(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
+                         hours: float | None = None) -> dict[str, dict[str, float]]:
+    """Fingerprint of every run the machine's targets name (paper runs first, all five)."""
+    runs = [run for run in target_runs(machine) if run not in PAPER_RUNS]
+    stats = paper_fingerprints(machine, fmu_path, hours=hours)
+    for run in runs:
+        stats[run] = run_fingerprint(simulate_scenario_run(machine, run, fmu_path))
+    return stats
 
 
 STEP_K = 5.0
@@ -102,11 +135,84 @@ def ambient_step_response(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
     return dict(zip(hours, (float(v) for v in response), strict=True))
 
 
+#: Issue 20's mechanisms: the parameter values that switch each one off on a machine where it is
+#: on (``MECHANISM_RUN`` says which heating run shows it), so its effect can be shown alone.
+MECHANISMS: dict[str, dict[str, dict[str, float]]] = {
+    "default": {
+        "thermally induced preload": {"front_preload_N_per_K": 0.0},
+        "air through the front bearing": {"G_bearing_air_ref": 0.0},
+        "column heated by the headstock and motor": {"headstock_column_G": 5.0,
+                                                     "motor_column_G": 0.0},
+        "column time constant (earlier 12 m2, 1600 kg)": {"A_column": 12.0,
+                                                          "column_C": 736000.0},
+        "test mandrel in the loop": {"tool_L": 0.0},
+    },
+    "motor-spindle": {
+        "rotor losses on the shaft": {"rotor_loss_fraction": 0.0},
+        "chiller jacket": {"jacket_enabled": 0.0},
+        "stator seated in the housing": {"stator_housing_G": 0.0, "motor_housing_G": 2.0},
+        "thermally induced preload": {"front_preload_N_per_K": 0.0},
+        "air through the front bearing": {"G_bearing_air_ref": 0.0},
+    },
+}
+MECHANISM_RUN = {"default": "heating/room20_4000", "motor-spindle": "heating/room20_12000"}
+
+
+def mechanism_fingerprints(name: str, fmu_path: str | Path = DEFAULT_FMU
+                           ) -> dict[str, dict[str, float]]:
+    """Fingerprint of machine ``name``'s heating run with everything on, then with each of its
+    mechanisms off alone (row label → statistics)."""
+    from dataclasses import replace
+
+    machine = load_machine(name)
+    run = MECHANISM_RUN[name]
+    rows = {"all on": run_fingerprint(simulate_scenario_run(machine, run, fmu_path))}
+    for mechanism, off in MECHANISMS[name].items():
+        variant = replace(machine, parameters={**machine.parameters, **off})
+        rows[f"{mechanism} off"] = run_fingerprint(simulate_scenario_run(variant, run, fmu_path))
+    return rows
+
+
+LEVEL_RUNS = ("heating/room20_2000", "heating/room20_4000", "heating/room20_8000",
+              "heating/room20_12000")
+
+
+def levels(machine: Machine, fmu_path: str | Path = DEFAULT_FMU) -> dict[str, float]:
+    """Rises after the 8 h heating runs (K: T1 on the bearing cap, the front bearing rings) and
+    the column's time constant to the room (h: t63 of its mean temperature after an idle 5 K
+    ambient step)."""
+    from dataclasses import replace
+
+    from fmpy import simulate_fmu
+
+    from spindlebench.fingerprint import t63
+    from spindlebench.testbench.runner import co_simulate
+
+    out: dict[str, float] = {}
+    for run in LEVEL_RUNS:
+        scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
+        outputs = co_simulate(scenario, fmu_path).outputs
+        rpm = run.rsplit("_", 1)[1]
+        for name, column in (("T1", "T1_C"), ("rings", "node_front_bearing_C")):
+            values = np.asarray(outputs[column], dtype=float)
+            out[f"{name} rise at {rpm} rpm (K)"] = float(values[-1] - values[0])
+    columns = [f"node_column_{i}_C" for i in range(1, 13)]
+    start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, "ambient_C": 20.0 + STEP_K}
+    result = simulate_fmu(str(fmu_path), start_values=start, stop_time=96 * 3600.0,
+                          output_interval=120.0, output=columns, relative_tolerance=1e-8)
+    mean = np.mean([np.asarray(result[c]) for c in columns], axis=0) - 20.0
+    out["column time constant to the room (h)"] = t63(np.asarray(result["time"]), mean) / 3600.0
+    return out
+
+
 def table(fingerprints: Mapping[str, Mapping[str, float]]) -> str:
-    """A Markdown table: one row per run plus the median."""
+    """A Markdown table: one row per run plus the median of the paper runs."""
     lines = ["| run | " + " | ".join(KEYS) + " |", "|---|" + "---|" * len(KEYS)]
-    rows = dict(fingerprints)
-    rows["median"] = {k: float(np.median([r[k] for r in fingerprints.values()])) for k in KEYS}
+    paper = [stats for run, stats in fingerprints.items() if run in PAPER_RUNS]
+    rows = {run: stats for run, stats in fingerprints.items() if run in PAPER_RUNS}
+    if paper:
+        rows["paper median"] = {k: float(np.median([r[k] for r in paper])) for k in KEYS}
+    rows.update({run: stats for run, stats in fingerprints.items() if run not in PAPER_RUNS})
     for run, stats in rows.items():
         lines.append(f"| {run} | " + " | ".join(f"{stats[k]:.3f}" for k in KEYS) + " |")
     return "\n".join(lines)
@@ -121,16 +227,30 @@ def main(argv: list[str] | None = None) -> int:
                         help="simulate only the first HOURS of each run (default: all 6 h)")
     parser.add_argument("--ambient-step", action="store_true",
                         help="print the no-load response to a 5 K ambient step (um/K) instead")
+    parser.add_argument("--mechanisms", action="store_true",
+                        help="print each issue-20 mechanism's effect on its heating run")
+    parser.add_argument("--levels", action="store_true",
+                        help="print bearing rises of the heating runs and the column's "
+                        "time constant to the room")
     args = parser.parse_args(argv)
     failed = False
+    if args.mechanisms:
+        for name in args.machines or list(MECHANISMS):
+            print(f"## {name}, {MECHANISM_RUN[name]}\n")
+            print(table(mechanism_fingerprints(name, args.fmu)) + "\n")
+        return 0
     for name in args.machines or machine_names():
         machine = load_machine(name)
+        if args.levels:
+            print(f"{machine.name}: " + ", ".join(
+                f"{key} {value:.1f}" for key, value in levels(machine, args.fmu).items()))
+            continue
         if args.ambient_step:
             response = ambient_step_response(machine, args.fmu)
             print(f"{machine.name}: drift per K after an idle ambient step: " + ", ".join(
                 f"{h:g} h {v:+.2f}" for h, v in response.items()))
             continue
-        stats = paper_fingerprints(machine, args.fmu, hours=args.hours)
+        stats = machine_fingerprints(machine, args.fmu, hours=args.hours)
         print(f"## {machine.name} ({machine.path.name}, sha256 {machine.sha256[:12]})\n")
         print(table(stats) + "\n")
         problems = target_problems(machine, stats)

@@ -10,7 +10,10 @@ A scenario or study picks one with ``machine = "<name>"`` (or a path to a ``.tom
 A target is one statistic of the fingerprint with ``min`` and/or ``max``; ``above = "<other
 statistic>"`` makes the bounds apply to the difference ``statistic - other``; ``runs`` names the
 paper experiments it is taken over (default all five) and ``each = true`` requires every run to
-meet it instead of the median.
+meet it instead of the median. A run is a paper experiment (``exp1`` … ``exp5``) or any scenario
+named by its path under ``scenarios/`` without ``.toml`` (``heating/room20_4000``: a heating test
+in a constant room, where the weather cannot help; ``examples/realistic_day``), simulated
+noise-free on the machine.
 """
 
 from __future__ import annotations
@@ -134,13 +137,33 @@ def _read_target(t: Table) -> Target:
     maximum = t.number("max", None)
     if minimum is None and maximum is None:
         raise t.error("statistic", "a target needs min and/or max")
-    runs = tuple(t.get_list("runs", str, list(PAPER_RUNS),
-                            check=lambda v: None if v in PAPER_RUNS else
-                            f"must be one of {', '.join(PAPER_RUNS)}"))
+    runs = tuple(t.get_list("runs", str, list(PAPER_RUNS), check=_run_problem))
     each = t.get("each", bool, False)
     t.finish()
     return Target(statistic=statistic, minimum=minimum, maximum=maximum, above=above,
                   runs=runs, each=each)
+
+
+def run_scenario_path(run: str) -> Path:
+    """The scenario file of a target's run: ``exp1`` … ``exp5`` are the paper's, any other
+    name is a path under ``scenarios/`` without ``.toml``."""
+    return SCENARIOS_DIR / ("paper" if run in PAPER_RUNS else "") / f"{run}.toml"
+
+
+def _run_problem(run: str) -> str | None:
+    if run in PAPER_RUNS:
+        return None
+    if "\\" in run or run.startswith(("/", ".")) or ".." in run.split("/"):
+        return f"must be one of {', '.join(PAPER_RUNS)} or a scenario under scenarios/, got {run!r}"
+    if not run_scenario_path(run).is_file():
+        return (f"must be one of {', '.join(PAPER_RUNS)} or a scenario under scenarios/ "
+                f"(no {run}.toml there), got {run!r}")
+    return None
+
+
+def target_runs(machine: Machine) -> tuple[str, ...]:
+    """Every run a target of ``machine`` is taken over, in order of first mention."""
+    return tuple(dict.fromkeys(run for target in machine.targets for run in target.runs))
 
 
 def target_problems(machine: Machine,

@@ -59,6 +59,7 @@ UNIT_DEFINITIONS: dict[str, dict[str, float]] = {
     "m2": {"m": 2},
     "um": {"m": 1, "factor": 1e-6},
     "N": {"kg": 1, "m": 1, "s": -2},
+    "N/K": {"kg": 1, "m": 1, "s": -2, "K": -1},
     "N.m": {"kg": 1, "m": 2, "s": -2},
     "mm2/s": {"m": 2, "s": -1, "factor": 1e-6},
     "rev/min": {"rad": 1, "s": -1, "factor": 2 * math.pi / 60},
