@@ -13,6 +13,9 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 //   [D341] ASTM D341 (Walther): log10(log10(nu + 0.7)) = A - B log10(T), from nu_40 and nu_100.
 //   [ISO230] ISO 230-3: thermal tests with a test mandrel and a probe fixture on the table.
   //   [EST]  engineering estimate for a VMC-850 class machine (masses from similar designs).
+  //   [ST]   Stein & Tu (1994), thermally induced preload in spindle bearings, ASME J. Dyn. Syst.
+  //          Meas. Control 116; [LS] Li & Shin (2004), ASME J. Manuf. Sci. Eng. 126 (issue 20).
+  //   [LB]   Le & Bui (2023), grease versus air-oil lubrication of CNC spindle bearings, ETASR 13(5).
 
   package HeatTransfer "Thermal components named and connected like Modelica.Thermal.HeatTransfer"
 
@@ -276,8 +279,8 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     // ---- spindle-driven mechanisms (issue 20): a gain of 0 switches each off (docs/model.md) ----
     parameter Real front_preload_N_per_K(unit = "N/K", min = 0.0, max = 1.0e4) = 200.0 "Thermally induced preload of the front set per K of shaft (at the bearing) over housing seat [ST, LS]";
     parameter Real rear_preload_N_per_K(unit = "N/K", min = 0.0, max = 1.0e4) = 0.0 "Thermally induced preload of the rear set per K of shaft over housing seat (sliding outer rings relieve the axial part) [ST, LS]";
-    parameter Real G_bearing_air_ref(unit = "W/K", min = 0.0, max = 1.0e3) = 2.0 "Front bearing rings - air at n_ref: sealing-air purge and the air the rotating cage pumps through the labyrinth (oil-air: the lubricating air) [BT, JS]";
-    parameter Real k_bearing_air(unit = "1", min = 0.0, max = 2.0) = 0.8 "Exponent of the bearing-air conductance in speed [JS]";
+    parameter Real G_bearing_air_ref(unit = "W/K", min = 0.0, max = 1.0e3) = 2.0 "Front bearing rings - air at n_ref: sealing-air purge and the air the rotating cage pumps through the labyrinth (oil-air: the lubricating air) [BT, LB]";
+    parameter Real k_bearing_air(unit = "1", min = 0.0, max = 2.0) = 0.8 "Exponent of the bearing-air conductance in speed [EST]";
     // built-in motor (motorized spindle): rotor on the shaft between the bearings, stator in the housing
     parameter Real rotor_loss_fraction(unit = "1", min = 0.0, max = 1.0) = 0.0 "Share of the spindle motor losses released in the rotor on the shaft (0: separate belt-drive motor) [BT]";
     parameter Real rotor_front_share(unit = "1", min = 0.0, max = 1.0) = 0.5 "Share of the rotor heat entering the shaft at the front bearing's place, the rest at the rear's";
