@@ -35,7 +35,7 @@ test: $(STAMP)
 
 ## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
 notebooks: $(STAMP)
-	$(PY) -m spindlebench.course results/notebooks
+	$(PY) -m spindlebench.commands.course results/notebooks
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

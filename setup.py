@@ -2,8 +2,8 @@
 
 The FMU, the Modelica source and the scenarios live at the top of the repository, where the
 build and the users edit them. A wheel copies them into ``spindlebench/_data``, where
-``spindlebench.paths`` finds them when the package is not run from a checkout. An editable
-install needs no copy: ``spindlebench.paths`` uses the checkout itself.
+``spindlebench.core.paths`` finds them when the package is not run from a checkout. An editable
+install needs no copy: ``spindlebench.core.paths`` uses the checkout itself.
 """
 
 import shutil

@@ -30,8 +30,8 @@ from spindlebench.calibration.fitset import DEFAULT_FIT
 from spindlebench.calibration.mapping import read_map, recording_map_text
 from spindlebench.calibration.problem import Discretisation, calibrate
 from spindlebench.calibration.series import load_series
-from spindlebench.cli import main
-from spindlebench.modelica.equations import explicit_ode
+from spindlebench.commands.main import main
+from spindlebench.model.equations import explicit_ode
 
 ROOT = Path(__file__).resolve().parents[1]
 #: 10 of the default set (the table's expansion length and the Y feed loss left at default).

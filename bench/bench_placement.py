@@ -117,9 +117,9 @@ def peak_mb() -> float:
 def placement_case(n_nodes: int):
     """A placement study (tiny_placement.toml's family) whose candidates are ``n_nodes``
     synthetic nodes with all differences, fuzzy only, and its 1 + 8 design runs."""
-    from spindlebench.studies.experiments import experiments
+    from spindlebench.studies.family.experiments import experiments
     from spindlebench.studies.placement.candidates import Run
-    from spindlebench.studies.placement.study import load_placement_study
+    from spindlebench.studies.placement.placement_file import load_placement_study
 
     study = load_placement_study(TINY)
     study = dataclasses.replace(study, nodes=tuple(f"node{i}" for i in range(n_nodes)),

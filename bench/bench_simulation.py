@@ -9,7 +9,7 @@ Simulates the paper's experiment 1 (6 h, 1 s communication grid) in this process
    inputs held over each step, CVode stopped at every communication point;
 2. the same co-simulation done with SciPy: ``solve_ivp`` called for every communication step,
    on a Python function that evaluates the same equations
-   (``spindlebench.modelica.equations.explicit_ode``, a CasADi function);
+   (``spindlebench.model.equations.explicit_ode``, a CasADi function);
 3. for scale, not a co-simulation: one ``solve_ivp`` call over the whole run with the held
    inputs looked up inside the right-hand side; it strides over the communication points, so it
    only shows what the 21 600 input exchanges cost.
@@ -62,7 +62,7 @@ class Equations:
     """The model's explicit ODE as Python callables, with the run's inputs and parameters."""
 
     def __init__(self, scenario: Scenario, info: FmuInterface, parameters: Mapping[str, float]):
-        from spindlebench.modelica.equations import explicit_ode
+        from spindlebench.model.equations import explicit_ode
 
         segments = fmu_segments(info)
         model = (explicit_ode(ROOT / "models") if segments is None

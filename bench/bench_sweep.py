@@ -31,9 +31,9 @@ import time
 from pathlib import Path
 
 import pandas as pd
-from spindlebench.studies.executor import TaskRunner
-from spindlebench.studies.study import load_study
-from spindlebench.studies.sweep import Sweep, write_outputs
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.running.executor import TaskRunner
+from spindlebench.studies.sweep.sweep_run import Sweep, write_outputs
 
 STUDY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "season_sweep.toml"
 KEYS = ["replica", "data", "noise", "fault", "train_experiment", "method", "k", "test_experiment"]

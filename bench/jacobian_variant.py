@@ -25,7 +25,7 @@ from fmpy.sundials.libraries import sundials_cvode, sundials_sunmatrixdense
 from fmpy.sundials.nvector_serial import NV_DATA_S
 from fmpy.sundials.sundials_nvector import N_Vector
 from fmpy.sundials.sundials_types import sunrealtype
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.testbench.runner import FmuInterface, Simulation, co_simulate, inspect_fmu
 from spindlebench.testbench.scenario import Scenario
 

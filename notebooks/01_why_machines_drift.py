@@ -37,9 +37,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
-
-from spindlebench import course
-from spindlebench.course import spindlebench
+from spindlebench.commands import course
+from spindlebench.commands.course import spindlebench
 from spindlebench.formats.recording import read_recording
 
 work = course.start("01")  # this notebook's own files go into work/01

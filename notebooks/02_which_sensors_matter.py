@@ -34,11 +34,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import Image, display
 from scipy.cluster.hierarchy import dendrogram
-from spindlebench import course
-from spindlebench.course import spindlebench
+from spindlebench.commands import course
+from spindlebench.commands.course import spindlebench
+from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.formats.recording import read_recording
-from spindlebench.paper_study.figures import cut_height
-from spindlebench.paths import SCENARIOS_DIR
 from spindlebench.selection import (
     correlation_with,
     cut_for_clusters,
@@ -48,6 +47,7 @@ from spindlebench.selection import (
     similarity_matrix,
     transitive_closure,
 )
+from spindlebench.studies.paper.figures import cut_height
 
 work = course.start("02")
 

@@ -36,11 +36,10 @@ import tomllib
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
-
-from spindlebench import course
-from spindlebench.course import spindlebench
-from spindlebench.names import PAPER_SIX
-from spindlebench.paths import SCENARIOS_DIR
+from spindlebench.commands import course
+from spindlebench.commands.course import spindlebench
+from spindlebench.core.names import PAPER_SIX
+from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.formats.recording import read_recording
 from spindlebench.selection import evaluate, with_differences
 

@@ -31,9 +31,8 @@
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
-
-from spindlebench import course
-from spindlebench.course import spindlebench
+from spindlebench.commands import course
+from spindlebench.commands.course import spindlebench
 
 work = course.start("04")
 

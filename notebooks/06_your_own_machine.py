@@ -27,10 +27,9 @@
 import numpy as np
 import pandas as pd
 from IPython.display import Image, display
-
-from spindlebench import course
-from spindlebench.course import spindlebench
-from spindlebench.paths import SCENARIOS_DIR
+from spindlebench.commands import course
+from spindlebench.commands.course import spindlebench
+from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.formats.recording import default_sensors, read_recording
 from spindlebench.selection import correlation_with, evaluate, rises
 

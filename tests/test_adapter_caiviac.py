@@ -5,11 +5,11 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench import cli
 from spindlebench.adapters import caiviac
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import read_recording
-from spindlebench.provenance import sha256_file
 
 # The schedule as SOURCE.md documents it (0-based rows): the adapter derives it from spindle_rpm.
 DOCUMENTED = [  # (first row, first idle row, next run's first row, speeds)

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from conftest import MODELS
 from spindlebench.calibration.mapping import read_map, recording_map_text
-from spindlebench.cli import main
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands.main import main
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import read_recording
 
 OUTPUTS = [f"T{i}_C" for i in range(1, 21)] + ["drift_um", "node_housing_1_C",
@@ -134,7 +134,7 @@ def test_twin_recovery_and_held_out_prediction(twin):
 
 def test_calibrated_machine_runs_through_sweep_unchanged(twin, repo):
     """The machine file calibrate writes is a machine like the shipped ones."""
-    machines = pytest.importorskip("spindlebench.machines")
+    machines = pytest.importorskip("spindlebench.machines.variants")
     tmp_path, _ = twin
     machine_file = tmp_path / "machines" / "twin.toml"
     machine = machines.load_machine(str(machine_file))
@@ -149,7 +149,7 @@ def test_calibrated_machine_runs_through_sweep_unchanged(twin, repo):
 def test_fit_bounds_respect_the_fmus_declared_range():
     """A factor range that would leave the FMU's min/max is narrowed to it (h_nat <= 100)."""
     from spindlebench.calibration.problem import Discretisation
-    from spindlebench.modelica.equations import explicit_ode
+    from spindlebench.model.equations import explicit_ode
 
     ode = explicit_ode(MODELS, segments=2)
     assert ode.bounds["h_nat"][1] == 100.0

@@ -3,7 +3,8 @@
 import subprocess
 import sys
 
-from spindlebench import __version__, cli
+from spindlebench import __version__
+from spindlebench.commands import main as cli
 
 
 def test_version_flag_prints_version(capsys):
@@ -64,7 +65,7 @@ def test_warnings_are_one_line_each(capsys):
     """A warning from a sub-command prints as one 'warning:' line, not Python's source echo."""
     import warnings
 
-    from spindlebench.cli import print_warning
+    from spindlebench.core.console import print_warning
 
     with warnings.catch_warnings():
         warnings.showwarning = print_warning
@@ -114,7 +115,7 @@ def test_any_error_with_a_newline_is_collapsed(capsys):
     """The collapse is in cli, for every sub-command, not in each message."""
     import argparse
 
-    from spindlebench.errors import SpindlebenchError
+    from spindlebench.core.errors import SpindlebenchError
 
     def fail(_args):
         raise SpindlebenchError("first part\n  second part\r\n")

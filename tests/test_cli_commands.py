@@ -2,7 +2,7 @@
 
 import importlib
 
-from spindlebench import cli
+from spindlebench.commands import main as cli
 
 
 def test_every_module_registers_exactly_the_commands_the_table_names():

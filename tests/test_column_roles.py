@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.columns import ColumnRoles, choose, detect_dialect
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.formats.roles import ColumnRoles, choose, detect_dialect
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "other-logger"
 TARGET = "dz [um]"
@@ -194,7 +194,7 @@ def test_plot_takes_the_roles_and_needs_the_time_column(tmp_path, capsys):
 
 
 def test_plot_draws_only_the_named_sensors(tmp_path, capsys):
-    from spindlebench.formats.columns import read_with_roles
+    from spindlebench.formats.roles import read_with_roles
     from spindlebench.testbench.overview import recordings_figure
 
     roles = ColumnRoles(time_column="Time [s]", sensors=("Spindle*",), exclude=("*[rpm]",))
@@ -292,7 +292,7 @@ def test_every_command_that_reads_recordings_has_the_role_flags():
 def test_the_copy_screen_refuses_the_same_first_sensor_as_one_by_one():
     """refuse_target_copies clears most sensors from |r| of all at once: the sensor it
     refuses (and its |r|) is the one the one-by-one np.corrcoef check refuses."""
-    from spindlebench.formats.columns import COPY_R, refuse_target_copies
+    from spindlebench.formats.roles import COPY_R, refuse_target_copies
 
     def one_by_one(frame, names):
         y = frame["y"].to_numpy()

@@ -9,16 +9,16 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench import cli
-from spindlebench.compensation.controller import (
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.compensation.compensation_file import load_compensation
+from spindlebench.studies.compensation.controller import (
     ControllerSettings,
     FaultMonitor,
     applied_offset,
     detect_faults,
 )
-from spindlebench.compensation.loop import plan_days, run_loop, simulate_days, summary
-from spindlebench.compensation.study import load_compensation
-from spindlebench.errors import SpindlebenchError
+from spindlebench.studies.compensation.loop import plan_days, run_loop, simulate_days, summary
 
 TINY = REPO / "scenarios" / "studies" / "tiny_compensate.toml"
 
@@ -159,8 +159,8 @@ def test_continuous_days_carry_the_machine_state_and_keep_the_days_air(tiny):
     same air as the cold-start day (the air of working hours is the day's own weather)."""
     from dataclasses import replace
 
-    from spindlebench.compensation.continuous import continuous_scenario
-    from spindlebench.studies.experiments import ambient_for
+    from spindlebench.studies.compensation.continuous import continuous_scenario
+    from spindlebench.studies.family.experiments import ambient_for
     from spindlebench.testbench.drivers import ambient_C
 
     study, truths = tiny
@@ -187,7 +187,7 @@ def test_continuous_days_carry_the_machine_state_and_keep_the_days_air(tiny):
 
 
 def test_a_stuck_sensor_stays_stuck_on_the_following_days(tiny):
-    from spindlebench.compensation.loop import measure_days
+    from spindlebench.studies.compensation.loop import measure_days
 
     study, truths = tiny
     frames = measure_days(study, truths)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO
-from spindlebench import cli
+from spindlebench.commands import main as cli
 
 ROOT = REPO
 PAPER = ROOT / "scenarios" / "paper"
@@ -14,7 +14,7 @@ PAPER = ROOT / "scenarios" / "paper"
 @pytest.fixture
 def no_build(monkeypatch):
     """Fail loudly if the demo gets as far as building."""
-    from spindlebench import demo
+    from spindlebench.commands import demo
 
     def refuse(argv):
         raise AssertionError(f"demo ran {argv} before checking its inputs")

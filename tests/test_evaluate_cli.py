@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from selection_data import REAL_RECORDING, experiment_files
-from spindlebench import cli
+from spindlebench.commands import main as cli
 from spindlebench.selection import SelectionWarning, evaluate
 
 KEYS = ["selected", "psi", "eta", "clusters", "coefficients", "r2", "rmse_um", "mean_rmse_um",

@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import QUICK as QUICK_BASE
-from spindlebench import cli
-from spindlebench.fingerprint import KEYS, fingerprint
-from spindlebench.fingerprint_reference import KEY_FILE, cached_reference
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.commands import main as cli
+from spindlebench.core.paths import DEFAULT_FMU
+from spindlebench.studies.fingerprint.reference import KEY_FILE, cached_reference
+from spindlebench.studies.fingerprint.statistics import KEYS, fingerprint
 
 # The hand-made recording: 11 samples, one a minute.
 #   T1 (fast) rises 0, 5, 8, then stays at 10        (offset 20 °C)
@@ -239,8 +239,8 @@ def test_runs_on_the_caiviac_runs(tmp_path, capsys):
 
 
 def test_reference_key_changes_with_the_testbench_code(monkeypatch):
-    from spindlebench import fingerprint_reference as reference
-    from spindlebench.provenance import source_sha256
+    from spindlebench.core.provenance import source_sha256
+    from spindlebench.studies.fingerprint import reference
 
     before = reference.inputs_key()
     assert before["code_sha256"] == source_sha256(*reference.REFERENCE_CODE)

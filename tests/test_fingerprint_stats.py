@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-from spindlebench.errors import SpindlebenchError
-from spindlebench.fingerprint import KEYS, final, fingerprint, smooth, t63
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.fingerprint.statistics import KEYS, final, fingerprint, smooth, t63
 
 
 def test_smooth_window_shrinks_at_the_edges():

@@ -13,10 +13,11 @@ import pytest
 from conftest import REPO
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Model
-from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica.build import build_fmu, output_path
-from spindlebench.modelica.cold_start import cold_start, rise
-from spindlebench.modelica.equations import explicit_ode
+from spindlebench.commands.build import output_path
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.model.build import build_fmu
+from spindlebench.model.cold_start import cold_start, rise
+from spindlebench.model.equations import explicit_ode
 
 ROOT = REPO
 MODELS = ROOT / "models"
@@ -120,7 +121,7 @@ def test_build_command_rejects_bad_segments_in_one_line(tmp_path):
         [
             sys.executable,
             "-m",
-            "spindlebench.cli",
+            "spindlebench.commands.main",
             "build",
             "--segments",
             "1",
@@ -139,7 +140,7 @@ def test_build_command_rejects_bad_segments_in_one_line(tmp_path):
 
 def test_build_command_refuses_too_many_segments_before_building(tmp_path, capsys):
     """--segments 100000 ran for minutes; the model is meant for 2 to 50."""
-    from spindlebench import cli
+    from spindlebench.commands import main as cli
 
     assert cli.main(["build", "--segments", "100000", "--out", str(tmp_path)]) == 2
     assert capsys.readouterr().err == "error: --segments: must be from 2 to 50, got 100000\n"
@@ -183,8 +184,8 @@ def test_build_with_other_segments_keeps_the_default_fmu(coarse, tmp_path, monke
     """
     import shutil
 
-    from spindlebench import cli
-    from spindlebench.modelica import build
+    from spindlebench.commands import main as cli
+    from spindlebench.model import build
 
     def fake_build(model_dir, out_path, segments):
         assert segments == 6

@@ -7,7 +7,7 @@ import pytest
 from conftest import FMU
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-from spindlebench.modelica.cold_start import cold_start, state_names
+from spindlebench.model.cold_start import cold_start, state_names
 
 
 @pytest.fixture(scope="module")

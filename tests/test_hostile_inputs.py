@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from conftest import QUICK, REPO
 from selection_data import synthetic_experiment
-from spindlebench import cli
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.commands import main as cli
+from spindlebench.core.paths import DEFAULT_FMU
 
 TINY = (REPO / "scenarios" / "studies" / "tiny_sweep.toml").read_text(encoding="utf-8")
 

@@ -17,7 +17,8 @@ def test_installed_wheel_runs_the_demo_from_another_folder(tmp_path):
     elsewhere.mkdir()
     env = {**os.environ, "PYTHONPATH": str(site)}
     where = subprocess.run(
-        [sys.executable, "-c", "import spindlebench.paths as p; print(p.__file__, p.DEFAULT_FMU)"],
+        [sys.executable, "-c",
+         "import spindlebench.core.paths as p; print(p.__file__, p.DEFAULT_FMU)"],
         check=True, cwd=elsewhere, env=env, capture_output=True, text=True).stdout.split()
     assert where[0].startswith(str(site)), where  # the installed copy, not the checkout
     assert where[1].startswith(str(site)), where

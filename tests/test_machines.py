@@ -5,10 +5,9 @@ import json
 
 import pytest
 from conftest import FMU, SCENARIOS
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
-from spindlebench.machine_check import machine_fingerprints
-from spindlebench.machines import (
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.machines.variants import (
     DEFAULT_MACHINE,
     Target,
     load_machine,
@@ -16,6 +15,7 @@ from spindlebench.machines import (
     target_problems,
     target_runs,
 )
+from spindlebench.studies.fingerprint.machine_check import machine_fingerprints
 from spindlebench.testbench.runner import inspect_fmu, parameter_values
 from spindlebench.testbench.scenario import load_scenario, with_machine
 
@@ -110,8 +110,8 @@ def test_machine_value_outside_the_fmu_bounds_is_refused(tmp_path):
 
 
 def test_a_study_names_its_machine_and_every_run_uses_it(tmp_path):
-    from spindlebench.studies.experiments import experiments, scenario_for
-    from spindlebench.studies.study import load_study, pinned_content
+    from spindlebench.studies.family.experiments import experiments, scenario_for
+    from spindlebench.studies.family.family_file import load_study, pinned_content
 
     tiny = SCENARIOS / "studies" / "tiny_sweep.toml"
     assert load_study(tiny).machine.name == DEFAULT_MACHINE
@@ -133,7 +133,7 @@ def test_a_study_names_its_machine_and_every_run_uses_it(tmp_path):
 
 def test_a_study_can_run_over_machines(tmp_path):
     """[axes] machines: the study runs once per machine, each into its own folder."""
-    from spindlebench.studies.study import load_study, machine_runs
+    from spindlebench.studies.family.family_file import load_study, machine_runs
 
     tiny = SCENARIOS / "studies" / "tiny_sweep.toml"
     text = tiny.read_text().replace("[axes]\n", '[axes]\nmachines = ["default", '

@@ -3,8 +3,8 @@
 import casadi as ca
 import numpy as np
 import pytest
-from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica.causalise import solve_explicitly, strongly_connected_blocks
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.model.causalise import solve_explicitly, strongly_connected_blocks
 
 
 def symbols(*names):

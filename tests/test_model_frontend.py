@@ -4,9 +4,9 @@ from pathlib import Path
 
 import pytest
 from conftest import MODELS
-from spindlebench.errors import SpindlebenchError
-from spindlebench.modelica import MODEL_FILE
-from spindlebench.modelica.frontend import model_source, translate, validate
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.model import MODEL_FILE
+from spindlebench.model.frontend import model_source, translate, validate
 
 
 def broken_copy(tmp_path: Path, old: str, new: str) -> Path:
@@ -80,7 +80,7 @@ def test_segments_must_be_an_integer_of_at_least_two(segments):
 
 
 def test_missing_equation_is_reported_with_the_file(tmp_path):
-    from spindlebench.modelica.equations import explicit_ode
+    from spindlebench.model.equations import explicit_ode
 
     folder = broken_copy(tmp_path, "    T2_C = sensor_T2.T - 273.15;\n", "")
     with pytest.raises(SpindlebenchError, match=r"not balanced.*no equation for: T2_C"):

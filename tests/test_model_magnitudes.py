@@ -3,7 +3,7 @@
 
 import pytest
 from conftest import FMU
-from spindlebench.modelica.cold_start import cold_start, rise
+from spindlebench.model.cold_start import cold_start, rise
 
 SPINDLE_NEAR = ("T1_C", "T2_C", "T3_C", "T5_C", "T8_C")
 FEED_AND_STRUCTURE = ("T6_C", "T11_C", "T13_C", "T16_C", "T20_C")

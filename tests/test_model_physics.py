@@ -6,7 +6,7 @@ import pytest
 from conftest import MODELS
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
-from spindlebench.modelica.equations import explicit_ode
+from spindlebench.model.equations import explicit_ode
 
 SOURCES = (
     "Q_front_bearing_W",

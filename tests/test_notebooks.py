@@ -1,6 +1,6 @@
 """The course notebooks execute from top to bottom (the real commands, the real FMU).
 
-Each notebook runs in a fresh kernel of this venv (``spindlebench.course.execute``, as
+Each notebook runs in a fresh kernel of this venv (``spindlebench.commands.course.execute``, as
 ``make notebooks`` does), in a temporary working folder. The kernels are single-threaded
 work, so two notebooks run at a time (the machine has two cores); each test then checks
 one notebook's result. A failing cell fails that notebook's test with its traceback.
@@ -9,7 +9,7 @@ one notebook's result. A failing cell fails that notebook's test with its traceb
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
-from spindlebench.course import NOTEBOOKS, execute, notebook_files
+from spindlebench.commands.course import NOTEBOOKS, execute, notebook_files
 
 NOTEBOOK_FILES = notebook_files()
 
@@ -46,8 +46,8 @@ def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, execu
 
 
 def test_render_writes_each_notebook_as_html_with_its_figures_and_an_index(tmp_path):
-    """``make notebooks`` (``spindlebench.course.render``) on a one-cell course."""
-    from spindlebench.course import render
+    """``make notebooks`` (``spindlebench.commands.course.render``) on a one-cell course."""
+    from spindlebench.commands.course import render
 
     course = tmp_path / "course"
     course.mkdir()

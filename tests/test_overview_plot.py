@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.colors import to_rgba
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import MODELS_DIR, SCENARIOS_DIR
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import MODELS_DIR, SCENARIOS_DIR
 from spindlebench.testbench.overview import (
     overview_figure,
     plot_recording,

@@ -6,16 +6,16 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy.cluster.hierarchy import fcluster
-from spindlebench import cli
 from spindlebench.adapters import caiviac
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import GROUPS, PAPER_SIX
 from spindlebench.formats.recording import read_recording
-from spindlebench.names import GROUPS, PAPER_SIX
-from spindlebench.paper_study import config as study_config
-from spindlebench.paper_study import reference
-from spindlebench.paper_study.figures import cut_height
-from spindlebench.paper_study.study import choose_six, run_study
 from spindlebench.selection import evaluate, linkage_from_similarity
+from spindlebench.studies.paper import config as study_config
+from spindlebench.studies.paper import reference
+from spindlebench.studies.paper.analysis import choose_six, run_study
+from spindlebench.studies.paper.figures import cut_height
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 FIGURES = [
@@ -343,7 +343,7 @@ def test_figures_label_the_quantity_and_keep_legends_off_the_data(generated, mon
     """Fig. 3/5 say 'thermal error (µm)' (the column in the title); legends sit right of the
     axes (inside they hid curves and branches); the dendrogram legend says each line is the
     cut for k, with its η."""
-    from spindlebench.paper_study import figures
+    from spindlebench.studies.paper import figures
 
     folder, _ = generated
     drawn = {}

@@ -14,13 +14,14 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.selection import SelectionWarning, pairs
 from spindlebench.selection.registry import PAPER_METHOD, select_each, select_with
 from spindlebench.selection.regression import rises
-from spindlebench.studies.experiments import experiments
+from spindlebench.studies.family.experiments import experiments
 from spindlebench.studies.placement import placements
 from spindlebench.studies.placement.candidates import Run, candidate_columns, candidate_set
+from spindlebench.studies.placement.placement_file import load_placement_study
 from spindlebench.studies.placement.placements import (
     Design,
     exhaustive_placements,
@@ -28,7 +29,6 @@ from spindlebench.studies.placement.placements import (
     fuzzy_placements,
 )
 from spindlebench.studies.placement.search import Block, exhaustive_search, usable_candidates
-from spindlebench.studies.placement.study import load_placement_study
 
 TINY = REPO / "scenarios" / "studies" / "tiny_placement.toml"
 
@@ -160,7 +160,7 @@ def test_greedy_over_too_large_a_design_is_refused_in_one_line(small_study, monk
     study = dataclasses.replace(small_study, methods=("fuzzy", "greedy"),
                                 with_differences=(False, True))
     runs = field_runs(study, 14, 3, 40)
-    monkeypatch.setattr(placements, "GREEDY_MAX_VALUES", 14 * 120)  # nodes pass, 105 do not
+    monkeypatch.setattr(placements, "FORWARD_SEARCH_MAX_VALUES", 14 * 120)  # nodes pass, 105 do not
     with pytest.raises(SpindlebenchError) as caught:
         find_placements(study, runs[:1], runs[1:])
     message = str(caught.value)

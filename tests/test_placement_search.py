@@ -9,9 +9,10 @@ import itertools
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.selection import CandidateSet
 from spindlebench.studies.placement.candidates import physical_nodes
+from spindlebench.studies.placement.placement_file import fmu_nodes
 from spindlebench.studies.placement.schematic import node_positions
 from spindlebench.studies.placement.search import (
     Block,
@@ -20,7 +21,6 @@ from spindlebench.studies.placement.search import (
     subset_batches,
     validation_score,
 )
-from spindlebench.studies.placement.study import fmu_nodes
 
 
 def synthetic_runs(rng, n_runs, n_samples, n_nodes, true_columns, coefficients, noise=0.05):
@@ -156,7 +156,7 @@ def test_schematic_places_every_node_of_the_model_on_its_part():
 
 
 def test_findings_name_the_budgets_a_method_wins():
-    from spindlebench.studies.placement.report import findings
+    from spindlebench.studies.placement.placement_report import findings
 
     rows = [  # greedy wins at m = 3 only; at m = 2 fuzzy is better
         ("fuzzy", 2, 0.8), ("greedy", 2, 0.9), ("fuzzy", 3, 0.8), ("greedy", 3, 0.7),

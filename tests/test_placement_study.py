@@ -9,12 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench.cli import main
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.commands.main import main
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.studies.placement.candidates import candidate_set
-from spindlebench.studies.placement.run import PlacementStudyRun
-from spindlebench.studies.placement.study import fmu_nodes, load_placement_study
+from spindlebench.studies.placement.placement_file import fmu_nodes, load_placement_study
+from spindlebench.studies.placement.placement_run import PlacementStudyRun
 
 TINY = REPO / "scenarios" / "studies" / "tiny_placement.toml"
 SHIPPED = REPO / "scenarios" / "studies" / "placement.toml"
@@ -203,7 +203,7 @@ def test_missing_placement_table_and_file(tmp_path):
 def test_when_every_run_fails_the_error_is_one_short_line(tmp_path, capsys, monkeypatch):
     import dataclasses
 
-    from spindlebench.studies import simulations
+    from spindlebench.studies.running import simulations
 
     def broken(*args):
         return dataclasses.replace(real(*args), parameters={"no_such_parameter": 1.0})

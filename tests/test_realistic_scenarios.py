@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import KELVIN_OFFSET
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import KELVIN_OFFSET
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.testbench import soak
 from spindlebench.testbench.drivers import ambient_C, weather_anomaly_K
 from spindlebench.testbench.scenario import (
@@ -282,7 +282,7 @@ def test_a_soaked_run_starts_from_the_history_reproducibly(tmp_path, soak_cache)
 
 
 def test_shipped_realistic_example_and_study_load():
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family.family_file import load_study
 
     root = Path(__file__).parents[1]
     study = load_study(root / "scenarios" / "studies" / "season_sweep_realistic.toml")
@@ -306,8 +306,8 @@ def _tiny(tmp_path: Path, old: str, new: str) -> Path:
 
 
 def test_a_sweep_soaks_once_per_month_and_draws_indoor_weather_per_run(tmp_path):
-    from spindlebench.studies import experiments as ex
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family import experiments as ex
+    from spindlebench.studies.family.family_file import load_study
 
     study = load_study(_tiny(
         tmp_path, "weather_sd_C = 1.0\n",
@@ -329,8 +329,8 @@ def test_a_sweep_soaks_once_per_month_and_draws_indoor_weather_per_run(tmp_path)
 
 
 def test_a_sweep_noise_level_carries_the_noise_process(tmp_path):
-    from spindlebench.studies import experiments as ex
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family import experiments as ex
+    from spindlebench.studies.family.family_file import load_study
 
     study = load_study(_tiny(tmp_path, "[noise.lab]\nnoise_C = 0.05\n",
                              '[noise.lab]\nnoise_C = 0.05\nnoise_kind = "ar1"\n'
@@ -353,7 +353,7 @@ def test_a_sweep_noise_level_carries_the_noise_process(tmp_path):
      "noise.lab.noise_lag1"),
 ])
 def test_bad_realism_study_keys_are_one_line(tmp_path, old, new, key):
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family.family_file import load_study
 
     with pytest.raises(SpindlebenchError, match=f"key '{key}'"):
         load_study(_tiny(tmp_path, old, new))

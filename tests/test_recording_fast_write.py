@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import QUICK
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import (
     TRUTH_COLUMNS,
     read_back,
@@ -13,7 +14,6 @@ from spindlebench.formats.recording import (
     write_csv,
     write_recording,
 )
-from spindlebench.paths import DEFAULT_FMU
 from spindlebench.testbench.scenario import load_scenario
 from spindlebench.testbench.simulate import record
 

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from conftest import REPO, SHARED_RECORDINGS
 from spindlebench.formats import recording
-from spindlebench.formats.columns import (
+from spindlebench.formats.recording import read_recording, read_table
+from spindlebench.formats.roles import (
     ColumnRoles,
     detect_dialect,
     read_table_with_roles,
     read_with_roles,
 )
-from spindlebench.formats.recording import read_recording, read_table
 
 REAL = SHARED_RECORDINGS
 EXAMPLES = sorted((REPO / "docs" / "examples").rglob("*.csv"))

@@ -5,9 +5,9 @@ import os
 
 import pandas as pd
 import pytest
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import write_recording
-from spindlebench.provenance import sha256_file
 
 FRAME = pd.DataFrame({"time_s": [0.0, 60.0], "T1": [20.0, 20.5]})
 

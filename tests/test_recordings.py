@@ -4,7 +4,7 @@ file, line and column for every kind of bad input."""
 import numpy as np
 import pytest
 from selection_data import REAL_RECORDING, synthetic_experiment
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import default_sensors, read_recording
 
 GOOD = "time_s,T1,T2,drift_um\n0,20.0,21.0,0.0\n15,20.5,21.1,1.5\n30,21.0,21.3,2.5\n"

@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import QUICK
-from spindlebench import cli
-from spindlebench.atomic import atomic_path, write_text
+from spindlebench.commands import main as cli
+from spindlebench.core.atomic import atomic_path, write_text
 from spindlebench.selection.similarity import constant_columns
-from spindlebench.studies.store import ResultStore
+from spindlebench.studies.running.store import ResultStore
 from spindlebench.testbench.runner import DEFAULT_FMU, declared_bounds, inspect_fmu
 
 #: A month at 60 s steps: minutes of simulation, long enough to be interrupted.
@@ -37,7 +37,7 @@ LONG = QUICK.replace("duration_s = 600", "duration_s = 7776000").replace(
 
 def spindlebench(*args: str, env: dict[str, str] | None = None, **kwargs) -> subprocess.Popen:
     """The installed command line in a child process (its own signals, its own stderr)."""
-    return subprocess.Popen([sys.executable, "-m", "spindlebench.cli", *args],
+    return subprocess.Popen([sys.executable, "-m", "spindlebench.commands.main", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, **(env or {})}, **kwargs)
 
@@ -193,7 +193,7 @@ def test_a_refused_write_names_the_file_being_written(tmp_path):
         "import resource, signal, sys\n"
         "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
         "resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))\n"
-        "from spindlebench.atomic import write_text\n"
+        "from spindlebench.core.atomic import write_text\n"
         f"write_text({str(target)!r}, 'x' * 100000)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode != 0
@@ -229,7 +229,7 @@ def test_cli_prints_the_named_file_of_a_refused_write(tmp_path):
 def test_a_killed_writer_leaves_a_part_file_that_the_next_write_removes(tmp_path):
     target = tmp_path / "a.csv"
     code = ("import os, signal\n"
-            "from spindlebench.atomic import atomic_path\n"
+            "from spindlebench.core.atomic import atomic_path\n"
             f"with atomic_path({str(target)!r}) as tmp:\n"
             "    tmp.write_text('half')\n"
             "    os.kill(os.getpid(), signal.SIGKILL)\n")
@@ -344,7 +344,7 @@ def test_a_second_study_process_in_a_locked_folder_is_refused_naming_the_holder(
     out = tmp_path / "sweep"
     holder = subprocess.Popen(
         [sys.executable, "-c", "import sys, time\n"
-         "from spindlebench.studies.store import ResultStore\n"
+         "from spindlebench.studies.running.store import ResultStore\n"
          f"ResultStore({str(out)!r}).claim({{}}, {{}})\n"
          "print('locked', flush=True)\n"
          "time.sleep(600)\n"], stdout=subprocess.PIPE, text=True)
@@ -384,7 +384,7 @@ def session_processes(sid: int) -> list[int]:
 
 def test_kill_9_of_a_sweep_leaves_no_worker_forkserver_or_tracker_behind(tmp_path):
     # no pipes: orphans holding them would block the test instead of failing it
-    child = subprocess.Popen([sys.executable, "-m", "spindlebench.cli", "sweep", str(TINY), "-o",
+    child = subprocess.Popen([sys.executable, "-m", "spindlebench", "sweep", str(TINY), "-o",
                               str(tmp_path / "sweep"), "--workers", "2", "--no-progress"],
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                              start_new_session=True)
@@ -550,8 +550,8 @@ def test_an_unknown_unit_is_file_and_line(tmp_path):
 
 
 def test_a_unit_error_in_an_equation_is_file_and_line(tmp_path):
-    from spindlebench.errors import SpindlebenchError
-    from spindlebench.modelica.frontend import translate
+    from spindlebench.core.errors import SpindlebenchError
+    from spindlebench.model.frontend import translate
 
     models = edited_models(tmp_path, "T20_C = sensor_T20.T - 273.15;",
                            "T20_C = sensor_T20.T - 273.15 + sensor_T20.port.Q_flow;")
@@ -602,8 +602,8 @@ def small_model_error(tmp_path: Path, old: str, new: str) -> tuple[str, int]:
     import pymoca.ast
     import pymoca.parser
     import pymoca.tree
-    from spindlebench.errors import SpindlebenchError
-    from spindlebench.modelica.units import check_connections, check_equations
+    from spindlebench.core.errors import SpindlebenchError
+    from spindlebench.model.units import check_connections, check_equations
 
     assert old in SMALL
     text = SMALL.replace(old, new, 1)
@@ -624,7 +624,7 @@ def test_the_small_model_passes_the_unit_check(tmp_path):
     import pymoca.ast
     import pymoca.parser
     import pymoca.tree
-    from spindlebench.modelica.units import check_connections, check_equations
+    from spindlebench.model.units import check_connections, check_equations
 
     tree = pymoca.parser.parse(SMALL, bypass_cache=True)
     check_connections(tree, tmp_path / "P.mo")
@@ -675,7 +675,7 @@ def test_an_empirical_law_is_exempt_only_where_its_equation_says_so(tmp_path):
     import pymoca.ast
     import pymoca.parser
     import pymoca.tree
-    from spindlebench.modelica.units import EMPIRICAL, check_equations
+    from spindlebench.model.units import EMPIRICAL, check_equations
 
     text = SMALL.replace("y = exp(k * 0.5);", f'y = exp(L) "{EMPIRICAL}: L in m";')
     flat = pymoca.tree.flatten(pymoca.parser.parse(text, bypass_cache=True),
@@ -687,8 +687,8 @@ def test_an_empirical_law_is_exempt_only_where_its_equation_says_so(tmp_path):
 
 
 def test_the_shipped_model_passes_the_unit_check():
-    from spindlebench.modelica.frontend import model_source, translate
-    from spindlebench.modelica.units import check_declared_units, dimension_of
+    from spindlebench.model.frontend import model_source, translate
+    from spindlebench.model.units import check_declared_units, dimension_of
 
     check_declared_units(model_source(MODELS))
     assert dimension_of("W/(m2.K)") == dimension_of("W") / dimension_of("m2") / dimension_of("K")

@@ -11,9 +11,9 @@ import fmpy
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import DEFAULT_FMU
-from spindlebench.provenance import sha256_file
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU
+from spindlebench.core.provenance import sha256_file
 from spindlebench.testbench import simulate_scenario
 from spindlebench.testbench.runner import co_simulate, inspect_fmu
 from spindlebench.testbench.scenario import load_scenario
@@ -117,7 +117,7 @@ def test_sidecar_carries_provenance_and_end_state(quick_run):
 
 
 def fmpy_sha(path):
-    from spindlebench.provenance import sha256_file
+    from spindlebench.core.provenance import sha256_file
 
     return sha256_file(path)
 

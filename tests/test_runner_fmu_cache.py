@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 from conftest import QUICK
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.testbench import runner
 from spindlebench.testbench.scenario import load_scenario
 
@@ -44,7 +44,7 @@ def test_one_extraction_per_process_gives_the_same_simulation(tmp_path):
 
 SCRIPT = """
 import concurrent.futures as cf, multiprocessing, sys
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.testbench import runner
 from spindlebench.testbench.scenario import load_scenario
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.testbench.runner import co_simulate, solver_stops
 from spindlebench.testbench.scenario import InitialState, load_scenario
 

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import REPO
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.testbench import drivers
 from spindlebench.testbench.scenario import (
     ConstantFeed,

@@ -269,7 +269,7 @@ def test_every_selector_composes_with_every_regressor(selector, regressor):
 # --- the registry, evaluate --method and spindlebench methods --------------------------------
 
 def test_method_labels_round_trip_and_refuse_nonsense():
-    from spindlebench.names import METHODS, REGRESSORS
+    from spindlebench.core.names import METHODS, REGRESSORS
     from spindlebench.selection.registry import MethodChoice, parse_method
 
     for method in METHODS:
@@ -305,7 +305,7 @@ def test_evaluate_every_method_against_a_pipeline(tmp_path):
 def test_cli_evaluate_method_within_regressor(tmp_path, capsys):
     import json
 
-    from spindlebench import cli
+    from spindlebench.commands import main as cli
 
     train, *tests = experiment_files(tmp_path)
     out = tmp_path / "r.json"
@@ -328,8 +328,8 @@ def test_cli_evaluate_method_within_regressor(tmp_path, capsys):
 
 
 def test_cli_methods_lists_every_name(capsys):
-    from spindlebench import cli
-    from spindlebench.names import METHODS, REGRESSORS, WITHIN
+    from spindlebench.commands import main as cli
+    from spindlebench.core.names import METHODS, REGRESSORS, WITHIN
 
     assert cli.main(["methods"]) == 0
     printed = capsys.readouterr().out

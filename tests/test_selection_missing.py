@@ -8,13 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import MissingValueError, read_recording
-from spindlebench.paper_study import config as study_config
-from spindlebench.paper_study.study import run_study
-from spindlebench.paths import DEFAULT_FMU
 from spindlebench.selection import SelectionError, SelectionWarning, evaluate
+from spindlebench.studies.paper import config as study_config
+from spindlebench.studies.paper.analysis import run_study
 
 FAULT_EXAMPLE = REPO / "scenarios" / "examples" / "sensor_faults.toml"
 SENSORS = [f"T{i}" for i in range(1, 21)]

@@ -1,7 +1,7 @@
 """Shared helpers: atomic writes and provenance."""
 
 import pytest
-from spindlebench import atomic, provenance
+from spindlebench.core import atomic, provenance
 
 
 def test_atomic_write_leaves_old_file_on_failure(tmp_path):

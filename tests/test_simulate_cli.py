@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 from conftest import QUICK as QUICK_10S_STEP
 from conftest import REPO
-from spindlebench import cli
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.commands import main as cli
+from spindlebench.core.paths import DEFAULT_FMU
 
 #: conftest's 10-minute scenario at a 1 s communication step.
 QUICK = QUICK_10S_STEP.replace("step_s = 10.0", "step_s = 1.0")
@@ -214,7 +214,7 @@ def test_two_scenarios_writing_one_recording_are_refused(tmp_path, capsys):
 
 def test_shipped_examples_plan_day1_before_its_continuation():
     """The real example folder, planned (not simulated) for a fresh output folder."""
-    from spindlebench.testbench.simulate import plan_batch
+    from spindlebench.testbench.batch import plan_batch
 
     examples = REPO / "scenarios" / "examples"
     files = sorted(examples.glob("*.toml"))

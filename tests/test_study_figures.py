@@ -9,11 +9,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench.paths import DEFAULT_FMU
-from spindlebench.studies import plots
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.studies.placement import schematic
+from spindlebench.studies.placement.placement_file import fmu_nodes
 from spindlebench.studies.placement.placements import Placement
-from spindlebench.studies.placement.study import fmu_nodes
+from spindlebench.studies.sweep import sweep_plots as plots
 
 
 @pytest.fixture

@@ -7,8 +7,8 @@ import os
 import distributed
 import pytest
 from conftest import REPO
-from spindlebench.errors import SpindlebenchError
-from spindlebench.studies.executor import Task, TaskRunner, one_line_error
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.running.executor import Task, TaskRunner, one_line_error
 
 
 def square(x: int) -> int:
@@ -98,7 +98,7 @@ def test_one_line_error_is_short_and_single_line():
 @pytest.mark.parametrize("command", ["sweep", "place"])
 def test_a_study_name_that_is_no_folder_name_is_refused_without_o(tmp_path, monkeypatch,
                                                                   capsys, name, command):
-    from spindlebench import cli
+    from spindlebench.commands import main as cli
 
     repo = REPO
     tiny = repo / "scenarios" / "studies" / ("tiny_sweep.toml" if command == "sweep"
@@ -121,9 +121,9 @@ def test_an_unreachable_scheduler_fails_before_the_results_folder_is_made(tmp_pa
                                                                          capsys, command):
     import functools
 
-    from spindlebench import cli
-    from spindlebench.studies import sweep
-    from spindlebench.studies.placement import run as place
+    from spindlebench.commands import main as cli
+    from spindlebench.studies.placement import placement_run as place
+    from spindlebench.studies.sweep import sweep_run as sweep
 
     for module in (sweep, place):  # a short connect timeout keeps the test fast
         monkeypatch.setattr(module, "TaskRunner", functools.partial(TaskRunner,

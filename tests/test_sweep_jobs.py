@@ -9,12 +9,12 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench.studies import jobs
-from spindlebench.studies.executor import TaskRunner
-from spindlebench.studies.jobs import evaluate_job, measured_frame
-from spindlebench.studies.methods import score_all
-from spindlebench.studies.study import load_study
-from spindlebench.studies.sweep import Sweep, evaluation_path
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.family.methods import score_all
+from spindlebench.studies.running import jobs
+from spindlebench.studies.running.executor import TaskRunner
+from spindlebench.studies.running.jobs import evaluate_job, measured_frame
+from spindlebench.studies.sweep.sweep_run import Sweep, evaluation_path
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 
@@ -148,7 +148,7 @@ def _grown_frame(job, train, tests, rows):
     ([2, None], [float("nan")] * 2, "simulation failed: y"),
 ])
 def test_result_frame_is_the_grown_frame_to_the_byte(swept, tmp_path, ks, rmse, error):
-    from spindlebench.studies.store import ResultStore
+    from spindlebench.studies.running.store import ResultStore
 
     sweep, _ = swept
     job = sweep.evaluation_task(1, sweep.conditions[0], sweep.trains).args[0]

@@ -7,11 +7,11 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import SENSORS
-from spindlebench.studies.methods import MethodSpec, method_specs, run_method
-from spindlebench.studies.study import load_study
-from spindlebench.studies.summary import rank_by_slice
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import SENSORS
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.family.methods import MethodSpec, method_specs, run_method
+from spindlebench.studies.sweep.summary import rank_by_slice
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 
@@ -110,7 +110,7 @@ def _old_scores(train, tests, spec, similarity="abs-pearson"):
     from spindlebench.selection import PairwiseDifferences, correlation_with, evaluate, fit_ols
     from spindlebench.selection.regression import rises, rmse
     from spindlebench.selection.regressors import blocked_cv_alpha
-    from spindlebench.studies.methods import GROUP_SENSORS, SIX_DIFF
+    from spindlebench.studies.family.methods import GROUP_SENSORS, SIX_DIFF
 
     train = train.copy()
     tests = {name: frame.copy() for name, frame in tests.items()}
@@ -152,7 +152,7 @@ def test_one_pass_scores_equal_each_method_on_its_own_frames(tmp_path):
     """score_all converts and checks the recordings once for every method and k: its scores
     are those of each method run alone on fresh frames, to the last bit; also with a test
     run that lost a sensor for good (NaN column) and one with a gap (NaN rows)."""
-    from spindlebench.studies.methods import score_all
+    from spindlebench.studies.family.methods import score_all
 
     study = _study(tmp_path, 'methods = ["closure", "kmeans+grey"]\n'
                              'baselines = ["top-k-correlated", "ridge"]\n'
@@ -176,7 +176,7 @@ def test_one_pass_scores_equal_each_method_on_its_own_frames(tmp_path):
 
 
 def _assert_scores_as_before(rows, specs, train, tests):
-    from spindlebench.studies.executor import one_line_error
+    from spindlebench.core.console import one_line_error
 
     for spec in specs:
         mine = rows[(rows["method"] == spec.name)

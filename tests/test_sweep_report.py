@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pandas as pd
-from spindlebench.studies.report import duration_text, overall
+from spindlebench.studies.sweep.sweep_report import duration_text, overall
 
 
 def verdict(*rows: tuple[str, int, bool, bool]) -> pd.DataFrame:

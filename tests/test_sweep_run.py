@@ -16,15 +16,15 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import read_recording
-from spindlebench.studies.executor import TaskRunner
-from spindlebench.studies.jobs import measured_frame
-from spindlebench.studies.methods import method_specs
-from spindlebench.studies.simulations import failure_path, recording_path
-from spindlebench.studies.study import load_study
-from spindlebench.studies.sweep import RESULT_COLUMNS, Sweep, run_sweep, write_outputs
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.family.methods import method_specs
+from spindlebench.studies.running.executor import TaskRunner
+from spindlebench.studies.running.jobs import measured_frame
+from spindlebench.studies.running.simulations import failure_path, recording_path
+from spindlebench.studies.sweep.sweep_run import RESULT_COLUMNS, Sweep, run_sweep, write_outputs
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 NUMBERS = ["rmse_um", "rmse_true_um"]
@@ -263,7 +263,7 @@ def test_a_comment_or_reordered_key_does_not_block_resuming(tmp_path, reference)
 def test_a_state_file_without_the_pinned_content_is_refused(tmp_path, reference):
     """A state.json that pins no study content (an unreleased early format) is not adopted:
     one line, and the folder is left as it was."""
-    from spindlebench.provenance import sha256_file
+    from spindlebench.core.provenance import sha256_file
 
     out = tmp_path / "old"
     shutil.copytree(reference[1].out_dir, out)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 import pytest
-from spindlebench.errors import SpindlebenchError
-from spindlebench.studies.store import ResultStore, canonical, content_sha256, differences
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.running.store import ResultStore, canonical, content_sha256, differences
 
 STUDY = {"study file": {"study": {"seed": 7, "replicas": 2}, "axes": {"speeds_rpm": [2000.0]}},
          "climate file": {"months": {"Jan": {"low_C": 5.8, "high_C": 9.8}}}}

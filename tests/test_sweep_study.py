@@ -6,11 +6,11 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO
-from spindlebench.errors import SpindlebenchError
-from spindlebench.studies import experiments as ex
-from spindlebench.studies.seasons import MONTHS, load_climate, resolve_climate_path
-from spindlebench.studies.seeds import derive_seed
-from spindlebench.studies.study import load_study
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.family import experiments as ex
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.family.seasons import MONTHS, load_climate, resolve_climate_path
+from spindlebench.studies.family.seeds import derive_seed
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 EXAMPLE = REPO / "scenarios" / "studies" / "season_sweep.toml"

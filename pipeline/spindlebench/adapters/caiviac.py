@@ -36,12 +36,12 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
-from spindlebench import atomic
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core import atomic
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import DEFAULT_SIMILARITY
+from spindlebench.core.paths import shared_recordings_dir
+from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import check_recording_targets, write_recording
-from spindlebench.names import DEFAULT_SIMILARITY
-from spindlebench.paths import shared_recordings_dir
-from spindlebench.provenance import file_entry, provenance
 
 DATASET = "caiviac-fl-thermal"
 TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 
 #: The default fit set (FMU parameter names), with why each is uncertain on a real machine.
 DEFAULT_FIT: dict[str, str] = {

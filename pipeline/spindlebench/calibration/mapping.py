@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
     DRIFT_COLUMN,
     NODE_PREFIX,
@@ -48,7 +48,7 @@ from spindlebench.formats.recording import (
     node_of_output,
     node_output,
 )
-from spindlebench.formats.tables import Table, load_toml
+from spindlebench.formats.toml import Table, load_toml
 
 INPUTS = ("spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C")
 UNKNOWN = "unknown"

@@ -40,10 +40,10 @@ from threadpoolctl import threadpool_limits
 from spindlebench.calibration.fitset import PRIOR_SD_LN, log_bounds
 from spindlebench.calibration.mapping import INPUTS
 from spindlebench.calibration.series import Series
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import node_output
-from spindlebench.modelica.equations import ExplicitOde
-from spindlebench.names import KELVIN_OFFSET
+from spindlebench.model.equations import ExplicitOde
 
 #: Prior sd (K) of the uniform shift of the initial state.
 INITIAL_SD_K = 3.0

@@ -13,16 +13,16 @@ from pathlib import Path
 import numpy as np
 
 from spindlebench.calibration.mapping import DRIFT_OUTPUT, INPUTS, UNKNOWN, RecordingMap
-from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.columns import (
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.recording import TIME_COLUMN, read_header, read_recording
+from spindlebench.formats.roles import (
     ColumnRoles,
     as_time_s,
     detect_dialect,
     refuse_implausible_temperatures,
     refuse_target_copies,
 )
-from spindlebench.formats.recording import TIME_COLUMN, read_header, read_recording
-from spindlebench.provenance import sha256_file
 
 #: Smallest noise a channel is given: a logger that quantises to 0.1 K on a slow signal shows
 #: almost no sample-to-sample scatter, and a weight of 1/0.001 K would let one channel rule.

@@ -33,15 +33,15 @@ import numpy as np
 from matplotlib.figure import Figure
 from sklearn.linear_model import LinearRegression
 
-from spindlebench import atomic
 from spindlebench.adapters import caiviac
 from spindlebench.calibration.fitset import DEFAULT_FIT
 from spindlebench.calibration.mapping import RecordingMap
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate, trajectory
 from spindlebench.calibration.series import Series, load_series
+from spindlebench.core import atomic
+from spindlebench.core.paths import MODELS_DIR
 from spindlebench.formats.recording import read_recording
-from spindlebench.modelica.equations import explicit_ode
-from spindlebench.paths import MODELS_DIR
+from spindlebench.model.equations import explicit_ode
 
 TRAIN = ("run1_1250rpm", "run2_2500rpm", "run3_3750rpm")
 TEST = ("run4_5000rpm", "run5_3500rpm", "run6_stepped")

@@ -58,10 +58,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from spindlebench.atomic import atomic_path
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import SENSORS
-from spindlebench.provenance import sha256_file
+from spindlebench.core.atomic import atomic_path
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import SENSORS
+from spindlebench.core.provenance import sha256_file
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
     import pandas as pd

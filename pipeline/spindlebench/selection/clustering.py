@@ -33,7 +33,7 @@ import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
 from scipy.spatial.distance import squareform
 
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 
 
 class SelectionError(SpindlebenchError, ValueError):

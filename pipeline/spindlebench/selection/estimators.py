@@ -42,7 +42,7 @@ from sklearn.utils.validation import (
     validate_data,
 )
 
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.differences import difference_names, pairwise_differences
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.regression import fit_ols

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
+from spindlebench.core.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.formats.recording import (
     MissingValueError,
     RecordingTable,
@@ -38,7 +39,6 @@ from spindlebench.formats.recording import (
     read_table,
     recording_name,
 )
-from spindlebench.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.selection.differences import difference_names, pair_indices
 from spindlebench.selection.errors import (
     SelectionError,

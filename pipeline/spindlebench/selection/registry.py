@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import (
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import (
     CLUSTER_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,

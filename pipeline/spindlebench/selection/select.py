@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from spindlebench.names import DEFAULT_SIMILARITY
+from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import Cut, cut_for_clusters
 from spindlebench.selection.errors import (

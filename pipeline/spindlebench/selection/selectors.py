@@ -35,8 +35,8 @@ from sklearn.linear_model import enet_path, lars_path
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from spindlebench.names import DEFAULT_SIMILARITY
-from spindlebench.names import WITHIN as WITHIN_CHOICES
+from spindlebench.core.names import DEFAULT_SIMILARITY
+from spindlebench.core.names import WITHIN as WITHIN_CHOICES
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list

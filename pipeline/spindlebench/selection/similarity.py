@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from spindlebench.names import DEFAULT_SIMILARITY, SIMILARITIES
+from spindlebench.core.names import DEFAULT_SIMILARITY, SIMILARITIES
 from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,

@@ -31,8 +31,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from spindlebench.atomic import atomic_path
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.atomic import atomic_path
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
     DRIFT_COLUMN,
     TIME_COLUMN,

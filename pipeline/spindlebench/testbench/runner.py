@@ -45,14 +45,18 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Model, fmi3Float64, fmi3ValueReference
 from fmpy.model_description import ModelDescription, ScalarVariable, ValidationError
 
-from spindlebench import interrupts
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core import interrupts
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import KELVIN_OFFSET
+from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState
-from spindlebench.machines import Machine
-from spindlebench.names import KELVIN_OFFSET
-from spindlebench.paths import DEFAULT_FMU
+from spindlebench.machines.variants import Machine
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
+
+#: What a run that is not a cold start starts from, handed over by the caller: a previous
+#: run's parsed end state (``continue``) or a soak history's end state in kelvin (``soak``).
+Start = EndState | Mapping[str, float] | None
 
 #: CVode's relative tolerance per input mode; absolute tolerance = nominal × this (K for
 #: temperatures). Without the 1 s step cap the solver's own error control sets the accuracy,
@@ -369,18 +373,22 @@ STATE_RANGE_K = (200.0, 600.0)
 
 
 def initial_state(scenario: Scenario, fmu: FmuInterface, ambient0_C: float,
-                  start: EndState | None = None) -> dict[str, float]:
-    """Initial value (K) of every state: a cold soak, a soak history (``testbench.soak``), or
-    a previous run's end state (``start``, parsed by the caller: ``scenario.start_state``)."""
+                  start: Start = None) -> dict[str, float]:
+    """Initial value (K) of every state: a cold soak, or the start the caller hands over like
+    every other start, never computed here: a soak history's end state (``start``, from
+    ``testbench.soak.soak_state``) or a previous run's (``start``, parsed by
+    ``scenario.start_state``). ``testbench.simulate.run_start`` picks the right one."""
     initial = scenario.initial
     if initial.kind == "cold":
         start_C = ambient0_C if initial.temperature_C is None else initial.temperature_C
         return dict.fromkeys(fmu.state_names, start_C + KELVIN_OFFSET)
     if initial.kind == "soak":
-        from spindlebench.testbench.soak import soak_state
-
-        return soak_state(scenario, fmu.path)
-    if start is None:
+        if start is None or isinstance(start, EndState):
+            raise SpindlebenchError(f"{scenario.path}: key 'initial.kind': a soak start is "
+                                    "computed by the caller, not the runner: pass start="
+                                    "soak_state(scenario, fmu) (testbench.simulate.record does)")
+        return dict(start)
+    if not isinstance(start, EndState):
         what = (f"the scenario {initial.from_scenario!r}" if initial.from_file is None
                 else str(initial.from_file))
         raise SpindlebenchError(f"{scenario.path}: key 'initial.from': names {what}, a previous "
@@ -451,11 +459,13 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
 
 @interrupts.deferring  # Ctrl-C inside CVode's ctypes callbacks would be swallowed
 def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
-                progress: bool = False, start: EndState | None = None) -> Simulation:
+                progress: bool = False, start: Start = None) -> Simulation:
     """Run a scenario through the FMU and return the noise-free sampled outputs.
 
     A ``continue`` scenario needs ``start``, the parsed end state of the run it continues
-    (``scenario.start_state``); the runner reads no recording files."""
+    (``scenario.start_state``), a ``soak`` scenario the soak's end state
+    (``testbench.soak.soak_state``): the runner reads no recording files and runs no soak
+    (``testbench.simulate.run_start`` picks either)."""
     from fmpy.sundials import CVodeSolver
 
     set_stop_time = _cvode_set_stop_time()

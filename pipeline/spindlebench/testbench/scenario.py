@@ -16,10 +16,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.tables import REQUIRED, Table, load_toml, range_problem
-from spindlebench.machines import DEFAULT_MACHINE, Machine, load_machine
-from spindlebench.names import SENSORS
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import SENSORS
+from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
+from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
 
 if TYPE_CHECKING:
     from spindlebench.formats.recording import EndState

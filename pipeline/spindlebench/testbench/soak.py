@@ -33,9 +33,10 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from spindlebench import atomic
-from spindlebench.errors import SpindlebenchError
-from spindlebench.provenance import sha256_file, source_sha256
+from spindlebench.core import atomic
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file, source_sha256
+from spindlebench.testbench.runner import co_simulate
 from spindlebench.testbench.scenario import (
     ConstantFeed,
     ConstantSpeed,
@@ -123,8 +124,6 @@ def soak_provenance(scenario: Scenario, fmu_path: str | Path) -> dict[str, Any]:
 
 def soak_state(scenario: Scenario, fmu_path: str | Path) -> dict[str, float]:
     """The end state (K by state name) of the soak before ``scenario``; cached."""
-    from spindlebench.testbench.runner import co_simulate  # the runner calls this module
-
     fmu_path = Path(fmu_path)
     history = soak_scenario(scenario)
     key = soak_key(history, fmu_path)

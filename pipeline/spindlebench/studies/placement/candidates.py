@@ -19,16 +19,16 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from spindlebench.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, node_column, true_column
 from spindlebench.selection import CandidateSet
 from spindlebench.selection.differences import pair_indices
 from spindlebench.selection.pairs import PairCandidates
 from spindlebench.selection.regression import rises
-from spindlebench.studies.experiments import Experiment, sensor_model
+from spindlebench.studies.family.experiments import Experiment, sensor_model
+from spindlebench.studies.family.seeds import derive_seed
+from spindlebench.studies.placement.placement_file import PlacementStudy
 from spindlebench.studies.placement.search import Block
-from spindlebench.studies.placement.study import PlacementStudy
-from spindlebench.studies.seeds import derive_seed
 from spindlebench.testbench.sensors import measure
 
 TARGET = DRIFT_COLUMN

@@ -22,8 +22,8 @@ from functools import cached_property
 import numpy as np
 import pandas as pd
 
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import DEFAULT_REGRESSOR
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import DEFAULT_REGRESSOR
 from spindlebench.selection import CandidateSet, SelectionWarning, pairs, rmse
 from spindlebench.selection.clustering import PAIRWISE_CLUSTERINGS
 from spindlebench.selection.evaluate import row_wise
@@ -43,6 +43,7 @@ from spindlebench.studies.placement.candidates import (
     physical_nodes,
     stacked_rises,
 )
+from spindlebench.studies.placement.placement_file import PlacementStudy
 from spindlebench.studies.placement.search import (
     Block,
     exhaustive_search,
@@ -50,13 +51,12 @@ from spindlebench.studies.placement.search import (
     n_subsets,
     usable_candidates,
 )
-from spindlebench.studies.placement.study import PlacementStudy
 
 #: Above this many candidates the exhaustive search's Gram matrices (runs x p x p) get too big.
 EXHAUSTIVE_MAX_CANDIDATES = 600
 #: Greedy forward selection refuses design data of more candidate values than this
 #: (candidates x design samples; 8 bytes each, and the search holds about three copies).
-GREEDY_MAX_VALUES = 25_000_000
+FORWARD_SEARCH_MAX_VALUES = 25_000_000
 
 
 class Design:
@@ -145,17 +145,17 @@ class Design:
                     f"{self.study.path}: key 'placement.methods': {label!r} forms an n x n "
                     f"matrix over {size}; drop it or set with_differences = false")
 
-    def check_greedy(self) -> None:
+    def check_forward_search(self) -> None:
         """Greedy search scores every candidate on every design run at every step, from the
         full design matrix: refused, naming the key, where that matrix is too large."""
         values = self.n_candidates * self.n_samples
-        if "greedy" in self.study.methods and values > GREEDY_MAX_VALUES:
+        if "greedy" in self.study.methods and values > FORWARD_SEARCH_MAX_VALUES:
             raise SpindlebenchError(
                 f"{self.study.path}: key 'placement.methods': 'greedy' with "
                 f"{'differences' if self.differences else 'nodes'} needs every one of "
                 f"{self.n_candidates:,} candidates on {self.n_samples:,} design samples "
-                f"({values:,} values, over the limit of {GREEDY_MAX_VALUES:,}); drop 'greedy' "
-                "or set with_differences = false")
+                f"({values:,} values, over the limit of {FORWARD_SEARCH_MAX_VALUES:,}); drop "
+                "'greedy' or set with_differences = false")
 
 
 @dataclass(frozen=True)
@@ -217,16 +217,19 @@ def fuzzy_placements(design: Design) -> list[Placement]:
     return out
 
 
-def greedy_placements(design: Design) -> list[Placement]:
-    """One forward path up to the largest budget; the set of size m is its first m steps.
+def forward_search_placements(design: Design) -> list[Placement]:
+    """The placement method ``greedy`` (a forward search over the nodes; named so here to keep
+    it apart from the selection method ``greedy``, though both run
+    ``selection.forward.greedy_forward``): one forward path up to the largest budget; the set
+    of size m is its first m steps.
 
-    It needs every candidate column of every design run (each step scores all of them on
-    the held-out runs): ``Design.check_greedy`` refuses designs over ``GREEDY_MAX_VALUES``
-    before any method runs. Refused rather than worked in column chunks: the forward path's
-    state (every candidate's training residual, orthogonalised against the chosen ones) is
-    itself candidates x training samples, so chunks would have to replay every earlier
-    step's projections per chunk to give the same bits, and on 500 nodes with differences
-    the search would still cost minutes per step.
+    It needs every candidate column of every design run (each step scores all of them on the
+    held-out runs): ``Design.check_forward_search`` refuses designs over
+    ``FORWARD_SEARCH_MAX_VALUES`` before any method runs. Refused rather than worked in column
+    chunks: the forward path's state (every candidate's training residual, orthogonalised
+    against the chosen ones) is itself candidates x training samples, so chunks would have to
+    replay every earlier step's projections per chunk to give the same bits, and on 500 nodes
+    with differences the search would still cost minutes per step.
     """
     study, differences, candidates = design.study, design.differences, design.candidates
     start = time.perf_counter()
@@ -276,7 +279,7 @@ def find_placements(study: PlacementStudy, train_runs: Sequence[Run],
     designs = [Design(study, differences, train_runs, valid_runs)
                for differences in study.with_differences]
     for design in designs:  # before any search runs
-        design.check_greedy()
+        design.check_forward_search()
         design.check_pairwise()
     placements: list[Placement] = []
     while designs:  # each design's formed columns go with it
@@ -284,7 +287,7 @@ def find_placements(study: PlacementStudy, train_runs: Sequence[Run],
         if "fuzzy" in study.methods:
             placements += fuzzy_placements(design)
         if "greedy" in study.methods:
-            placements += greedy_placements(design)
+            placements += forward_search_placements(design)
         if "exhaustive" in study.methods:
             placements += exhaustive_placements(design)
         for label in study.methods:

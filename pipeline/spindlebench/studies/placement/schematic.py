@@ -22,9 +22,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
-from spindlebench.atomic import atomic_path
+from spindlebench.core.atomic import atomic_path
+from spindlebench.studies.placement.placement_file import PlacementStudy
 from spindlebench.studies.placement.placements import Placement
-from spindlebench.studies.placement.study import PlacementStudy
 
 #: Outline of each part: (y0, z0, width, height, colour, label, label above the box?).
 PARTS = {

@@ -24,9 +24,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
-from spindlebench.atomic import atomic_path
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import MODELS_DIR
+from spindlebench.core.atomic import atomic_path
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import MODELS_DIR
 from spindlebench.studies.placement.schematic import LUMPED, SEGMENTED, draw_machine
 from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, LOCATIONS, PARTS, sensor_colours
 
@@ -174,8 +174,8 @@ def sensor_map_figure(nodes: list[str]) -> Figure:
 def write_sensor_map(path: str | Path, nodes: list[str] | None = None) -> Path:
     """Draw the sensor map into ``path`` atomically; ``nodes`` default to the FMU's."""
     if nodes is None:
-        from spindlebench.paths import DEFAULT_FMU
-        from spindlebench.studies.placement.study import fmu_nodes
+        from spindlebench.core.paths import DEFAULT_FMU
+        from spindlebench.studies.placement.placement_file import fmu_nodes
 
         nodes = fmu_nodes(DEFAULT_FMU)
     fig = sensor_map_figure(nodes)

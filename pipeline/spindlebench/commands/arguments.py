@@ -1,0 +1,85 @@
+"""Argument helpers shared by several sub-commands: the study-file options and results folder
+of every study command (``sweep``, ``place``, ``compensate``), and the study command itself
+(``register_study_command``): one results folder, then one run per machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import re
+from collections.abc import Callable
+from pathlib import Path
+
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.machines.variants import add_machine_argument
+from spindlebench.studies.family.family_file import SweepStudy, machine_runs
+
+#: A study name that may serve as the default results folder ``results/<name>``.
+FOLDER_NAME = re.compile(r"[A-Za-z0-9._-]+")
+
+
+def add_study_file_arguments(parser: argparse.ArgumentParser, example: str) -> None:
+    """The study file and its results folder (``-o``; default ``default_results_folder``):
+    every command that runs a study file (``sweep``, ``place``, ``compensate``)."""
+    parser.add_argument("study", type=Path, help=f"study file (e.g. {example})")
+    parser.add_argument("-o", "--out", type=Path, default=None,
+                        help="results folder (default: results/<study name>)")
+
+
+def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
+    """The options every study command shares: study file, results folder, where to run."""
+    add_study_file_arguments(parser, example)
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; 0 = in-process)")
+    parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
+                        help="run on an existing Dask distributed cluster instead")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_machine_argument(parser, "machine variant of every run",
+                         "the study's [study] machine, else 'default'")
+
+
+def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) -> Path:
+    """The study command's output folder, after refusing contradictory execution options."""
+    if args.workers is not None and args.dask_address:
+        raise SpindlebenchError("give either --workers or --dask-address, not both")
+    if args.out is not None:
+        return args.out
+    return default_results_folder(args.study, study_name(args.study))
+
+
+def default_results_folder(study_path: Path, name: str) -> Path:
+    """``results/<name>`` for a study without ``-o``, or one line if the study's name cannot
+    be a folder there."""
+    # The name becomes a folder under results/: '../x', 'a/b' or '' would write elsewhere.
+    if not FOLDER_NAME.fullmatch(name) or set(name) == {"."}:
+        raise SpindlebenchError(
+            f"{study_path}: key 'study.name': {name!r} cannot name a folder under results/ "
+            "(use only letters, digits, '.', '_' and '-'), or give -o/--out")
+    return Path("results") / name
+
+
+def register_study_command(subparsers: argparse._SubParsersAction, name: str, *, help: str,
+                           description: str, example: str,
+                           load_family: Callable[[Path], SweepStudy],
+                           run_one: Callable[[argparse.Namespace, Path, str | None], None]
+                           ) -> None:
+    """Add a study sub-command with the options every study shares.
+
+    ``load_family`` loads (and checks) the study file and gives its experiment family;
+    ``run_one`` runs the study on one machine into one results folder."""
+    parser = subparsers.add_parser(name, help=help, description=description)
+    add_study_arguments(parser, example)
+    parser.set_defaults(func=functools.partial(run_study_command, load_family=load_family,
+                                               run_one=run_one))
+
+
+def run_study_command(args: argparse.Namespace, *, load_family: Callable[[Path], SweepStudy],
+                      run_one: Callable[[argparse.Namespace, Path, str | None], None]) -> int:
+    """A study command: its results folder, then one run per machine (``machine_runs``)."""
+    out = results_folder(args, lambda study: load_family(study).name)
+    for machine, folder in machine_runs(load_family(args.study), args.machine, out):
+        if machine is not None and folder != out:
+            print(f"machine {machine}:")
+        run_one(args, folder, machine)
+    return 0

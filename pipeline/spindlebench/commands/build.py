@@ -1,0 +1,82 @@
+"""``spindlebench build``: Modelica package in ``models/`` → ``fmus/SpindleBench.fmu``.
+
+A build with a non-default ``--segments N`` goes to ``fmus/SpindleBench_<N>seg.fmu`` unless
+``--out`` names a ``.fmu`` file, so the committed default model is only replaced by itself.
+The build itself is ``spindlebench.model.build.build_fmu``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from fmpy import read_model_description
+
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file
+from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
+from spindlebench.model.build import build_fmu
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``build`` sub-command."""
+    parser = subparsers.add_parser(
+        "build",
+        help="build the FMU from the Modelica model (models/ -> fmus/)",
+        description="Translate models/SpindleBench.mo with pymoca, causalise it, export an "
+        "FMI 3.0 model-exchange FMU with CasADi and compile it with gcc (or $CC).",
+    )
+    parser.add_argument(
+        "--models", default="models", help="Modelica source folder (default: models)"
+    )
+    parser.add_argument(
+        "--segments",
+        type=int,
+        default=DEFAULT_SEGMENTS,
+        help=f"segments per large part, 2 to {MAX_SEGMENTS} (default: {DEFAULT_SEGMENTS})",
+    )
+    parser.add_argument(
+        "--out",
+        default="fmus",
+        help=f"output folder, or a path ending in .fmu (default: fmus; in a folder the file "
+        f"is {FMU_NAME}.fmu, or {FMU_NAME}_<N>seg.fmu for a non-default --segments N)",
+    )
+    parser.set_defaults(func=run)
+
+
+def output_path(out: str | Path, segments: int) -> Path:
+    """Where ``build --out OUT --segments N`` writes.
+
+    A path ending in ``.fmu`` is taken as given. In a folder, only the default segment count
+    is ``SpindleBench.fmu``: every default ``simulate``, ``sweep`` and ``place`` uses
+    ``fmus/SpindleBench.fmu``, so a coarse experiment must not silently replace it.
+    """
+    out = Path(out)
+    if out.suffix == ".fmu":
+        return out
+    if segments == DEFAULT_SEGMENTS:
+        return out / f"{FMU_NAME}.fmu"
+    return out / f"{FMU_NAME}_{segments}seg.fmu"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the FMU and print where it went (and, for a variant, how to use it)."""
+    if not 2 <= args.segments <= MAX_SEGMENTS:
+        raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
+                                f"{args.segments}")
+    target = output_path(args.out, args.segments)
+    started = time.perf_counter()
+    path = build_fmu(args.models, target, segments=args.segments)
+    elapsed = time.perf_counter() - started
+    description = read_model_description(str(path))
+    nodes = sum(v.name.startswith("node_") for v in description.modelVariables)
+    print(
+        f"built {path}: {args.segments} segments per part, {nodes} nodes, "
+        f"{len(description.derivatives)} states, {elapsed:.1f} s, sha256 {sha256_file(path)[:12]}"
+    )
+    if path.name != f"{FMU_NAME}.fmu":
+        print(f"the default {FMU_NAME}.fmu is unchanged; to use this build: 'spindlebench "
+              f"simulate SCENARIO.toml -o OUT.csv --fmu {path}', or in a sweep/place study "
+              f"file's [study] table fmu = \"<{path} relative to the study file>\"")
+    return 0

@@ -1,0 +1,65 @@
+"""``spindlebench compensate STUDY.toml [-o DIR]``: the model in the controller, day after day.
+
+Writes into DIR (default ``results/<study.name>``): ``README.md`` (set-up, the residual per
+model, per day), ``days.csv`` (one row per model and day), ``summary.csv``,
+``timeseries.csv.gz`` (every sample of the first retraining rule: true drift, prediction,
+applied offset, residual), ``compensation.png`` (uncompensated drift, applied offset and
+residual over the run) and ``provenance.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+
+import pandas as pd
+
+from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.studies.compensation.compensation_file import (
+    DAY_MODES,
+    load_compensation,
+)
+from spindlebench.studies.compensation.compensation_report import summary_text, write_outputs
+from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
+from spindlebench.studies.family.family_file import check_fmu
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``compensate`` sub-command."""
+    parser = subparsers.add_parser(
+        "compensate", help="run the trained model in a simulated controller over many days",
+        description="Train each model of the study's [compensate] table on day 1, then "
+        "simulate every other day of the study family with the model in the controller "
+        "(update interval, rate limit, dead band); report the residual (true drift minus "
+        "applied offset) per day, the fraction of time within the tolerance, the effect of "
+        "a sensor fault after training and of the retraining rule.")
+    add_study_file_arguments(parser, "scenarios/studies/compensate_month.toml, with a "
+                             "[compensate] table")
+    parser.add_argument("--days", choices=DAY_MODES, default=None,
+                        help="override [compensate] days: 'continuous' (one machine, the "
+                        "state carried from day to day) or 'cold-starts' (every day on its "
+                        "own)")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, simulate, write."""
+    study = load_compensation(args.study)
+    if args.days is not None and args.days != study.days:
+        study = replace(study, days=args.days)
+    fmu = check_fmu(study.family)
+    out = args.out if args.out is not None else default_results_folder(args.study, study.name)
+    if out.exists() and not out.is_dir():
+        raise SpindlebenchError(f"{out}: exists and is not a folder")
+    truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
+    outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
+    days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
+    series = pd.concat([part for o in outcomes.values() for part in o.series],
+                       ignore_index=True)
+    table = summary(study, days, series)
+    write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
+    print(summary_text(table))
+    print(f"wrote {out / 'README.md'} and 5 more files")
+    return 0

@@ -1,0 +1,179 @@
+"""``spindlebench evaluate``: select points on one recording, predict the others.
+
+Warnings (dropped constant candidates, tied similarities, samples dropped for missing values
+with ``--missing drop-rows``) go to stderr as ``warning:`` lines and into the JSON's
+``provenance.warnings``. The column roles (time column, sensors, excluded columns, CSV
+dialect) are ``spindlebench.formats.roles``'; only the target, the time column and the
+sensors are read and checked, other columns are ignored.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from spindlebench.core import atomic, provenance
+from spindlebench.core.names import DEFAULT_SIMILARITY, MISSING_MODES
+from spindlebench.formats.recording import MissingValueError, RecordingTable, read_header
+from spindlebench.formats.roles import (
+    ColumnRoles,
+    RoleChoice,
+    add_role_arguments,
+    choose,
+    detect_dialect,
+    read_table_with_roles,
+    refuse_target_copies,
+)
+from spindlebench.selection.closure import CLOSURES
+from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.evaluate import (
+    Evaluation,
+    check_same_sensors,
+    evaluate,
+)
+
+if TYPE_CHECKING:
+    from spindlebench.selection.evaluate import RecordingLike
+from spindlebench.selection.registry import add_method_arguments, choice_from_args
+from spindlebench.selection.similarity import SIMILARITIES
+
+#: The same hint ``evaluate`` gives when it reads a file itself.
+DROP_HINT = "--missing drop-rows drops incomplete samples"
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``evaluate`` sub-command."""
+    parser = subparsers.add_parser(
+        "evaluate",
+        help="select temperature-sensitive points on one recording and predict others",
+        description="Xu et al. (2023): fuzzy-cluster the candidates of the training recording, "
+        "keep per cluster the one most correlated with the target, fit OLS on rises, and "
+        "report the RMSE on every test recording. Without --sensors, the columns that look "
+        "like temperatures (T3, t3_C, '... [degC]', '... °C', Temp...) are the sensors; the "
+        "command prints which it took and which it skipped and why. Only the target, the "
+        "time column and the sensors are read and checked.",
+    )
+    parser.add_argument("--train", required=True, type=Path, help="training recording (CSV)")
+    parser.add_argument(
+        "--test", required=True, nargs="+", type=Path, help="recording(s) to predict (CSV)"
+    )
+    parser.add_argument("--target", required=True, help="thermal-error column, e.g. drift_um")
+    add_role_arguments(parser)
+    parser.add_argument(
+        "--clusters", required=True, type=int, metavar="K",
+        help="number of clusters k (for a method without clusters: the number of inputs)"
+    )
+    add_method_arguments(parser)
+    parser.add_argument(
+        "--differences", action="store_true", help="add every pairwise difference A-B"
+    )
+    parser.add_argument("--similarity", choices=SIMILARITIES, default=DEFAULT_SIMILARITY)
+    parser.add_argument(
+        "--closure", choices=CLOSURES, default="fast", help="closure algorithm (same result)"
+    )
+    parser.add_argument(
+        "--missing",
+        choices=MISSING_MODES,
+        default="error",
+        help="missing (empty/NaN) values: a one-line error (default), or drop the samples "
+        "where the target or a used sensor is missing, with a warning (rises then start at "
+        "the first complete sample; nothing is filled in)",
+    )
+    parser.add_argument("--json", type=Path, metavar="OUT.json", help="write the result here")
+    parser.set_defaults(func=run)
+
+
+def _read_used(path: Path, target: str, roles: ColumnRoles,
+               missing: str) -> tuple[RecordingTable, RoleChoice]:
+    """One recording with only the target, time and sensor columns read and checked: a gap
+    or a note in a column nobody uses must not reject the file. As arrays: the command
+    never imports pandas (half a second of its start-up) unless a file needs its parser."""
+    try:
+        return read_table_with_roles(path, target, roles, allow_missing=missing == "drop-rows")
+    except MissingValueError as exc:
+        raise SelectionError(f"{exc}; {DROP_HINT}") from exc
+
+
+def run(args: argparse.Namespace) -> int:
+    """Evaluate, print the summary, write JSON if asked."""
+    if args.clusters < 1:
+        raise SelectionError(f"--clusters: must be at least 1, got {args.clusters}")
+    if args.json is not None and args.json.is_dir():
+        raise SelectionError(f"--json {args.json}: is a directory; give a file OUT.json")
+    roles = ColumnRoles.from_args(args)
+    choice = choice_from_args(args)  # checked before reading
+    train, taken = _read_used(args.train, args.target, roles, args.missing)
+    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
+                         roles.allow_target_copy)
+    sensors = taken.sensors
+    n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
+    if args.clusters > n:
+        raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
+                             f"({n}) of recording {args.train} (sensors, and their differences "
+                             "with --differences)")
+    same = dataclasses.replace(roles, sensors=tuple(sensors), exclude=())  # the train's columns
+    tests: list[RecordingLike] = []
+    for path in args.test:
+        if taken.by_rule:  # the rule must find the same sensors in every file
+            theirs = choose(read_header(path, detect_dialect(path, roles.delimiter)[0]),
+                            args.target, roles, str(path)).sensors
+            check_same_sensors(str(path), theirs, sensors, str(args.train))
+        tests.append(_read_used(path, args.target, same, args.missing)[0])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = evaluate(
+            train,
+            tests,
+            args.target,
+            sensors=sensors,
+            k=args.clusters,
+            differences=args.differences,
+            similarity=args.similarity,
+            closure=args.closure,
+            missing=args.missing,
+            method=choice,
+            seed=args.seed,
+        )
+    messages = [str(item.message) for item in caught]
+    text = None if args.json is None else _json_text(result, args, messages)
+    for message in messages:
+        print(f"warning: {message}", file=sys.stderr)
+    print(taken.report())
+    print(result.summary())
+    if text is not None:
+        atomic.write_text(args.json, text)
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _json_text(result: Evaluation, args: argparse.Namespace, messages: list[str]) -> str:
+    """The --json document, made before anything is printed so that a value JSON cannot
+    hold (inf, NaN) is one error line, not a traceback after the summary."""
+    record = result.to_dict()
+    record["provenance"] = provenance.provenance(
+        command="evaluate",
+        train=provenance.file_entry(args.train),
+        tests=[provenance.file_entry(path) for path in args.test],
+        target=args.target,
+        sensors=result.sensors,
+        clusters=args.clusters,
+        differences=args.differences,
+        similarity=args.similarity,
+        closure=args.closure,
+        missing=args.missing,
+        method=result.method.to_dict(),
+        seed=args.seed,
+        warnings=messages,
+    )
+    try:
+        return json.dumps(record, indent=2, allow_nan=False) + "\n"
+    except ValueError as exc:
+        raise SelectionError(
+            f"--json {args.json}: the result holds a value JSON cannot store ({exc}); "
+            f"the input values are probably too large"
+        ) from exc

@@ -1,0 +1,48 @@
+"""``spindlebench place``: run (or resume) a virtual sensor-placement study and print the best
+placements.
+
+The study itself is ``studies.placement.placement_run``; the options every study command shares
+are ``commands.arguments``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from spindlebench.commands.arguments import register_study_command
+from spindlebench.studies.family.family_file import SweepStudy
+from spindlebench.studies.placement.placement_file import (
+    load_placement_study,
+)
+from spindlebench.studies.placement.placement_run import report_best, run_placement, search_times
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``place`` sub-command."""
+    register_study_command(
+        subparsers, "place",
+        help="virtual sensor placement: choose m of the model's nodes per method",
+        description="Run (or resume) a virtual sensor-placement study: simulate the study's "
+        "experiments, choose sensor sets among the temperature-field nodes with the paper's "
+        "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
+        "seasons and write placements.csv, plots, schematic drawings and README.md.",
+        example="scenarios/studies/placement.toml", load_family=_family, run_one=_run_one)
+
+
+def _family(path: Path) -> SweepStudy:
+    return load_placement_study(path).family
+
+
+def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    outcome = run_placement(args.study, out, workers=args.workers,
+                            dask_address=args.dask_address, progress=not args.no_progress,
+                            machine=machine)
+    found = [p for p in outcome.placements if p.found]
+    print(f"{'resumed' if outcome.resumed else 'ran'}: {outcome.stats.total('simulation')} "
+          f"simulation(s) in {outcome.stats.seconds:.1f} s; {len(found)} placement(s) found "
+          f"in {outcome.search_seconds:.1f} s ({len(outcome.placements) - len(found)} "
+          f"skipped); {len(outcome.failures)} failed simulation(s)")
+    print(search_times(outcome.placements))
+    print(report_best(outcome.table))
+    print(f"results: {outcome.out_dir / 'README.md'}")

@@ -1,0 +1,42 @@
+"""``spindlebench sweep``: run (or resume) a season sweep and print what it did.
+
+The sweep itself is ``studies.sweep.sweep_run``; the options every study command shares are
+``commands.arguments``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from spindlebench.commands.arguments import register_study_command
+from spindlebench.studies.family.family_file import (
+    load_study,
+)
+from spindlebench.studies.sweep.sweep_run import run_sweep
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``sweep`` sub-command."""
+    register_study_command(
+        subparsers, "sweep",
+        help="season stress test: run a study of experiments and score the methods",
+        description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
+        "on every replica, train each selection method on the training experiment(s), score "
+        "it on the others, and write results.csv, a summary, box plots and README.md.",
+        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one)
+
+
+def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    outcome = run_sweep(args.study, out, workers=args.workers,
+                        dask_address=args.dask_address, progress=not args.no_progress,
+                        machine=machine)
+    results = outcome.results
+    failed = int((results["error"] != "").sum()) if len(results) else 0
+    stats = outcome.stats
+    print(f"{'resumed: ' if outcome.resumed else ''}ran {stats.total('simulation')} "
+          f"simulation(s) and {outcome.evaluated} evaluation(s) in "
+          f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
+          f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
+          f"{failed} with errors")
+    print(f"results: {outcome.out_dir / 'README.md'}")

@@ -1,0 +1,96 @@
+"""The shared vocabulary: sensor names, the paper's six, group and similarity names, units.
+
+One home for every name that more than one layer (model/, testbench/, selection/, studies/)
+uses, so a rename is one edit. This module imports nothing from the package, so
+every layer may import it without importing another layer.
+"""
+
+from __future__ import annotations
+
+#: The paper's twenty temperature sensors (Xu et al. 2023, Fig. 4), in the paper's order.
+SENSORS: tuple[str, ...] = tuple(f"T{i}" for i in range(1, 21))
+#: The paper's six-sensor subset (spindle front, headstock, motor, ambient, X motor, Y motor).
+PAPER_SIX: tuple[str, ...] = ("T1", "T6", "T8", "T10", "T13", "T16")
+
+#: The paper's three candidate groups: reference group 1 (all raw sensors), reference group 2
+#: (the six raw sensors) and the reconstructed group (the six plus their pairwise differences).
+#: Used in every table, file name and report (paper study and season sweep alike).
+ALL_RAW, SIX_RAW, SIX_DIFF = "all_raw", "six_raw", "six_diff"
+GROUPS: tuple[str, ...] = (ALL_RAW, SIX_RAW, SIX_DIFF)
+#: Human-readable group labels for figure legends.
+GROUP_LABELS: dict[str, str] = {
+    ALL_RAW: "all raw",
+    SIX_RAW: "six raw",
+    SIX_DIFF: "six + differences",
+}
+
+#: The two readings of the paper's eq. 1 (see ``selection.similarity``); the first is the default.
+SIMILARITIES: tuple[str, ...] = ("abs-pearson", "literal")
+DEFAULT_SIMILARITY = SIMILARITIES[0]
+
+#: How ``evaluate`` treats missing (NaN) values: one-line error, or drop incomplete samples
+#: (also a key of ``paper_study.toml``).
+MISSING_MODES: tuple[str, ...] = ("error", "drop-rows")
+
+#: The model's and the FMU's name: ``models/SpindleBench.mo`` builds ``fmus/SpindleBench.fmu``
+#: (``core.paths`` finds it, ``model`` builds it).
+FMU_NAME = "SpindleBench"
+
+#: The fingerprint statistics of a recording (``studies.fingerprint.statistics``), in the
+#: order they are reported (also their JSON keys and a machine file's ``[[target]]``
+#: statistics, ``machines.variants``).
+FINGERPRINT_KEYS: tuple[str, ...] = (
+    "best_raw_psi",
+    "best_single_r2",
+    "best_diff_psi",
+    "best_pair_r2",
+    "t63_ratio",
+    "t63_fastest_ratio",
+    "overshoot",
+    "early_fraction",
+)
+
+#: Degrees Celsius to kelvin.
+KELVIN_OFFSET = 273.15
+
+#: The selection methods every command, study file and report knows, with one line each
+#: (``spindlebench methods`` prints them; ``selection.registry`` builds the estimators). The
+#: first is the paper's. Cluster methods pick one candidate per cluster (``WITHIN``); the others
+#: choose k candidates directly.
+CLUSTER_METHODS: dict[str, str] = {
+    "closure": "the paper's fuzzy equivalence closure t(R) cut into k clusters "
+               "(single linkage on 1 - R)",
+    "fcm": "fuzzy c-means (scikit-fuzzy cmeans, fuzzifier 2) on the standardised series; "
+           "each candidate to its largest membership",
+    "kmeans": "k-means (scikit-learn, 10 starts) on the standardised series",
+    "average": "hierarchical clustering, average linkage on 1 - R (SciPy)",
+    "complete": "hierarchical clustering, complete linkage on 1 - R (SciPy)",
+    "ward": "hierarchical clustering, Ward linkage on the standardised series (SciPy)",
+}
+DIRECT_METHODS: dict[str, str] = {
+    "top-k-correlated": "the k candidates with the largest |psi|, no clustering",
+    "lasso": "the first k candidates to enter the LASSO path (standardised rises)",
+    "elastic-net": "the first k candidates to enter the elastic-net path (l1_ratio 0.5)",
+    "stability": "stability selection: the k most frequent on the LASSO path's first k over "
+                 "50 random half-samples",
+    "greedy": "greedy forward selection by cross-experiment RMSE of OLS (train on the first "
+              "half of the run, score on the second)",
+}
+METHODS: dict[str, str] = {**CLUSTER_METHODS, **DIRECT_METHODS}
+DEFAULT_METHOD = "closure"
+#: The choice of one candidate inside a cluster.
+WITHIN: dict[str, str] = {
+    "psi": "largest |psi|, the Pearson correlation with the error (the paper's eq. 4)",
+    "grey": "largest grey relational grade with the error (Deng; interval normalisation, "
+            "rho = 0.5)",
+}
+DEFAULT_WITHIN = "psi"
+#: The regression after the selector (all on rises, all linear).
+REGRESSORS: dict[str, str] = {
+    "ols": "ordinary least squares with intercept (the paper's MLR)",
+    "ridge": "ridge on standardised rises, penalty by 5-fold CV over contiguous time blocks",
+    "pls": "partial least squares (scikit-learn PLSRegression, up to 2 components)",
+}
+DEFAULT_REGRESSOR = "ols"
+#: The seed of the seeded methods (fcm, kmeans, stability) unless a command is given another.
+DEFAULT_METHOD_SEED = 0

@@ -1,0 +1,150 @@
+"""Turn implicit equations into explicit assignments (BLT sorting), symbolically.
+
+A thermal network flattened from connectors has hundreds of trivial equations (aliases
+``a.T = b.T``, flow sums, ``Q = G*dT``) and few states. Solving the whole system with one dense
+symbolic solve would not scale, so we do what Modelica tools do: match every equation to one
+unknown (maximum bipartite matching), find the strongly connected blocks of the dependency
+graph (Tarjan) and solve the blocks in dependency order. Each block must be linear in its own
+unknowns (it may be nonlinear in earlier ones, e.g. Palmgren friction in a node temperature);
+a scalar block is a division, a larger one a small ``casadi.solve``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import casadi as ca
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import maximum_bipartite_matching
+
+from spindlebench.core.errors import SpindlebenchError
+
+
+def incidence(residuals: ca.SX, unknowns: ca.SX) -> csr_matrix:
+    """Structural incidence matrix: rows are equations, columns unknowns."""
+    sparsity = ca.jacobian(residuals, unknowns).sparsity()
+    rows, cols = sparsity.get_triplet()
+    data = np.ones(len(rows), dtype=np.int8)
+    shape = (residuals.numel(), unknowns.numel())
+    return csr_matrix((data, (np.asarray(rows), np.asarray(cols))), shape=shape)
+
+
+def strongly_connected_blocks(successors: Sequence[Sequence[int]]) -> list[list[int]]:
+    """Tarjan's algorithm, iterative; every block comes after the blocks it depends on."""
+    count = len(successors)
+    index = [-1] * count
+    lowlink = [0] * count
+    on_stack = [False] * count
+    stack: list[int] = []
+    blocks: list[list[int]] = []
+    counter = 0
+    for root in range(count):
+        if index[root] >= 0:
+            continue
+        work = [(root, 0)]
+        while work:
+            node, edge = work.pop()
+            if edge == 0:
+                index[node] = lowlink[node] = counter
+                counter += 1
+                stack.append(node)
+                on_stack[node] = True
+            recurse = False
+            edges = successors[node]
+            while edge < len(edges):
+                succ = edges[edge]
+                edge += 1
+                if index[succ] < 0:
+                    work.append((node, edge))
+                    work.append((succ, 0))
+                    recurse = True
+                    break
+                if on_stack[succ]:
+                    lowlink[node] = min(lowlink[node], index[succ])
+            if recurse:
+                continue
+            if lowlink[node] == index[node]:
+                block = []
+                while True:
+                    member = stack.pop()
+                    on_stack[member] = False
+                    block.append(member)
+                    if member == node:
+                        break
+                blocks.append(sorted(block))
+            if work:
+                parent = work[-1][0]
+                lowlink[parent] = min(lowlink[parent], lowlink[node])
+    return blocks
+
+
+def solve_explicitly(
+    residuals: ca.SX, unknowns: ca.SX, unknown_names: Sequence[str]
+) -> tuple[ca.SX, list[int]]:
+    """Explicit expressions for all ``unknowns`` from ``residuals == 0``.
+
+    Returns the solution (same order as ``unknowns``, free of any unknown) and the sizes of the
+    blocks that needed a simultaneous solve (empty for a fully sequential system).
+    """
+    n_eq, n_unknown = residuals.numel(), unknowns.numel()
+    graph = incidence(residuals, unknowns)
+    match = maximum_bipartite_matching(graph, perm_type="column")
+    matched_cols = {int(c) for c in match[match >= 0]}
+    free = [unknown_names[j] for j in range(n_unknown) if j not in matched_cols]
+    if n_eq != n_unknown:
+        which = f"; no equation for: {', '.join(free[:8])}" if n_unknown > n_eq else ""
+        raise SpindlebenchError(
+            f"model is not balanced: {n_eq} equations for {n_unknown} unknowns{which}"
+        )
+    if free:
+        raise SpindlebenchError(
+            f"model is structurally singular: {len(free)} unknown(s) not determined by the "
+            f"equations: {', '.join(free[:8])}"
+        )
+    equation_of = np.empty(n_unknown, dtype=int)
+    equation_of[match] = np.arange(n_eq)
+    successors = []
+    for k in range(n_eq):
+        cols = graph.indices[graph.indptr[k] : graph.indptr[k + 1]]
+        successors.append([int(equation_of[j]) for j in cols if j != match[k]])
+    blocks = strongly_connected_blocks(successors)
+
+    scalar_residuals = [residuals[k] for k in range(n_eq)]
+    scalar_unknowns = [unknowns[j] for j in range(n_unknown)]
+    solution: list[ca.SX | None] = [None] * n_unknown
+    solved_by_name: dict[str, int] = {}
+    simultaneous = []
+    for block in blocks:
+        cols = [int(match[k]) for k in block]
+        block_residuals = ca.vertcat(*[scalar_residuals[k] for k in block])
+        block_unknowns = ca.vertcat(*[scalar_unknowns[j] for j in cols])
+        known = [
+            solved_by_name[s.name()]
+            for s in ca.symvar(block_residuals)
+            if s.name() in solved_by_name
+        ]
+        if known:
+            block_residuals = ca.substitute(
+                block_residuals,
+                ca.vertcat(*[scalar_unknowns[j] for j in known]),
+                ca.vertcat(*[solution[j] for j in known]),
+            )
+        jac = ca.jacobian(block_residuals, block_unknowns)
+        if ca.depends_on(jac, block_unknowns):
+            names = ", ".join(unknown_names[j] for j in cols[:8])
+            raise SpindlebenchError(
+                f"equations for {names} are nonlinear in these unknowns; only blocks linear "
+                "in their own unknowns can be solved"
+            )
+        offset = ca.substitute(block_residuals, block_unknowns, ca.DM.zeros(len(cols)))
+        if len(cols) == 1:
+            values = [-offset / jac]
+        else:
+            simultaneous.append(len(cols))
+            solved = ca.solve(jac, -offset)
+            values = [solved[i] for i in range(len(cols))]
+        for j, value in zip(cols, values, strict=True):
+            solution[j] = value
+            solved_by_name[unknown_names[j]] = j
+    return ca.vertcat(*solution), simultaneous

@@ -1,0 +1,230 @@
+"""Read the Modelica package and translate it with pymoca into implicit CasADi equations.
+
+The segment count of the large parts is a structural Modelica parameter (``nSeg``); a build
+overrides its binding in the parsed syntax tree (what a modification ``(nSeg = N)`` would do),
+so the Modelica source itself never has to be generated or edited.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.model import MAX_SEGMENTS, MODEL_CLASS, MODEL_FILE
+from spindlebench.model.units import check_connections, check_declared_units, check_equations
+
+# pymoca 0.12 still calls the Python 2 division hook on CasADi 3.8 expressions.
+ca.MX.__div__ = ca.MX.__truediv__
+
+SEGMENTS_PARAMETER = "nSeg"
+
+
+@dataclass(frozen=True)
+class SymbolInfo:
+    """Declaration facts pymoca's CasADi model drops: description, unit and the bounds.
+
+    ``minimum``/``maximum`` are the declared ``min``/``max`` when they are plain numbers
+    (None when not declared), so the FMU can carry them and importers refuse values outside.
+    """
+
+    description: str
+    unit: str
+    minimum: float | None = None
+    maximum: float | None = None
+
+
+@dataclass
+class TranslatedModel:
+    """pymoca's CasADi model plus the declaration facts of the flattened class."""
+
+    model: Any
+    symbols: dict[str, SymbolInfo]
+    component_descriptions: dict[str, str]
+    source: Path
+    segments: int
+
+
+def model_source(model_dir: str | Path) -> Path:
+    """The Modelica file of the package, or a one-line error if it is missing."""
+    path = Path(model_dir) / MODEL_FILE
+    if not path.is_file():
+        raise SpindlebenchError(f"{path}: Modelica source not found")
+    try:  # rumoca and pymoca both fail on other encodings with a traceback
+        path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[: exc.start].count(b"\n") + 1
+        raise SpindlebenchError(f"{path}:{line}: Modelica source is not UTF-8 text (byte "
+                                f"{exc.start}); save it as UTF-8") from None
+    return path
+
+
+def _syntax_error_line(message: str) -> int | None:
+    match = re.search(r"line (\d+)", message)
+    return int(match.group(1)) if match else None
+
+
+def check_segments(segments: object) -> None:
+    """Refuse a segment count the model is not meant for, before any slow step runs."""
+    if (isinstance(segments, bool) or not isinstance(segments, int)
+            or not 2 <= segments <= MAX_SEGMENTS):
+        raise SpindlebenchError(f"segments: must be an integer from 2 to {MAX_SEGMENTS}, got "
+                                f"{segments!r}")
+
+
+def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
+    """Parse and flatten the machine model into pymoca's CasADi representation.
+
+    Errors in the Modelica text become one line naming the file and line.
+    """
+    import pymoca.ast
+    import pymoca.backends.casadi.generator as generator
+    import pymoca.parser
+    import pymoca.tree
+
+    check_segments(segments)
+    path = model_source(model_dir)
+    check_declared_units(path)  # file:line of a unit pint does not know, before parsing
+    text = path.read_text(encoding="utf-8")
+    chatter = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
+            tree = pymoca.parser.parse(text, bypass_cache=True)
+    except pymoca.parser.ModelicaSyntaxError as exc:
+        message = str(exc).splitlines()[0]
+        line = _syntax_error_line(message)
+        where = f"{path}:{line}" if line else str(path)
+        raise SpindlebenchError(f"{where}: Modelica syntax error: {message}") from None
+    if tree is None:
+        raise SpindlebenchError(f"{path}: Modelica source could not be parsed")
+    _set_segments(tree, path, segments)
+    check_connections(tree, path)  # file:line of a connect() of two different connectors
+    try:
+        with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
+            flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string(MODEL_CLASS))
+        (flat_class,) = flat.classes.values()
+    except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
+        raise SpindlebenchError(_semantic_error(path, exc)) from None
+    check_equations(flat_class, path)  # dimensions, from the declared units (pint)
+    try:
+        with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
+            # generator.generate() would flatten a second time; walk the flat tree ourselves.
+            options = generator._merge_default_options(None)
+            casadi_generator = generator.Generator(flat, MODEL_CLASS, options)
+            generator.GeneratorWalker().walk(casadi_generator, flat)
+            model = casadi_generator.model
+    except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
+        raise SpindlebenchError(_semantic_error(path, exc)) from None
+    symbols = {
+        name: SymbolInfo(
+            description=str(sym.comment or ""),
+            unit=_unit_of(sym),
+            minimum=_bound_of(sym, "min"),
+            maximum=_bound_of(sym, "max"),
+        )
+        for name, sym in flat_class.symbols.items()
+    }
+    package, machine = MODEL_CLASS.split(".")
+    components = {
+        name: str(sym.comment or "")
+        for name, sym in tree.classes[package].classes[machine].symbols.items()
+    }
+    return TranslatedModel(
+        model=model,
+        symbols=symbols,
+        component_descriptions=components,
+        source=path,
+        segments=segments,
+    )
+
+
+def _set_segments(tree: Any, path: Path, segments: int) -> None:
+    """Bind ``nSeg`` of the machine to ``segments`` in the parsed tree."""
+    import pymoca.ast
+
+    package, model = MODEL_CLASS.split(".")
+    try:
+        symbol = tree.classes[package].classes[model].symbols[SEGMENTS_PARAMETER]
+    except KeyError:
+        raise SpindlebenchError(
+            f"{path}: model {MODEL_CLASS} with parameter {SEGMENTS_PARAMETER} not found"
+        ) from None
+    for argument in symbol.class_modification.arguments:
+        modification = argument.value
+        if (
+            getattr(modification, "component", None) is not None
+            and str(getattr(modification.component, "name", modification.component)) == "value"
+        ):
+            modification.modifications = [pymoca.ast.Primary(value=segments)]
+            return
+    raise SpindlebenchError(f"{path}: parameter {SEGMENTS_PARAMETER} needs a default value")
+
+
+def _unit_of(symbol: Any) -> str:
+    unit = getattr(symbol, "unit", None)
+    value = getattr(unit, "value", unit)
+    return value if isinstance(value, str) else ""
+
+
+def _bound_of(symbol: Any, attribute: str) -> float | None:
+    """A declared ``min``/``max`` that is a finite number, else None (pymoca's default is None)."""
+    bound = getattr(symbol, attribute, None)
+    value = getattr(bound, "value", bound)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value) if abs(value) != float("inf") else None
+
+
+def _semantic_error(path: Path, exc: Exception) -> str:
+    """One line for a model pymoca cannot flatten, located as well as we can.
+
+    rumoca's diagnostics carry a line; failing that, a name pymoca could not resolve (its
+    error quotes it) is looked up in the source, so the user gets ``file:line`` either way.
+    """
+    detail = " ".join(str(exc).split()) or type(exc).__name__
+    for diagnostic in validate(path):
+        return f"{diagnostic} (pymoca: {detail})"
+    quoted = re.search(r"'([A-Za-z_][\w.\[\]]*)'", detail)
+    if quoted:
+        name = quoted.group(1).split(".")[-1].split("[")[0]
+        pattern = re.compile(rf"(?<![\w.\"]){re.escape(name)}(?![\w\"])")
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+            code = line.split("//", 1)[0]
+            if pattern.search(re.sub(r'"[^"]*"', '""', code)):
+                return f"{path}:{number}: Modelica error: cannot resolve '{quoted.group(1)}'"
+    return f"{path}: Modelica model could not be translated: {detail}"
+
+
+def validate(path: str | Path) -> list[str]:
+    """Check the package with rumoca, an independent Modelica front end.
+
+    Returns one line per problem (``file:line:column: message``); empty when rumoca accepts it.
+    """
+    import rumoca
+
+    path = Path(path)
+    problems = []
+    for diagnostic in rumoca.validate(str(path), model=MODEL_CLASS):
+        problems.append(_diagnostic_line(path, diagnostic))
+    return problems
+
+
+def _diagnostic_line(path: Path, diagnostic: Any) -> str:
+    text = str(diagnostic)
+    # rumoca's own position is often 1:1; the real one is in the rendered snippet ─[file:L:C]
+    match = re.search(r"─\[[^\]]*?:(\d+):(\d+)\]", text)
+    line, column = (
+        (match.group(1), match.group(2)) if match else (diagnostic.line, diagnostic.column)
+    )
+    message = str(diagnostic.message)
+    # keep the first complaint ("× unexpected `flow`"), not the rendered source snippet
+    complaint = re.search(r"×\s*(.*?)\s*(?:╭|$)", message, flags=re.S)
+    summary = " ".join((complaint.group(1) if complaint else message).split())
+    summary = re.sub(r"\s*│\s*", " ", summary)
+    return f"{path}:{line}:{column}: {summary}"

@@ -1,0 +1,210 @@
+"""From a study to concrete work: experiments, conditions, replicas, scenarios and seeds.
+
+An *experiment* is one operating point of the machine on one day of a month (month × speed ×
+programme × cooling). A *replica* re-draws the day: the weather (the day's low and high
+scatter around the month's normals by ``weather_sd_C``) and the sensor noise. A *condition*
+(noise level × fault) is how that day is measured. The expensive part, the FMU simulation,
+depends only on (replica, experiment); each condition re-measures its noise-free truth.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from spindlebench.studies.family.family_file import (
+    NO_FAULT,
+    Fault,
+    NoiseLevel,
+    Programme,
+    SweepStudy,
+)
+from spindlebench.studies.family.seeds import derive_seed
+from spindlebench.testbench.scenario import (
+    AmbientModel,
+    ConstantFeed,
+    ConstantSpeed,
+    Cooling,
+    FeedWithSpindle,
+    InitialState,
+    Scenario,
+    SeasonAmbient,
+    SensorFault,
+    SensorModel,
+    SpeedCycles,
+    SpeedStep,
+    SteppedSpeed,
+)
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One operating point in one month; ``id`` names its files and result rows."""
+
+    month: str
+    season: str
+    speed_rpm: float
+    programme: str
+    cooling: str
+
+    @property
+    def id(self) -> str:
+        return f"{self.month}-{self.speed_rpm:g}rpm-{self.programme}-{self.cooling}"
+
+
+@dataclass(frozen=True)
+class Condition:
+    """How the experiments are measured: a noise level and an optional fault."""
+
+    noise: NoiseLevel
+    fault: Fault | None
+
+    @property
+    def id(self) -> str:
+        return f"{self.noise.name}+{self.fault.name if self.fault else NO_FAULT}"
+
+    @property
+    def fault_name(self) -> str:
+        return self.fault.name if self.fault else NO_FAULT
+
+
+def experiments(study: SweepStudy) -> list[Experiment]:
+    """Every experiment of the study, in the order of its axes."""
+    return [
+        Experiment(month, study.climate.season_of(month), speed, programme.name, cooling.name)
+        for month, speed, programme, cooling in itertools.product(
+            study.months, study.speeds_rpm, study.programmes, study.cooling)
+    ]
+
+
+def conditions(study: SweepStudy) -> list[Condition]:
+    return [Condition(noise, fault) for noise, fault in itertools.product(study.noise,
+                                                                          study.faults)]
+
+
+def replicas(study: SweepStudy) -> list[int]:
+    return list(range(1, study.replicas + 1))
+
+
+def training_experiments(study: SweepStudy, family: list[Experiment]) -> list[Experiment]:
+    """The experiments models are trained on, per the study's training rule.
+
+    ``one``: the experiment the ``[training]`` table names. ``each-season``: for every season
+    in the study, its first listed month at the ``[training]`` speed, programme and cooling.
+    """
+    rule = study.training
+
+    def matches(exp: Experiment, month: str) -> bool:
+        return (exp.month == month and exp.speed_rpm == rule.speed_rpm
+                and exp.programme == rule.programme and exp.cooling == rule.cooling)
+
+    if rule.rule == "one":
+        months = [rule.month]
+    else:
+        first_of_season: dict[str, str] = {}
+        for month in study.months:
+            first_of_season.setdefault(study.climate.season_of(month), month)
+        months = list(first_of_season.values())
+    return [exp for month in months for exp in family if matches(exp, month)]
+
+
+def sensor_seed(study: SweepStudy, replica: int, experiment: Experiment) -> int:
+    """Seed of the sensor noise; shared by all conditions (common random numbers)."""
+    return derive_seed(study.seed, "sensors", replica, experiment.id)
+
+
+def day_weather(study: SweepStudy, replica: int, experiment: Experiment) -> tuple[float, float]:
+    """The (low, high) of this replica's day: the month's normals plus a common shift.
+
+    The shift is Gaussian with ``weather_sd_C``; low and high move together because day-to-day
+    weather mostly shifts the whole daily curve.
+    """
+    normal = study.climate.months[experiment.month]
+    if study.weather_sd_C == 0:
+        return normal.low_C, normal.high_C
+    rng = np.random.default_rng(derive_seed(study.seed, "weather", replica, experiment.id))
+    shift = float(rng.normal(0.0, study.weather_sd_C))
+    return round(normal.low_C + shift, 3), round(normal.high_C + shift, 3)
+
+
+def _speed(programme: Programme, rpm: float):
+    if programme.kind == "constant":
+        return ConstantSpeed(rpm=rpm)
+    if programme.kind == "cycles":
+        return SpeedCycles(rpm=rpm, on_s=programme.on_s, off_s=programme.off_s)
+    return SteppedSpeed(steps=tuple(
+        SpeedStep(at_s=at, rpm=rpm * fraction)
+        for at, fraction in zip(programme.step_at_s, programme.step_fraction, strict=True)))
+
+
+def sensor_model(noise: NoiseLevel, fault: Fault | None) -> SensorModel:
+    """The testbench's sensor model for a noise level and an optional fault (to the end)."""
+    faults: tuple[SensorFault, ...] = ()
+    if fault is not None:
+        faults = (SensorFault(fault.sensor, fault.kind, fault.start_s, None,  # type: ignore[arg-type]
+                              fault.value_C, fault.offset_C),)
+    return SensorModel(noise_C=noise.noise_C, quantum_C=noise.quantum_C,
+                       probe_noise_um=noise.probe_noise_um,
+                       probe_quantum_um=noise.probe_quantum_um, faults=faults,
+                       noise_kind=noise.noise_kind,  # type: ignore[arg-type]
+                       noise_lag1=noise.noise_lag1,
+                       probe_drift_um_per_sqrt_h=noise.probe_drift_um_per_sqrt_h,
+                       probe_drift_rate_um_per_h=noise.probe_drift_rate_um_per_h)
+
+
+def ambient_for(study: SweepStudy, replica: int, experiment: Experiment) -> AmbientModel:
+    """The run's air: the replica's day of the season curve, or indoor air of the month's
+    normals with its own weather (seeded per replica and experiment, like ``day_weather``)."""
+    if study.indoor is None:
+        low, high = day_weather(study, replica, experiment)
+        return SeasonAmbient(low_C=low, high_C=high, start_hour=study.start_hour)
+    normal = study.climate.months[experiment.month]
+    return replace(study.indoor, outdoor_low_C=normal.low_C, outdoor_high_C=normal.high_C,
+                   start_hour=study.start_hour,
+                   weather_seed=derive_seed(study.seed, "weather", replica, experiment.id))
+
+
+def initial_for(study: SweepStudy, experiment: Experiment) -> InitialState:
+    """A cold start, or the soak of the month's *normal* daily cycle (no replica's weather):
+    every run of one month shares it, so the soak is simulated once per month."""
+    if study.soak_days is None:
+        return InitialState()
+    normal = study.climate.months[experiment.month]
+    if study.indoor is None:
+        cycle: AmbientModel = SeasonAmbient(low_C=normal.low_C, high_C=normal.high_C,
+                                            start_hour=study.start_hour)
+    else:
+        cycle = replace(study.indoor, outdoor_low_C=normal.low_C,
+                        outdoor_high_C=normal.high_C, start_hour=study.start_hour,
+                        weather_sd_K=0.0)
+    return InitialState(kind="soak", days=study.soak_days, soak_ambient=cycle)
+
+
+def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Scenario:
+    """The runner's scenario of one experiment on one replica's day.
+
+    Its sensor model is the study's first noise level without faults, so the stored recording
+    is an ordinary healthy recording; conditions re-measure its truth with the same seed.
+    """
+    programme = next(p for p in study.programmes if p.name == experiment.programme)
+    cooling = next(c for c in study.cooling if c.name == experiment.cooling)
+    feed_cls = ConstantFeed if study.feed == "constant" else FeedWithSpindle
+    return Scenario(
+        path=study.path,
+        name=experiment.id,
+        description=f"{study.name}: {experiment.id}, replica {replica}",
+        duration_s=study.duration_s,
+        step_s=study.step_s,
+        sample_interval_s=study.sample_interval_s,
+        seed=sensor_seed(study, replica, experiment),
+        speed=_speed(programme, experiment.speed_rpm),
+        feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
+        ambient=ambient_for(study, replica, experiment),
+        cooling=Cooling(mode=cooling.mode, setpoint_C=cooling.setpoint_C),  # type: ignore[arg-type]
+        sensors=sensor_model(study.noise[0], None),
+        initial=initial_for(study, experiment),
+        parameters=dict(study.parameters),
+        machine=study.machine,
+    )

@@ -1,0 +1,365 @@
+"""The methods a sweep compares, each trained on one experiment and scored on the others.
+
+- The paper's three candidate groups through ``spindlebench.selection.evaluate``: ``all_raw``
+  (all 20 sensors), ``six_raw`` (T1, T6, T8, T10, T13, T16) and ``six_diff`` (those six plus
+  their 15 pairwise differences), each at k clusters. With ``[methods] methods`` listing
+  other selection methods (``spindlebench methods``), each also runs on every group, named
+  ``group:label`` (``six_diff:kmeans+grey``, ``all_raw:lasso+ridge``).
+- ``top-k-correlated``: what a practitioner tries first: the k raw sensors (of all 20) whose
+  rises correlate most strongly with the error, then the same OLS on rises. Same k as the
+  clusters, so it isolates what the fuzzy clustering adds.
+- ``ridge``: no selection at all: ridge regression on the rises of all 20 sensors and their
+  190 differences (standardised; the penalty is chosen by 5-fold cross-validation over
+  contiguous time blocks of the training run). It has no k.
+
+When the study asks for the ground truth, two references join them:
+
+- every method also runs on the noise-free truth (true sensor temperatures and true drift,
+  no faults): the same method with perfect instruments. This is what better sensors could
+  buy, not a bound: selection by correlation can pick worse on perfectly smooth data.
+- ``oracle``: OLS of the held-out run's drift on the rises of all 20 sensors, fitted on that
+  run itself. Every method here predicts the drift as an intercept plus a linear combination
+  of those rises (a difference is one too), so no method can score below the oracle on the
+  same data: it is a true lower bound on the RMSE, and the gap to it is what selection and
+  extrapolation from the training run cost.
+
+Every score is the RMSE (um) of the predicted against the measured drift of the held-out run,
+as in the paper; ``rmse_true_um`` scores the same prediction against the true drift, which is
+what a compensation actually achieves.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TypeVar
+
+import numpy as np
+import pandas as pd
+from sklearn.linear_model import Ridge
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+
+from spindlebench.core.console import one_line_error
+from spindlebench.core.names import (
+    ALL_RAW,
+    DEFAULT_METHOD,
+    DEFAULT_METHOD_SEED,
+    DEFAULT_REGRESSOR,
+    PAPER_SIX,
+    SENSORS,
+    SIX_DIFF,
+    SIX_RAW,
+)
+from spindlebench.formats.recording import DRIFT_COLUMN, recording_name
+from spindlebench.selection import PairwiseDifferences, rises, rmse
+from spindlebench.selection.differences import with_differences_matrix
+from spindlebench.selection.evaluate import CheckedRecording, evaluate_checked
+from spindlebench.selection.registry import (
+    MethodChoice,
+    fit_regressor,
+    fit_with,
+    parse_method,
+    select_with,
+)
+from spindlebench.selection.regressors import blocked_cv_alpha
+from spindlebench.studies.family.family_file import Methods
+
+TARGET = DRIFT_COLUMN
+#: Column of each prepared frame holding the true drift rise (um), for ``rmse_true_um``.
+TRUTH = "true_drift_rise_um"
+
+ORACLE = "oracle"
+GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
+#: Between a group and a selection method in a method's name (``six_diff:kmeans+grey``).
+GROUP_SEPARATOR = ":"
+#: The ``top-k-correlated`` baseline is that selection method on the raw sensors, then OLS.
+TOP_K = parse_method("top-k-correlated")
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """One method at one k (``k`` None for methods without a sensor budget).
+
+    ``name`` is the results' ``method`` column: a paper group alone (``six_diff``) for the
+    paper's method, ``group:label`` (``six_diff:kmeans+grey``) for another selection method
+    (``names.METHODS``) on that group; baselines and the oracle by their own names.
+    """
+
+    name: str
+    k: int | None
+    seed: int = DEFAULT_METHOD_SEED
+
+    @property
+    def label(self) -> str:
+        return self.name if self.k is None else f"{self.name} k={self.k}"
+
+    @property
+    def group(self) -> str | None:
+        """The paper group whose candidates the method selects from (None: a baseline)."""
+        group = self.name.split(GROUP_SEPARATOR)[0]
+        return group if group in GROUP_SENSORS else None
+
+    @property
+    def choice(self) -> MethodChoice:
+        """The selection method on the group (the paper's when the name is a group alone)."""
+        _, _, label = self.name.partition(GROUP_SEPARATOR)
+        return parse_method(label or DEFAULT_METHOD)
+
+
+def group_method_name(group: str, label: str) -> str:
+    """The results' name of method ``label`` on ``group``: the group alone for the paper's."""
+    return group if label == DEFAULT_METHOD else f"{group}{GROUP_SEPARATOR}{label}"
+
+
+def method_specs(methods: Methods) -> list[MethodSpec]:
+    """Every (method, k) the study asks for, groups first (each with every selection method
+    of ``methods.methods``, the paper's first), in a stable order."""
+    specs = [MethodSpec(group_method_name(group, label), k, methods.seed)
+             for group in methods.groups for label in methods.methods
+             for k in methods.clusters]
+    for baseline in methods.baselines:
+        if baseline == "ridge":
+            specs.append(MethodSpec(baseline, None))
+        else:
+            specs.extend(MethodSpec(baseline, k) for k in methods.clusters)
+    if methods.ground_truth:
+        specs.append(MethodSpec(ORACLE, None))
+    return specs
+
+
+@dataclass(frozen=True)
+class Score:
+    """A method's result on one held-out run."""
+
+    rmse_um: float
+    rmse_true_um: float
+    selected: str
+
+
+class SharedRuns:
+    """The measured runs of one (replica, condition), converted and checked once for all of
+    its training runs.
+
+    Why: each training run of a (replica, condition) scores its methods on the same
+    held-out frames; one job per training run measured, checked and subtracted every run
+    again for each. The checks, rises and oracle fits here depend on the held-out run only,
+    so every training run reads the same arrays and gets the bits it got on its own (tests
+    compare the two).
+    """
+
+    def __init__(self, frames: Mapping[str, pd.DataFrame]) -> None:
+        self.frames = {str(name): frame for name, frame in frames.items()}
+        self._checked: dict[str, CheckedRecording] = {}
+
+    def checked(self, name: str, frame: pd.DataFrame) -> CheckedRecording:
+        """Run ``name`` as a checked recording; ``frame`` must be this object's frame."""
+        if self.frames.get(name) is not frame:
+            raise ValueError(f"run {name!r} is not one of the shared frames")
+        if name not in self._checked:
+            self._checked[name] = CheckedRecording(name, frame)
+        return self._checked[name]
+
+    def raw_rises(self, name: str) -> np.ndarray:
+        """The rises of the 20 raw sensors of run ``name`` (shared: do not modify)."""
+        checked = self.checked(name, self.frames[name])
+        return self.memo("raw rises", name,
+                         lambda: rises(np.asfortranarray(checked.stack(SENSORS))))
+
+    def memo(self, what: str, name: str, compute: Callable[[], T]) -> T:
+        """``compute()`` the first time ``what`` of run ``name`` is asked for, then kept
+        (for results that depend on the held-out run only, like the oracle's): kept by the
+        run's checked recording (``CheckedRecording.memo``)."""
+        return self.checked(name, self.frames[name]).memo(what, compute)
+
+
+class EvaluationData:
+    """One evaluation's recordings, converted and checked once for every method and k.
+
+    Why: each of a job's methods used to read, check and subtract the same frames again
+    (``evaluate`` per group and k, the raw rises per baseline): 99 % of an evaluation's time,
+    the selection maths 1 %. The frames are columns T1..T20, drift_um and
+    true_drift_rise_um; every method reads them through here, so the results are those of
+    the per-method path to the last bit (tests compare the two). ``runs`` (holding the test
+    frames) shares the test runs' conversions with other training runs.
+    """
+
+    def __init__(self, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
+                 runs: SharedRuns | None = None) -> None:
+        self.train = train
+        self.tests = {str(name): frame for name, frame in tests.items()}
+        self.runs = SharedRuns(self.tests) if runs is None else runs
+        self.checked_train = CheckedRecording(recording_name(train, "train"), train)
+        self.checked_tests = {name: self.runs.checked(name, frame)
+                              for name, frame in self.tests.items()}
+        self._train_rises: np.ndarray | None = None
+
+    def raw_rises(self, name: str | None = None) -> np.ndarray:
+        """The rises of the 20 raw sensors of test run ``name`` (None: the training run);
+        shared: do not modify.
+
+        Column-major, as ``frame.loc[:, SENSORS].to_numpy()`` gives them: the BLAS calls
+        of the fits below may round differently on another memory layout."""
+        if name is not None:
+            return self.runs.raw_rises(name)
+        if self._train_rises is None:
+            self._train_rises = rises(np.asfortranarray(self.checked_train.stack(SENSORS)))
+        return self._train_rises
+
+    def column(self, name: str, column: str) -> np.ndarray:
+        """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
+        return self.checked_tests[str(name)].values(column)
+
+
+def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
+               similarity: str, data: EvaluationData | None = None) -> dict[str, Score]:
+    """Train ``spec`` on ``train`` (columns T1..T20, drift_um, true_drift_rise_um) and score
+    it on every frame of ``tests``; ``data`` (of the same frames) shares their conversions
+    with the job's other methods."""
+    if data is None:
+        data = EvaluationData(train, tests)
+    if spec.group is not None:
+        return _paper_group(spec, data, similarity)
+    if spec.name == "top-k-correlated":
+        return _top_k_correlated(spec, data)
+    if spec.name == "ridge":
+        return _ridge(data)
+    if spec.name == ORACLE:
+        return _oracle(data)
+    raise ValueError(f"unknown method {spec.name!r}")
+
+
+def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
+            rows: Mapping[str, np.ndarray] | None = None) -> dict[str, Score]:
+    """Scores of the predictions of every test run (on its samples ``rows`` if given)."""
+    return {name: _score(data, name, predictions[name], selected,
+                         None if rows is None else rows[name]) for name in data.tests}
+
+
+def _score(data: EvaluationData, name: str, prediction: np.ndarray, selected: str,
+           rows: np.ndarray | None = None) -> Score:
+    """Score of the prediction of test run ``name`` (on its samples ``rows`` if given)."""
+    measured, truth = data.column(name, TARGET), data.column(name, TRUTH)
+    if rows is not None:
+        measured, truth = measured[rows], truth[rows]
+    return Score(rmse(measured, prediction), rmse(truth, prediction), selected)
+
+
+def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
+    # A dropout reaches evaluate only as a whole-run NaN column (jobs.measured_frame holds a
+    # dropped sensor at its last good reading): with "drop-rows" a group whose model does not
+    # read that sensor is still scored; one that does fails with a one-line error.
+    if spec.k is None:
+        raise ValueError(f"{spec.name} needs a number of clusters k")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
+        result = evaluate_checked(data.checked_train, data.checked_tests, TARGET,
+                                  sensors=list(GROUP_SENSORS[spec.group]), k=spec.k,
+                                  differences=spec.group == SIX_DIFF, similarity=similarity,
+                                  missing="drop-rows", method=spec.choice, seed=spec.seed)
+    # evaluate scored the measured drift already (the same arrays): only the truth is left
+    selected, scores = ";".join(result.selected), {}
+    for name in data.tests:
+        truth, rows = data.column(name, TRUTH), result.test_rows[name]
+        if len(rows) < len(truth):
+            truth = truth[rows]
+        scores[name] = Score(result.rmse_um[name], rmse(truth, result.predictions[name]),
+                             selected)
+    return scores
+
+
+def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
+    X = data.raw_rises()
+    y = data.train[TARGET].to_numpy(float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
+        selection = select_with(TOP_K, X, y, spec.k, names=SENSORS)
+    chosen = selection.selected
+    fit = fit_with(TOP_K, X[:, chosen], y)
+    predictions = {name: fit.predict(data.raw_rises(name)[:, chosen]) for name in data.tests}
+    return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
+
+
+def _ridge(data: EvaluationData) -> dict[str, Score]:
+    X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
+    differences = PairwiseDifferences().fit(X)
+    candidates = differences.transform(X)
+    # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
+    alpha = blocked_cv_alpha(candidates, y, factors=(X, with_differences_matrix(X.shape[1])))
+    # make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha)).fit(X, y), step
+    # by step as Pipeline.fit runs it, on the candidates made for the CV
+    scaler = StandardScaler().fit(candidates)
+    ridge = Ridge(alpha=alpha).fit(scaler.transform(candidates), y)
+    model = Pipeline([("pairwisedifferences", differences), ("standardscaler", scaler),
+                      ("ridge", ridge)])
+    return _scores(data, _ridge_predictions(model, data),
+                   f"all 210 candidates (alpha={alpha:.3g})")
+
+
+def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.ndarray]:
+    """``model.predict`` of every test run's raw rises, to the last bit, in a fraction of
+    the time: a run's 210 candidates do not depend on the training run (made once per run),
+    and the scaler's and the ridge's arithmetic (``StandardScaler.transform``: minus
+    ``mean_``, divided by ``scale_``; ``Ridge.predict``: ``X @ coef_ + intercept_``) runs on
+    each run's own array in its own memory layout, as ``model.predict`` runs it (one product
+    on the runs stacked, or on another layout, rounds differently; test_sweep_methods
+    compares the two), without scikit-learn validating each of the 23 inputs twice. When a
+    run's rises or candidates fail or a value is not finite, every run takes
+    ``model.predict`` one by one, so the errors are those of that path, in its order."""
+    scaler, ridge = model.steps[1][1], model.steps[2][1]
+
+    def candidates(name: str) -> Callable[[], np.ndarray]:
+        return lambda: PairwiseDifferences().fit(data.raw_rises(name)).transform(
+            data.raw_rises(name))
+
+    try:
+        blocks = [data.runs.memo("ridge candidates", name, candidates(name))
+                  for name in data.tests]
+    except Exception:  # model.predict below raises it where it did
+        blocks = []
+    scaled = [(block - scaler.mean_) / scaler.scale_ for block in blocks]
+    if len(blocks) != len(data.tests) or ridge.coef_.ndim != 1 or not all(
+            np.isfinite(values).all() for values in scaled):  # scikit-learn would refuse
+        return {name: model.predict(data.raw_rises(name)) for name in data.tests}
+    return {name: values @ ridge.coef_ + ridge.intercept_
+            for name, values in zip(data.tests, scaled, strict=True)}
+
+
+def _oracle(data: EvaluationData) -> dict[str, Score]:
+    # Fitted on the held-out run itself, so the same for every training run: fitted and
+    # scored once per run (all fits first, then the scores: the errors of one pass each)
+    def prediction(name: str) -> Callable[[], np.ndarray]:
+        def fit() -> np.ndarray:
+            X = data.raw_rises(name)
+            return fit_regressor(DEFAULT_REGRESSOR, X,
+                                 data.tests[name][TARGET].to_numpy(float)).predict(X)
+        return fit
+
+    predictions = {name: data.runs.memo(ORACLE, name, prediction(name)) for name in data.tests}
+    selected = "all 20 sensors, fitted on the held-out run itself"
+    return {name: data.runs.memo(f"{ORACLE} score", name, lambda name=name: _score(
+        data, name, predictions[name], selected)) for name in data.tests}
+
+
+def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
+              similarity: str, runs: SharedRuns | None = None) -> list[dict[str, object]]:
+    """Rows (method, k, test, scores or error) for every spec; a failing method is recorded,
+    never raised, so one bad fit does not cost the others. ``runs`` (holding the frames of
+    ``tests``) shares the test runs' conversions with other training runs."""
+    rows: list[dict[str, object]] = []
+    data = EvaluationData(train, tests, runs)  # the one pass: every spec works on its arrays
+    for spec in specs:
+        try:
+            scores = run_method(spec, train, tests, similarity, data)
+        except Exception as exc:  # failure isolation per method
+            message = one_line_error(exc)
+            rows.extend({"method": spec.name, "k": spec.k, "test_experiment": name,
+                         "rmse_um": np.nan, "rmse_true_um": np.nan, "selected": "",
+                         "error": message} for name in tests)
+            continue
+        rows.extend({"method": spec.name, "k": spec.k, "test_experiment": name,
+                     "rmse_um": score.rmse_um, "rmse_true_um": score.rmse_true_um,
+                     "selected": score.selected, "error": ""} for name, score in scores.items())
+    return rows

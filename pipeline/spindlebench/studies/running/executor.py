@@ -1,0 +1,371 @@
+"""Run a study's tasks on local worker processes, in-process, or on a Dask cluster.
+
+Every backend is a ``concurrent.futures.Executor``: a ``ProcessPoolExecutor`` by default, an
+in-process executor for ``workers=0`` (debugging, profiling), and for a Dask address the
+executor of a ``distributed.Client`` connected to that scheduler, so a study that outgrows
+one machine runs on many without a line of study code changing.
+
+:func:`TaskRunner.run` isolates failures: an exception inside a task becomes a failed
+:class:`Outcome` carrying its one-line message, and a worker process that dies (a crash in
+native FMU code) breaks only the tasks it was running, which are retried one by one in
+quarantine so the crash is pinned to the task that caused it. Handlers may answer an
+outcome with follow-up tasks (an evaluation once its simulations are in), so the workers
+never idle between the phases of a study.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+import re
+import select
+import threading
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from tqdm.auto import tqdm
+
+from spindlebench.core import interrupts
+from spindlebench.core.console import one_line_error
+from spindlebench.core.errors import SpindlebenchError
+
+#: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
+DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$|^inproc://\S+$")
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: ``fn(*args)`` under a unique ``key``; ``fn`` must be importable."""
+
+    key: str
+    fn: Callable[..., Any]
+    args: tuple[Any, ...] = ()
+    kind: str = "task"
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What became of a task: its value, or the one-line error and the traceback."""
+
+    task: Task
+    value: Any = None
+    error: str | None = None
+    detail: str = ""
+    seconds: float = 0.0
+    #: CPU seconds of the process that ran the task, spent inside the task function.
+    cpu_s: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+@dataclass
+class RunStats:
+    """Counts per task kind, for reports, benchmarks and tests."""
+
+    done: dict[str, int] = field(default_factory=dict)
+    failed: dict[str, int] = field(default_factory=dict)
+    seconds: float = 0.0
+    #: Seconds spent inside the task functions, summed over workers, per kind.
+    busy_s: dict[str, float] = field(default_factory=dict)
+    #: CPU seconds spent inside the task functions, summed over workers, per kind (on a
+    #: shared machine the wall seconds above also hold other programs' time).
+    cpu_s: dict[str, float] = field(default_factory=dict)
+
+    def count(self, outcome: Outcome) -> None:
+        kind = outcome.task.kind
+        bucket = self.done if outcome.ok else self.failed
+        bucket[kind] = bucket.get(kind, 0) + 1
+        self.busy_s[kind] = self.busy_s.get(kind, 0.0) + outcome.seconds
+        self.cpu_s[kind] = self.cpu_s.get(kind, 0.0) + outcome.cpu_s
+
+    def total(self, kind: str | None = None) -> int:
+        if kind is None:
+            return sum(self.done.values()) + sum(self.failed.values())
+        return self.done.get(kind, 0) + self.failed.get(kind, 0)
+
+
+def call_isolated(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, str | None, str,
+                                                                          float, float]:
+    """Run ``fn(*args)`` in a worker; an exception comes back as data, never as a raise.
+    Returns (value, error, traceback, wall seconds, CPU seconds)."""
+    start, cpu = time.perf_counter(), time.process_time()
+    try:
+        value = fn(*args)
+    except Exception as exc:  # failure isolation: every error becomes a recorded outcome
+        return (None, one_line_error(exc), traceback.format_exc(), time.perf_counter() - start,
+                time.process_time() - cpu)
+    return value, None, "", time.perf_counter() - start, time.process_time() - cpu
+
+
+class InlineExecutor(cf.Executor):
+    """Runs each task at submission, in this process: no pickling, easy to debug."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> cf.Future[Any]:
+        future: cf.Future[Any] = cf.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:
+            future.set_exception(exc)
+        return future
+
+
+def default_workers() -> int:
+    return max(1, os.cpu_count() or 1)
+
+
+def single_threaded_worker(parent_pid: int | None = None) -> None:
+    """Worker initializer: one BLAS thread per process, one-line warnings, and exit when the
+    study process dies.
+
+    The workers already fill the cores; a multi-threaded BLAS in each of them oversubscribes
+    the machine, and OpenBLAS's spinning threads then make two workers slower than one.
+    A worker is a child of the forkserver, not of the study process, and waits on its task
+    queue forever: after a ``kill -9`` of the study it would live on, reparented to PID 1
+    (and keep the forkserver and resource tracker alive with it), so it watches
+    ``parent_pid`` and exits as soon as that process is gone.
+    """
+    import warnings
+
+    from threadpoolctl import threadpool_limits
+
+    from spindlebench.core.console import print_warning
+
+    threadpool_limits(limits=1)
+    warnings.showwarning = print_warning  # one line, as in the study process, no source line
+    if parent_pid is not None:
+        threading.Thread(target=_exit_with, args=(parent_pid,), daemon=True,
+                         name="exit-with-parent").start()
+
+
+def _exit_with(pid: int) -> None:
+    """Block until process ``pid`` ends, then end this process at once."""
+    try:
+        handle = os.pidfd_open(pid)  # readable when the process ends (Linux >= 5.3)
+    except (AttributeError, OSError):
+        handle = None
+    if handle is not None:
+        select.select([handle], [], [])
+    else:
+        while _alive(pid):
+            time.sleep(1.0)
+    os._exit(1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _local_pool(workers: int) -> cf.ProcessPoolExecutor:
+    # forkserver: forking a process that runs threads (tqdm, Dask) can deadlock the child.
+    context = multiprocessing.get_context("forkserver")
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                  initializer=single_threaded_worker, initargs=(os.getpid(),))
+
+
+def _stop_workers(executor: cf.Executor) -> None:
+    """End a local pool's workers now (Ctrl-C: do not wait for their running simulations).
+
+    SIGKILL, not SIGTERM: a worker inside a simulation defers SIGTERM
+    (``interrupts.deferred``), ends only that task and lives on, while one that was idle dies
+    at once, possibly holding the pool's task-queue lock; the survivor then waits on that lock
+    forever and the pool's shutdown with it (a study hung at exit). Workers hold nothing to
+    save: results are written by this process, and the unpacked FMU folder of a killed worker
+    is removed by the next process that unpacks (``runner.extracted_fmu``)."""
+    processes = getattr(executor, "_processes", None) or {}
+    for process in list(processes.values()):
+        if process.is_alive():
+            process.kill()
+
+
+@contextmanager
+def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor]:
+    """The executor of a Dask client connected to the scheduler at ``address``."""
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - distributed is a pinned requirement
+        raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
+    try:
+        client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SpindlebenchError(
+            f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
+        ) from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()
+
+
+class TaskRunner:
+    """Runs tasks with failure isolation, follow-up tasks and a done/total progress bar."""
+
+    def __init__(self, workers: int | None = None, dask_address: str | None = None,
+                 progress: bool = True, desc: str = "tasks", unit: str = "task",
+                 connect_timeout_s: float = 10.0) -> None:
+        if workers is not None and workers < 0:
+            raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
+        self.workers = default_workers() if workers is None else workers
+        if dask_address is not None and not DASK_ADDRESS.match(dask_address):
+            raise SpindlebenchError(f"--dask-address {dask_address!r}: expected a scheduler "
+                                    "address like tcp://HOST:PORT")
+        self.dask_address = dask_address
+        self.progress = progress
+        self.desc = desc
+        self.unit = unit
+        self.connect_timeout_s = connect_timeout_s
+        self._dask: cf.Executor | None = None
+
+    @contextmanager
+    def connected(self) -> Iterator[TaskRunner]:
+        """Connect to the Dask scheduler now (if any) and keep the connection for ``run``.
+
+        Entered before a study touches its results folder, so an unreachable scheduler is
+        one line with nothing written, not a folder with a state.json and no results.
+        """
+        if not self.dask_address or self._dask is not None:
+            yield self
+            return
+        with dask_executor(self.dask_address, self.connect_timeout_s) as executor:
+            self._dask = executor
+            try:
+                yield self
+            finally:
+                self._dask = None
+
+    def describe(self) -> str:
+        if self.dask_address:
+            return f"Dask cluster at {self.dask_address}"
+        if self.workers == 0:
+            return "in-process"
+        return f"{self.workers} local worker process(es)"
+
+    def _max_in_flight(self) -> int:
+        """Tasks handed to the executor at once: enough to keep every worker busy, few
+        enough that follow-ups start early and results stream to disk in order."""
+        if self.dask_address:
+            return 1 << 30  # the scheduler balances its workers itself
+        return max(1, 2 * self.workers)
+
+    def _open(self) -> cf.Executor:
+        if self.workers == 0:
+            return InlineExecutor()
+        return _local_pool(self.workers)
+
+    def run(self, tasks: Iterable[Task],
+            on_outcome: Callable[[Outcome], Iterable[Task] | None] | None = None,
+            expected_follow_ups: int = 0) -> RunStats:
+        """Run ``tasks`` (and any follow-ups ``on_outcome`` returns) to completion.
+
+        ``on_outcome`` runs in this process, in completion order; it is where results are
+        written to disk, so a sweep interrupted at any moment keeps every finished task.
+        ``expected_follow_ups`` lets the progress bar show the true total from the start.
+        """
+        stats = RunStats()
+        start = time.perf_counter()
+        queue = list(tasks)
+        bar = tqdm(total=len(queue) + expected_follow_ups, desc=self.desc, unit=self.unit,
+                   disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
+        try:
+            if self.dask_address:
+                with self.connected():
+                    executor = self._dask
+                    self._drain(lambda: executor, queue, on_outcome, stats, bar)
+            else:
+                self._drain(self._open, queue, on_outcome, stats, bar)
+        finally:
+            bar.close()
+            stats.seconds = time.perf_counter() - start
+        return stats
+
+    def _drain(self, open_executor: Callable[[], cf.Executor], queue: list[Task],
+               on_outcome: Callable[[Outcome], Iterable[Task] | None] | None,
+               stats: RunStats, bar: Any) -> None:
+        """Submit, collect and hand over outcomes until no task is left.
+
+        When a local worker dies the pool is unusable: the tasks it was running are rerun
+        one by one in quarantine (each in a fresh one-worker pool) so the crash is pinned on
+        the task that causes it, then a fresh pool takes the rest.
+        """
+
+        known = len(queue)  # tasks seen so far, follow-ups included
+
+        def finish(outcome: Outcome) -> None:
+            nonlocal known
+            stats.count(outcome)
+            follow_ups = list(on_outcome(outcome) or ()) if on_outcome else []
+            queue.extend(follow_ups)
+            known += len(follow_ups)
+            bar.total = max(bar.total, known)
+            done = ", ".join(f"{kind} {count}" for kind, count in stats.done.items())
+            failed = sum(stats.failed.values())
+            bar.set_postfix_str(done + (f", failed {failed}" if failed else ""), refresh=False)
+            bar.update(1)
+
+        while queue:
+            executor = open_executor()
+            running: dict[cf.Future[Any], Task] = {}
+            victims: list[Task] = []
+            try:
+                while queue or running:
+                    while queue and not victims and len(running) < self._max_in_flight():
+                        task = queue.pop(0)
+                        try:
+                            future = executor.submit(call_isolated, task.fn, task.args)
+                        except BrokenProcessPool:
+                            victims.append(task)
+                            break
+                        running[future] = task
+                    if not running:
+                        break
+                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                    for future in done:
+                        task = running.pop(future)
+                        try:
+                            value, error, detail, seconds, cpu_s = future.result()
+                        except BrokenProcessPool:
+                            victims.append(task)
+                            continue
+                        except Exception as exc:  # a Dask worker lost, an unpicklable result
+                            finish(Outcome(task, error=one_line_error(exc), detail=repr(exc)))
+                            continue
+                        finish(Outcome(task, value, error, detail, seconds, cpu_s))
+            except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
+                if not isinstance(executor, InlineExecutor) and not self.dask_address:
+                    with interrupts.deferred():  # a second signal must not cut the stop short
+                        _stop_workers(executor)
+                raise
+            finally:
+                if not isinstance(executor, InlineExecutor) and not self.dask_address:
+                    # a signal inside shutdown() left its manager thread waiting on a worker
+                    # nobody stopped, and the study hung at exit: finish it, then raise
+                    with interrupts.deferred():
+                        executor.shutdown(wait=True, cancel_futures=True)
+            for task in victims:
+                finish(_run_quarantined(task))
+
+
+def _run_quarantined(task: Task) -> Outcome:
+    pool = _local_pool(1)
+    try:
+        value, error, detail, seconds, cpu_s = pool.submit(call_isolated, task.fn,
+                                                           task.args).result()
+    except BrokenProcessPool:
+        return Outcome(task, error="worker process died while running this task "
+                                   "(crash in native code, e.g. the FMU?)")
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    return Outcome(task, value, error, detail, seconds, cpu_s)

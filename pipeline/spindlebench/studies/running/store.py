@@ -1,0 +1,303 @@
+"""A study's results folder as a resumable store: one file per finished unit of work.
+
+Each unit (a simulated recording, an evaluation) is written atomically when it finishes, so
+the folder is always consistent: an interrupted study restarts, finds what is on disk, and
+does only the rest. ``state.json`` pins the inputs: the study's *content* (its parsed,
+canonicalised tables, so a comment, blank line or reordered key does not count as a change)
+and the FMU's hash. Resuming with different inputs would mix incompatible results, so it is
+refused with one line naming what differs.
+
+A finished unit counts as done only while it is intact: every file the store writes has its
+SHA-256 in ``manifest.json`` (a recording's CSV is checked against its sidecar's
+``recording_sha256``), so a damaged, truncated or edited piece is named in a warning and
+redone instead of read (random bytes in a stored CSV were a ``UnicodeDecodeError``).
+
+Only one study process may work in a folder at a time: ``claim`` takes an exclusive lock
+(``.lock``, an ``flock`` the system drops when the process ends, even by ``kill -9``); a
+second process is refused with one line naming the process that holds it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import json
+import os
+import socket
+import sys
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from spindlebench.core.atomic import atomic_path, write_text
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.table_csv import write_table
+
+STATE_FILE = "state.json"
+MANIFEST_FILE = "manifest.json"
+LOCK_FILE = ".lock"
+CONTENT_KEY = "study_content_sha256"
+#: How a refusal names each pinned input.
+_LABELS = {CONTENT_KEY: "study", "fmu_sha256": "FMU"}
+_MAX_NAMED = 3
+
+
+def canonical(content: Any) -> Any:
+    """``content`` as it reads back from JSON, with 6000.0 written as 6000.
+
+    Whole-number floats become ints so that ``6000`` and ``6000.0`` in a study file (the same
+    value to the loader) pin the same content; dates become strings, tuples lists.
+    """
+    if isinstance(content, dict):
+        return {str(key): canonical(value) for key, value in content.items()}
+    if isinstance(content, list | tuple):
+        return [canonical(value) for value in content]
+    if isinstance(content, float) and content.is_integer():
+        return int(content)
+    if content is None or isinstance(content, bool | int | float | str):
+        return content
+    return str(content)
+
+
+def content_sha256(content: Any) -> str:
+    """Hex SHA-256 of the canonical JSON of ``content`` (sorted keys, no whitespace)."""
+    text = json.dumps(canonical(content), sort_keys=True, ensure_ascii=False,
+                      separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _flatten(table: Any, prefix: str = "") -> dict[str, Any]:
+    if not isinstance(table, dict):
+        return {prefix: table}
+    out: dict[str, Any] = {}
+    for key, value in table.items():
+        out.update(_flatten(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+_ABSENT: Any = object()
+
+
+def _short(value: Any) -> str:
+    text = "(absent)" if value is _ABSENT else json.dumps(value, ensure_ascii=False)
+    return text if len(text) <= 40 else text[:39] + "…"
+
+
+def differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    """``<section> key 'a.b': old → new`` for every leaf that differs between two contents.
+
+    A content is a dict of sections (``"study file"``, ``"climate file"``), each a table.
+    """
+    out = []
+    for section in sorted(set(old) | set(new)):
+        before, after = _flatten(old.get(section, {})), _flatten(new.get(section, {}))
+        for key in sorted(set(before) | set(after)):
+            was, now = before.get(key, _ABSENT), after.get(key, _ABSENT)
+            if was != now:
+                out.append(f"{section} key '{key}': {_short(was)} → {_short(now)}")
+    return out
+
+
+class DamagedResultWarning(UserWarning):
+    """A stored piece of a study no longer matches what was written; it is redone."""
+
+
+class ResultStore:
+    """Files under ``root``, addressed by relative paths, each checked to be intact."""
+
+    def __init__(self, root: str | Path) -> None:
+        self.root = Path(root)
+        self._manifest: dict[str, str] | None = None
+        self._verified: dict[str, bool] = {}
+        self._lock: int | None = None
+
+    def path(self, relative: str | Path) -> Path:
+        return self.root / relative
+
+    def exists(self, relative: str | Path) -> bool:
+        """Whether the piece is there and intact; a damaged one is named and counts as
+        missing (so the caller redoes it)."""
+        return self.path(relative).is_file() and self.intact(relative)
+
+    def has_recording(self, relative: str | Path) -> bool:
+        """Whether the recording CSV ``relative`` is there, intact and has its JSON sidecar.
+
+        The recording writer moves the CSV into place before its sidecar, so a study killed
+        between the two moves leaves a CSV alone; without its sidecar (provenance, the
+        ``recording_sha256`` it is checked against) it is not a finished recording: named in
+        a warning and redone, not taken on trust."""
+        if not self.exists(relative):
+            return False
+        key = Path(relative).as_posix()
+        sidecar = self.path(key).with_suffix(".json")
+        if sidecar.is_file():
+            return True
+        warnings.warn(f"{self.path(key)}: incomplete (its sidecar {sidecar.name} is missing); "
+                      "redoing it", DamagedResultWarning, stacklevel=2)
+        self._verified[key] = False
+        return False
+
+    def intact(self, relative: str | Path) -> bool:
+        """Whether the file still has the bytes the store (or the recording writer) wrote;
+        a file written before the store kept hashes is taken on trust."""
+        key = Path(relative).as_posix()
+        if key not in self._verified:
+            problem = self._damage(key)
+            if problem:
+                warnings.warn(f"{self.path(key)}: {problem}; redoing it",
+                              DamagedResultWarning, stacklevel=3)
+            self._verified[key] = problem is None
+        return self._verified[key]
+
+    def _damage(self, key: str) -> str | None:
+        actual = sha256_file(self.path(key))
+        expected = self.manifest().get(key)
+        sidecar = self.path(key).with_suffix(".json")
+        if expected is None and key.endswith(".csv") and sidecar.exists():  # a recording
+            try:
+                expected = json.loads(sidecar.read_text(encoding="utf-8")).get(
+                    "recording_sha256")
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+                return f"damaged (its sidecar {sidecar.name} is unreadable)"
+        if expected is None or expected == actual:
+            return None
+        return (f"damaged (sha256 {actual[:12]}… is not the {expected[:12]}… it was "
+                "written with)")
+
+    def manifest(self) -> dict[str, str]:
+        """Relative path → SHA-256 of every file this store wrote."""
+        if self._manifest is None:
+            try:
+                loaded = json.loads(self.path(MANIFEST_FILE).read_text(encoding="utf-8"))
+                self._manifest = {str(k): str(v) for k, v in loaded.items()}
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+                self._manifest = {}  # lost or damaged: every piece is taken on trust
+        return self._manifest
+
+    def _written(self, relative: str | Path) -> None:
+        key = Path(relative).as_posix()
+        self.manifest()[key] = sha256_file(self.path(key))
+        self._verified[key] = True
+        self._save_manifest()
+
+    def _save_manifest(self) -> None:
+        write_text(self.path(MANIFEST_FILE),
+                   json.dumps(dict(sorted(self.manifest().items())), indent=1) + "\n")
+
+    def remove(self, relative: str | Path) -> None:
+        key = Path(relative).as_posix()
+        self.path(key).unlink(missing_ok=True)
+        self._verified.pop(key, None)
+        if self.manifest().pop(key, None) is not None:
+            self._save_manifest()
+
+    def write_json(self, relative: str | Path, data: Any) -> Path:
+        target = self.path(relative)
+        write_text(target, json.dumps(data, indent=2, ensure_ascii=False, default=str) + "\n")
+        self._written(relative)
+        return target
+
+    def read_json(self, relative: str | Path) -> Any:
+        return json.loads(self.path(relative).read_text(encoding="utf-8"))
+
+    def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
+        target = self.path(relative)
+        with atomic_path(target) as tmp:
+            write_table(tmp, frame)
+        self._written(relative)
+        return target
+
+    def read_frame(self, relative: str | Path) -> pd.DataFrame:
+        return pd.read_csv(self.path(relative), keep_default_na=True)
+
+    def lock(self) -> None:
+        """Take the folder's exclusive lock for the life of this process, or refuse in one
+        line naming the process that holds it."""
+        if self._lock is not None:
+            return
+        self._refuse_foreign_folder()  # no lock file in a folder that is not ours
+        self.root.mkdir(parents=True, exist_ok=True)
+        path = self.path(LOCK_FILE)
+        handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(handle, 400).decode("utf-8", "replace").strip() or "another process"
+            os.close(handle)
+            raise SpindlebenchError(f"{self.root}: in use by {holder}; wait for it to finish "
+                                    "or use another output folder") from None
+        os.ftruncate(handle, 0)
+        command = " ".join(["spindlebench", *sys.argv[1:3]]) if sys.argv else "python"
+        os.write(handle, f"process {os.getpid()} on {socket.gethostname()} "
+                         f"({command})\n".encode())
+        self._lock = handle  # kept open: the lock lasts as long as this process
+
+    def unlock(self) -> None:
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[ResultStore]:
+        """Hold the folder's lock for the block (re-entrant: an outer holder keeps it)."""
+        if self._lock is not None:
+            yield self
+            return
+        self.lock()
+        try:
+            yield self
+        finally:
+            self.unlock()
+
+    def _refuse_foreign_folder(self) -> None:
+        if not self.path(STATE_FILE).is_file() and self.root.exists() and any(
+                p.name != LOCK_FILE for p in self.root.iterdir()):
+            raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
+                                    "choose an empty or new folder")
+
+    def claim(self, content: dict[str, Any], hashes: dict[str, str]) -> bool:
+        """Start or resume: pin the inputs or check them against the pinned ones.
+
+        ``content``: the study's canonical content (sections of tables, see
+        :func:`differences`); its hash is pinned and the content itself is kept, so a refusal
+        names the keys that changed. ``hashes``: other inputs pinned by hash (the FMU).
+        Returns True when resuming existing work; refuses a folder made from other inputs.
+        """
+        content = canonical(content)
+        inputs = {CONTENT_KEY: content_sha256(content), **hashes}
+        state_path = self.path(STATE_FILE)
+        self.lock()  # held until unlock(), the end of ``locked()`` or of the process
+        if state_path.is_file():
+            try:
+                state = json.loads(state_path.read_text(encoding="utf-8"))
+                recorded = state["inputs"]
+                if not isinstance(recorded, dict) or CONTENT_KEY not in recorded:
+                    raise TypeError
+            except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
+                raise SpindlebenchError(f"{state_path}: not a study state file; "
+                                        "choose another output folder") from None
+            for key, value in inputs.items():
+                if recorded.get(key) != value:
+                    raise self._refusal(key, recorded.get(key), value, state.get("content"),
+                                        content)
+            return True
+        self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
+        return False
+
+    def _refusal(self, key: str, was: Any, now: str, old_content: Any,
+                 new_content: dict[str, Any]) -> SpindlebenchError:
+        label = _LABELS.get(key, key)
+        named = differences(old_content, new_content) if (
+            key == CONTENT_KEY and isinstance(old_content, dict)) else []
+        if named:
+            more = len(named) - _MAX_NAMED
+            what = "; ".join(named[:_MAX_NAMED]) + (f"; and {more} more" if more > 0 else "")
+        else:
+            what = f"sha256 {str(was)[:12]}… vs {now[:12]}…"
+        return SpindlebenchError(f"{self.root}: holds results of a different {label} ({what}); "
+                                 "use a new output folder to run this study")

@@ -1,0 +1,1 @@
+"""The season sweep: run, summary, figures and report."""

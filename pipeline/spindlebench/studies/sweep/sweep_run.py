@@ -1,0 +1,335 @@
+"""``spindlebench sweep STUDY.toml``: the season stress test of the selection methods.
+
+Simulates every experiment of the study on every replica's day (through the FMU, in worker
+processes or on a Dask cluster), then, per replica, measurement condition and training
+experiment, trains every method and scores it on all held-out experiments. Each finished
+simulation and evaluation is on disk at once, so an interrupted sweep resumes where it
+stopped; a failed simulation is recorded with its error and the sweep carries on.
+
+The results folder holds ``results.csv`` (tidy: one row per replica × condition × method × k
+× held-out experiment), ``summary.csv``, box plots, ``README.md`` (the findings, computed from
+the data) and ``provenance.json``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from spindlebench.core.atomic import write_text
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.provenance import file_entry, provenance
+from spindlebench.formats.recording import TRUTH_COLUMNS, read_back, read_recording
+from spindlebench.studies.family.experiments import (
+    Condition,
+    Experiment,
+    conditions,
+    experiments,
+    replicas,
+    sensor_seed,
+    training_experiments,
+)
+from spindlebench.studies.family.family_file import (
+    SweepStudy,
+    check_fmu,
+    describe,
+    load_study,
+    pinned_content,
+)
+from spindlebench.studies.family.methods import method_specs
+from spindlebench.studies.running.executor import Outcome, RunStats, Task, TaskRunner
+from spindlebench.studies.running.jobs import NOISE_FREE, EvaluationJob, evaluate_job
+from spindlebench.studies.running.simulations import (
+    Simulations,
+    failure_path,
+    recording_path,
+)
+from spindlebench.studies.running.store import ResultStore, content_sha256
+
+RESULT_COLUMNS = (
+    "replica", "data", "noise", "fault", "train_experiment", "test_experiment", "test_month",
+    "test_season", "test_speed_rpm", "test_programme", "test_cooling", "method", "k",
+    "rmse_um", "rmse_true_um", "selected", "error",
+)
+
+
+@dataclass
+class SweepOutcome:
+    """What a sweep did: counts of work done now, the results table and the output folder."""
+
+    out_dir: Path
+    results: pd.DataFrame
+    stats: RunStats
+    resumed: bool
+    skipped: dict[str, int] = field(default_factory=dict)
+    #: (replica, condition, training run) evaluations done now; ``stats`` counts their jobs
+    #: (one per replica and condition)
+    evaluated: int = 0
+
+
+def condition_id(condition: Condition | None) -> str:
+    return condition.id if condition is not None else NOISE_FREE
+
+
+def evaluation_path(replica: int, condition: Condition | None, train: Experiment) -> str:
+    return f"evals/r{replica:03d}/{condition_id(condition)}/{train.id}.csv"
+
+
+def error_path(relative: str) -> str:
+    """Where a failed unit's error is kept (beside the file it did not produce)."""
+    return relative.removesuffix(".csv") + ".error.csv"
+
+
+class Sweep:
+    """One sweep of one study into one results folder (plans, runs and collects)."""
+
+    def __init__(self, study: SweepStudy, out_dir: Path) -> None:
+        self.study = study
+        self.store = ResultStore(out_dir)
+        self.family = experiments(study)
+        self.trains = training_experiments(study, self.family)
+        self.conditions: list[Condition | None] = list(conditions(study))
+        if study.methods.ground_truth:
+            self.conditions.append(None)
+        self.specs = tuple(method_specs(study.methods))
+        self.fmu = check_fmu(study)
+        self.simulations = Simulations(self.store, study, self.family, self.fmu)
+        self._truths: dict[tuple[int, str], pd.DataFrame] = {}
+
+    # ----------------------------------------------------------------- planning
+
+    def evaluation_keys(self, replica: int) -> list[tuple[Condition | None, Experiment]]:
+        return [(c, t) for c in self.conditions for t in self.trains]
+
+    def simulation_task(self, replica: int, experiment: Experiment) -> Task:
+        """The task that simulates one run (a seam: tests break a run here)."""
+        return self.simulations.task(replica, experiment)
+
+    def evaluation_task(self, replica: int, condition: Condition | None,
+                        trains: Sequence[Experiment]) -> Task:
+        """The task that evaluates training runs ``trains`` of one (replica, condition): one
+        job for all of them measures and checks every run once (a seam: tests break one
+        here)."""
+        truths: dict[str, pd.DataFrame] = {}
+        failures: dict[str, str] = {}
+        for experiment in self.family:
+            if self.store.exists(failure_path(replica, experiment)):
+                failures[experiment.id] = self.simulations.error(replica, experiment)
+            else:
+                truths[experiment.id] = self.truth(replica, experiment)
+        job = EvaluationJob(
+            replica=replica, condition=condition, trains=tuple(trains),
+            experiments=tuple(self.family), truths=truths, failures=failures,
+            seeds={e.id: sensor_seed(self.study, replica, e) for e in self.family},
+            duration_s=self.study.duration_s, specs=self.specs,
+            similarity=self.study.methods.similarity)
+        key = f"evaluate r{replica} {condition_id(condition)}"
+        if list(trains) != self.trains:
+            key += " " + " ".join(train.id for train in trains)
+        return Task(key, evaluate_job, (job,), kind="evaluation")
+
+    def truth(self, replica: int, experiment: Experiment) -> pd.DataFrame:
+        """The run's truth columns as read from its recording (kept from the write when the
+        recording was simulated now: ``read_back``)."""
+        key = (replica, experiment.id)
+        if key not in self._truths:
+            frame = read_recording(self.store.path(recording_path(replica, experiment)))
+            self._truths[key] = frame.loc[:, list(TRUTH_COLUMNS)].copy()
+        return self._truths[key]
+
+    # ----------------------------------------------------------------- running
+
+    def run(self, runner: TaskRunner) -> SweepOutcome:
+        """Simulate and evaluate what is not done yet, holding the folder's lock."""
+        with self.store.locked():
+            return self._run(runner)
+
+    def _run(self, runner: TaskRunner) -> SweepOutcome:
+        resumed = self.simulations.claim()
+        pending = self.simulations.pending()
+        waiting = {r: {e.id for e in exps} for r, exps in pending.items()}
+        tasks: list[Task] = []
+        skipped = {"simulation": 0, "evaluation": 0}
+        for replica, exps in pending.items():
+            skipped["simulation"] += len(self.family) - len(exps)
+            if exps:
+                # Its recordings change: evaluations made from the old set are stale.
+                for condition, train in self.evaluation_keys(replica):
+                    self.store.remove(evaluation_path(replica, condition, train))
+                    self.store.remove(error_path(evaluation_path(replica, condition, train)))
+                tasks.extend(self.simulation_task(replica, e) for e in exps)
+            else:
+                todo = self._evaluations_to_do(replica)
+                skipped["evaluation"] += len(self.evaluation_keys(replica)) - sum(
+                    len(task.args[0].trains) for task in todo)
+                tasks.extend(todo)
+
+        evaluated = [0]  # training-run evaluations written (a job holds several)
+
+        def on_outcome(outcome: Outcome) -> Iterable[Task]:
+            if outcome.task.kind == "simulation":
+                return self._record_simulation(outcome, waiting)
+            self._record_evaluation(outcome)
+            evaluated[0] += len(outcome.task.args[0].trains)
+            return ()
+
+        follow_ups = len(self.conditions) * sum(1 for exps in pending.values() if exps)
+        stats = runner.run(tasks, on_outcome, expected_follow_ups=follow_ups)
+        results = self.collect()
+        return SweepOutcome(self.store.root, results, stats, resumed, skipped, evaluated[0])
+
+    def _evaluations_to_do(self, replica: int) -> list[Task]:
+        """One task per condition of ``replica`` for its training runs without a result file
+        (a run whose file is lost is redone, the others are kept)."""
+        tasks = []
+        for condition in self.conditions:
+            missing = [train for train in self.trains
+                       if not self.store.exists(evaluation_path(replica, condition, train))]
+            if missing:
+                tasks.append(self.evaluation_task(replica, condition, missing))
+        for experiment in self.family:  # the jobs hold their data now: free the cache
+            self._truths.pop((replica, experiment.id), None)
+        return tasks
+
+    def _record_evaluation(self, outcome: Outcome) -> None:
+        """Write each training run's rows, or its error file (kept apart so that the next run
+        retries it): a job that raised fails all its training runs, a training run whose
+        evaluation raised only itself."""
+        job: EvaluationJob = outcome.task.args[0]
+        condition = job.condition
+        for train in job.trains:
+            path = evaluation_path(job.replica, condition, train)
+            value = outcome.value[train.id] if outcome.ok else outcome.error
+            if isinstance(value, pd.DataFrame):
+                self.store.write_frame(path, value)
+                self.store.remove(error_path(path))
+                continue
+            self.store.write_frame(error_path(path), pd.DataFrame([{
+                "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                "noise": condition.noise.name if condition else NOISE_FREE,
+                "fault": condition.fault_name if condition else "none",
+                "train_experiment": train.id,
+                "error": f"evaluation failed: {value}"}]))
+
+    def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
+        replica, experiment = self.simulations.store_outcome(outcome)
+        if outcome.ok:  # its truth as the file reads back, without reading it
+            truth = read_back(self.store.path(recording_path(replica, experiment)),
+                              outcome.value[0], TRUTH_COLUMNS)
+            if truth is not None:
+                self._truths[(replica, experiment.id)] = truth
+        waiting[replica].discard(experiment.id)
+        return self._evaluations_to_do(replica) if not waiting[replica] else []
+
+    # ----------------------------------------------------------------- collecting
+
+    def collect(self) -> pd.DataFrame:
+        """All evaluation files as one tidy table, in a stable order."""
+        frames = []
+        for replica in replicas(self.study):
+            for condition, train in self.evaluation_keys(replica):
+                relative = evaluation_path(replica, condition, train)
+                for candidate in (relative, error_path(relative)):
+                    if self.store.exists(candidate):
+                        frames.append(self.store.read_frame(candidate))
+                        break
+        if not frames:
+            return pd.DataFrame(columns=list(RESULT_COLUMNS))
+        results = pd.concat(frames, ignore_index=True)
+        for column in RESULT_COLUMNS:
+            if column not in results:
+                results[column] = pd.NA
+        results = results.loc[:, list(RESULT_COLUMNS)]
+        results["k"] = results["k"].astype("Int64")
+        for column in ("error", "selected"):  # an all-empty column reads back as float NaN
+            results[column] = results[column].astype(object).where(results[column].notna(), "")
+            results[column] = results[column].astype(str)
+        return results.reset_index(drop=True)
+
+
+def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None = None,
+              dask_address: str | None = None, progress: bool = True,
+              machine: str | None = None) -> SweepOutcome:
+    """Run (or resume) a sweep and write every output; return what was done. ``machine``
+    replaces the study's machine variant."""
+    study = load_study(study_path, machine=machine)
+    sweep = Sweep(study, Path(out_dir))
+    runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
+                        desc=study.name, unit="job")
+    # an unreachable scheduler fails before the folder is made (and locked)
+    with runner.connected(), sweep.store.locked():
+        outcome = sweep.run(runner)
+        write_outputs(sweep, outcome, runner)
+    return outcome
+
+
+def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> None:
+    """results.csv, summary, plots, README and provenance (all atomic)."""
+    from spindlebench.studies.sweep import summary
+    from spindlebench.studies.sweep import sweep_plots as plots
+    from spindlebench.studies.sweep import sweep_report as report
+
+    store, study = sweep.store, sweep.study
+    results = outcome.results
+    store.write_frame("results.csv", results)
+    if not results["rmse_um"].notna().any():
+        raise nothing_to_summarise(sweep, results)
+    tables = summary.summarise(results)
+    for name, table in tables.items():
+        store.write_frame(f"summary/{name}.csv", table)
+    figures = plots.box_plots(results, store.path("plots"))
+    seeds = {f"r{r}": {e.id: sensor_seed(study, r, e) for e in sweep.family}
+             for r in replicas(study)}
+    record = provenance(
+        kind="spindlebench season sweep",
+        study=file_entry(study.path),
+        study_content_sha256=content_sha256(pinned_content(study)),
+        climate=file_entry(study.climate.path),
+        machine=study.machine.provenance(),
+        fmu=file_entry(sweep.fmu),
+        study_seed=study.seed,
+        seeds=seeds,
+        axes=describe(study),
+        executor=runner.describe(),
+    )
+    store.write_json("provenance.json", record)
+    write_text(store.path("README.md"),
+               report.readme(study, results, tables, figures, record, sweep.trains))
+
+
+def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchError:
+    """Write a README that says why there are no findings; return the one-line error.
+
+    When every simulation (or every evaluation) failed there is nothing to summarise, plot or
+    judge; results.csv (written before) keeps every row with its error, and the README and
+    the error line point at the first cause instead of a crash in the summary.
+    """
+    store, study = sweep.store, sweep.study
+    runs, failed = sweep.simulations.runs(), sweep.simulations.failed()
+    if failed:
+        where = failure_path(*failed[0])
+        first = sweep.simulations.error(*failed[0])
+    else:
+        with_error = results[results["error"] != ""]
+        first = with_error["error"].iloc[0] if len(with_error) else "no result rows"
+        where = "results.csv"
+    if len(failed) == len(runs):
+        what = f"all {len(runs)} simulations failed"
+    else:
+        what = (f"no evaluation produced an RMSE ({len(results)} result rows, "
+                f"{len(failed)} of {len(runs)} simulations failed)")
+    write_text(store.path("README.md"), "\n".join([
+        f"# {study.name}: no findings", "",
+        f"Nothing to summarise: {what} ({len(sweep.family)} experiments × "
+        f"{study.replicas} replica(s)).", "",
+        f"First error (`{where}`):", "", f"    {first}", "",
+        "`results.csv` lists every result row with its error. Fix the cause and run the same "
+        "command again: finished work is kept and failed simulations and evaluations are "
+        "retried.", ""]))
+    return SpindlebenchError(f"sweep: {what}; first: {first}; see {store.path(where)}")
+
+
+# --------------------------------------------------------------------- command line
