@@ -1,6 +1,6 @@
 """Calibration as a weighted nonlinear least-squares problem on the model's own equations.
 
-The equations are ``modelica.equations.explicit_ode`` (what the FMU contains), integrated with
+The equations are ``model.equations.explicit_ode`` (what the FMU contains), integrated with
 the implicit trapezoidal rule (A-stable, second order) on the recording's sample grid, inputs
 held over each interval as in the co-simulation. The network is stiff (probes react in
 seconds, the floor in a day), so an explicit method would need steps far below the 60 s

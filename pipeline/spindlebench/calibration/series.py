@@ -122,7 +122,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
                 roles: ColumnRoles | None = None) -> Series:
     """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given.
 
-    The map names every column used; ``roles`` (``formats.columns``) gives the time column
+    The map names every column used; ``roles`` (``formats.roles``) gives the time column
     (required: the model is integrated over it), the CSV dialect and whether a temperature
     column that copies the error column (|r| > 0.999) is allowed.
     """

@@ -6,7 +6,7 @@ the recordings, prints estimates with 95 % intervals, the strongest correlations
 channel's residual, and writes the machine file, ``NAME.calibration.json`` (report) and
 ``NAME.calibration.png`` (measured vs calibrated). The map names every column used; the time
 column and CSV dialect are ``--time-column``/``--delimiter``/``--decimal`` (column roles,
-``formats.columns``), and a mapped temperature that copies the error column is refused
+``formats.roles``), and a mapped temperature that copies the error column is refused
 unless ``--allow-target-copy``. ``--design`` then ranks excitations that
 would separate the parameters the recordings could not.
 """

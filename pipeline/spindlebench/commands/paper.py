@@ -33,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", default=None,
                         help="output folder (default: <recordings>/paper_study)")
     parser.add_argument("--config", default=None,
-                        help="study TOML (see paper_study.config); default: "
+                        help="study TOML (see spindlebench.studies.paper.config); default: "
                         f"<recordings>/{study_config.CONFIG_NAME} when the folder has one (the "
                         "CAIVIAC adapter writes it; said on stderr), else the paper's set-up")
     parser.add_argument("--target", default=None, help="thermal-error column (default drift_um)")

@@ -2,7 +2,7 @@
 
 Works on any recording (synthetic, ``spindlebench adapt`` output, another logger's CSV): the
 time column, sensors, excluded columns and CSV dialect are the column roles of
-``formats.columns`` (``--time-column``, ``--sensors``, ``--exclude``, ``--delimiter``,
+``formats.roles`` (``--time-column``, ``--sensors``, ``--exclude``, ``--delimiter``,
 ``--decimal``); without ``--sensors`` the temperature-looking columns are drawn and the
 command prints which it took and skipped. A recording without a time column is refused. A
 copy of the target is not refused here (nothing is fitted; the plot shows it). The figure

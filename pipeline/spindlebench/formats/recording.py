@@ -126,7 +126,7 @@ def _output_order(name: str) -> int:
 #: synthetic testbench's noise-free truth and driver inputs, and, on any recording, thermal
 #: errors/displacements (``*_um``, ``[µm]``), speeds, feed rates and heat flows. ``ambient_C``
 #: is the testbench's ambient *driver*; the measured ambient sensor is a T column. Used by
-#: ``default_sensors`` and by the column roles of user recordings (``formats.columns``).
+#: ``default_sensors`` and by the column roles of user recordings (``formats.roles``).
 NOT_SENSOR: tuple[tuple[re.Pattern[str], str], ...] = (
     (re.compile(r"^true_"), "noise-free truth"),
     (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
@@ -235,7 +235,7 @@ def read_recording(
     what it missed, ``require_columns`` lists the whole header); every line must still have
     all its fields. ``frame.attrs["path"]`` keeps the file name for later messages,
     ``frame.attrs["header"]`` every column name of the file. ``delimiter`` and ``decimal``
-    give the CSV dialect (``formats.columns.detect_dialect`` finds them); a file that reads
+    give the CSV dialect (``formats.roles.detect_dialect`` finds them); a file that reads
     as one column whose name holds another delimiter is refused saying so.
 
     The DataFrame of ``read_table(..., engine="pandas")``: the same checks and values.

@@ -26,7 +26,7 @@ every replica, replica by replica, in the order of the axes. ``[compensate]``::
 
 ``update_interval_s`` must be a multiple of the study's ``sample_interval_s`` (the controller
 sees the readings the logger makes). ``days = "continuous"`` is
-``compensation.continuous``: one simulation, the machine's state carried from each day (and
+``studies.compensation.continuous``: one simulation, the machine's state carried from each day (and
 its night) to the next, and a fault that starts on ``fault_from_day`` stays to the end;
 ``"cold-starts"`` simulates every day on its own from the family's start state and applies
 the fault from ``start_h`` into every day from ``fault_from_day`` on.

@@ -10,7 +10,7 @@ axes moving with the spindle or at the family's feed), then the machine stands f
 at the end of one day's night is the state the next day starts from, so nothing is reset.
 
 The air during working hours is exactly the cold-start day's air (the day's weather of the
-family, ``studies.experiments.ambient_for``); during the night it continues that day's curve
+family, ``studies.family.experiments.ambient_for``); during the night it continues that day's curve
 and bends linearly onto the next day's starting value, so the air is continuous too.
 
 What the controller sees is measured once over the whole run (one instrument set, one seed):

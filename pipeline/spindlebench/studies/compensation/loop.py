@@ -1,7 +1,7 @@
 """Day after day with the model in the controller: simulate, measure, predict, offset, score.
 
 Every day is an experiment of the study family on one replica's weather, measured by the
-study's instruments. By default (``days = "continuous"``, ``compensation.continuous``) the
+study's instruments. By default (``days = "continuous"``, ``studies.compensation.continuous``) the
 days follow each other on one machine: one simulation, the heat of each day carried through
 the night into the next; ``days = "cold-starts"`` simulates every day on its own. Day 1
 trains every model (on its measured temperatures and the probe's drift, as a commissioning

@@ -83,7 +83,7 @@ class StudyConfig:
     #: paper's tables; the others add the "methods compared" tables.
     methods: tuple[str, ...] = (DEFAULT_METHOD,)
     seed: int = DEFAULT_METHOD_SEED
-    #: Column roles (``formats.columns``): time axis, excluded columns, copies of the target,
+    #: Column roles (``formats.roles``): time axis, excluded columns, copies of the target,
     #: CSV dialect (None: detected).
     time_column: str = TIME_COLUMN
     exclude: tuple[str, ...] = ()
