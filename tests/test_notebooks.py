@@ -52,7 +52,7 @@ def test_render_writes_each_notebook_as_html_with_its_figures_and_an_index(tmp_p
     course = tmp_path / "course"
     course.mkdir()
     (course / "01_tiny.py").write_text(
-        "# %% [markdown]\n# # Tiny\n# %%\nfrom spindlebench import course\n"
+        "# %% [markdown]\n# # Tiny\n# %%\nfrom spindlebench.commands import course\n"
         "work = course.start('01')\nimport matplotlib.pyplot as plt\n"
         "plt.plot([1, 2])\nplt.show()\n", encoding="utf-8")
     (course / "notes.py").write_text("not a notebook: no NN_ prefix\n", encoding="utf-8")

@@ -165,7 +165,8 @@ def two_recordings(folder: Path) -> list[str]:
 
 
 def run_checked(argv: list[str], check: str, env: dict[str, str] | None = None):
-    code = ("import sys; from spindlebench import cli; status = cli.main(sys.argv[1:]); "
+    code = ("import sys; from spindlebench.commands import main as cli; "
+            "status = cli.main(sys.argv[1:]); "
             f"{check}; sys.exit(status)")
     return subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True,
                           env=env)

@@ -214,7 +214,7 @@ def test_cli_prints_the_named_file_of_a_refused_write(tmp_path):
         "import resource, signal, sys\n"
         "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
         f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))\n"
-        "from spindlebench import cli\n"
+        "from spindlebench.commands import main as cli\n"
         f"sys.exit(cli.main(['simulate', {str(scenario)!r}, '-o', {str(out)!r}]))\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 2
