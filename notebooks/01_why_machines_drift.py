@@ -37,6 +37,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
+
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 from spindlebench.formats.recording import read_recording

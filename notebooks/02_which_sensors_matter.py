@@ -36,8 +36,9 @@ from IPython.display import Image, display
 from scipy.cluster.hierarchy import dendrogram
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.formats.recording import read_recording
+from spindlebench.studies.paper.figures import cut_height
+from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.selection import (
     correlation_with,
     cut_for_clusters,
@@ -47,7 +48,6 @@ from spindlebench.selection import (
     similarity_matrix,
     transitive_closure,
 )
-from spindlebench.studies.paper.figures import cut_height
 
 work = course.start("02")
 

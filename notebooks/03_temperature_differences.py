@@ -36,6 +36,7 @@ import tomllib
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
+
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 from spindlebench.core.names import PAPER_SIX

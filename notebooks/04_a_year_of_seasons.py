@@ -31,6 +31,7 @@
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
+
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 

@@ -30,11 +30,12 @@
 import matplotlib.pyplot as plt
 import pandas as pd
 from IPython.display import Image, display
+
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.formats.recording import read_recording
-from spindlebench.studies.placement.schematic import draw_machine
+from spindlebench.studies.placement.schematic import draw_machine, node_positions
 
 work = course.start("05")
 

@@ -27,6 +27,7 @@
 import numpy as np
 import pandas as pd
 from IPython.display import Image, display
+
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 from spindlebench.core.paths import SCENARIOS_DIR

@@ -184,8 +184,8 @@ def test_build_with_other_segments_keeps_the_default_fmu(coarse, tmp_path, monke
     """
     import shutil
 
+    from spindlebench.commands import build
     from spindlebench.commands import main as cli
-    from spindlebench.model import build
 
     def fake_build(model_dir, out_path, segments):
         assert segments == 6

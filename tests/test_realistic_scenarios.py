@@ -251,9 +251,7 @@ def test_soak_lags_the_daily_cycle_and_is_cached_once_per_cycle(tmp_path, soak_c
     def no_simulation(*args, **kwargs):
         raise AssertionError("the soak was simulated again")
 
-    import spindlebench.testbench.runner as runner
-
-    monkeypatch.setattr(runner, "co_simulate", no_simulation)
+    monkeypatch.setattr(soak, "co_simulate", no_simulation)
     other_run = replace(scenario, speed=replace(scenario.speed, rpm=1000.0), seed=99)
     assert soak.soak_state(other_run, DEFAULT_FMU) == states  # memory
     monkeypatch.setattr(soak, "_memory", {})
