@@ -1,5 +1,7 @@
 """Studies built on the testbench: season stress tests (``sweep``) and sensor placement.
 
-The shared machinery (study-file checking, executors, resumable result stores, seeds) lives
-here so that every study runs, resumes and reports the same way.
+One subpackage per study type (``sweep``, ``placement``, ``paper``, ``compensation``,
+``fingerprint``); what they share lives in ``family`` (the study family file, experiments,
+climates, seeds, method specs) and ``running`` (executors, resumable result stores, jobs), so
+that every study runs, resumes and reports the same way.
 """

@@ -2,5 +2,6 @@
 
 ``controller`` turns predictions into the offset an axis would apply (update interval, rate
 limit, dead band) and detects sensor faults; ``loop`` simulates the days, trains, retrains and
-scores the residual; ``command`` is ``spindlebench compensate``.
+scores the residual; ``compensation_file`` reads the study file, ``compensation_report``
+writes the outputs; ``spindlebench compensate`` is ``commands.compensate``.
 """

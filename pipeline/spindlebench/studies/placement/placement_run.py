@@ -1,4 +1,5 @@
-"""``spindlebench place STUDY.toml``: virtual sensor placement over a season study.
+"""Virtual sensor placement over a season study (``spindlebench place STUDY.toml``, whose
+command is ``commands.place``).
 
 1. Simulate every experiment of the study on every replica's day through the FMU (the
    sweep's executor: worker processes or a Dask cluster; each recording is stored as soon as

@@ -4,7 +4,7 @@ Claim the results folder (pin the study's content and the FMU, or check them on 
 simulate every (replica, experiment) run whose recording is not on disk yet, and store each
 outcome as it arrives: the recording with its sidecar, or the error in its place, so an
 interrupted study resumes and a failed simulation is retried by the next run. The command
-line every study shares (``register_study_command``) lives here too.
+line every study shares is ``commands.arguments.register_study_command``.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""``spindlebench sweep STUDY.toml``: the season stress test of the selection methods.
+"""The season stress test of the selection methods (``spindlebench sweep STUDY.toml``, whose
+command is ``commands.sweep``).
 
 Simulates every experiment of the study on every replica's day (through the FMU, in worker
 processes or on a Dask cluster), then, per replica, measurement condition and training
