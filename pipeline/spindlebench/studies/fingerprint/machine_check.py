@@ -80,10 +80,10 @@ def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEF
     from dataclasses import replace
 
     from spindlebench.testbench.runner import co_simulate
-    from spindlebench.testbench.scenario import start_state
+    from spindlebench.testbench.simulate import run_start
 
     scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
-    simulation = co_simulate(scenario, fmu_path, start=start_state(scenario))
+    simulation = co_simulate(scenario, fmu_path, start=run_start(scenario, Path(fmu_path)))
     frame = {name: np.asarray(simulation.outputs[name], dtype=float)
              for name in [f"{s}_C" for s in SENSORS] + [ERROR]}
     frame["time_s"] = np.asarray(simulation.time_s, dtype=float)
@@ -190,11 +190,12 @@ def levels(machine: Machine, fmu_path: str | Path = DEFAULT_FMU) -> dict[str, fl
 
     from spindlebench.studies.fingerprint.statistics import t63
     from spindlebench.testbench.runner import co_simulate
+    from spindlebench.testbench.simulate import run_start
 
     out: dict[str, float] = {}
     for run in LEVEL_RUNS:
         scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
-        outputs = co_simulate(scenario, fmu_path).outputs
+        outputs = co_simulate(scenario, fmu_path, start=run_start(scenario, Path(fmu_path))).outputs
         rpm = run.rsplit("_", 1)[1]
         for name, column in (("T1", "T1_C"), ("rings", "node_front_bearing_C")):
             values = np.asarray(outputs[column], dtype=float)
