@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     "demo": "spindlebench.demo",
     "evaluate": "spindlebench.selection.command",
     "fingerprint": "spindlebench.fingerprint_command",
+    "iso230-3": "spindlebench.iso230_3.command",
     "methods": "spindlebench.selection.methods_command",
     "paper": "spindlebench.paper_study.command",
     "place": "spindlebench.studies.placement.run",
