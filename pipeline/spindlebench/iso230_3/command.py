@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -124,7 +125,7 @@ def evaluate(test: str, data: TestData) -> dict[str, Any]:
         steps = []
         change = np.flatnonzero(np.diff(data.speed_rpm) != 0) + 1
         bounds = [0, *change.tolist(), t.size]
-        for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+        for start, stop in itertools.pairwise(bounds):
             last = stop - 1
             steps.append({"speed_rpm": float(data.speed_rpm[start]),
                           "from_h": float(t[start] / 3600.0), "to_h": float(t[last] / 3600.0),
@@ -177,8 +178,8 @@ def _summary(test: str, numbers: dict[str, Any]) -> str:
                          f"{entry['final']:.2f})")
     if "stability" in numbers:
         s = numbers["stability"]
-        lines.append(f"  stability criterion: {'met at ' + format(s['met_at_h'], '.2f') + ' h' if s['met'] else 'not met'}"
-                     f" (time limit {s['time_limit_h']:.2f} h)")
+        met = f"met at {s['met_at_h']:.2f} h" if s["met"] else "not met"
+        lines.append(f"  stability criterion: {met} (time limit {s['time_limit_h']:.2f} h)")
     if "air_range_K" in numbers:
         lines.append(f"  air temperature range: {numbers['air_range_K']:.2f} K")
     return "\n".join(lines)
