@@ -497,6 +497,54 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ContactSensor sensor_T20(C = 10.0, G_contact = 0.5, G_env = 0.03) "T20 Y screw bearing seat";
 
 
+    // ---- outputs ------------------------------------------------------------------------
+    output Real T1_C(unit = "degC") "Sensor T1, spindle front";
+    output Real T2_C(unit = "degC") "Sensor T2, spindle front";
+    output Real T3_C(unit = "degC") "Sensor T3, spindle front";
+    output Real T4_C(unit = "degC") "Sensor T4, spindle front";
+    output Real T5_C(unit = "degC") "Sensor T5, spindle front";
+    output Real T6_C(unit = "degC") "Sensor T6, headstock";
+    output Real T7_C(unit = "degC") "Sensor T7, drawbar cylinder base";
+    output Real T8_C(unit = "degC") "Sensor T8, spindle motor";
+    output Real T9_C(unit = "degC") "Sensor T9, headstock inner cavity";
+    output Real T10_C(unit = "degC") "Sensor T10, ambient";
+    output Real T11_C(unit = "degC") "Sensor T11, X screw bearing seat";
+    output Real T12_C(unit = "degC") "Sensor T12, X nut";
+    output Real T13_C(unit = "degC") "Sensor T13, X motor";
+    output Real T14_C(unit = "degC") "Sensor T14, X nut";
+    output Real T15_C(unit = "degC") "Sensor T15, X motor";
+    output Real T16_C(unit = "degC") "Sensor T16, Y motor";
+    output Real T17_C(unit = "degC") "Sensor T17, Y motor";
+    output Real T18_C(unit = "degC") "Sensor T18, Y nut";
+    output Real T19_C(unit = "degC") "Sensor T19, Y nut";
+    output Real T20_C(unit = "degC") "Sensor T20, Y screw bearing seat";
+    output Real drift_um(unit = "um") "Axial thermal drift of the tool towards the table, relative to T_ref";
+    output Real Q_front_bearing_W(unit = "W") "Front bearing friction heat";
+    output Real Q_rear_bearing_W(unit = "W") "Rear bearing friction heat";
+    output Real Q_spindle_motor_W(unit = "W") "Spindle motor losses";
+    output Real Q_x_feed_W(unit = "W") "X drive heat (motor, nut, support bearings)";
+    output Real Q_y_feed_W(unit = "W") "Y drive heat (motor, nut, support bearings)";
+    output Real Q_z_feed_W(unit = "W") "Z drive heat (motor, nut, top bearings)";
+    output Real Q_motor_to_column_W(unit = "W") "Heat from the spindle motor into the column";
+    output Real Q_shaft_convection_W(unit = "W") "Heat from the rotating shaft into the cavity air";
+    output Real Q_headstock_to_column_W(unit = "W") "Heat from the headstock into the column";
+    output Real Q_cooling_W(unit = "W") "Heat removed by the spindle cooling unit";
+    output Real Q_to_ambient_W(unit = "W") "Total heat released to the workshop air";
+    output Real spindle_growth_um(unit = "um") "Shaft growth between front bearing and nose (towards the table)";
+    output Real tool_growth_um(unit = "um") "Tool holder and test mandrel growth, nose to measured face (towards the table)";
+    output Real headstock_growth_um(unit = "um") "Headstock growth between the Z nut bracket and the front bearing seat (towards the table)";
+    output Real z_screw_growth_um(unit = "um") "Z ball screw growth between its top bearing and the nut (towards the table)";
+    output Real column_growth_um(unit = "um") "Column growth between bed and Z screw top bearing (head away from the table)";
+    output Real bed_tilt_um(unit = "um") "Bed growth under the column minus under the table (head away)";
+    output Real table_growth_um(unit = "um") "Saddle and table growth (towards the tool)";
+    output Real fixture_growth_um(unit = "um") "Probe fixture growth (probe towards the tool)";
+    output Real front_preload_thermal_N(unit = "N") "Thermally induced preload of the front set (per bearing)";
+    output Real Q_bearing_air_W(unit = "W") "Heat carried off the front bearing by the air stream through it";
+    output Real Q_rotor_W(unit = "W") "Spindle motor losses released in the rotor (built-in motor)";
+    output Real Q_jacket_W(unit = "W") "Heat removed by the chiller jacket";
+    output Real jacket_inlet_C(unit = "degC") "Chiller jacket supply (inlet) temperature";
+    output Real jacket_outlet_C(unit = "degC") "Chiller jacket return (outlet) temperature";
+
     // ---- five-probe drift: X, Y and the tilts A, B (ISO 230-3 / ISO 10791-10 set-up) ----------
     // Axes: +X to the operator's right, +Y from the operator towards the column, +Z up. A probe
     // reading is the mandrel's displacement relative to the probe fixture on the table, in +X or
@@ -550,54 +598,6 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     output Real drift_y_um(unit = "um", min = -1000.0, max = 1000.0) "Y drift of the mandrel's end face relative to the table (+Y), incl. the Y screw at y_target_m";
     output Real tilt_a_urad(unit = "urad", min = -10000.0, max = 10000.0) "Tilt A = (Y1 - Y2)/l: the mandrel's upper end displaced towards +Y";
     output Real tilt_b_urad(unit = "urad", min = -10000.0, max = 10000.0) "Tilt B = (X1 - X2)/l: the mandrel's upper end displaced towards +X";
-
-    // ---- outputs ------------------------------------------------------------------------
-    output Real T1_C(unit = "degC") "Sensor T1, spindle front";
-    output Real T2_C(unit = "degC") "Sensor T2, spindle front";
-    output Real T3_C(unit = "degC") "Sensor T3, spindle front";
-    output Real T4_C(unit = "degC") "Sensor T4, spindle front";
-    output Real T5_C(unit = "degC") "Sensor T5, spindle front";
-    output Real T6_C(unit = "degC") "Sensor T6, headstock";
-    output Real T7_C(unit = "degC") "Sensor T7, drawbar cylinder base";
-    output Real T8_C(unit = "degC") "Sensor T8, spindle motor";
-    output Real T9_C(unit = "degC") "Sensor T9, headstock inner cavity";
-    output Real T10_C(unit = "degC") "Sensor T10, ambient";
-    output Real T11_C(unit = "degC") "Sensor T11, X screw bearing seat";
-    output Real T12_C(unit = "degC") "Sensor T12, X nut";
-    output Real T13_C(unit = "degC") "Sensor T13, X motor";
-    output Real T14_C(unit = "degC") "Sensor T14, X nut";
-    output Real T15_C(unit = "degC") "Sensor T15, X motor";
-    output Real T16_C(unit = "degC") "Sensor T16, Y motor";
-    output Real T17_C(unit = "degC") "Sensor T17, Y motor";
-    output Real T18_C(unit = "degC") "Sensor T18, Y nut";
-    output Real T19_C(unit = "degC") "Sensor T19, Y nut";
-    output Real T20_C(unit = "degC") "Sensor T20, Y screw bearing seat";
-    output Real drift_um(unit = "um") "Axial thermal drift of the tool towards the table, relative to T_ref";
-    output Real Q_front_bearing_W(unit = "W") "Front bearing friction heat";
-    output Real Q_rear_bearing_W(unit = "W") "Rear bearing friction heat";
-    output Real Q_spindle_motor_W(unit = "W") "Spindle motor losses";
-    output Real Q_x_feed_W(unit = "W") "X drive heat (motor, nut, support bearings)";
-    output Real Q_y_feed_W(unit = "W") "Y drive heat (motor, nut, support bearings)";
-    output Real Q_z_feed_W(unit = "W") "Z drive heat (motor, nut, top bearings)";
-    output Real Q_motor_to_column_W(unit = "W") "Heat from the spindle motor into the column";
-    output Real Q_shaft_convection_W(unit = "W") "Heat from the rotating shaft into the cavity air";
-    output Real Q_headstock_to_column_W(unit = "W") "Heat from the headstock into the column";
-    output Real Q_cooling_W(unit = "W") "Heat removed by the spindle cooling unit";
-    output Real Q_to_ambient_W(unit = "W") "Total heat released to the workshop air";
-    output Real spindle_growth_um(unit = "um") "Shaft growth between front bearing and nose (towards the table)";
-    output Real tool_growth_um(unit = "um") "Tool holder and test mandrel growth, nose to measured face (towards the table)";
-    output Real headstock_growth_um(unit = "um") "Headstock growth between the Z nut bracket and the front bearing seat (towards the table)";
-    output Real z_screw_growth_um(unit = "um") "Z ball screw growth between its top bearing and the nut (towards the table)";
-    output Real column_growth_um(unit = "um") "Column growth between bed and Z screw top bearing (head away from the table)";
-    output Real bed_tilt_um(unit = "um") "Bed growth under the column minus under the table (head away)";
-    output Real table_growth_um(unit = "um") "Saddle and table growth (towards the tool)";
-    output Real fixture_growth_um(unit = "um") "Probe fixture growth (probe towards the tool)";
-    output Real front_preload_thermal_N(unit = "N") "Thermally induced preload of the front set (per bearing)";
-    output Real Q_bearing_air_W(unit = "W") "Heat carried off the front bearing by the air stream through it";
-    output Real Q_rotor_W(unit = "W") "Spindle motor losses released in the rotor (built-in motor)";
-    output Real Q_jacket_W(unit = "W") "Heat removed by the chiller jacket";
-    output Real jacket_inlet_C(unit = "degC") "Chiller jacket supply (inlet) temperature";
-    output Real jacket_outlet_C(unit = "degC") "Chiller jacket return (outlet) temperature";
   equation
     // boundaries
     ambient.T = ambient_C + 273.15;
