@@ -89,3 +89,31 @@ def test_spindle_test_on_the_default_machine(tmp_path):
     assert 20.0 < z < 60.0 and 3.0 < y < z  # a VMC: Z largest, Y from the column, tens of µm
     assert report["range_urad"]["A"]["range"] > 5.0
     assert (out / "spindle_recording.csv").is_file()
+
+
+def test_compensate_reports_what_a_trained_model_leaves_of_z(tmp_path, capsys):
+    t = np.arange(0.0, 4 * 3600.0 + 1, 300.0)
+    heat = 1 - np.exp(-t / 3600)
+    t1, t2 = 20 + 10 * heat, 20 + 4 * heat
+    z = 0.5 + 2.0 * (t1 - t1[0]) + 1.0 * ((t1 - t1[0]) - (t2 - t2[0]))
+    z = z - z[0]  # the probe is zeroed; the model's intercept 0.5 stays in the residual
+    csv = tmp_path / "run.csv"
+    pd.DataFrame({"time_s": t, "T1": t1, "T2": t2, "z_um": z}).to_csv(csv, index=False)
+    mapping = tmp_path / "map.toml"
+    mapping.write_text('temperatures = ["T1"]\n[directions]\nZ = "z_um"\n')
+    models = {"models": {"never": {"m": [{"trained_on_day": 1, "inputs": ["T1", "T1-T2"],
+                                          "excluded": [], "coefficients": [0.5, 2.0, 1.0]}]}}}
+    trained = tmp_path / "provenance.json"
+    trained.write_text(json.dumps(models))
+    out = tmp_path / "report"
+    assert main(["iso230-3", "spindle", "--recording", str(csv), "--map", str(mapping),
+                 "--compensate", str(trained), "-o", str(out)]) == 0
+    report = json.loads((out / "spindle.json").read_text())
+    residual = report["range_um"]["Z residual (m)"]
+    assert report["range_um"]["Z"]["range"] > 20.0
+    assert residual["range"] < 1e-3 and residual["final"] == pytest.approx(-0.5, abs=1e-3)
+    assert report["provenance"]["compensation"]["inputs"] == ["T1", "T1-T2"]
+    capsys.readouterr()
+    assert main(["iso230-3", "spindle", "--recording", str(csv), "--map", str(mapping),
+                 "--compensate", str(trained), "--model", "x", "-o", str(out)]) != 0
+    assert "key 'models': no model 'x' (has m)" in capsys.readouterr().err

@@ -8,7 +8,9 @@ instead (``channels`` describes the map). Outputs in ``-o DIR`` (default
 ``iso230-3_<test>``): ``<test>.png``, ``<test>.json`` (numbers and provenance),
 ``<test>_series.csv`` (the series the figure shows) and, for a simulation, the recording(s).
 
-Not done: ``--compensate`` (what a trained compensation leaves behind) is not implemented.
+With ``--compensate PROVENANCE.json [--model NAME]`` a model trained by ``spindlebench
+compensate`` predicts the Z drift from the test's temperatures and the residual is reported
+beside it (``iso230_3.compensation``).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from spindlebench.formats.recording import read_recording, write_recording
 from spindlebench.formats.table_csv import write_table
 from spindlebench.iso230_3 import evaluation
 from spindlebench.iso230_3.channels import TestData, from_map, load_map, synthetic
+from spindlebench.iso230_3.compensation import LinearModel, load_model
 from spindlebench.iso230_3.figure import draw
 from spindlebench.machines import add_machine_argument
 from spindlebench.paths import DEFAULT_FMU, SCENARIOS_DIR
@@ -68,10 +71,11 @@ def _rounded(value: Any) -> Any:
     return value
 
 
-def simulate_test(test: str, machine: str, out_dir: Path,
-                  fmu: Path = DEFAULT_FMU) -> tuple[TestData, list[dict[str, Any]]]:
+def simulate_test(test: str, machine: str, out_dir: Path, fmu: Path = DEFAULT_FMU
+                  ) -> tuple[TestData, list[dict[str, Any]], pd.DataFrame]:
     """Simulate ``test`` on ``machine``, write its recording(s) into ``out_dir``, and return
-    the report's series (the axis test's X at both targets) and the recordings' entries."""
+    the report's series (the axis test's X at both targets), the recordings' entries and the
+    (first) recording's frame."""
     from spindlebench.testbench.scenario import load_scenario, with_machine
     from spindlebench.testbench.simulate import record
 
@@ -79,8 +83,8 @@ def simulate_test(test: str, machine: str, out_dir: Path,
     if test != "axis":
         frame, sidecar = record(scenario, fmu)
         path = write_recording(out_dir / f"{test}_recording.csv", frame, sidecar)
-        return synthetic(frame), [file_entry(path)]
-    runs, entries = [], []
+        return synthetic(frame), [file_entry(path)], frame
+    runs, entries, frames = [], [], []
     for target in AXIS_TARGETS_M:
         at_target = dataclasses.replace(
             scenario, parameters={**scenario.parameters, "x_target_m": target})
@@ -88,12 +92,25 @@ def simulate_test(test: str, machine: str, out_dir: Path,
         path = write_recording(out_dir / f"axis_recording_x{target:g}m.csv", frame, sidecar)
         runs.append(synthetic(frame))
         entries.append(file_entry(path))
+        frames.append(frame)
     near, far = runs
     linear = {f"X at {AXIS_TARGETS_M[0]:g} m": near.linear["X"],
               f"X at {AXIS_TARGETS_M[1]:g} m": far.linear["X"],
               "X far - near": far.linear["X"] - near.linear["X"],
               "Y": near.linear["Y"], "Z": near.linear["Z"]}
-    return dataclasses.replace(near, linear=linear, sources={}), entries
+    return dataclasses.replace(near, linear=linear, sources={}), entries, frames[0]
+
+
+def compensated(data: TestData, frame: pd.DataFrame, model: LinearModel) -> TestData:
+    """``data`` with the residual of ``model``'s Z compensation as one more direction."""
+    missing = [s for s in model.sensors if s not in frame]
+    if missing:
+        raise SpindlebenchError(f"{model.source}: model {model.name!r} reads sensor(s) "
+                                f"{', '.join(missing)}, which the test's recording has not")
+    prediction = model.predict({s: frame[s].to_numpy(float) for s in model.sensors})
+    linear = dict(data.linear)
+    linear[f"Z residual ({model.name})"] = data.linear["Z"] - prediction
+    return dataclasses.replace(data, linear=linear)
 
 
 def evaluate(test: str, data: TestData) -> dict[str, Any]:
@@ -120,7 +137,8 @@ def evaluate(test: str, data: TestData) -> dict[str, Any]:
         report["heating_range_um"] = evaluation.ranges(t, data.linear, heating)
         report["heating_range_urad"] = evaluation.ranges(t, data.tilts, heating)
         if test == "spindle":
-            report["stability"] = evaluation.stability(t, data.linear, end).to_dict()
+            directions = {k: v for k, v in data.linear.items() if k in evaluation.LINEAR}
+            report["stability"] = evaluation.stability(t, directions, end).to_dict()
     if test == "spectrum" and data.speed_rpm is not None:
         steps = []
         change = np.flatnonzero(np.diff(data.speed_rpm) != 0) + 1
@@ -196,6 +214,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--recording", type=Path, help="evaluate this recording instead")
     parser.add_argument("--map", type=Path, help="MAP.toml of the recording's channels")
     parser.add_argument("--fmu", type=Path, default=DEFAULT_FMU, help="the FMU to simulate")
+    parser.add_argument("--compensate", type=Path, metavar="PROVENANCE.json",
+                        help="a compensate run's provenance.json: its trained model predicts "
+                        "Z, the report adds the residual")
+    parser.add_argument("--model", help="which model of --compensate (default: its first)")
     parser.add_argument("-o", "--out", type=Path, help="output folder (default iso230-3_TEST)")
     parser.set_defaults(func=run)
 
@@ -203,13 +225,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     out_dir = args.out or Path(f"iso230-3_{args.test}")
     title = f"ISO 230-3 {TESTS[args.test].title}"
+    if args.model is not None and args.compensate is None:
+        raise SpindlebenchError("--model belongs to --compensate")
+    model = None if args.compensate is None else load_model(args.compensate, args.model)
     if args.recording is not None:
         if args.map is None:
             raise SpindlebenchError("--recording needs --map MAP.toml (which channel is which)")
         if args.machine is not None:
             raise SpindlebenchError("--recording and --machine exclude each other")
         mapping = load_map(args.map)
-        frame = read_recording(args.recording, columns=mapping.columns())
+        wanted = mapping.columns() + ([] if model is None else model.sensors)
+        frame = read_recording(args.recording, columns=list(dict.fromkeys(wanted)))
         data = from_map(frame, mapping, args.recording)
         source = {"recording": file_entry(args.recording), "map": file_entry(args.map)}
         title += f": {args.recording.name}"
@@ -218,11 +244,19 @@ def run(args: argparse.Namespace) -> int:
             raise SpindlebenchError("--map belongs to --recording")
         machine = args.machine or "default"
         out_dir.mkdir(parents=True, exist_ok=True)
-        data, recordings = simulate_test(args.test, machine, out_dir, args.fmu)
+        data, recordings, frame = simulate_test(args.test, machine, out_dir, args.fmu)
         source = {"machine": machine, "scenario": file_entry(ISO_SCENARIOS /
                                                               TESTS[args.test].scenario),
                   "fmu": file_entry(args.fmu), "recordings": recordings}
         title += f": machine {machine}"
+    if model is not None:
+        if "Z" not in data.linear:
+            raise SpindlebenchError("--compensate needs a Z direction to compensate")
+        data = compensated(data, frame, model)
+        source["compensation"] = {"model": model.name, "inputs": list(model.inputs),
+                                  "coefficients": [model.intercept, *model.coefficients],
+                                  "file": file_entry(model.source)}
+        title += f", compensated by {model.name}"
     numbers = evaluate(args.test, data)
     paths = write_report(args.test, data, numbers, source, out_dir, title)
     print(f"{title}\n{_summary(args.test, numbers)}")
