@@ -114,3 +114,25 @@ def test_probe_columns_only_when_the_scenario_asks(tmp_path):
     assert list(asked.columns[:len(plain.columns)]) != [] and \
         set(plain.columns) <= set(asked.columns)
     np.testing.assert_array_equal(asked["drift_um"], plain["drift_um"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("good, bad", [
+    ("curvature = alpha * delta_T / (depth / 2.0);", "curvature = alpha * delta_T;"),
+    ("x_screw_error = alpha_steel * (x_screw.T - T_ref) * x_target_m;",
+     "x_screw_error = alpha_steel * (x_screw.T - T_ref);"),
+    ("tilt_a_urad = (probe_Y1_um - probe_Y2_um) / probe_l;",
+     "tilt_a_urad = probe_Y1_um - probe_Y2_um;"),
+])
+def test_the_unit_check_covers_the_five_probe_equations(tmp_path, good, bad):
+    from conftest import MODELS
+
+    from spindlebench.errors import SpindlebenchError
+    from spindlebench.modelica.frontend import translate
+
+    text = (MODELS / "SpindleBench.mo").read_text(encoding="utf-8")
+    assert good in text
+    (tmp_path / "SpindleBench.mo").write_text(text.replace(good, bad), encoding="utf-8")
+    line = text[:text.index(good)].count("\n") + 1
+    with pytest.raises(SpindlebenchError, match=rf"SpindleBench.mo:{line}:"):
+        translate(tmp_path, 2)
