@@ -126,7 +126,6 @@ def test_probe_columns_only_when_the_scenario_asks(tmp_path):
 ])
 def test_the_unit_check_covers_the_five_probe_equations(tmp_path, good, bad):
     from conftest import MODELS
-
     from spindlebench.errors import SpindlebenchError
     from spindlebench.modelica.frontend import translate
 
