@@ -22,6 +22,9 @@ def test_stability_is_met_when_the_last_hour_changes_less_than_15_percent_of_the
     ratio = 0.15 * (1 - np.exp(-3600 / tau)) / (np.exp(3600 / tau) - 1)
     expected = -tau * np.log(ratio)
     assert s.met_at_s == pytest.approx(expected, abs=60.0)
+    assert s.per_direction_s["Z"] == s.met_at_s
+    both = evaluation.stability(t, {"Z": z, "Y": np.zeros_like(t)}, phase_end_s=t[-1])
+    assert both.met_at_s == s.met_at_s  # a still direction (under the floor) holds nothing up
     late = evaluation.stability(t, {"Z": z}, phase_end_s=expected - 600.0)
     assert late.met_at_s is None and late.to_dict()["met"] is False
 

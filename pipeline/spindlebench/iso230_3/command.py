@@ -198,6 +198,9 @@ def _summary(test: str, numbers: dict[str, Any]) -> str:
         s = numbers["stability"]
         met = f"met at {s['met_at_h']:.2f} h" if s["met"] else "not met"
         lines.append(f"  stability criterion: {met} (time limit {s['time_limit_h']:.2f} h)")
+        alone = ", ".join(f"{k} {'-' if v is None else format(v, '.2f') + ' h'}"
+                          for k, v in s["per_direction_met_at_h"].items())
+        lines.append(f"  each direction alone: {alone}")
     if "air_range_K" in numbers:
         lines.append(f"  air temperature range: {numbers['air_range_K']:.2f} K")
     return "\n".join(lines)

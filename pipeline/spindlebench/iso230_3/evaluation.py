@@ -16,7 +16,7 @@ rather than its wording is marked here and in docs/iso230-3.md:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,6 +37,8 @@ class Stability:
 
     met_at_s: float | None
     phase_end_s: float
+    #: When each direction alone first met it (None: not within the phase).
+    per_direction_s: dict[str, float | None] = field(default_factory=dict)
     window_s: float = STABILITY_WINDOW_S
     fraction: float = STABILITY_FRACTION
     floor_um: float = STABILITY_FLOOR_UM
@@ -50,6 +52,8 @@ class Stability:
             "met_at_h": None if self.met_at_s is None else round(self.met_at_s / 3600.0, 4),
             "met": self.met_at_s is not None,
             "time_limit_h": round(self.phase_end_s / 3600.0, 4),
+            "per_direction_met_at_h": {k: None if v is None else round(v / 3600.0, 4)
+                                       for k, v in self.per_direction_s.items()},
         }
 
 
@@ -84,18 +88,26 @@ def stability(time_s: np.ndarray, linear: dict[str, np.ndarray], phase_end_s: fl
     """The first time within ``[window_s, phase_end_s]`` the criterion holds (module doc)."""
     t = np.asarray(time_s, dtype=float)
     first_hour = t <= t[0] + window_s
+    in_phase = (t >= t[0] + window_s) & (t <= phase_end_s)
+
+    def first(mask: np.ndarray) -> float | None:
+        candidates = in_phase & mask
+        return float(t[np.argmax(candidates)]) if candidates.any() else None
+
     ok = np.ones(t.size, dtype=bool)
-    for values in linear.values():
+    per_direction: dict[str, float | None] = {}
+    for name, values in linear.items():
         v = np.asarray(values, dtype=float)
         reference = np.max(np.abs(v[first_hour] - v[0]))
         allowed = max(fraction * reference, floor_um)
         # reading one window earlier, interpolated on the time axis
         earlier = np.interp(t - window_s, t, v)
-        ok &= np.abs(v - earlier) <= allowed
-    candidates = (t >= t[0] + window_s) & (t <= phase_end_s) & ok
-    met = float(t[np.argmax(candidates)]) if candidates.any() else None
-    return Stability(met_at_s=met, phase_end_s=float(phase_end_s), window_s=window_s,
-                     fraction=fraction, floor_um=floor_um)
+        stable = np.abs(v - earlier) <= allowed
+        per_direction[name] = first(stable)
+        ok &= stable
+    return Stability(met_at_s=first(ok), phase_end_s=float(phase_end_s),
+                     per_direction_s=per_direction, window_s=window_s, fraction=fraction,
+                     floor_um=floor_um)
 
 
 def spindle_on_end_s(time_s: np.ndarray, speed_rpm: np.ndarray | None) -> float:
