@@ -147,7 +147,7 @@ def _output_order(name: str) -> int:
 #: ``default_sensors`` and by the column roles of user recordings (``formats.columns``).
 NOT_SENSOR: tuple[tuple[re.Pattern[str], str], ...] = (
     (re.compile(r"^true_"), "noise-free truth"),
-    (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
+    (re.compile(r"_um$|_urad$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
      "displacement/thermal error"),
     (re.compile(r"_rpm$|\[rpm\]|speed|feed|_mm_per_min$|_W$", re.IGNORECASE),
      "driver/command input"),
