@@ -241,6 +241,37 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
 
   end Machine;
 
+  package Probes "Five-probe drift (ISO 230-3 / ISO 10791-10 set-up): cross-section temperature differences that bend the structure"
+
+    model HalfSection "The '+' half of a part's cross-section: its mean temperature beside the part's mean"
+      // A part of the network (column, headstock) has one temperature per segment: the mean over
+      // its cross-section. Cut the section into a '+' half and a '-' half along one direction
+      // (front/back or left/right) and the temperature field has a second mode, the difference
+      // between the halves. This component is the '+' half's heat balance,
+      //   (C/2) dT/dt = Q_in - 2 G_across (T - T_mean),
+      // with the '-' half implied as 2 T_mean - T, so delta_T = 2 (T - T_mean). Q_in (set by
+      // the assembly) is the '+' half's share of the heat into the part plus its own exchange
+      // with the air. The part's mean is not changed by this mode (one-way coupling: the
+      // neglected back-action is the difference of the two halves' air conductances times
+      // delta_T / 2). A uniform difference delta_T between the half-centroids, depth/2 apart,
+      // bends the part with the curvature alpha delta_T / (depth/2), the '+' side growing longer.
+      parameter Real C(unit = "J/K", min = 1.0e-3, max = 1.0e9) = 1.0e5 "Heat capacity of the whole part (both halves)";
+      parameter Real G_across(unit = "W/K", min = 1.0e-6, max = 1.0e5) = 10.0 "Conductance between the two half-centroids across the section";
+      parameter Real depth(unit = "m", min = 1.0e-3, max = 10.0) = 0.5 "Size of the section in the direction of the cut (outer face to outer face)";
+      parameter Real alpha(unit = "1/K", min = 0.0, max = 1.0e-4) = 1.05e-5 "Linear thermal expansion coefficient";
+      input Real Q_in(unit = "W") "Heat into the '+' half: its share of the part's heat input and its own surface exchange";
+      input Real T_mean(unit = "K") "Mean temperature of the part's section (the network's node)";
+      Real T(unit = "K", start = 293.15, fixed = true) "Mean temperature of the '+' half";
+      Real delta_T(unit = "K") "Temperature difference '+' half minus '-' half";
+      Real curvature(unit = "1/m") "Bending curvature from delta_T, positive when the '+' side grows longer";
+    equation
+      C / 2.0 * der(T) = Q_in - 2.0 * G_across * (T - T_mean);
+      delta_T = 2.0 * (T - T_mean);
+      curvature = alpha * delta_T / (depth / 2.0);
+    end HalfSection;
+
+  end Probes;
+
   model MachiningCentre "Vertical machining centre: spindle, tool, headstock, Z drive, column, bed, table, X/Y drives, probe fixture"
     import SpindleBench.HeatTransfer.Components.HeatCapacitor;
     import SpindleBench.HeatTransfer.Components.ThermalConductor;
@@ -251,6 +282,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     import SpindleBench.Machine.BearingFriction;
     import SpindleBench.Machine.ExpandingBody;
     import SpindleBench.Machine.ContactSensor;
+    import SpindleBench.Probes.HalfSection;
 
     // ---- structure and operating inputs --------------------------------------------------
     parameter Integer nSeg(min = 2, max = 50) = 12 "Segments per large part (structural: set at build time)";
@@ -464,6 +496,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     ContactSensor sensor_T19(C = 10.0, G_contact = 0.3, G_env = 0.1) "T19 Y nut bracket (between nut and saddle)";
     ContactSensor sensor_T20(C = 10.0, G_contact = 0.5, G_env = 0.03) "T20 Y screw bearing seat";
 
+
     // ---- outputs ------------------------------------------------------------------------
     output Real T1_C(unit = "degC") "Sensor T1, spindle front";
     output Real T2_C(unit = "degC") "Sensor T2, spindle front";
@@ -511,6 +544,60 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     output Real Q_jacket_W(unit = "W") "Heat removed by the chiller jacket";
     output Real jacket_inlet_C(unit = "degC") "Chiller jacket supply (inlet) temperature";
     output Real jacket_outlet_C(unit = "degC") "Chiller jacket return (outlet) temperature";
+
+    // ---- five-probe drift: X, Y and the tilts A, B (ISO 230-3 / ISO 10791-10 set-up) ----------
+    // Axes: +X to the operator's right, +Y from the operator towards the column, +Z up. A probe
+    // reading is the mandrel's displacement relative to the probe fixture on the table, in +X or
+    // +Y; the radial probes sit at two heights probe_l apart, probe 2 nearer the mandrel's end.
+    parameter Real column_depth(unit = "m", min = 0.05, max = 5.0) = 0.7 "Column section front to back [EST]";
+    parameter Real column_width(unit = "m", min = 0.05, max = 5.0) = 0.6 "Column section left to right [EST]";
+    parameter Real housing_depth(unit = "m", min = 0.05, max = 2.0) = 0.4 "Headstock section front to back, about the spindle axis [EST]";
+    parameter Real housing_width(unit = "m", min = 0.05, max = 2.0) = 0.4 "Headstock section left to right, about the spindle axis [EST]";
+    parameter Real column_front_air_fraction(unit = "1", min = 0.0, max = 1.0) = 0.4 "Share of the column's air conductance on its front half (the headstock, guides and covers shield the front) [EST]";
+    parameter Real housing_front_air_fraction(unit = "1", min = 0.0, max = 1.0) = 0.6 "Share of the headstock's outer air conductance on its front half (the back faces the column) [EST]";
+    parameter Real column_lr_asymmetry(unit = "1", min = -0.5, max = 0.5) = 0.0 "Extra share of the headstock and motor heat entering the column's +X half (0: symmetric design)";
+    parameter Real housing_lr_asymmetry(unit = "1", min = -0.5, max = 0.5) = 0.05 "Extra share of the bearing and motor-flange heat entering the headstock's +X half (belt pull and motor beside the spindle axis, lubrication inlet on one side) [EST]";
+    parameter Real sun_W_per_m2(unit = "W/m2", min = 0.0, max = 1500.0) = 0.0 "Irradiance on the sunlit patch of the column's +X side wall (0: no sun)";
+    parameter Real A_sun(unit = "m2", min = 0.0, max = 20.0) = 1.0 "Sunlit patch on the column's +X side wall";
+    parameter Real sun_absorptivity(unit = "1", min = 0.0, max = 1.0) = 0.6 "Solar absorptivity of the painted column [VDI]";
+    parameter Real z_mandrel_end(unit = "m", min = 0.0, max = 5.0) = 0.54 "Height of the mandrel's end face above the column foot (table 0.45 + fixture 0.15 - 0.06 step) [ISO230]";
+    parameter Real probe_l(unit = "m", min = 0.01, max = 1.0) = 0.1 "Distance l between the two radial probe heights [ISO230]";
+    parameter Real probe_end_offset(unit = "m", min = 0.0, max = 1.0) = 0.02 "Height of the lower radial probes (X2, Y2) above the mandrel's end face [ISO230]";
+    parameter Real x_target_m(unit = "m", min = 0.0, max = 2.0) = 0.0 "X target: distance of the table's nut from the X screw's fixed bearing";
+    parameter Real y_target_m(unit = "m", min = 0.0, max = 2.0) = 0.0 "Y target: distance of the saddle's nut from the Y screw's fixed bearing";
+    HalfSection column_front(C = 736000.0, G_across = 16.0, depth = column_depth, alpha = alpha_iron)
+      "Front half of the column section (towards -Y): side walls 2 x 30 mm x 1.42 m and ribs, k 48 W/(m.K), across 0.35 m [VDI, EST]";
+    HalfSection column_right(C = 736000.0, G_across = 14.0, depth = column_width, alpha = alpha_iron)
+      "Right half of the column section (+X): front and back walls across 0.3 m [VDI, EST]";
+    HalfSection housing_front(C = 161000.0, G_across = 7.0, depth = housing_depth, alpha = alpha_iron)
+      "Front half of the headstock about the spindle axis (-Y): walls 2 x 25 mm x 0.6 m across 0.2 m [VDI, EST]";
+    HalfSection housing_right(C = 161000.0, G_across = 7.0, depth = housing_width, alpha = alpha_iron)
+      "Right half of the headstock about the spindle axis (+X) [VDI, EST]";
+    PrescribedHeatFlow sun_on_column "Absorbed sunlight on the column's +X side wall";
+    Real column_mean_T(unit = "K") "Mean temperature of the column's segments";
+    Real housing_mean_T(unit = "K") "Mean temperature of the headstock's segments";
+    Real column_ports_Q(unit = "W") "Heat into the column through all its ports (headstock, motor, bed, Z seat, sun, probe)";
+    Real housing_ports_Q(unit = "W") "Heat into the headstock through all its ports";
+    Real z_carriage(unit = "m") "Height of the headstock's Z carriages above the column foot";
+    Real head_hang(unit = "m") "Headstock length from the Z carriages down to the front bearing seat";
+    Real seat_to_end(unit = "m") "Front bearing seat to the mandrel's end face (shaft nose part plus mandrel)";
+    Real x_screw_error(unit = "m") "X screw growth between its fixed bearing and the target (table displaced in +X)";
+    Real y_screw_error(unit = "m") "Y screw growth between its fixed bearing and the target (saddle displaced in +Y)";
+    Real x_at_X1(unit = "m") "Mandrel displacement in +X relative to the table at probe X1";
+    Real x_at_X2(unit = "m") "Mandrel displacement in +X relative to the table at probe X2";
+    Real x_at_end(unit = "m") "Mandrel displacement in +X relative to the table at its end face";
+    Real y_at_Y1(unit = "m") "Mandrel displacement in +Y relative to the table at probe Y1";
+    Real y_at_Y2(unit = "m") "Mandrel displacement in +Y relative to the table at probe Y2";
+    Real y_at_end(unit = "m") "Mandrel displacement in +Y relative to the table at its end face";
+    output Real probe_X1_um(unit = "um", min = -1000.0, max = 1000.0) "Radial probe X1 (upper, nearer the spindle): mandrel displacement in +X";
+    output Real probe_X2_um(unit = "um", min = -1000.0, max = 1000.0) "Radial probe X2 (lower, nearer the end face): mandrel displacement in +X";
+    output Real probe_Y1_um(unit = "um", min = -1000.0, max = 1000.0) "Radial probe Y1 (upper): mandrel displacement in +Y";
+    output Real probe_Y2_um(unit = "um", min = -1000.0, max = 1000.0) "Radial probe Y2 (lower): mandrel displacement in +Y";
+    output Real probe_Z_um(unit = "um", min = -1000.0, max = 1000.0) "Axial probe Z on the end face: the Z drift drift_um (towards the table)";
+    output Real drift_x_um(unit = "um", min = -1000.0, max = 1000.0) "X drift of the mandrel's end face relative to the table (+X), incl. the X screw at x_target_m";
+    output Real drift_y_um(unit = "um", min = -1000.0, max = 1000.0) "Y drift of the mandrel's end face relative to the table (+Y), incl. the Y screw at y_target_m";
+    output Real tilt_a_urad(unit = "urad", min = -10000.0, max = 10000.0) "Tilt A = (Y1 - Y2)/l: the mandrel's upper end displaced towards +Y";
+    output Real tilt_b_urad(unit = "urad", min = -10000.0, max = 10000.0) "Tilt B = (X1 - X2)/l: the mandrel's upper end displaced towards +X";
   equation
     // boundaries
     ambient.T = ambient_C + 273.15;
@@ -789,6 +876,58 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     Q_headstock_to_column_W = headstock_column.Q_flow;
     Q_cooling_W = coolant.port.Q_flow;
     Q_to_ambient_W = ambient.port.Q_flow;
+
+    // five-probe drift: the halves' heat (their share of the part's port heat, the sources on
+    // their side, their own air exchange), then the bending and the screws at the targets
+    column_mean_T = sum(column.T) / nSeg;
+    housing_mean_T = sum(housing.T) / nSeg;
+    column_ports_Q = column.port_a.Q_flow + column.port_b.Q_flow + column.port_1.Q_flow + column.port_2.Q_flow + column.port_3.Q_flow;
+    housing_ports_Q = housing.port_a.Q_flow + housing.port_b.Q_flow + housing.port_1.Q_flow + housing.port_2.Q_flow + housing.port_3.Q_flow;
+    sun_on_column.Q_flow = sun_absorptivity * A_sun * sun_W_per_m2;
+    connect(sun_on_column.port, column.port_2);
+    column_front.T_mean = column_mean_T;
+    column_front.Q_in = 0.5 * column_ports_Q + 0.5 * (headstock_column.Q_flow + motor_column.Q_flow)
+      - column_front_air_fraction * column.G_side1 * (column_front.T - ambient.T);
+    column_right.T_mean = column_mean_T;
+    column_right.Q_in = 0.5 * column_ports_Q + column_lr_asymmetry * (headstock_column.Q_flow + motor_column.Q_flow)
+      + 0.5 * sun_on_column.Q_flow - 0.5 * column.G_side1 * (column_right.T - ambient.T);
+    housing_front.T_mean = housing_mean_T;
+    housing_front.Q_in = 0.5 * housing_ports_Q + 0.5 * headstock_column.Q_flow
+      - housing_front_air_fraction * housing.G_side1 * (housing_front.T - ambient.T)
+      - 0.5 * housing.G_side2 * (housing_front.T - inner_cavity.T);
+    housing_right.T_mean = housing_mean_T;
+    housing_right.Q_in = 0.5 * housing_ports_Q + housing_lr_asymmetry * (fb_housing.Q_flow + cap_housing.Q_flow + rb_housing.Q_flow + motor_housing.Q_flow)
+      - 0.5 * housing.G_side1 * (housing_right.T - ambient.T) - 0.5 * housing.G_side2 * (housing_right.T - inner_cavity.T);
+    z_carriage = column.x1 * column.L;
+    head_hang = housing.x1 * housing.L;
+    seat_to_end = spindle_shaft.x1 * spindle_shaft.L + tool.L;
+    x_screw_error = alpha_steel * (x_screw.T - T_ref) * x_target_m;
+    y_screw_error = alpha_steel * (y_screw.T - T_ref) * y_target_m;
+    // column (cantilever from the bed): the head at height z moves by kappa z_c (z - z_c/2)
+    // towards the cooler side; headstock (hanging from the carriages, length h): a point d
+    // below its seat moves by kappa h (h/2 + d) towards the cooler side; the tool relative to
+    // the table moves against the screw's growth
+    x_at_X1 = -column_right.curvature * z_carriage * (z_mandrel_end + probe_end_offset + probe_l - z_carriage / 2.0)
+      - housing_right.curvature * head_hang * (head_hang / 2.0 + seat_to_end - probe_end_offset - probe_l) - x_screw_error;
+    x_at_X2 = -column_right.curvature * z_carriage * (z_mandrel_end + probe_end_offset - z_carriage / 2.0)
+      - housing_right.curvature * head_hang * (head_hang / 2.0 + seat_to_end - probe_end_offset) - x_screw_error;
+    x_at_end = -column_right.curvature * z_carriage * (z_mandrel_end - z_carriage / 2.0)
+      - housing_right.curvature * head_hang * (head_hang / 2.0 + seat_to_end) - x_screw_error;
+    y_at_Y1 = column_front.curvature * z_carriage * (z_mandrel_end + probe_end_offset + probe_l - z_carriage / 2.0)
+      + housing_front.curvature * head_hang * (head_hang / 2.0 + seat_to_end - probe_end_offset - probe_l) - y_screw_error;
+    y_at_Y2 = column_front.curvature * z_carriage * (z_mandrel_end + probe_end_offset - z_carriage / 2.0)
+      + housing_front.curvature * head_hang * (head_hang / 2.0 + seat_to_end - probe_end_offset) - y_screw_error;
+    y_at_end = column_front.curvature * z_carriage * (z_mandrel_end - z_carriage / 2.0)
+      + housing_front.curvature * head_hang * (head_hang / 2.0 + seat_to_end) - y_screw_error;
+    probe_X1_um = 1.0e6 * x_at_X1;
+    probe_X2_um = 1.0e6 * x_at_X2;
+    probe_Y1_um = 1.0e6 * y_at_Y1;
+    probe_Y2_um = 1.0e6 * y_at_Y2;
+    probe_Z_um = drift_um;
+    drift_x_um = 1.0e6 * x_at_end;
+    drift_y_um = 1.0e6 * y_at_end;
+    tilt_a_urad = (probe_Y1_um - probe_Y2_um) / probe_l;
+    tilt_b_urad = (probe_X1_um - probe_X2_um) / probe_l;
   end MachiningCentre;
 
 end SpindleBench;

@@ -186,3 +186,15 @@ def test_a_short_spindle_on_block_is_skipped_with_a_warning(tmp_path, capsys):
     assert sorted(p.name for p in out.glob("*.csv")) == ["run1_800rpm.csv", "run3_400rpm.csv"]
     assert all(len(read_recording(p)) >= caiviac.MIN_RUN_SAMPLES for p in out.glob("*.csv"))
     assert 'tests = ["run3_400rpm"]' in (out / caiviac.STUDY_FILE).read_text()
+
+
+def test_iso_map_beside_the_runs_names_all_five_channels(tmp_path):
+    from spindlebench.studies.iso230_3.channels import load_map
+
+    mapping_path = tmp_path / caiviac.ISO_MAP_FILE
+    mapping_path.write_text(caiviac.ISO_MAP_TEXT)
+    mapping = load_map(mapping_path)
+    displacement = [c for d in mapping.directions.values() for c in d.columns]
+    assert sorted(displacement) == list(caiviac.DISPLACEMENTS)
+    assert set(caiviac.DISPLACEMENT_CHANNELS) == set(caiviac.DISPLACEMENTS)
+    assert set(mapping.temperatures) <= set(caiviac.TEMPERATURES)

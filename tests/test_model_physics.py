@@ -73,8 +73,9 @@ def test_interface_names_follow_the_contract(ode):
     ):
         assert name in ode.parameters
     assert "nSeg" not in ode.parameters  # structural, fixed at build time
-    # roughly 50-100 field nodes at the default; 5 parts x 4 segments + 21 lumped here
-    assert len(ode.node_states) == 5 * 4 + 21
+    # roughly 50-100 field nodes at the default; 5 parts x 4 segments + 21 lumped here, + the
+    # four half-section nodes of the five-probe model (column and headstock, front and right)
+    assert len(ode.node_states) == 5 * 4 + 21 + 4
     assert len(ode.states) == len(ode.node_states) + 20
 
 

@@ -28,8 +28,8 @@ def executed(tmp_path_factory):
                         strict=True))
 
 
-def test_the_course_has_its_six_notebooks():
-    assert [p.name[:2] for p in NOTEBOOK_FILES] == [f"{i:02d}" for i in range(1, 7)], NOTEBOOKS
+def test_the_course_has_its_seven_notebooks():
+    assert [p.name[:2] for p in NOTEBOOK_FILES] == [f"{i:02d}" for i in range(1, 8)], NOTEBOOKS
 
 
 @pytest.mark.parametrize("path", NOTEBOOK_FILES, ids=[p.stem for p in NOTEBOOK_FILES])

@@ -23,7 +23,9 @@ Canonical output per run (``<name>.csv``): ``time_s`` from 0, ``spindle_speed_rp
 run's first sample, like a displacement probe zeroed at the start of an experiment (the offsets
 subtracted are in the sidecar, so the source values are recoverable). ``<name>.json`` carries the
 provenance: source file and SHA-256, 0-based row range, speeds. ``paper_study.toml`` beside
-them configures ``spindlebench paper`` for these runs (see ``study_config_text``).
+them configures ``spindlebench paper`` for these runs (see ``study_config_text``), and
+``iso230_3_map.toml`` maps all five displacement channels for ``spindlebench iso230-3
+--recording`` (``DISPLACEMENT_CHANNELS`` says what each channel is as far as the data tell).
 """
 
 from __future__ import annotations
@@ -48,6 +50,42 @@ TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
 DISPLACEMENTS = tuple(f"ch{i}_um" for i in range(1, 6))
 SOURCE_COLUMNS = ("time_s", "spindle_rpm", *DISPLACEMENTS, *TEMPERATURES)
 AXIAL_TARGET = "ch3_um"
+#: What each displacement channel is, as far as the data tell (the source documents neither
+#: direction nor position; the names stay the source's channel numbers, in µm). The pairs are
+#: read from the data: on the 5000 rpm cycle ch1/ch2 correlate at r = 0.997 and ch3/ch4 at
+#: 1.000, the pattern of two radial probes at two heights in one direction each; ch5 is alone.
+DISPLACEMENT_CHANNELS: dict[str, str] = {
+    "ch1_um": "displacement (um), zeroed at the run's start; with ch2_um a pair: one radial "
+              "direction at two heights (direction and position undocumented)",
+    "ch2_um": "displacement (um); the partner of ch1_um",
+    "ch3_um": "displacement (um); with ch4_um a pair, the largest heating response (to -70 "
+              "um): the other radial direction at two heights, or the axial drift "
+              "(SOURCE.md's reading); used as the axial target by the paper comparison",
+    "ch4_um": "displacement (um); the partner of ch3_um",
+    "ch5_um": "displacement (um), alone: the axial (Z) probe if ch3/ch4 are a radial pair; "
+              "drifts slowly and rises in the cool-downs",
+}
+#: The ``iso230-3 --recording`` map beside the runs: the five channels as two radial pairs
+#: and an axial probe (the reading of ``DISPLACEMENT_CHANNELS``).
+ISO_MAP_FILE = "iso230_3_map.toml"
+ISO_MAP_TEXT = """\
+# ISO 230-3 map of the caiviac-fl-thermal runs, written by `spindlebench adapt caiviac`.
+# Use: spindlebench iso230-3 spindle --recording <run>.csv --map <this file>
+# (a cycle-phase run, `adapt caiviac --phase cycle`, is a spindle test: 4 h on, 4 h off).
+# The source documents no probe directions, positions or geometry: the pairs below are read
+# from the data (ch1/ch2 and ch3/ch4 move together, r >= 0.997), ch5 is taken as the axial
+# probe, which of a pair is the upper probe and the distance l between them are ASSUMED, so
+# the tilts are (ch1 - ch2)/l and (ch3 - ch4)/l with l = 0.1 m, good to their sign and order
+# of magnitude only.
+speed = "spindle_speed_rpm"
+probe_l_m = 0.1
+temperatures = ["t5_C", "t9_C", "t4_C", "t1_C", "t16_C", "t6_C"]
+
+[directions]
+X = { upper = "ch1_um", lower = "ch2_um" }
+Y = { upper = "ch3_um", lower = "ch4_um" }
+Z = "ch5_um"
+"""
 SAMPLE_STEP_S = 15.0
 #: A spindle-on block shorter than this (2.5 min at 15 s) is a jog, not a run: it is skipped
 #: with a warning (the readers need 2 samples, a regression at k = 4 more than 4).
@@ -266,6 +304,7 @@ def write_runs(
             },
             speeds_rpm=list(run.speeds_rpm),
             axial_target=AXIAL_TARGET,
+            displacement_channels=DISPLACEMENT_CHANNELS,
             displacement_zero_offsets_um=offsets,
             license="MIT (c) 2024 CAIVIAC, see LICENSE-MIT-CAIVIAC.txt beside the source",
             recording_sha256=None,  # its place; write_recording fills in the CSV's hash
@@ -279,4 +318,5 @@ def write_runs(
     for path, table, record in recordings:
         write_recording(path, table, record, float_format=SOURCE_FLOAT_FORMAT)
     atomic.write_text(config_path, config_text)
+    atomic.write_text(out_dir / ISO_MAP_FILE, ISO_MAP_TEXT)
     return [path for path, _, _ in recordings]

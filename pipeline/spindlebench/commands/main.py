@@ -26,9 +26,9 @@ from spindlebench.core.errors import SpindlebenchError
 #: took most of a short command's time (~20 s of 22 s for a 100-sensor ``evaluate`` on a
 #: busy machine). ``--help`` and unknown names still import them all.
 COMMANDS: dict[str, str] = {
-    name: f"spindlebench.commands.{name}"
+    name: f"spindlebench.commands.{name.replace('-', '_')}"
     for name in ("adapt", "build", "calibrate", "compensate", "demo", "evaluate", "fingerprint",
-                 "methods", "paper", "place", "plot", "simulate", "sweep")
+                 "iso230-3", "methods", "paper", "place", "plot", "simulate", "sweep")
 }
 COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 

@@ -82,6 +82,24 @@ HEAT_FLOW_PREFIX = "Q_"
 SENSOR_OUTPUTS: tuple[str, ...] = tuple(f"{name}{TEMPERATURE_SUFFIX}" for name in SENSORS)
 
 
+#: The five-probe outputs (ISO 230-3 set-up: radial probes X1, X2, Y1, Y2 at two heights
+#: ``probe_l`` apart, axial probe Z on the end face; drifts of the end face; tilts A, B in
+#: µrad). ``probe_Z_um`` is ``drift_um`` under its probe's name.
+PROBE_OUTPUTS: tuple[str, ...] = (
+    "probe_X1_um", "probe_X2_um", "probe_Y1_um", "probe_Y2_um", "probe_Z_um",
+    "drift_x_um", "drift_y_um", "tilt_a_urad", "tilt_b_urad",
+)
+#: Field nodes of the five-probe model (the '+' halves of the column's and the headstock's
+#: sections), recorded with the probe outputs only.
+PROBE_NODES: tuple[str, ...] = ("column_front", "column_right", "housing_front", "housing_right")
+
+
+def is_probe_output(output_name: str) -> bool:
+    """Whether an FMU output belongs to the five-probe model (recorded only when a scenario
+    asks with ``[outputs] probes = true``, so older scenarios keep their columns)."""
+    return output_name in PROBE_OUTPUTS or node_of_output(output_name) in PROBE_NODES
+
+
 def true_column(output_name: str) -> str:
     """Recording column of a noise-free FMU output: ``T1_C`` → ``true_T1_C``."""
     return f"{TRUE_PREFIX}{output_name}"
@@ -129,7 +147,7 @@ def _output_order(name: str) -> int:
 #: ``default_sensors`` and by the column roles of user recordings (``formats.roles``).
 NOT_SENSOR: tuple[tuple[re.Pattern[str], str], ...] = (
     (re.compile(r"^true_"), "noise-free truth"),
-    (re.compile(r"_um$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
+    (re.compile(r"_um$|_urad$|\[um\]|\[µm\]|µm|displacement", re.IGNORECASE),
      "displacement/thermal error"),
     (re.compile(r"_rpm$|\[rpm\]|speed|feed|_mm_per_min$|_W$", re.IGNORECASE),
      "driver/command input"),
@@ -708,14 +726,20 @@ def recording_frame(
     measured_drift_um: np.ndarray,
     drivers: Mapping[str, np.ndarray],
     truth: Mapping[str, np.ndarray],
+    probes: Mapping[str, np.ndarray] | None = None,
 ) -> pd.DataFrame:
-    """The canonical recording table (column order fixed by the contract)."""
+    """The canonical recording table (column order fixed by the contract); ``probes``, the
+    measured five-probe channels (``PROBE_OUTPUTS`` but ``probe_Z_um``, which is
+    ``drift_um``), follow the drift when a scenario asks for them."""
     import pandas as pd
 
     columns: dict[str, np.ndarray] = {TIME_COLUMN: time_s}
     for i in range(measured_C.shape[1]):
         columns[SENSORS[i]] = measured_C[:, i]
     columns[DRIFT_COLUMN] = measured_drift_um
+    for name in PROBE_OUTPUTS if probes is not None else ():
+        if name != "probe_Z_um":
+            columns[name] = probes[name]
     columns.update(drivers)
     for name in sorted(truth, key=_output_order):  # stable sort keeps FMU order in a group
         columns[true_column(name)] = truth[name]

@@ -49,7 +49,7 @@ from spindlebench.core import interrupts
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU
-from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState
+from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState, is_probe_output
 from spindlebench.machines.variants import Machine
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
@@ -597,7 +597,8 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                               for f in DriverSignals.__dataclass_fields__))
     return Simulation(
         time_s=sampled.time_s,
-        outputs={name: samples[:, i] for i, name in enumerate(fmu_info.output_names)},
+        outputs={name: samples[:, i] for i, name in enumerate(fmu_info.output_names)
+                 if scenario.probes or not is_probe_output(name)},
         drivers=sampled,
         initial_state_K=x0,
         end_state_K=dict(zip(fmu_info.state_names, end_values, strict=True)),

@@ -304,6 +304,10 @@ class Scenario:
     inputs: str = "continuous"
     #: The machine variant (``scenarios/machines``); its parameters apply under ``parameters``.
     machine: Machine = field(default_factory=load_machine)
+    #: ``[outputs] probes = true``: record the five-probe outputs (X, Y, tilts) and their
+    #: cross-section nodes (``formats.recording.PROBE_OUTPUTS``); off, a recording keeps the
+    #: columns it had before the five-probe model.
+    probes: bool = False
 
     @property
     def n_steps(self) -> int:
@@ -720,6 +724,14 @@ def start_state(scenario: Scenario) -> EndState | None:
     return read_end_state(initial.from_file, where, missing)
 
 
+def _read_outputs(top: Table) -> bool:
+    """``[outputs] probes``: whether the recording carries the five-probe outputs."""
+    t = top.table("outputs", required=False)
+    probes = t.get("probes", bool, False)
+    t.finish()
+    return probes
+
+
 def _read_parameters(top: Table) -> dict[str, float]:
     t = top.table("parameters", required=False)
     values = {name: t.number(name) for name in sorted(t.data)}
@@ -792,6 +804,7 @@ def load_scenario(path: str | Path) -> Scenario:
         parameters=_read_parameters(top),
         inputs=top.string("inputs", "continuous", choices=INPUT_MODES),
         machine=_read_machine(top, path),
+        probes=_read_outputs(top),
     )
     top.finish()
     if scenario.initial.kind == "soak" and isinstance(scenario.ambient, MeasuredAmbient):

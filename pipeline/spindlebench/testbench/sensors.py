@@ -122,3 +122,40 @@ def measure(
     probe = true_drift_um + probe_noise
     drift = quantise(probe - probe[0], model.probe_quantum_um)
     return measured, drift
+
+
+#: The radial probes of the five-probe set-up, each measured like the axial probe.
+RADIAL_PROBES = ("probe_X1_um", "probe_X2_um", "probe_Y1_um", "probe_Y2_um")
+
+
+def measure_probes(
+    model: SensorModel,
+    time_s: np.ndarray,
+    truth: dict[str, np.ndarray],
+    probe_l_m: float,
+    probe_end_offset_m: float,
+    measured_drift_um: np.ndarray,
+    seed: int,
+) -> dict[str, np.ndarray]:
+    """The five-probe channels as recorded: each radial probe with the axial probe's noise,
+    drift and resolution, zeroed at the first sample; the Z probe is the measured
+    ``drift_um``; the end-face drifts and the tilts follow from the radial probes as an
+    evaluation would compute them (extrapolated over ``probe_end_offset_m``, divided by l).
+
+    Its own generator (seeded by ``seed`` and the probe's index) leaves the draws of
+    ``measure`` and hence every older recording unchanged."""
+    readings: dict[str, np.ndarray] = {}
+    for index, name in enumerate(RADIAL_PROBES):
+        rng = np.random.default_rng([seed, 230, index])
+        noise = rng.standard_normal(time_s.size) * model.probe_noise_um
+        probe = truth[name] + noise + probe_drift_um(model, rng, time_s)
+        readings[name] = quantise(probe - probe[0], model.probe_quantum_um)
+    readings["probe_Z_um"] = measured_drift_um
+    x1, x2 = readings["probe_X1_um"], readings["probe_X2_um"]
+    y1, y2 = readings["probe_Y1_um"], readings["probe_Y2_um"]
+    reach = probe_end_offset_m / probe_l_m
+    readings["drift_x_um"] = x2 - (x1 - x2) * reach
+    readings["drift_y_um"] = y2 - (y1 - y2) * reach
+    readings["tilt_a_urad"] = (y1 - y2) / probe_l_m
+    readings["tilt_b_urad"] = (x1 - x2) / probe_l_m
+    return readings

@@ -29,11 +29,7 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.formats.recording import sidecar_record as recording_sidecar
 from spindlebench.testbench.drivers import INPUT_NAMES
-from spindlebench.testbench.runner import (
-    Simulation,
-    check_physical,
-    co_simulate,
-)
+from spindlebench.testbench.runner import Simulation, check_physical, co_simulate, inspect_fmu
 from spindlebench.testbench.scenario import (
     MeasuredAmbient,
     Scenario,
@@ -41,7 +37,7 @@ from spindlebench.testbench.scenario import (
     resolve_initial,
     start_state,
 )
-from spindlebench.testbench.sensors import measure
+from spindlebench.testbench.sensors import measure, measure_probes
 from spindlebench.testbench.soak import soak_provenance, soak_state
 
 
@@ -104,7 +100,14 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
         seed,
     )
     drivers = {name: getattr(simulation.drivers, name) for name in INPUT_NAMES}
-    frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth)
+    probes = None
+    if scenario.probes:
+        probes = measure_probes(scenario.sensors, simulation.time_s, truth,
+                                _parameter(simulation, fmu, scenario, "probe_l"),
+                                _parameter(simulation, fmu, scenario, "probe_end_offset"),
+                                measured_drift, seed)
+    frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth,
+                            probes)
     return frame, simulation_sidecar(scenario, fmu, seed, simulation)
 
 
@@ -123,6 +126,17 @@ def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
     scenario = resolve_initial(load_scenario(scenario_path), out_csv.parent)
     frame, sidecar = record(scenario, fmu_path, seed, progress)
     return write_recording(out_csv, frame, sidecar)
+
+
+def _parameter(simulation: Simulation, fmu: Path, scenario: Scenario, name: str) -> float:
+    """A parameter's value in a run: the one given, else the FMU's default."""
+    if name in simulation.parameters:
+        return float(simulation.parameters[name])
+    variable = inspect_fmu(fmu).parameters.get(name)
+    if variable is None or variable.start is None:
+        raise SpindlebenchError(f"{scenario.path}: key 'outputs.probes': the FMU {fmu} has no "
+                                f"five-probe parameter {name!r} (rebuild it)")
+    return float(variable.start)
 
 
 def _columns(truth: Mapping[str, np.ndarray], names: tuple[str, ...]) -> np.ndarray:

@@ -33,7 +33,7 @@ from fmpy import read_model_description
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import DEFAULT_SIMILARITY, SIMILARITIES
-from spindlebench.formats.recording import node_of_output
+from spindlebench.formats.recording import PROBE_NODES, node_of_output
 from spindlebench.formats.toml import Table, in_range, load_toml, one_of
 from spindlebench.studies.family.family_file import NO_FAULT, SweepStudy, check_fmu, load_study
 
@@ -92,14 +92,16 @@ class PlacementStudy:
 
 
 def fmu_nodes(fmu: Path) -> list[str]:
-    """Node names of the FMU's temperature field (``node_housing_3_C`` → ``housing_3``)."""
+    """Node names of the FMU's temperature field (``node_housing_3_C`` → ``housing_3``), but
+    the five-probe model's half-section nodes: a study's recordings do not carry them (they
+    are recorded with the probe outputs only), so the candidates stay what they were."""
     try:
         description = read_model_description(str(fmu), validate=False)
     except Exception as exc:
         raise SpindlebenchError(f"{fmu}: not a readable FMU: {exc}") from None
     nodes = [node_of_output(v.name) for v in description.modelVariables
              if v.causality == "output"]
-    return [node for node in nodes if node is not None]
+    return [node for node in nodes if node is not None and node not in PROBE_NODES]
 
 
 def _bool_or_list(table: Table, name: str) -> tuple[bool, ...]:
