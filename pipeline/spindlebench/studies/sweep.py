@@ -45,6 +45,7 @@ from spindlebench.studies.jobs import (
     evaluate_job,
 )
 from spindlebench.studies.methods import method_specs
+from spindlebench.studies.population import Member, Population
 from spindlebench.studies.simulations import (
     Simulations,
     failure_path,
@@ -352,7 +353,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
         "it on the others, and write results.csv, a summary, box plots and README.md.",
-        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one)
+        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one,
+        population_report=_population_report)
+
+
+def _population_report(out: Path, population: Population, members: list[Member],
+                       study: Path, fmu: Path) -> str:
+    from spindlebench.studies.population_report import sweep_population_report
+
+    return sweep_population_report(out, population, members, study, fmu)
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
