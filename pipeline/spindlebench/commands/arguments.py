@@ -14,6 +14,7 @@ from pathlib import Path
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.studies.family.family_file import SweepStudy, machine_runs
+from spindlebench.studies.family.population import Member, Population, draw_population_of
 
 #: A study name that may serve as the default results folder ``results/<name>``.
 FOLDER_NAME = re.compile(r"[A-Za-z0-9._-]+")
@@ -59,27 +60,48 @@ def default_results_folder(study_path: Path, name: str) -> Path:
     return Path("results") / name
 
 
+#: What a study kind writes over a population's machines once each has run (None: the
+#: machines' own folders and ``population.csv`` only).
+PopulationReport = Callable[[Path, Population, list[Member], Path, Path], str]
+
+
 def register_study_command(subparsers: argparse._SubParsersAction, name: str, *, help: str,
                            description: str, example: str,
                            load_family: Callable[[Path], SweepStudy],
-                           run_one: Callable[[argparse.Namespace, Path, str | None], None]
-                           ) -> None:
+                           run_one: Callable[[argparse.Namespace, Path, str | None], None],
+                           population_report: PopulationReport | None = None) -> None:
     """Add a study sub-command with the options every study shares.
 
     ``load_family`` loads (and checks) the study file and gives its experiment family;
-    ``run_one`` runs the study on one machine into one results folder."""
+    ``run_one`` runs the study on one machine into one results folder;
+    ``population_report`` sums up a population's machines (``studies.family.population``)."""
     parser = subparsers.add_parser(name, help=help, description=description)
     add_study_arguments(parser, example)
     parser.set_defaults(func=functools.partial(run_study_command, load_family=load_family,
-                                               run_one=run_one))
+                                               run_one=run_one,
+                                               population_report=population_report))
 
 
 def run_study_command(args: argparse.Namespace, *, load_family: Callable[[Path], SweepStudy],
-                      run_one: Callable[[argparse.Namespace, Path, str | None], None]) -> int:
-    """A study command: its results folder, then one run per machine (``machine_runs``)."""
+                      run_one: Callable[[argparse.Namespace, Path, str | None], None],
+                      population_report: PopulationReport | None = None) -> int:
+    """A study command: its results folder, then one run per machine (``machine_runs``, or
+    every kept machine of the study's population)."""
     out = results_folder(args, lambda study: load_family(study).name)
-    for machine, folder in machine_runs(load_family(args.study), args.machine, out):
+    study = load_family(args.study)
+    members: list[Member] | None = None
+    if args.machine is None and study.population is not None:
+        print(f"population: {study.population.describe()}")
+        members = draw_population_of(study, out)
+        runs: list[tuple[str | None, Path]] = [(str(m.path), out / m.name)
+                                               for m in members if m.kept]
+    else:
+        runs = machine_runs(study, args.machine, out)
+    for machine, folder in runs:
         if machine is not None and folder != out:
-            print(f"machine {machine}:")
+            print(f"machine {Path(machine).stem if machine.endswith('.toml') else machine}:")
         run_one(args, folder, machine)
+    if members is not None and population_report is not None:
+        population_report(out, study.population, members, Path(args.study), study.fmu)
+        print(f"population summary: {out / 'README.md'}")
     return 0

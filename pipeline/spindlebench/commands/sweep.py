@@ -10,9 +10,8 @@ import argparse
 from pathlib import Path
 
 from spindlebench.commands.arguments import register_study_command
-from spindlebench.studies.family.family_file import (
-    load_study,
-)
+from spindlebench.studies.family.family_file import load_study
+from spindlebench.studies.sweep.population_report import sweep_population_report
 from spindlebench.studies.sweep.sweep_run import run_sweep
 
 
@@ -24,7 +23,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
         "it on the others, and write results.csv, a summary, box plots and README.md.",
-        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one)
+        example="scenarios/studies/season_sweep.toml", load_family=load_study, run_one=_run_one,
+        population_report=sweep_population_report)
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:

@@ -42,6 +42,7 @@ from spindlebench.formats.toml import (
     range_problem,
 )
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
+from spindlebench.studies.family.population import Population, read_population
 from spindlebench.studies.family.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import (
     FOLLOW_AMBIENT_MAX_K,
@@ -179,6 +180,9 @@ class SweepStudy:
     #: ``[axes] machines``: the study is run once per machine (``machine_runs``), each into
     #: its own results folder; empty: one run on ``machine``.
     machines: tuple[str, ...] = ()
+    #: ``[axes] machines = { population = N, ... }``: the study is run once per machine drawn
+    #: around a base machine (``studies.population``), each into its own results folder.
+    population: Population | None = None
 
     @property
     def sha256(self) -> str:
@@ -267,9 +271,14 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
     fault_names = axes.get_list("faults", str, default=[NO_FAULT])
-    machine_axis = tuple(axes.get_list("machines", str, default=[]))
+    population = None
+    if isinstance(axes.raw("machines", default=None), Mapping):
+        population = read_population(axes.table("machines"), path)
+        machine_axis: tuple[str, ...] = ()
+    else:
+        machine_axis = tuple(axes.get_list("machines", str, default=[]))
     axes.finish()
-    if machine_axis and machine_name != DEFAULT_MACHINE:
+    if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
     for name in machine_axis:
         try:
@@ -312,7 +321,7 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         feed=feed, feed_x_mm_per_min=feed_x, feed_y_mm_per_min=feed_y, months=months,
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
-        indoor=indoor, machine=machine_variant, machines=machine_axis,
+        indoor=indoor, machine=machine_variant, machines=machine_axis, population=population,
     )
 
 
