@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench compile notebooks clean-venv
+.PHONY: run test lint bench compile notebooks docs clean-venv
 
 ## The package is installed editable, so Python compiles its modules from source on every
 ## start unless their bytecode is cached; with PYTHONDONTWRITEBYTECODE set (as on this
@@ -36,6 +36,12 @@ test: $(STAMP)
 ## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
 notebooks: $(STAMP)
 	$(PY) -m spindlebench.commands.course results/notebooks
+
+## The documentation site (mkdocs, Material): the course executed first so its pages show the
+## outputs; generated pages come from the code (docs/hooks/generate.py). Open
+## results/site/index.html (no server needed).
+docs: notebooks
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

@@ -1,0 +1,148 @@
+"""MkDocs hook: the pages that are generated from the code and files they describe.
+
+A page typed by hand goes stale at the next change of what it describes; these cannot. At every
+``mkdocs build`` (``make docs``) this hook adds, under ``generated/``:
+
+- ``commands.md``: every sub-command's ``--help``, from the argument parser itself;
+- ``methods.md``: the selection methods, from the method registry (``spindlebench methods``);
+- ``machines.md``: every shipped machine file, its description, parameters and targets;
+- ``scenarios.md``: ``scenarios/README.md``, the scenario schema's own documentation;
+- ``course/``: each notebook of ``notebooks/`` as a page (its text and code, from the jupytext
+  source), with the executed notebook (figures and outputs) beside it when ``make notebooks``
+  has written it to ``results/notebooks/`` (``make docs`` runs it first).
+"""
+
+from __future__ import annotations
+
+import html
+import logging
+from pathlib import Path
+
+from mkdocs.structure.files import File, Files
+
+LOG = logging.getLogger("mkdocs.hooks.spindlebench")
+ROOT = Path(__file__).resolve().parents[2]
+EXECUTED = ROOT / "results" / "notebooks"
+
+
+def on_files(files: Files, config) -> Files:
+    """Add every generated page (mkdocs calls this once per build, before reading pages)."""
+    pages = {
+        "generated/commands.md": commands_page(),
+        "generated/methods.md": methods_page(),
+        "generated/machines.md": machines_page(),
+        "generated/scenarios.md": scenarios_page(),
+    }
+    pages.update(course_pages(files, config))
+    for uri, text in pages.items():
+        files.append(File.generated(config, uri, content=text))
+    return files
+
+
+def commands_page() -> str:
+    """Every sub-command's help, as ``spindlebench CMD --help`` prints it."""
+    from spindlebench.commands.main import COMMANDS, build_parser
+
+    parser = build_parser()
+    lines = ["# Command reference", "",
+             "Generated from the argument parser (`spindlebench CMD --help` prints the same).",
+             "", "```text", parser.format_help().rstrip(), "```", ""]
+    for name in sorted(COMMANDS):
+        sub = parser.commands[name]
+        lines += [f"## `spindlebench {name}`", "", "```text", sub.format_help().rstrip(), "```",
+                  ""]
+    return "\n".join(lines)
+
+
+def methods_page() -> str:
+    """The method listing of the registry (what ``spindlebench methods`` prints)."""
+    from spindlebench.selection.registry import listing
+
+    return "\n".join(["# Selection methods", "",
+                      "Generated from the method registry (`spindlebench methods` prints the "
+                      "same). Every name here is accepted by `evaluate --method`, the paper "
+                      "configuration and the study files.", "", "```text", listing().rstrip(),
+                      "```", ""])
+
+
+def machines_page() -> str:
+    """Each shipped machine: description, parameters set on top of the FMU's, targets."""
+    from spindlebench.machines.variants import load_machine, machine_names
+
+    lines = ["# Machines", "",
+             "Generated from `scenarios/machines/*.toml`. A machine is a named set of FMU "
+             "parameter values on top of the model's defaults, with the fingerprint targets "
+             "its runs were checked against (`tests/test_machines.py`). Any command that "
+             "simulates takes `--machine NAME` or a path to a machine file.", ""]
+    for name in machine_names():
+        machine = load_machine(name)
+        lines += [f"## `{name}`", "", machine.description.strip(), ""]
+        if machine.parameters:
+            lines += ["| parameter | value |", "|---|---|"]
+            lines += [f"| `{key}` | {value:g} |" for key, value in machine.parameters.items()]
+            lines.append("")
+        else:
+            lines += ["Parameters: the FMU's defaults.", ""]
+        if machine.targets:
+            lines += ["Targets:", ""] + [f"- {t.describe()}" for t in machine.targets] + [""]
+    return "\n".join(lines)
+
+
+def scenarios_page() -> str:
+    """``scenarios/README.md``: the schema of a scenario, kept beside the scenarios."""
+    return (ROOT / "scenarios" / "README.md").read_text(encoding="utf-8")
+
+
+def course_pages(files: Files, config) -> dict[str, str]:
+    """One page per notebook (text and code from its jupytext source), the executed HTML
+    beside it when it exists, and the course's index."""
+    import jupytext
+
+    index = ["# The course", "",
+             "Short notebooks that teach thermal error and sensor selection with the "
+             "testbench; each ends with exercises. `make notebooks` executes them "
+             "(`results/notebooks/`); `make docs` does so first and puts each executed "
+             "notebook, with its figures, beside its page.", ""]
+    pages: dict[str, str] = {}
+    for source in sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py")):
+        notebook = jupytext.reads(source.read_text(encoding="utf-8"), fmt="py:percent")
+        title = _title(notebook, source.stem)
+        executed = EXECUTED / f"{source.stem}.html"
+        body = [f"# {html.escape(title)}", ""]
+        if executed.is_file():
+            files.append(File(f"generated/course/{executed.name}", str(EXECUTED),
+                              config["site_dir"], config["use_directory_urls"]))
+            body += [f"[The executed notebook, with its figures and outputs]({executed.name})",
+                     ""]
+        else:
+            LOG.info("no executed %s: run make notebooks to show its outputs", executed.name)
+            body += ["*(Outputs are not included in this build: `make docs` executes the "
+                     "notebooks first.)*", ""]
+        for cell in notebook.cells:
+            text = cell.source.strip()
+            if not text:
+                continue
+            if cell.cell_type == "markdown":
+                body += [_drop_first_title(text) if cell is notebook.cells[0] else text, ""]
+            else:
+                body += ["```python", text, "```", ""]
+        pages[f"generated/course/{source.stem}.md"] = "\n".join(body)
+        index.append(f"- [{title}]({source.stem}.md)")
+    pages["generated/course/index.md"] = "\n".join(index) + "\n"
+    return pages
+
+
+def _title(notebook, fallback: str) -> str:
+    for cell in notebook.cells:
+        if cell.cell_type == "markdown":
+            for line in cell.source.splitlines():
+                if line.startswith("# "):
+                    return line[2:].strip()
+    return fallback
+
+
+def _drop_first_title(text: str) -> str:
+    lines = text.splitlines()
+    if lines and lines[0].startswith("# "):
+        lines = lines[1:]
+    return "\n".join(lines).strip()
