@@ -30,7 +30,7 @@ def evaluate(capsys, *args: str, train: Path = EXAMPLE / "run1.csv",
     return status, out, err
 
 
-def test_the_readme_example_takes_the_temperatures_and_says_what_it_skipped(capsys):
+def test_the_documented_example_takes_the_temperatures_and_says_what_it_skipped(capsys):
     status, out, err = evaluate(capsys, "--time-column", "Time [s]")
     assert status == 0, err
     first = out.splitlines()[0]
@@ -38,8 +38,8 @@ def test_the_readme_example_takes_the_temperatures_and_says_what_it_skipped(caps
     assert "skipped: Time [s] (time column); Spindle speed [rpm] (driver/command input); " \
            "dz [um] (target); dx [um] (displacement/thermal error)" in first
     assert "training R2" in out
-    readme = (EXAMPLE.parents[2] / "README.md").read_text(encoding="utf-8")
-    assert first in readme  # the README shows what the command prints
+    page = (EXAMPLE.parents[1] / "recordings.md").read_text(encoding="utf-8")
+    assert first in page  # the recordings page shows what the command prints
 
 
 def test_a_time_column_of_another_name_is_never_a_sensor(capsys):
