@@ -41,6 +41,7 @@ notebooks: $(STAMP)
 ## outputs; generated pages come from the code (docs/hooks/generate.py). Open
 ## results/site/index.html (no server needed).
 docs: notebooks
+	test -f results/README.md || $(MAKE) run
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
 bench: compile

@@ -9,7 +9,11 @@ A page typed by hand goes stale at the next change of what it describes; these c
 - ``scenarios.md``: ``scenarios/README.md``, the scenario schema's own documentation;
 - ``course/``: each notebook of ``notebooks/`` as a page (its text and code, from the jupytext
   source), with the executed notebook (figures and outputs) beside it when ``make notebooks``
-  has written it to ``results/notebooks/`` (``make docs`` runs it first).
+  has written it to ``results/notebooks/`` (``make docs`` runs it first);
+- ``results/``: the READMEs that ``make run`` writes (the paper's comparison on the synthetic
+  experiments and on the real recording), with their figures and tables, and any study results
+  folder listed in ``RESULT_FOLDERS`` that exists: the result tables of the site are the files
+  the commands wrote, not copies typed by hand.
 """
 
 from __future__ import annotations
@@ -23,6 +27,12 @@ from mkdocs.structure.files import File, Files
 LOG = logging.getLogger("mkdocs.hooks.spindlebench")
 ROOT = Path(__file__).resolve().parents[2]
 EXECUTED = ROOT / "results" / "notebooks"
+#: Results folders whose README becomes a page (site path -> folder), when they exist.
+RESULT_FOLDERS = {
+    "generated/results/paper_study": ROOT / "results" / "paper_study",
+    "generated/results/caiviac_study": ROOT / "results" / "caiviac_study",
+    "generated/results/population": ROOT / "results" / "population",
+}
 
 
 def on_files(files: Files, config) -> Files:
@@ -34,6 +44,7 @@ def on_files(files: Files, config) -> Files:
         "generated/scenarios.md": scenarios_page(),
     }
     pages.update(course_pages(files, config))
+    pages.update(result_pages(files, config))
     for uri, text in pages.items():
         files.append(File.generated(config, uri, content=text))
     return files
@@ -110,8 +121,8 @@ def course_pages(files: Files, config) -> dict[str, str]:
         executed = EXECUTED / f"{source.stem}.html"
         body = [f"# {html.escape(title)}", ""]
         if executed.is_file():
-            files.append(File(f"generated/course/{executed.name}", str(EXECUTED),
-                              config["site_dir"], config["use_directory_urls"]))
+            files.append(File.generated(config, f"generated/course/{executed.name}",
+                                        abs_src_path=str(executed)))
             body += [f"[The executed notebook, with its figures and outputs]({executed.name})",
                      ""]
         else:
@@ -146,3 +157,48 @@ def _drop_first_title(text: str) -> str:
     if lines and lines[0].startswith("# "):
         lines = lines[1:]
     return "\n".join(lines).strip()
+
+
+def result_pages(files: Files, config) -> dict[str, str]:
+    """Each existing results folder's README as a page, its figures and tables beside it, and
+    an index that says which command writes each (or that it has not been run)."""
+    pages: dict[str, str] = {}
+    index = ["# Results written by the commands", "",
+             "These pages are the READMEs the commands wrote, as they wrote them (figures and "
+             "tables beside them). `make run` writes the first two; `make docs` runs it when "
+             "`results/README.md` is missing.", ""]
+    for uri, folder in RESULT_FOLDERS.items():
+        readme = folder / "README.md"
+        name = folder.name
+        if not readme.is_file():  # a page all the same, so the links to it hold
+            pages[f"{uri}/index.md"] = (f"# {name}\n\nNot run in this build: `make run` writes "
+                                        f"`results/{name}/` (`make docs` runs it first).\n")
+            index.append(f"- [{name}]({name}/index.md): not run in this build")
+            continue
+        for item in sorted(folder.iterdir()):
+            if item.is_file() and item.suffix in (".png", ".csv", ".json", ".md") and \
+                    item.name != "README.md":
+                files.append(File.generated(config, f"{uri}/{item.name}",
+                                            abs_src_path=str(item)))
+        text = readme.read_text(encoding="utf-8")
+        pages[f"{uri}/index.md"] = _links_to_files(text, folder)
+        index.append(f"- [{name}]({name}/index.md)")
+    pages["generated/results/index.md"] = "\n".join(index) + "\n"
+    return pages
+
+
+def _links_to_files(text: str, folder: Path) -> str:
+    """A README's links to sub-folders or files the site does not carry become plain text
+    (mkdocs --strict refuses a link to a file that is not in the site)."""
+    import re
+
+    def keep(match: re.Match) -> str:
+        target = match.group(2).split("#")[0]
+        if target.startswith(("http://", "https://")) or not target:
+            return match.group(0)
+        path = folder / target
+        if path.is_file() and path.suffix in (".png", ".csv", ".json", ".md"):
+            return match.group(0)
+        return f"{match.group(1)} (`{target}`)"
+
+    return re.sub(r"(?<!!)\[([^\]]+)\]\(([^)]+)\)", keep, text)
