@@ -22,7 +22,15 @@ Last, issue 10's question whether the Jacobian from the FMU's directional deriva
 difference quotients against the same run with the FMU's Jacobian, on experiment 1 and on
 the start/stop example (the spindle standing still).
 
+With ``--baseline-fmu OLD.fmu`` (issue 26, the FMU's hot loop): CPU seconds of the default
+runner on OLD and on ``--fmu`` (best of 5, same process), their ratio and whether the outputs
+are the same bytes; e.g. the FMU of the commit before the value-reference table
+(``git show e587fce:fmus/SpindleBench.fmu > /tmp/old.fmu``). Also the co-simulation
+interface (``fmi3DoStep``, ``testbench.cosim``) on the same experiment, with its difference
+to the runner's hold.
+
     .venv/bin/python bench/bench_simulation.py [--scenario FILE] [--fmu FILE] [--method LSODA]
+        [--baseline-fmu OLD.fmu]
 """
 
 from __future__ import annotations
@@ -136,7 +144,12 @@ def main() -> None:
     parser.add_argument("--fmu", type=Path, default=DEFAULT_FMU)
     parser.add_argument("--method", default="LSODA",
                         help="solve_ivp method (LSODA was the fastest on this model; BDF, RK45 …)")
+    parser.add_argument("--baseline-fmu", type=Path, default=None,
+                        help="an older FMU build: CPU ratio of the default runner on it and on "
+                             "--fmu, and whether their outputs are the same bytes")
     args = parser.parse_args()
+    if args.baseline_fmu is not None:
+        compare_builds(load_scenario(args.scenario), args.baseline_fmu, args.fmu)
     scenario = dataclasses.replace(load_scenario(args.scenario), inputs="hold")
     hours = scenario.duration_s / 3600.0
     info = inspect_fmu(args.fmu)
@@ -176,11 +189,39 @@ def main() -> None:
     report("solve_ivp in one call (not a co-simulation)", single_s, single)
     print(f"speed-up of the runner over solve_ivp doing the same co-simulation: "
           f"{stepped_s / runner_s:.1f}x")
+    from spindlebench.testbench.cosim import co_simulate_cs
+
+    cs_s, cs = timed(co_simulate_cs, scenario, args.fmu)
+    drift = np.abs(cs.outputs["drift_um"] - simulation.outputs["drift_um"]).max()
+    temps = max(np.abs(cs.outputs[n] - simulation.outputs[n]).max()
+                for n in cs.outputs if n.endswith("_C"))
+    print(f"{'fmi3DoStep (SDIRK4 in the FMU), 1 s steps':<46} {cs_s:8.3f} s = "
+          f"{cs_s / hours:7.3f} s/sim h  {cs_s / runner_s:6.2f}x the runner's time, "
+          f"max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K (all temperature outputs)")
     print("Jacobian from the FMU's directional derivatives instead of CVode's difference "
           "quotients (continuous inputs, best of 3, CPU seconds):")
     jacobian_variant.report(args.scenario.name, continuous, args.fmu)
     stops = load_scenario(ROOT / "scenarios/examples/start_stop_cycles.toml")
     jacobian_variant.report(stops.path.name, stops, args.fmu)
+
+
+def compare_builds(scenario: Scenario, baseline: Path, fmu: Path) -> None:
+    """CPU seconds (best of 5) of the default runner on two FMU builds, and equal bytes."""
+    def best(path: Path) -> tuple[float, Any]:
+        times, result = [], None
+        for _ in range(5):
+            started = time.process_time()
+            result = co_simulate(scenario, path)
+            times.append(time.process_time() - started)
+        return min(times), result
+
+    best(fmu), best(baseline)  # load both binaries first
+    old_s, old = best(baseline)
+    new_s, new = best(fmu)
+    same = all(old.outputs[n].tobytes() == new.outputs[n].tobytes() for n in old.outputs)
+    print(f"runner (default inputs) on {baseline}: {old_s * 1e3:.1f} CPU-ms, on {fmu}: "
+          f"{new_s * 1e3:.1f} CPU-ms, ratio {old_s / new_s:.2f}; outputs identical in bytes: "
+          f"{same} ({len(old.outputs)} outputs)")
 
 
 if __name__ == "__main__":

@@ -193,7 +193,8 @@ def _short_run(parameters, rpm=8000.0, hours=1.0, outputs=("drift_um",)):
     inputs["time"], inputs["spindle_speed_rpm"], inputs["ambient_C"] = grid, rpm, 20.0
     result = simulate_fmu(str(FMU), start_values={"T_start": 293.15, **parameters},
                           input=inputs, stop_time=grid[-1], output_interval=60.0,
-                          output=list(outputs), relative_tolerance=1e-6)
+                          output=list(outputs), relative_tolerance=1e-6,
+                          fmi_type="ModelExchange")  # CVode, as before the FMU had both
     return {name: np.asarray(result[name]) for name in outputs}
 
 

@@ -143,7 +143,7 @@ def test_truth_agrees_with_fmpy_simulate_fmu(quick_run):
     result = fmpy.simulate_fmu(
         str(FMU), stop_time=1200.0, output_interval=60.0, input=inputs,
         start_values=dict.fromkeys(info.state_names, 293.15), relative_tolerance=1e-8,
-        output=["T1_C", "T8_C", "T16_C", "drift_um"],
+        output=["T1_C", "T8_C", "T16_C", "drift_um"], fmi_type="ModelExchange",
     )
     for name in ("T1_C", "T8_C", "T16_C"):
         np.testing.assert_allclose(frame[f"true_{name}"], result[name], atol=2e-3)

@@ -42,6 +42,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help=f"output folder, or a path ending in .fmu (default: fmus; in a folder the file "
         f"is {FMU_NAME}.fmu, or {FMU_NAME}_<N>seg.fmu for a non-default --segments N)",
     )
+    parser.add_argument(
+        "--cross-check",
+        metavar="DIR",
+        default=None,
+        help="also write the FMI Cross-Check folders (me and cs: the FMU, reference results, "
+        "options and inputs of the paper's experiment 1) under DIR",
+    )
     parser.set_defaults(func=run)
 
 
@@ -75,6 +82,13 @@ def run(args: argparse.Namespace) -> int:
         f"built {path}: {args.segments} segments per part, {nodes} nodes, "
         f"{len(description.derivatives)} states, {elapsed:.1f} s, sha256 {sha256_file(path)[:12]}"
     )
+    if getattr(args, "cross_check", None):
+        from spindlebench.core.paths import SCENARIOS_DIR
+        from spindlebench.testbench.cross_check import write_cross_check
+
+        for folder in write_cross_check(path, args.cross_check,
+                                        SCENARIOS_DIR / "paper" / "exp1.toml"):
+            print(f"cross-check folder {folder}")
     if path.name != f"{FMU_NAME}.fmu":
         print(f"the default {FMU_NAME}.fmu is unchanged; to use this build: 'spindlebench "
               f"simulate SCENARIO.toml -o OUT.csv --fmu {path}', or in a sweep/place study "

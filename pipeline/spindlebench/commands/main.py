@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     for name in ("adapt", "build", "calibrate", "compensate", "demo", "evaluate", "fingerprint",
                  "iso230-3", "methods", "paper", "place", "plot", "simulate", "sweep")
 }
+COMMANDS["export-ssp"] = "spindlebench.commands.export_ssp"  # a name that is no module name
 COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 
 #: Sub-commands that run OpenBLAS with one thread: their large products are single-threaded

@@ -19,7 +19,7 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.testbench.batch import check_batch, plan_batch
-from spindlebench.testbench.simulate import record
+from spindlebench.testbench.simulate import record_run
 
 
 def _scenario_files(arguments: list[str]) -> list[Path]:
@@ -65,8 +65,16 @@ def run(args: argparse.Namespace) -> int:
     plan = plan_batch(files, targets, args.machine)
     check_batch(plan, args.fmu)
     show_progress = not args.quiet and sys.stderr.isatty()
+    continued = {p for p in plan.producers if p is not None}
+    saved: dict[int, bytes] = {}  # end FMU states of the runs that a later run continues
     for i in plan.order:
-        frame, sidecar = record(plan.scenarios[i], args.fmu, args.seed, show_progress)
+        producer = plan.producers[i] if plan.producers else None
+        frame, sidecar, end = record_run(
+            plan.scenarios[i], args.fmu, args.seed, show_progress,
+            start_fmu_state=None if producer is None else saved.get(producer),
+            save_end_state=i in continued)
+        if end is not None:
+            saved[i] = end
         written = write_recording(targets[i], frame, sidecar)
         extras = [written.with_suffix(".json").name]
         if args.plot:

@@ -59,6 +59,7 @@ def cold_start(
         stop_time=hours * 3600.0,
         output_interval=output_interval_s,
         solver=solver,
+        fmi_type="ModelExchange",  # FMPy's default for an FMU with both is co-simulation
         # FMPy's Euler takes one step per output interval; it needs a step below ~35 s
         step_size=output_interval_s if solver == "Euler" else None,
         relative_tolerance=1e-6,

@@ -13,6 +13,10 @@ CasADi's FMU exporter is experimental. What we repair after ``export_fmu``:
 - every state the importer does not set before ``fmi3EnterInitializationMode`` starts at the
   tunable parameter ``T_start`` (the wrapper records which states were set), so an FMPy user
   gets a cold start at 8 degC with ``start_values={"T_start": 281.15}`` alone;
+- ``fmi3SetFloat64`` finds a state by a value-reference table, not a scan of all states;
+- co-simulation (``fmi3InstantiateCoSimulation``, ``fmi3DoStep``) and saved states
+  (``fmi3Get/SetFMUState``, serialisation) from ``fmu_extensions.c``, spliced into the
+  wrapper; the model description gets ``<CoSimulation>`` and the capability flags;
 - the archive is reproducible: no generation timestamp, an instantiation token derived from
   the sources, fixed zip dates and sorted entries.
 """
@@ -207,8 +211,32 @@ def fix_model_description(xml_text: str, ode: ExplicitOde, token: str) -> str:
         stepSize="1.0",
     )
     root.insert(position + 1, experiment)
+    _declare_interfaces(root)
     ET.indent(root, space="    ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: Capability flags both interfaces get from ``fmu_extensions.c`` (saved states).
+STATE_FLAGS = {"canGetAndSetFMUState": "true", "canSerializeFMUState": "true"}
+
+
+def _declare_interfaces(root: ET.Element) -> None:
+    """Saved-state flags on ``<ModelExchange>``, and a ``<CoSimulation>`` element beside it
+    (same binary, same model identifier: ``fmi3DoStep`` integrates the same functions)."""
+    me = root.find("ModelExchange")
+    if me is None or root.find("CoSimulation") is not None:
+        raise SpindlebenchError("CasADi wrote a modelDescription.xml without a lone "
+                                "<ModelExchange> element")
+    me.attrib.update(STATE_FLAGS)
+    cs = ET.Element("CoSimulation", {
+        "modelIdentifier": me.get("modelIdentifier", FMU_NAME),
+        **{k: me.get(k) for k in ("providesDirectionalDerivatives", "providesAdjointDerivatives")
+           if me.get(k)},
+        **STATE_FLAGS,
+        "canHandleVariableCommunicationStepSize": "true",
+        "hasEventMode": "false",
+    })
+    root.insert(list(root).index(me) + 1, cs)
 
 
 def _generation_tool() -> str:
@@ -296,11 +324,119 @@ def patch_start_temperature(source: str, start_vr: int) -> str:
     )
 
 
+#: The C code ``patch_extensions`` splices in; the marker splits its types from its functions.
+EXTENSIONS_SOURCE = Path(__file__).with_name("fmu_extensions.c")
+EXTENSIONS_SPLIT = "/* SB_SPLIT */\n"
+#: Replaced by the instantiation token once the sources' digest is known (``export_fmu``).
+TOKEN_PLACEHOLDER = "@SB_TOKEN@"
+#: Exported functions CasADi leaves unimplemented, and the bodies ``fmu_extensions.c`` gives them.
+EXTENSION_BODIES = {
+    "fmi3Instance fmi3InstantiateCoSimulation": """  casadi_fmi_memory* m;
+  (void)eventModeUsed;  // no event mode (hasEventMode = false)
+  (void)earlyReturnAllowed;  // fmi3DoStep never returns early
+  (void)requiredIntermediateVariables;
+  (void)nRequiredIntermediateVariables;
+  (void)intermediateUpdate;
+  m = (casadi_fmi_memory*)fmi3InstantiateModelExchange(instanceName, instantiationToken,
+      resourcePath, visible, loggingOn, instanceEnvironment, logMessage);
+  if (m) m->sb_is_cs = 1;
+  return m;
+""",
+    "fmi3Status fmi3GetFMUState": "  return sb_get_state((casadi_fmi_memory*)instance, "
+                                  "FMUState);\n",
+    "fmi3Status fmi3SetFMUState": "  return sb_set_state((casadi_fmi_memory*)instance, "
+                                  "FMUState);\n",
+    "fmi3Status fmi3FreeFMUState": "  (void)instance;\n  return sb_free_state(FMUState);\n",
+    "fmi3Status fmi3SerializedFMUStateSize": """  (void)instance;
+  (void)FMUState;
+  *size = sizeof(sb_fmu_state);
+  return fmi3OK;
+""",
+    "fmi3Status fmi3SerializeFMUState": "  return sb_serialize((casadi_fmi_memory*)instance, "
+                                        "FMUState, serializedState, size);\n",
+    "fmi3Status fmi3DeserializeFMUState": "  return sb_deserialize((casadi_fmi_memory*)instance, "
+                                          "serializedState, size, FMUState);\n",
+    "fmi3Status fmi3EnterStepMode": "  (void)instance;\n  return fmi3OK;\n",
+    "fmi3Status fmi3DoStep": """  fmi3Status status;
+  casadi_fmi_memory* m = (casadi_fmi_memory*)instance;
+  (void)noSetFMUStatePriorToCurrentPoint;
+  status = sb_do_step(m, currentCommunicationPoint, communicationStepSize);
+  if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
+  if (terminateSimulation) *terminateSimulation = fmi3False;
+  if (earlyReturn) *earlyReturn = fmi3False;
+  if (lastSuccessfulTime) *lastSuccessfulTime = m->t;
+  return status;
+""",
+}
+
+
+def _replace_body(source: str, signature: str, body: str) -> str:
+    """Replace the body of the exported C function that starts with ``signature``."""
+    start = source.find(f"FMI3_Export {signature}(")
+    brace = source.find(") {\n", start)
+    end = source.find("\nFMI3_Export", start + 1)
+    if start < 0 or brace < 0 or end < 0 or not start < brace < end:
+        raise SpindlebenchError(f"CasADi's FMU wrapper changed: {signature} not found")
+    return source[:brace + 4] + body + "}" + source[end:]
+
+
+def patch_extensions(source: str) -> str:
+    """Splice ``fmu_extensions.c`` into the wrapper (co-simulation, saved states, the
+    value-reference table) and route the unimplemented FMI functions to it."""
+    types, functions = EXTENSIONS_SOURCE.read_text(encoding="utf-8").split(EXTENSIONS_SPLIT)
+    source = _replace_once(source, "typedef struct {\n  // Name of instance\n",
+                           f"{types}\ntypedef struct {{\n  // Name of instance\n",
+                           "extension types")
+    source = _replace_once(
+        source,
+        "  int state_set[N_X];\n",
+        "  int state_set[N_X];\n"
+        f"  // spindlebench extensions {PATCH_NOTE}: value reference -> state index (-1: none),\n"
+        "  // co-simulation integrator memory and work arrays, the importer's logger\n"
+        "  int sb_state_of_vr[N_VAR];\n  int sb_is_cs;\n  sb_integrator sb_cs;\n"
+        "  sb_work* sb_work;\n  fmi3LogMessageCallback sb_log;\n"
+        "  fmi3InstanceEnvironment sb_env;\n",
+        "extension memory",
+    )
+    source = _replace_once(
+        source, "FMI3_Export fmi3Status fmi3Reset(",
+        f'#define SB_TOKEN "{TOKEN_PLACEHOLDER}"\n{functions}\nFMI3_Export fmi3Status fmi3Reset(',
+        "extension functions")
+    source = _replace_in_function(
+        source, "fmi3Reset", "  m->continuous_states_changed = 0;\n",
+        "  m->continuous_states_changed = 0;\n"
+        "  m->sb_cs.h = 0;\n  m->sb_cs.jac_valid = 0;\n  m->sb_cs.lu_hg = 0;\n")
+    source = _replace_once(
+        source, "    m->instance_name = instanceName;\n",
+        "    m->instance_name = instanceName;\n    sb_init_extensions(m);\n"
+        "    m->sb_log = logMessage;\n    m->sb_env = instanceEnvironment;\n",
+        "instantiation")
+    source = _replace_once(source, "    // Free memory structure\n    free(instance);\n",
+                           "    // Free memory structure\n"
+                           "    free(((casadi_fmi_memory*)instance)->sb_work);\n"
+                           "    free(instance);\n", "fmi3FreeInstance")
+    source = _replace_in_function(
+        source, "fmi3EnterInitializationMode", "  m->t = startTime;\n",
+        "  m->t = startTime;\n"
+        "  if (toleranceDefined && tolerance > 0) m->sb_cs.tol = tolerance;\n")
+    source = _replace_in_function(
+        source, "fmi3SetFloat64",
+        "    for (j = 0; j < N_X; ++j) if (x_vr[j] == vr) m->state_set[j] = 1;\n",
+        "    if (vr < N_VAR && m->sb_state_of_vr[vr] >= 0) "
+        "m->state_set[m->sb_state_of_vr[vr]] = 1;\n")
+    for signature, body in EXTENSION_BODIES.items():
+        source = _replace_body(source, signature, body)
+    return source
+
+
 def patch_wrapper(source: str, start_vr: int | None = None) -> str:
-    """Make ``fmi3GetEventIndicators`` succeed for a model without event indicators, and (with
-    ``start_vr``) start unset states at ``T_start``."""
+    """Make ``fmi3GetEventIndicators`` succeed for a model without event indicators, (with
+    ``start_vr``) start unset states at ``T_start``, and add ``fmu_extensions.c``."""
     source = _replace_once(source, NO_EVENTS_FATAL, NO_EVENTS_OK, "fmi3GetEventIndicators")
-    return source if start_vr is None else patch_start_temperature(source, start_vr)
+    if start_vr is None:  # the extensions' saved states include the state flags it adds
+        raise SpindlebenchError(f"the model has no parameter {START_PARAMETER!r}, which the "
+                                "FMU's start-temperature patch needs")
+    return patch_extensions(patch_start_temperature(source, start_vr))
 
 
 def _value_reference(xml_text: str, name: str) -> int | None:
@@ -382,6 +518,7 @@ def export_fmu(ode: ExplicitOde, out_path: str | Path) -> Path:
         for source in c_sources:
             digest.update(source.read_bytes())
         token = "{" + digest.hexdigest()[:32] + "}"
+        wrapper.write_text(wrapper.read_text().replace(TOKEN_PLACEHOLDER, token))
         description.write_text(fix_model_description(description.read_text(), ode, token))
         compile_binary(
             c_sources, sources_dir, package / "binaries" / folder / f"{FMU_NAME}{suffix}"

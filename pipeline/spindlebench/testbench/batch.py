@@ -7,7 +7,7 @@ every FMU-dependent check made, so a mistake in the last file costs nothing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from spindlebench.core.errors import SpindlebenchError
@@ -32,6 +32,8 @@ class BatchPlan:
     order: list[int]  # indices into the batch, each after the run it continues from
     scenarios: list[Scenario]  # loaded, with sibling references resolved to files
     state_from_batch: list[bool]  # whether a run's start state is written by an earlier run
+    #: the index of the run each run continues from (None: not a run of this batch)
+    producers: list[int | None] = field(default_factory=list)
 
 
 def plan_batch(files: list[Path], targets: list[Path], machine: str | None = None) -> BatchPlan:
@@ -88,7 +90,7 @@ def plan_batch(files: list[Path], targets: list[Path], machine: str | None = Non
 
     for i in range(len(files)):
         visit(i, [])
-    return BatchPlan(order=order, scenarios=scenarios,
+    return BatchPlan(order=order, scenarios=scenarios, producers=after,
                      state_from_batch=[producer is not None for producer in after])
 
 

@@ -79,6 +79,9 @@ class FmuInterface:
     state_names: tuple[str, ...]
     state_vrs: tuple[int, ...]
     parameters: Mapping[str, ScalarVariable] = field(repr=False)
+    #: ``<ModelExchange canGetAndSetFMUState canSerializeFMUState>`` (FMPy's FMI 3 reader
+    #: keeps neither flag, so they are read from the XML here)
+    saves_states: bool = False
 
 
 #: FMUs already read and checked in this process, by (resolved path, size, mtime): a sweep
@@ -143,7 +146,18 @@ def _read_and_check(fmu_path: Path) -> FmuInterface:
         state_names=tuple(v.name for v in states),
         state_vrs=tuple(v.valueReference for v in states),
         parameters=parameters,
+        saves_states=_declares_saved_states(fmu_path),
     )
+
+
+def _declares_saved_states(fmu_path: Path) -> bool:
+    """Whether the FMU's ``<ModelExchange>`` can get, set and serialise its state."""
+    import xml.etree.ElementTree as ET
+
+    with zipfile.ZipFile(fmu_path) as archive:
+        me = ET.fromstring(archive.read("modelDescription.xml")).find("ModelExchange")
+    return me is not None and all(me.get(flag) == "true" for flag in
+                                  ("canGetAndSetFMUState", "canSerializeFMUState"))
 
 
 def _damaged_member(fmu_path: Path) -> str | None:
@@ -273,6 +287,9 @@ class Simulation:
     end_state_K: Mapping[str, float]  # noqa: N815
     parameters: Mapping[str, float]  # every parameter value the FMU was given
     solver: Mapping[str, Any]
+    #: The FMU's serialised state at the end (``fmi3SerializeFMUState``), when asked for
+    #: (``co_simulate(..., save_end_state=True)``): a soak's warm start for many runs.
+    end_fmu_state: bytes | None = None
 
 
 # --------------------------------------------------------------------------- set-up helpers
@@ -459,13 +476,21 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
 
 @interrupts.deferring  # Ctrl-C inside CVode's ctypes callbacks would be swallowed
 def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
-                progress: bool = False, start: Start = None) -> Simulation:
+                progress: bool = False, start: Start = None,
+                start_fmu_state: bytes | None = None, save_end_state: bool = False,
+                ) -> Simulation:
     """Run a scenario through the FMU and return the noise-free sampled outputs.
 
     A ``continue`` scenario needs ``start``, the parsed end state of the run it continues
     (``scenario.start_state``), a ``soak`` scenario the soak's end state
     (``testbench.soak.soak_state``): the runner reads no recording files and runs no soak
-    (``testbench.simulate.run_start`` picks either)."""
+    (``testbench.simulate.run_start`` picks either). With ``start_fmu_state`` as well (a
+    serialised FMU state whose states are ``start``'s: the soak's, ``soak.soak_start``, or
+    the continued run's), an FMU that saves states restores it (``fmi3SetFMUState``: one warm
+    state forked into many runs) instead of setting ``start``'s temperatures by name; the
+    bytes are the same (tests/test_fmu_cosim.py), and the check that the FMU starts from
+    ``start`` still applies. ``save_end_state`` keeps the FMU's serialised end state in
+    ``Simulation.end_fmu_state``."""
     from fmpy.sundials import CVodeSolver
 
     set_stop_time = _cvode_set_stop_time()
@@ -476,6 +501,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     inputs = np.ascontiguousarray(signals.matrix)
     jumps = signals.jumps()
     x0 = initial_state(scenario, fmu_info, float(signals.ambient_C[0]), start)
+    warm = start_fmu_state if fmu_info.saves_states and start is not None else None
     params = parameter_values(scenario, fmu_info)
 
     n_steps, every = scenario.n_steps, scenario.steps_per_sample
@@ -501,11 +527,14 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     try:
         fmu.instantiate()
         instantiated = True
+        if warm is not None:  # states, parameters and flags of the start; ours on top
+            restore_state(fmu, warm)
         if params:
             names = list(params)
             fmu.setFloat64([fmu_info.parameters[n].valueReference for n in names],
                            [params[n] for n in names])
-        fmu.setFloat64(list(fmu_info.state_vrs), [x0[n] for n in fmu_info.state_names])
+        if warm is None:
+            fmu.setFloat64(list(fmu_info.state_vrs), [x0[n] for n in fmu_info.state_names])
         fmu.enterInitializationMode(startTime=0.0, stopTime=scenario.duration_s)
         input_vrs = (fmi3ValueReference * len(fmu_info.input_vrs))(*fmu_info.input_vrs)
         output_vrs = (fmi3ValueReference * n_out)(*fmu_info.output_vrs)
@@ -580,6 +609,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             if bar is not None and (number + 1) % report_every == 0:
                 bar.update(round(t) - bar.n)
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
+        end_fmu_state = save_state(fmu) if save_end_state else None
         fmu.terminate()
     except (RuntimeError, FMICallException) as exc:  # CVode or the FMU gave up
         changed = ", ".join(f"{k} = {v:g}" for k, v in scenario.parameters.items())
@@ -611,8 +641,30 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             "input_hold": INPUT_DESCRIPTIONS[scenario.inputs],
             "solver_stops": int(stops.size),
             "restarts_at_input_jumps": int(jumps.sum()),
+            **({"start": "saved FMU state of " + ("the soak" if scenario.initial.kind == "soak"
+                                                  else "the run it continues")
+                            + " (fmi3SetFMUState)"} if warm else {}),
         },
+        end_fmu_state=end_fmu_state,
     )
+
+
+def save_state(fmu: Any) -> bytes:
+    """The instance's state, serialised (``fmi3GetFMUState`` + ``fmi3SerializeFMUState``)."""
+    state = fmu.getFMUState()
+    try:
+        return bytes(fmu.serializeFMUState(state))
+    finally:
+        fmu.freeFMUState(state)
+
+
+def restore_state(fmu: Any, data: bytes) -> None:
+    """Restore a state saved by ``save_state`` (of the same FMU build) into ``fmu``."""
+    state = fmu.deserializeFMUState(data)
+    try:
+        fmu.setFMUState(state)
+    finally:
+        fmu.freeFMUState(state)
 
 
 #: What each ``Scenario.inputs`` mode does, for the recording's provenance.

@@ -38,7 +38,7 @@ from spindlebench.testbench.scenario import (
     start_state,
 )
 from spindlebench.testbench.sensors import measure, measure_probes
-from spindlebench.testbench.soak import soak_provenance, soak_state
+from spindlebench.testbench.soak import soak_provenance, soak_start, soak_state
 
 
 def simulation_sidecar(scenario: Scenario, fmu_path: Path, seed: int,
@@ -79,6 +79,17 @@ def run_start(scenario: Scenario, fmu_path: Path) -> EndState | dict[str, float]
     return start_state(scenario)
 
 
+def run_start_with_state(scenario: Scenario, fmu_path: Path,
+                         ) -> tuple[EndState | dict[str, float] | None, bytes | None]:
+    """``run_start``, plus for a soak the FMU's saved state at the soak's end when the FMU
+    saves states (``soak.soak_start``): the runner restores it into the run, one warm state
+    forked into every run of the same soak, with the same bytes as the temperatures set by
+    name."""
+    if scenario.initial.kind == "soak" and inspect_fmu(fmu_path).saves_states:
+        return soak_start(scenario, fmu_path)
+    return run_start(scenario, fmu_path), None
+
+
 def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | None = None,
            progress: bool = False) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Co-simulate a loaded scenario and measure it: the recording frame and its sidecar.
@@ -86,9 +97,25 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
     ``seed`` overrides the scenario's seed; ``fmu_path`` defaults to ``fmus/SpindleBench.fmu``.
     Nothing is written, so a study can keep recordings in memory.
     """
+    frame, sidecar, _ = record_run(scenario, fmu_path, seed, progress)
+    return frame, sidecar
+
+
+def record_run(scenario: Scenario, fmu_path: str | Path | None = None,
+               seed: int | None = None, progress: bool = False, *,
+               start_fmu_state: bytes | None = None, save_end_state: bool = False,
+               ) -> tuple[pd.DataFrame, dict[str, Any], bytes | None]:
+    """``record``, plus the saved FMU states a batch hands from a run to the one continuing
+    it: ``start_fmu_state`` (the end state of the run a ``continue`` scenario continues,
+    restored instead of its end temperatures set by name: the same bytes) and, with
+    ``save_end_state``, this run's serialised end state (else None)."""
     fmu = Path(DEFAULT_FMU if fmu_path is None else fmu_path)
     seed = scenario.seed if seed is None else seed
-    simulation = co_simulate(scenario, fmu, progress=progress, start=run_start(scenario, fmu))
+    start, warm = run_start_with_state(scenario, fmu)
+    if scenario.initial.kind == "continue" and start_fmu_state is not None:
+        warm = start_fmu_state
+    simulation = co_simulate(scenario, fmu, progress=progress, start=start,
+                             start_fmu_state=warm, save_end_state=save_end_state)
     check_physical(simulation, scenario)
     truth = simulation.outputs
     measured_C, measured_drift = measure(
@@ -108,7 +135,8 @@ def record(scenario: Scenario, fmu_path: str | Path | None = None, seed: int | N
                                 measured_drift, seed)
     frame = recording_frame(simulation.time_s, measured_C, measured_drift, drivers, truth,
                             probes)
-    return frame, simulation_sidecar(scenario, fmu, seed, simulation)
+    sidecar = simulation_sidecar(scenario, fmu, seed, simulation)
+    return frame, sidecar, simulation.end_fmu_state
 
 
 def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,

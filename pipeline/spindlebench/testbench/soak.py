@@ -20,7 +20,9 @@ Soaks are cached twice: in memory for the process, and as JSON files in the fold
 ``SPINDLEBENCH_SOAK_CACHE`` (default ``results/cache/soak``), named by a SHA-256 of everything
 the soak depends on (the FMU's hash, the runner's source and the package versions included),
 written atomically, so parallel workers and later runs reuse them and a stale entry cannot be
-hit.
+hit. Beside each JSON file, ``<key>.fmustate`` holds the FMU's serialised state at the soak's
+end (``fmi3SerializeFMUState``), for an FMU that saves states: the runner restores it into
+every run of the same soak (``soak_start``), one warm state forked into many scenarios.
 """
 
 from __future__ import annotations
@@ -63,6 +65,10 @@ SOAK_CODE = ("spindlebench.testbench.runner", "spindlebench.testbench.drivers",
              "spindlebench.testbench.soak")
 
 _memory: dict[str, dict[str, float]] = {}
+_memory_fmu_state: dict[str, bytes] = {}
+#: The first bytes of a serialised SpindleBench FMU state (``fmu_extensions.c``): a cache file
+#: that does not start so is redone, never handed to the FMU.
+FMU_STATE_MAGIC = b"SBFMUST\x00"
 
 
 def cache_dir() -> Path:
@@ -140,6 +146,44 @@ def soak_state(scenario: Scenario, fmu_path: str | Path) -> dict[str, float]:
             atomic.write_text(file, json.dumps(record, indent=1, sort_keys=True) + "\n")
     _memory[key] = dict(states)
     return dict(states)
+
+
+def soak_start(scenario: Scenario, fmu_path: str | Path) -> tuple[dict[str, float], bytes]:
+    """The soak's end temperatures (K by state name) and the FMU's serialised state there.
+
+    Needs an FMU that saves states (``FmuInterface.saves_states``); the caller hands both to
+    the runner (``simulate.run_start_with_state``). Cached like ``soak_state``; a JSON entry
+    without its state file (written before states were saved, or damaged) is computed again.
+    """
+    fmu_path = Path(fmu_path)
+    history = soak_scenario(scenario)
+    key = soak_key(history, fmu_path)
+    if key in _memory_fmu_state:
+        return dict(_memory[key]), _memory_fmu_state[key]
+    file = cache_dir() / f"{key}.json"
+    state_file = file.with_suffix(".fmustate")
+    states, saved = _read_cached(file), _read_state(state_file)
+    if states is None or saved is None:
+        simulation = co_simulate(history, fmu_path, save_end_state=True)
+        states, saved = dict(simulation.end_state_K), simulation.end_fmu_state
+        assert saved is not None
+        record = {"soak_key": key, "days": scenario.initial.days,
+                  "ambient": history.to_dict()["ambient"], "fmu": str(fmu_path),
+                  "states_K": states}
+        with contextlib.suppress(OSError):
+            atomic.write_bytes(state_file, saved)
+            atomic.write_text(file, json.dumps(record, indent=1, sort_keys=True) + "\n")
+    _memory[key], _memory_fmu_state[key] = dict(states), saved
+    return dict(states), saved
+
+
+def _read_state(file: Path) -> bytes | None:
+    """A cached serialised FMU state, or None when missing or not one (then it is redone)."""
+    try:
+        data = file.read_bytes()
+    except OSError:
+        return None
+    return data if data.startswith(FMU_STATE_MAGIC) else None
 
 
 def _read_cached(file: Path) -> dict[str, float] | None:
