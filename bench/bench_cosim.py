@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def differences(a: dict, b: dict) -> str:
-    temps = [n for n in a if n.endswith("_C")]
+    temps = [n for n in a if n.endswith("_C") and n in b]
     worst = max(temps, key=lambda n: float(np.max(np.abs(a[n] - b[n]))))
     d_t = float(np.max(np.abs(a[worst] - b[worst])))
     d_drift = float(np.max(np.abs(a["drift_um"] - b["drift_um"])))

@@ -194,7 +194,7 @@ def main() -> None:
     cs_s, cs = timed(co_simulate_cs, scenario, args.fmu)
     drift = np.abs(cs.outputs["drift_um"] - simulation.outputs["drift_um"]).max()
     temps = max(np.abs(cs.outputs[n] - simulation.outputs[n]).max()
-                for n in cs.outputs if n.endswith("_C"))
+                for n in cs.outputs if n.endswith("_C") and n in simulation.outputs)
     print(f"{'fmi3DoStep (SDIRK4 in the FMU), 1 s steps':<46} {cs_s:8.3f} s = "
           f"{cs_s / hours:7.3f} s/sim h  {cs_s / runner_s:6.2f}x the runner's time, "
           f"max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K (all temperature outputs)")

@@ -40,7 +40,7 @@ def runner_result(exp1_short):
 
 
 def _max_differences(a, b):
-    temperatures = [n for n in a if n.endswith("_C")]
+    temperatures = [n for n in a if n.endswith("_C") and n in b]
     d_t = max(float(np.max(np.abs(a[n] - b[n]))) for n in temperatures)
     return d_t, float(np.max(np.abs(a["drift_um"] - b["drift_um"])))
 
