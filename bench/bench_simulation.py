@@ -25,7 +25,7 @@ the start/stop example (the spindle standing still).
 With ``--baseline-fmu OLD.fmu`` (issue 26, the FMU's hot loop): CPU seconds of the default
 runner on OLD and on ``--fmu`` (best of 5, same process), their ratio and whether the outputs
 are the same bytes; e.g. the FMU of the commit before the value-reference table
-(``git show e587fce:fmus/SpindleBench.fmu > /tmp/old.fmu``). Also the co-simulation
+(``git show b91ff71:fmus/SpindleBench.fmu > /tmp/old.fmu``). Also the co-simulation
 interface (``fmi3DoStep``, ``testbench.cosim``) on the same experiment, with its difference
 to the runner's hold.
 
