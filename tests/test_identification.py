@@ -45,6 +45,7 @@ def test_exponent_is_identified_from_several_speeds():
     assert result.exponents[0] == pytest.approx(1.7, abs=0.01)
 
 
+@pytest.mark.slow
 def test_order_selection_prefers_two_nodes_for_a_two_mode_machine():
     t, n = _programme(hours=48.0)
     u = n / 4000.0

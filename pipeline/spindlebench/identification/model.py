@@ -34,7 +34,7 @@ a 46 h recording at 15 s (11 115 samples) is simulated in well under a milliseco
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -51,6 +51,8 @@ MIN_TAU_S = 60.0
 #: The longest time constant, as a multiple of the training span: slower modes are ramps the
 #: data cannot tell from a drift.
 MAX_TAU_SPAN = 2.0
+#: Successive time constants of a network differ at least by this factor.
+MIN_TAU_RATIO = 2.0
 #: Relative tolerance on a uniform time grid (else the step-by-step path is used).
 UNIFORM_TOLERANCE = 1e-6
 
@@ -66,6 +68,8 @@ class Structure:
     ambient: bool = False  # an ambient column drives every node
     initial: bool = False  # each node's initial temperature is fitted (else: at rest)
     exponent: float | None = None  # a fixed exponent for every speed source (None: fitted)
+    basis: tuple[float, ...] = ()  # fixed exponents, one speed source each (replaces the above)
+    tau_max_s: float = np.inf  # the longest time constant (``fit`` sets it from the data)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -79,11 +83,31 @@ class Structure:
     def n_taus(self) -> int:
         if self.kind == "network":
             return self.n_nodes
-        return {"tf1": 1, "tf2": 2}[self.kind] * (self.speed_sources + self.linear_inputs)
+        return {"tf1": 1, "tf2": 2}[self.kind] * (self.n_sources + self.linear_inputs)
+
+    @property
+    def n_sources(self) -> int:
+        return len(self.basis) if self.basis else self.speed_sources
 
     @property
     def n_exponents(self) -> int:
-        return 0 if self.exponent is not None else self.speed_sources
+        return 0 if self.exponent is not None or self.basis else self.speed_sources
+
+    def taus_of(self, theta: np.ndarray) -> np.ndarray:
+        """Time constants, s. A network's are ordered and at least ``MIN_TAU_RATIO`` apart
+        (``theta`` holds the log of the fastest, then the log ratios): two nearly equal modes
+        are one mode, and fitted as two they cancel with huge opposite weights."""
+        head = np.asarray(theta[:self.n_taus], dtype=float)
+        return np.minimum(np.exp(np.cumsum(head) if self.kind == "network" else head),
+                          self.tau_max_s)
+
+    def exponents_of(self, theta: np.ndarray) -> np.ndarray:
+        """The speed sources' exponents: the fixed basis, the fixed one, or fitted."""
+        if self.basis:
+            return np.asarray(self.basis, dtype=float)
+        if self.exponent is not None:
+            return np.full(self.speed_sources, self.exponent)
+        return np.asarray(theta[self.n_taus:], dtype=float)
 
     @property
     def label(self) -> str:
@@ -133,7 +157,8 @@ def heat_inputs(inputs: Inputs, exponents: np.ndarray, speed_ref: float) -> list
     """Each source's normalised heat input: ``(n / n_ref)^a`` per speed source, then the
     linear inputs as they are."""
     ratio = np.clip(inputs.speed_rpm, 0.0, None) / speed_ref
-    out = [ratio ** a for a in exponents]
+    # exponent 0: the spindle-on indicator (a loss present whenever it turns), not 1 always
+    out = [ratio ** a if a > 0 else (ratio > 0).astype(float) for a in exponents]
     out += list(np.atleast_2d(inputs.linear)) if inputs.linear.size else []
     return out
 
@@ -142,10 +167,8 @@ def design(structure: Structure, theta: np.ndarray, inputs: Inputs, speed_ref: f
            initial: bool | None = None) -> np.ndarray:
     """The design matrix (N, p) of the linear output weights at nonlinear parameters
     ``theta`` (``log tau`` then exponents); the last column is the constant."""
-    taus = np.exp(theta[:structure.n_taus])
-    exponents = (np.full(structure.speed_sources, structure.exponent)
-                 if structure.exponent is not None else theta[structure.n_taus:])
-    sources = heat_inputs(inputs, exponents, speed_ref)
+    taus = structure.taus_of(theta)
+    sources = heat_inputs(inputs, structure.exponents_of(theta), speed_ref)
     t = inputs.time_s
     columns: list[np.ndarray] = []
     if structure.kind == "network":
@@ -176,6 +199,7 @@ class FitResult:
     speed_ref: float
     theta_se: np.ndarray
     weights_se: np.ndarray
+    theta_cov: np.ndarray
     rmse: np.ndarray  # per output, on the weighted samples
     cost: float
     evaluations: int
@@ -185,13 +209,11 @@ class FitResult:
 
     @property
     def taus_s(self) -> np.ndarray:
-        return np.exp(self.theta[:self.structure.n_taus])
+        return self.structure.taus_of(self.theta)
 
     @property
     def exponents(self) -> np.ndarray:
-        if self.structure.exponent is not None:
-            return np.full(self.structure.speed_sources, self.structure.exponent)
-        return self.theta[self.structure.n_taus:]
+        return self.structure.exponents_of(self.theta)
 
     def predict(self, inputs: Inputs, initial: bool = False) -> np.ndarray:
         """Outputs (N, outputs) of the model on ``inputs``; from rest unless ``initial``
@@ -211,9 +233,13 @@ class FitResult:
     def tau_interval95(self) -> np.ndarray:
         """(n_taus, 2) 95 % intervals of the time constants (normal on log tau)."""
         n = self.structure.n_taus
-        se = self.theta_se[:n]
-        return np.column_stack([np.exp(self.theta[:n] - 1.96 * se),
-                                np.exp(self.theta[:n] + 1.96 * se)])
+        log_tau = np.log(self.taus_s)
+        if self.structure.kind == "network":  # log tau = cumulative sum of theta's head
+            L = np.tril(np.ones((n, n)))
+            se = np.sqrt(np.clip(np.diag(L @ self.theta_cov[:n, :n] @ L.T), 0.0, None))
+        else:
+            se = self.theta_se[:n]
+        return np.column_stack([np.exp(log_tau - 1.96 * se), np.exp(log_tau + 1.96 * se)])
 
     def to_dict(self) -> dict:
         s = self.structure
@@ -225,8 +251,8 @@ class FitResult:
             "tau_s": self.taus_s.tolist(),
             "tau_s_interval95": self.tau_interval95().tolist(),
             "exponents": self.exponents.tolist(),
-            "exponent_fixed": s.exponent is not None,
-            "exponents_se": (self.theta_se[s.n_taus:].tolist() if s.exponent is None else []),
+            "exponent_fixed": s.n_exponents == 0,
+            "exponents_se": self.theta_se[s.n_taus:].tolist(),
             "outputs": list(self.outputs),
             "weights": self.weights.T.tolist(),
             "weights_se": self.weights_se.T.tolist(),
@@ -308,9 +334,14 @@ def fit(structure: Structure, inputs: Inputs | list[Inputs], outputs: np.ndarray
     dt = float(np.median(np.concatenate([np.diff(p.time_s) for p in parts])))
     tau_lo = max(MIN_TAU_S, 2.0 * dt)
     tau_hi = max(MAX_TAU_SPAN * span, 10.0 * tau_lo)
+    structure = replace(structure, tau_max_s=tau_hi)
     n_taus, n_exp = structure.n_taus, structure.n_exponents
     lower = np.r_[np.full(n_taus, np.log(tau_lo)), np.full(n_exp, EXPONENT_BOUNDS[0])]
     upper = np.r_[np.full(n_taus, np.log(tau_hi)), np.full(n_exp, EXPONENT_BOUNDS[1])]
+    network = structure.kind == "network"
+    if network and n_taus > 1:  # log ratios of successive time constants
+        lower[1:n_taus] = np.log(MIN_TAU_RATIO)
+        upper[1:n_taus] = max(np.log(tau_hi / tau_lo), np.log(MIN_TAU_RATIO) + 1.0)
     sw = np.sqrt(weight[use])
     Y = outputs[use] / scales * sw[:, None]
 
@@ -334,7 +365,9 @@ def fit(structure: Structure, inputs: Inputs | list[Inputs], outputs: np.ndarray
         else:
             log_taus = np.sort(rng.uniform(np.log(tau_lo), np.log(tau_hi), n_taus))
             exps = rng.uniform(0.8, 2.5, n_exp)
-        theta0 = np.clip(np.r_[log_taus, exps], lower + 1e-9, upper - 1e-9)
+        head = np.r_[log_taus[0], np.maximum(np.diff(log_taus), np.log(MIN_TAU_RATIO) + 0.1)] \
+            if network else log_taus
+        theta0 = np.clip(np.r_[head, exps], lower + 1e-9, upper - 1e-9)
         result = least_squares(residual, theta0, bounds=(lower, upper), method="trf",
                                x_scale="jac", max_nfev=max_nfev)
         evaluations += result.nfev
@@ -352,11 +385,11 @@ def fit(structure: Structure, inputs: Inputs | list[Inputs], outputs: np.ndarray
     xtx_inv = np.linalg.pinv(X.T @ X)
     per_output = np.array([np.sum(resid[:, j] ** 2) / max(1, len(resid) - X.shape[1])
                            / effective_fraction(resid[:, j]) for j in range(m)])
-    weights_se = np.sqrt(np.outer(np.diag(xtx_inv), per_output)) * scales
+    weights_se = np.sqrt(np.outer(np.clip(np.diag(xtx_inv), 0, None), per_output)) * scales
     weights = coef * scales
     rmse = np.sqrt(np.mean((resid / sw[:, None]) ** 2, axis=0)) * scales
     status = "converged" if best.status > 0 else "evaluation limit"
-    return FitResult(structure, theta, weights, speed_ref, theta_se, weights_se, rmse,
+    return FitResult(structure, theta, weights, speed_ref, theta_se, weights_se, theta_cov, rmse,
                      float(best.cost), evaluations, status, max(1, starts), tuple(output_names))
 
 
@@ -374,6 +407,9 @@ def blocks(time_s: np.ndarray, speed_rpm: np.ndarray, mask: np.ndarray,
     index = np.flatnonzero(mask)
     cuts = [i for i in run_starts(time_s, speed_rpm) if index[0] < i <= index[-1]]
     parts = [p for p in np.split(index, np.searchsorted(index, cuts)) if p.size]
+    # an idle stretch before the first switch-on is no cycle: part of the first one
+    while len(parts) > 1 and parts[0].size < 0.25 * np.median([p.size for p in parts]):
+        parts[:2] = [np.concatenate(parts[:2])]
     if len(parts) < min_blocks:
         parts = [p for p in np.array_split(index, min_blocks) if p.size]
     return parts

@@ -63,7 +63,7 @@ def network_state_space(fitted: FitResult) -> tuple[np.ndarray, np.ndarray, list
     if s.kind != "network" or s.initial or s.ambient:
         raise SpindlebenchError("the observer needs a network model driven by the speed "
                                 "(no ambient column, no fitted initial state)")
-    n_sources = s.speed_sources + s.linear_inputs
+    n_sources = s.n_sources + s.linear_inputs
     taus = fitted.taus_s
     source = [j for _ in taus for j in range(n_sources)]
     rates = np.repeat(1.0 / taus, n_sources)
