@@ -45,13 +45,12 @@ def test_exponent_is_identified_from_several_speeds():
     assert result.exponents[0] == pytest.approx(1.7, abs=0.01)
 
 
-@pytest.mark.slow
 def test_order_selection_prefers_two_nodes_for_a_two_mode_machine():
-    t, n = _programme(hours=48.0)
+    t, n = _programme(hours=32.0, step_s=300.0)
     u = n / 4000.0
     y = -30.0 * lag(u, 1800.0, t) + 20.0 * lag(u, 8 * 3600.0, t)
     chosen, rows = select_order([Structure("network", 1), Structure("network", 2)],
-                                Inputs(t, n), y, np.ones(t.size, bool))
+                                Inputs(t, n), y, np.ones(t.size, bool), starts=1)
     assert chosen.n_nodes == 2
     assert rows[1]["mean"] < 0.5 * rows[0]["mean"]
 
