@@ -190,3 +190,43 @@ def test_a_spindle_that_never_turns_is_refused():
     t = np.arange(0.0, 3600.0, 60.0)
     with pytest.raises(SpindlebenchError, match="never turns"):
         fit(Structure("tf1"), Inputs(t, np.zeros(t.size)), np.zeros(t.size))
+
+
+def _write(path, time_values, temperature_offset=25.0):
+    t, n = _programme(hours=8.0, step_s=120.0)
+    node = lag(n / 4000.0, 5400.0, t)
+    sensor = lag(n / 4000.0, 1200.0, t)
+    lines = ["time_s,spindle_rpm,ch3_um,t1_C"]
+    lines += [f"{a:g},{b:g},{-20 * c:.4f},{temperature_offset + 8 * s:.4f}"
+              for a, b, c, s in zip(time_values(t), n, node, sensor, strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(("time_values", "offset", "units", "expect"), [
+    (lambda t: np.arange(t.size), 25.0, "", ["sample index", "time_unit"]),
+    (lambda t: t, 0.0, "", ["rises", "temperatures = \"rise\""]),
+])
+def test_a_sample_index_or_rises_are_refused_unless_the_map_says(
+        tmp_path, capsys, time_values, offset, units, expect):
+    rec = _write(tmp_path / "rec.csv", time_values, offset)
+    (tmp_path / "map.toml").write_text(MAP + units)
+    status = cli.main(["identify", str(rec), "--map", str(tmp_path / "map.toml"),
+                       "--nodes", "1", "-o", str(tmp_path / "m.json")])
+    err = capsys.readouterr().err.strip()
+    assert status != 0 and len(err.splitlines()) == 1, err
+    for word in expect:
+        assert word in err
+
+
+def test_units_in_the_map_convert_samples_and_rises(tmp_path):
+    from spindlebench.calibration.mapping import read_map
+    from spindlebench.calibration.series import load_series
+
+    rec = _write(tmp_path / "rec.csv", lambda t: np.arange(t.size), 0.0)
+    (tmp_path / "map.toml").write_text(
+        MAP + '[units]\ntime_unit = "sample"\nsample_s = 120.0\ntemperatures = "rise"\n'
+        "base_C = 21.5\n")
+    series = load_series(rec, read_map(tmp_path / "map.toml", []), None)
+    assert series.time_s[1] - series.time_s[0] == pytest.approx(120.0)
+    assert series.channels[0].values[0] == pytest.approx(21.5)
