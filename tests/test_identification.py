@@ -230,3 +230,28 @@ def test_units_in_the_map_convert_samples_and_rises(tmp_path):
     series = load_series(rec, read_map(tmp_path / "map.toml", []), None)
     assert series.time_s[1] - series.time_s[0] == pytest.approx(120.0)
     assert series.channels[0].values[0] == pytest.approx(21.5)
+
+
+def test_calibration_rejects_a_trial_point_whose_step_fails(monkeypatch):
+    """issue 22, calibrate: a failed step at a trial point shrinks the step, not the fit."""
+    from types import SimpleNamespace
+
+    from spindlebench.calibration import problem
+
+    target = np.array([2.0, -1.0])
+    calls = {"failed": 0}
+
+    def fake_evaluate(d, series_list, layout, theta):
+        if theta[0] > 2.2:  # a region where the model's step would not converge
+            calls["failed"] += 1
+            raise problem.StepFailedError("rec.csv: the step at time_s = 0 did not converge")
+        e = np.exp(theta[0])
+        return SimpleNamespace(residuals=np.r_[e - np.exp(target[0]), 3 * (theta[1] - target[1])],
+                               jacobian=np.array([[e, 0.0], [0.0, 3.0]]))
+
+    monkeypatch.setattr(problem, "evaluate", fake_evaluate)
+    d = SimpleNamespace(log_bounds=lambda: (np.full(2, -10.0), np.full(2, 10.0)))
+    layout = SimpleNamespace(size=2, n_s=2)
+    theta, _, message = problem._gauss_newton(d, [], layout, np.array([1.0, 5.0]), 50, False)
+    assert np.allclose(theta, target, atol=1e-6)
+    assert calls["failed"] >= 1 and "rejected" in message
