@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from spindlebench.adapters import caiviac
-from spindlebench.cli import main
+from spindlebench.commands.main import main
 
 MAP = """[inputs]
 spindle_speed_rpm = "spindle_rpm"
