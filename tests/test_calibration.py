@@ -109,6 +109,8 @@ def test_twin_recovery_and_held_out_prediction(twin):
     report = json.loads((tmp_path / "machines" / "twin.calibration.json").read_text())
     assert (tmp_path / "machines" / "twin.calibration.png").stat().st_size > 10_000
     assert report["provenance"]["recordings"][0]["sha256"]
+    assert report["evaluation_limit"] == 50  # the default --max-iter
+    assert report["stop_reason"].startswith("converged") and "stopped: converged" in out
     for row in report["parameters"]:
         lo, hi = row["ci95"]
         assert lo <= TRUE[row["name"]] <= hi, row

@@ -24,7 +24,16 @@ t5_C = "node_spindle_motor"         # or a node of the temperature field (node_<
 
 [noise]                             # optional: 1-sigma noise of a column (K or µm); default:
 t1_C = 0.05                         # estimated from the column's sample-to-sample scatter
+
+[units]                             # optional: what the time and temperature columns hold
+time_unit = "s"                     # "s", "min", "h", or "sample" (then sample_s = 15.0)
+temperatures = "absolute"           # or "rise" (above base_C, e.g. base_C = 21.5)
 ```
+
+A time column that looks like a sample index (whole numbers from 0 or 1 in steps of 1) or
+temperature columns that all start within ±2 K of 0 (rises, not °C) are refused with one line
+unless ``[units]`` says what they are: a sample index read as seconds "fitted" a 72 s run
+at 0 °C to a real machine.
 
 Every key is checked; a bad one is one line naming the map file and the dotted key. Columns of
 the recording the map does not name are ignored (``unmapped_columns`` lists them).
@@ -38,6 +47,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
@@ -81,6 +92,10 @@ class RecordingMap:
     error_sign: float
     temperatures: dict[str, str]  # column -> model output name (T1_C, node_x_C)
     noise: dict[str, float] = field(default_factory=dict)
+    time_unit: str | None = None  # None: not said (a sample-index-looking axis is refused)
+    sample_s: float | None = None  # seconds per sample with time_unit = "sample"
+    temperatures_kind: str | None = None  # "absolute", "rise", or None (not said)
+    base_C: float | None = None  # noqa: N815  (added to rises)
 
     @property
     def ambient_unknown(self) -> bool:
@@ -178,11 +193,70 @@ def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
         if column not in known:
             raise noise_table.error(column, "is not a temperature or error column of the map")
         noise[column] = noise_table.number(column, positive=True)
+    units = top.table("units", required=False)
+    time_unit = units.string("time_unit", None, choices=TIME_UNITS)
+    sample_s = units.number("sample_s", None, positive=True) if time_unit == "sample" else None
+    if time_unit == "sample" and sample_s is None:
+        raise units.error("sample_s", "time_unit = \"sample\" needs sample_s (seconds)")
+    kind = units.string("temperatures", None, choices=("absolute", "rise"))
+    base = units.number("base_C", None) if kind == "rise" else None
+    if kind == "rise" and base is None:
+        raise units.error("base_C", "temperatures = \"rise\" needs base_C (°C the rises are "
+                          "above)")
+    units.finish()
     top.finish()
     return RecordingMap(
         path=path, inputs=inputs, ambient_knot_h=knot_h, error_column=error_column,
-        error_sign=sign, temperatures=temperatures, noise=noise,
+        error_sign=sign, temperatures=temperatures, noise=noise, time_unit=time_unit,
+        sample_s=sample_s, temperatures_kind=kind, base_C=base,
     )
+
+
+#: Units a map's time column may be in, and seconds per unit (``sample``: ``sample_s``).
+TIME_UNITS = ("s", "min", "h", "sample")
+_SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0}
+
+
+def seconds_per_unit(recording_map: RecordingMap) -> float:
+    """Seconds per unit of the recording's time column (1 when the map does not say)."""
+    unit = recording_map.time_unit
+    if unit == "sample":
+        return float(recording_map.sample_s)
+    return _SECONDS.get(unit, 1.0) if unit else 1.0
+
+
+def looks_like_sample_index(time_s: np.ndarray) -> bool:
+    """Whole numbers from 0 or 1 in steps of exactly 1: a row counter, not seconds."""
+    t = np.asarray(time_s, dtype=float)
+    return (len(t) > 2 and t[0] in (0.0, 1.0) and bool(np.all(np.diff(t) == 1.0)))
+
+
+def apply_units(recording_map: RecordingMap, time_s: np.ndarray,
+                temperatures: dict[str, np.ndarray], where: str
+                ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The time axis in seconds and the temperatures in °C, as the map's ``[units]`` says;
+    without it, a sample-index axis or rise-looking temperatures are one line."""
+    unit = recording_map.time_unit
+    if unit is None and looks_like_sample_index(time_s):
+        raise SpindlebenchError(
+            f"recording {where}: the time column counts 0, 1, 2, … like a sample index; if it "
+            f"is seconds say so in {recording_map.path.name} ([units] time_unit = \"s\"), "
+            "else time_unit = \"sample\" with sample_s")
+    if unit == "sample":
+        time_s = (time_s - time_s[0]) * recording_map.sample_s
+    elif unit is not None:
+        time_s = time_s * _SECONDS[unit]
+    kind = recording_map.temperatures_kind
+    firsts = [v[np.isfinite(v)][0] for v in temperatures.values() if np.isfinite(v).any()]
+    if kind is None and firsts and max(abs(f) for f in firsts) < 2.0:
+        raise SpindlebenchError(
+            f"recording {where}: every temperature column starts within ±2 of 0 "
+            f"({', '.join(temperatures)}): rises, not °C? say so in "
+            f"{recording_map.path.name} ([units] temperatures = \"rise\", base_C = …) or "
+            "temperatures = \"absolute\"")
+    if kind == "rise":
+        temperatures = {c: v + recording_map.base_C for c, v in temperatures.items()}
+    return time_s, temperatures
 
 
 def constant_inputs(recording_map: RecordingMap) -> Mapping[str, float]:

@@ -301,8 +301,8 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
                 break
             (r,) = d._residual(z, z1, u, h[k], s)
         else:
-            raise SpindlebenchError(f"{series.path}: the step at time_s = "
-                                    f"{series.time_s[k]:g} did not converge")
+            raise StepFailedError(f"{series.path}: the step at time_s = "
+                             f"{series.time_s[k]:g} did not converge")
         states[:, k + 1] = z1
         if S is not None:
             rhs = B @ S[k]
@@ -415,9 +415,21 @@ class Fit:
         return self.theta[self.layout.blocks[recording][1]]
 
 
+class StepFailedError(SpindlebenchError):
+    """A model step did not converge at some parameter values."""
+
+
 def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
-    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf')."""
+    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf').
+
+    A trial point whose integration fails (a step that does not converge near a bound) is
+    rejected, not the fit: its residuals are returned as infinite, on which 'trf' shrinks
+    the trust region to a quarter of the step and tries again. Only a failure at the start
+    values is an error. The count of rejected points is in the returned message.
+    """
     cache: dict[bytes, Evaluation] = {}
+    rejected = [0]
+    size = [0]
 
     def at(theta: np.ndarray) -> Evaluation:
         key = theta.tobytes()
@@ -429,12 +441,26 @@ def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
     lower = np.full(layout.size, -np.inf)
     upper = np.full(layout.size, np.inf)
     lower[: layout.n_s], upper[: layout.n_s] = d.log_bounds()
+    def residuals(theta: np.ndarray) -> np.ndarray:
+        try:
+            values = at(theta).residuals
+        except StepFailedError:
+            if not size[0]:
+                raise
+            rejected[0] += 1
+            return np.full(size[0], np.inf)
+        size[0] = len(values)
+        return values
+
     result = scipy.optimize.least_squares(
-        lambda t: at(t).residuals, theta0, jac=lambda t: at(t).jacobian,
+        residuals, theta0, jac=lambda t: at(t).jacobian,
         bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
         xtol=1e-8, ftol=1e-7, gtol=1e-8, verbose=2 if verbose else 0,
     )
-    return result.x, int(result.nfev), str(result.message)
+    message = str(result.message)
+    if rejected[0]:
+        message += f" ({rejected[0]} trial point(s) rejected: the model step failed there)"
+    return result.x, int(result.nfev), message
 
 
 def calibrate(d: Discretisation, series_list: Sequence[Series], *, method: str = "gauss-newton",

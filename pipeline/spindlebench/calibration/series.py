@@ -12,7 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from spindlebench.calibration.mapping import DRIFT_OUTPUT, INPUTS, UNKNOWN, RecordingMap
+from spindlebench.calibration.mapping import (
+    DRIFT_OUTPUT,
+    INPUTS,
+    UNKNOWN,
+    RecordingMap,
+    apply_units,
+    seconds_per_unit,
+)
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import TIME_COLUMN, read_header, read_recording
@@ -142,7 +149,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
     time_s = frame[TIME_COLUMN].to_numpy(dtype=float)
     steps = np.diff(time_s)
     if step_s is not None:
-        native = float(np.median(steps))
+        native = float(np.median(steps)) * seconds_per_unit(recording_map)
         factor = step_s / native
         if factor < 1 - 1e-9 or abs(factor - round(factor)) > 1e-6:
             raise SpindlebenchError(f"--step-s {step_s:g}: not a whole multiple of {path}'s "
@@ -151,6 +158,9 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
         time_s = frame[TIME_COLUMN].to_numpy(dtype=float)
     if len(time_s) < 3:
         raise SpindlebenchError(f"recording {path}: fewer than 3 samples to calibrate on")
+    time_s, measured = apply_units(
+        recording_map, time_s,
+        {c: frame[c].to_numpy(dtype=float) for c in recording_map.temperatures}, str(path))
     inputs = np.empty((len(INPUTS), len(time_s)))
     for i, name in enumerate(INPUTS):
         source = recording_map.inputs[name]
@@ -167,7 +177,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
             inputs[i] = source
     channels = []
     for column, output in recording_map.temperatures.items():
-        values = frame[column].to_numpy(dtype=float)
+        values = measured[column]
         noise = recording_map.noise.get(column) or noise_estimate(values, "temperature")
         channels.append(Channel(column, output, "temperature", values, noise))
     if recording_map.error_column:

@@ -139,6 +139,10 @@ def _run(args: argparse.Namespace) -> int:
                                        fit, record)
     report_path, figure_path = report.report_paths(out)
     content = report.report_dict(fit, record, ignored)
+    limited = fit.evaluations >= args.max_iter
+    content["evaluation_limit"] = args.max_iter
+    content["stop_reason"] = (f"evaluation limit ({args.max_iter}) reached: not converged"
+                              if limited else f"converged: {fit.status}")
     if args.design:
         from spindlebench.calibration.design import design_lines, rank_excitations
 
@@ -150,6 +154,7 @@ def _run(args: argparse.Namespace) -> int:
     report.write_report(report_path, content)
     atomic.write_text(out, machine_text)
     print(f"wrote {out} (+ {report_path.name}, {figure_path.name}); "
-          f"{fit.evaluations} evaluations, {fit.seconds:.0f} s, {fit.status}")
+          f"{fit.evaluations} of at most {args.max_iter} evaluations, {fit.seconds:.0f} s; "
+          f"stopped: {content['stop_reason']}")
     return 0
 

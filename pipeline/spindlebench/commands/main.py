@@ -28,7 +28,8 @@ from spindlebench.core.errors import SpindlebenchError
 COMMANDS: dict[str, str] = {
     name: f"spindlebench.commands.{name.replace('-', '_')}"
     for name in ("adapt", "build", "calibrate", "compensate", "demo", "evaluate", "fingerprint",
-                 "iso230-3", "methods", "paper", "place", "plot", "simulate", "sweep")
+                 "identify", "iso230-3", "methods", "paper", "place", "plot", "simulate",
+                 "sweep")
 }
 COMMANDS["export-ssp"] = "spindlebench.commands.export_ssp"  # a name that is no module name
 COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
