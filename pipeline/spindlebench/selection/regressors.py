@@ -8,6 +8,10 @@ um/K), which is what ``evaluate`` reports and what a controller would run.
   cross-validation over *contiguous time blocks* of the training run (``blocked_cv_alpha``):
   neighbouring samples of a heating curve are nearly equal, so a shuffled split would reward
   fitting noise.
+  A penalty at the edge of its grid is widened once (``widened_cv_alpha``) and, still at
+  the edge, warned (one line, a ``SelectionWarning``, hence in ``evaluate --json``'s
+  ``provenance.warnings``): at the upper edge the fit is the constant training mean in
+  effect, at the lower edge it is OLS.
 - ``PLSRiseRegressor``: scikit-learn's ``PLSRegression`` with at most ``n_components``
   components (never more than the features it is given, so it composes after a selector of
   any budget).
@@ -15,6 +19,7 @@ um/K), which is what ``evaluate`` reports and what a controller would run.
 
 from __future__ import annotations
 
+import warnings
 from numbers import Integral
 from typing import ClassVar
 
@@ -25,6 +30,7 @@ from sklearn.model_selection import KFold
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from spindlebench.selection.errors import SelectionWarning
 from spindlebench.selection.regression import r2_score
 
 RIDGE_ALPHAS = np.logspace(-4, 4, 17)
@@ -90,6 +96,40 @@ def _fold_errors(X: np.ndarray, y: np.ndarray, alphas: np.ndarray, n_folds: int,
     return errors
 
 
+def widened_cv_alpha(X: np.ndarray, y: np.ndarray, alphas: np.ndarray = RIDGE_ALPHAS,
+                     n_folds: int = 5) -> tuple[float, np.ndarray, str | None]:
+    """``blocked_cv_alpha``, widening the grid once when the penalty sits at its edge.
+
+    Why: the largest penalty of the grid makes ridge the constant training mean in effect
+    (issue 23: the largest of the grid was chosen in 20 of 66 cells of a real set, silently).
+    An edge choice is re-decided on the grid extended beyond that edge by the grid's own span
+    in log space (1e-4..1e4 -> up to 1e12, or down to 1e-12), at the same spacing. Returns the
+    penalty, the grid it was chosen on, and ``"upper"``/``"lower"`` if it is still at that
+    grid's edge (else None); the caller warns.
+    """
+    alphas = np.sort(np.asarray(alphas, dtype=float))
+    alpha = blocked_cv_alpha(X, y, alphas, n_folds)
+    if alphas.size < 2:
+        return alpha, alphas, None
+    edge = "upper" if alpha == alphas[-1] else "lower" if alpha == alphas[0] else None
+    if edge is None:
+        return alpha, alphas, None
+    span = alphas[-1] / alphas[0]
+    extension = alphas[1:] * span if edge == "upper" else alphas[:-1] / span
+    grid = np.sort(np.concatenate([alphas, extension]))
+    alpha = blocked_cv_alpha(X, y, grid, n_folds)
+    still = (edge == "upper" and alpha == grid[-1]) or (edge == "lower" and alpha == grid[0])
+    return alpha, grid, edge if still else None
+
+
+def edge_message(alpha: float, edge: str) -> str:
+    """The one-line warning of a penalty still at its (widened) grid's edge."""
+    effect = ("the fit is the constant training mean in effect" if edge == "upper"
+              else "the fit is ordinary least squares in effect")
+    return (f"ridge: the cross-validated penalty {alpha:.3g} is the {edge} edge of its grid "
+            f"even after widening it once; {effect}")
+
+
 class LinearRiseModel(RegressorMixin, BaseEstimator):
     """A fitted ``error = intercept_ + rises @ coef_``: the prediction every rise regressor
     shares (OLS, ridge, PLS); subclasses fit ``intercept_`` and ``coef_``."""
@@ -115,6 +155,10 @@ class RidgeRiseRegressor(LinearRiseModel):
     ----------
     alpha_ : float
         The chosen penalty.
+    alphas_ : ndarray
+        The grid it was chosen on (``alphas``, widened once if the first choice was an edge).
+    alpha_at_edge_ : {"upper", "lower"} or None
+        The edge of ``alphas_`` the penalty still sits at (warned), else None.
     intercept_ : float
     coef_ : ndarray of shape (n_features_in_,)
         In the units of the input (um/K for rises), not of the standardised columns.
@@ -145,7 +189,11 @@ class RidgeRiseRegressor(LinearRiseModel):
         """Choose the penalty on blocks of ``X``, then fit on all of it."""
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
         alphas = RIDGE_ALPHAS if self.alphas is None else np.asarray(self.alphas, dtype=float)
-        self.alpha_ = blocked_cv_alpha(X, y, alphas, self.n_folds)
+        self.alpha_, self.alphas_, self.alpha_at_edge_ = widened_cv_alpha(X, y, alphas,
+                                                                           self.n_folds)
+        if self.alpha_at_edge_ is not None:
+            warnings.warn(edge_message(self.alpha_, self.alpha_at_edge_), SelectionWarning,
+                          stacklevel=2)
         mean, scale = X.mean(axis=0), X.std(axis=0)
         scale[scale == 0] = 1.0
         Z = (X - mean) / scale
