@@ -42,7 +42,7 @@ def experiments(n_experiments: int = 3) -> tuple[pd.DataFrame, np.ndarray, np.nd
 def test_pipeline_feature_names_and_selection():
     data, groups, _ = experiments()
     X = data[SENSORS]
-    model = make_selection_pipeline(n_clusters=2, differences=True)
+    model = make_selection_pipeline(k=2, differences=True)
     model.fit(X[groups == "exp1"], data["drift_um"][groups == "exp1"])
     names = model[:-1].get_feature_names_out()
     all_names = model["differences"].get_feature_names_out()
@@ -61,7 +61,7 @@ def test_pipeline_equals_evaluate():
     data, groups, frames = experiments()
     Xr = rises(data[SENSORS].to_numpy(), groups)
     y = data["drift_um"].to_numpy()
-    model = make_selection_pipeline(n_clusters=3, differences=True)
+    model = make_selection_pipeline(k=3, differences=True)
     train, test = next(TrainOnOneExperiment(["exp1"]).split(Xr, y, groups))
     model.fit(Xr[train], y[train])
     result = evaluate(frames[0], {"exp2": frames[1], "exp3": frames[2]}, "drift_um",
@@ -78,7 +78,7 @@ def test_selector_on_dataframe_keeps_names():
     data, _, _ = experiments(1)
     selector = FuzzyClusterSelector(2).fit(data[SENSORS], data["drift_um"])
     assert list(selector.get_feature_names_out()) == [SENSORS[i] for i in selector.selected_]
-    assert isinstance(clone(selector).n_clusters, int)
+    assert isinstance(clone(selector).k, int)
 
 
 def test_rise_transformer_reference():

@@ -335,3 +335,76 @@ def test_cli_methods_lists_every_name(capsys):
     printed = capsys.readouterr().out
     for name in (*METHODS, *WITHIN, *REGRESSORS):
         assert f"  {name} " in printed
+
+
+ALL_SELECTORS = [ClusterSelector, TopCorrelatedSelector, LassoPathSelector, StabilitySelector,
+                 GreedyForwardSelector]
+
+
+@pytest.mark.parametrize("cls", ALL_SELECTORS)
+def test_every_selector_takes_k_and_its_old_name_warns(cls):
+    """One budget name, ``k``, spans every selector; the old name still works (warned)."""
+    from spindlebench.selection.estimators import FuzzyClusterSelector
+
+    X, y = _two_drivers()
+    new = cls(k=2).fit(X, y)
+    old_name = "n_clusters" if cls in (ClusterSelector, FuzzyClusterSelector) else \
+        "n_features_to_select"
+    with pytest.warns(FutureWarning, match=f"'{old_name}' is deprecated"):
+        old = cls(**{old_name: 2}).fit(X, y)
+    assert new.selected_.tolist() == old.selected_.tolist() and len(new.selected_) == 2
+    assert "k" in cls().get_params()
+
+
+def test_fuzzy_cluster_selector_alias_and_one_grid_over_methods():
+    from sklearn.model_selection import GridSearchCV
+    from spindlebench.selection.estimators import FuzzyClusterSelector
+
+    X, y = _two_drivers()
+    with pytest.warns(FutureWarning, match="'n_clusters' is deprecated"):
+        old = FuzzyClusterSelector(n_clusters=2).fit(X, y)
+    assert old.selected_.tolist() == FuzzyClusterSelector(k=2).fit(X, y).selected_.tolist()
+    pipe = Pipeline([("select", TopCorrelatedSelector()), ("regress", RiseRegressor())])
+    grid = GridSearchCV(pipe, [{"select": [cls() for cls in ALL_SELECTORS[:3]],
+                                "select__k": [1, 2]}], cv=2).fit(X, y)
+    assert grid.best_params_["select__k"] in (1, 2)
+
+
+def _two_drivers():
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(80, 5)).cumsum(axis=0)
+    return X, 3 * X[:, 2] - 2 * X[:, 4] + 0.1 * rng.normal(size=80)
+
+
+@pytest.mark.parametrize("make", [lambda rs: ClusterSelector(2, "fcm", random_state=rs),
+                                  lambda rs: ClusterSelector(2, "kmeans", random_state=rs),
+                                  lambda rs: StabilitySelector(2, n_subsamples=5,
+                                                               random_state=rs)])
+def test_random_state_none_int_generator_and_global_rng_untouched(make):
+    X, y = _two_drivers()
+    np.random.seed(123)
+    before = np.random.get_state()
+    by_int = make(5).fit(X, y).selected_.tolist()
+    assert make(5).fit(X, y).selected_.tolist() == by_int
+    make(None).fit(X, y)
+    gen_a = make(np.random.default_rng(9)).fit(X, y).selected_.tolist()
+    gen_b = make(np.random.default_rng(9)).fit(X, y).selected_.tolist()
+    assert gen_a == gen_b
+    after = np.random.get_state()
+    # never reseeded, never drawn from
+    assert after[1].tolist() == before[1].tolist() and after[2] == before[2]
+    with pytest.raises(ValueError):
+        make("seven").fit(X, y)
+
+
+def test_fcm_start_is_what_cmeans_seed_draws():
+    """``fcm_init`` reproduces cmeans(seed=s)'s start, so int seeds keep their results."""
+    from skfuzzy.cluster import cmeans
+    from spindlebench.selection.randomness import fcm_init
+
+    data = np.random.default_rng(0).normal(size=(4, 30))
+    state = np.random.get_state()
+    by_seed = cmeans(data, 3, 2.0, error=1e-6, maxiter=50, seed=11)[1]
+    np.random.set_state(state)
+    by_init = cmeans(data, 3, 2.0, error=1e-6, maxiter=50, init=fcm_init(3, 30, 11))[1]
+    np.testing.assert_array_equal(by_seed, by_init)

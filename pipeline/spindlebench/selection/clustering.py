@@ -18,7 +18,8 @@ squared Euclidean distance of two of them is 2 (1 - r): points close together co
 that this keeps the sign: an anti-correlated pair is far apart for ``fcm``, ``kmeans`` and
 ``ward``, while R = |r| puts it close for ``closure``, ``average`` and ``complete``.
 
-Seeded variants (``fcm``, ``kmeans``) take ``random_state`` (an int, recorded by the callers).
+Seeded variants (``fcm``, ``kmeans``) take ``random_state`` (None, an int as recorded by the
+callers, or a ``Generator``: ``selection.randomness``).
 A variant that cannot give exactly k non-empty clusters (ties in a linkage, an fcm cluster
 that is nobody's largest membership) warns and returns the clusters it has.
 Clusters are index arrays (sorted), ordered by their first member, as ``cut.Cut`` orders them.
@@ -37,6 +38,7 @@ from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning
+from spindlebench.selection.randomness import fcm_init, int_seed
 from spindlebench.selection.similarity import similarity_matrix, standardized
 
 CLUSTERINGS: tuple[str, ...] = ("closure", "fcm", "kmeans", "average", "complete", "ward")
@@ -74,18 +76,22 @@ def hierarchical_labels(distances: np.ndarray, n_clusters: int, linkage_method: 
     return fcluster(tree, n_clusters, criterion="maxclust")
 
 
-def fcm_memberships(points: np.ndarray, n_clusters: int, random_state: int) -> np.ndarray:
-    """Fuzzy c-means memberships (n_clusters x n_points) of the rows of ``points``."""
+def fcm_memberships(points: np.ndarray, n_clusters: int, random_state) -> np.ndarray:
+    """Fuzzy c-means memberships (n_clusters x n_points) of the rows of ``points``.
+
+    The start is ``randomness.fcm_init`` (what ``cmeans(seed=...)`` draws, without its
+    ``np.random.seed``: NumPy's global generator is never reseeded)."""
     from skfuzzy.cluster import cmeans
 
+    init = fcm_init(n_clusters, points.shape[0], random_state)
     _, u, *_ = cmeans(points.T, n_clusters, FCM_FUZZIFIER, error=FCM_TOLERANCE,
-                      maxiter=FCM_MAX_ITERATIONS, seed=random_state)
+                      maxiter=FCM_MAX_ITERATIONS, init=init)
     return u
 
 
 def cluster_candidates(X: np.ndarray, n_clusters: int, clustering: str = "closure",
                        similarity: str = DEFAULT_SIMILARITY, closure: str = "fast",
-                       random_state: int = 0,
+                       random_state=0,
                        names: Sequence[str] | None = None) -> list[np.ndarray]:
     """Partition the columns of ``X`` (non-constant candidates) into ``n_clusters`` clusters.
 
@@ -123,7 +129,7 @@ def cluster_candidates(X: np.ndarray, n_clusters: int, clustering: str = "closur
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # duplicate points: fewer distinct clusters
                 labels = KMeans(n_clusters, n_init=KMEANS_STARTS,
-                                random_state=random_state).fit(points).labels_
+                                random_state=int_seed(random_state)).fit(points).labels_
         else:
             labels = np.argmax(fcm_memberships(points, n_clusters, random_state), axis=0)
     clusters = clusters_from_labels(labels)

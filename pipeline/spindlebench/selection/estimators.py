@@ -18,13 +18,14 @@ learned-at-fit reference and passes the estimator checks.
 Example::
 
     Xr = rises(X, groups)
-    model = make_selection_pipeline(n_clusters=2, differences=True)
+    model = make_selection_pipeline(k=2, differences=True)
     for train, test in TrainOnOneExperiment().split(Xr, y, groups):
         model.fit(Xr[train], y[train]).predict(Xr[test])
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import ClassVar
 
 import numpy as np
@@ -48,7 +49,7 @@ from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.regression import fit_ols
 from spindlebench.selection.regressors import LinearRiseModel
 from spindlebench.selection.select import select_sensitive_points
-from spindlebench.selection.selectors import SupportFromSelected
+from spindlebench.selection.selectors import DEPRECATED, SupportFromSelected
 
 
 class PairwiseDifferences(TransformerMixin, BaseEstimator):
@@ -133,12 +134,14 @@ class FuzzyClusterSelector(SupportFromSelected):
 
     Parameters
     ----------
-    n_clusters : int, default=2
-        Requested number of clusters k (the paper uses 2, 3, 4).
+    k : int, default=2
+        Requested number of clusters (the paper uses 2, 3, 4), hence of selected candidates.
     similarity : {"abs-pearson", "literal"}, default="abs-pearson"
         Reading of eq. 1 (see ``spindlebench.selection.similarity``).
     closure : {"fast", "squaring"}, default="fast"
         Implementation of t(R); both give identical results.
+    n_clusters : int, deprecated
+        Old name of ``k`` (one release; given, it wins with a ``FutureWarning``).
 
     Attributes
     ----------
@@ -158,18 +161,19 @@ class FuzzyClusterSelector(SupportFromSelected):
         6 000 columns, beyond that reading them is a ``SelectionError``.
     """
 
-    def __init__(self, n_clusters: int = 2, similarity: str = DEFAULT_SIMILARITY,
-                 closure: str = "fast"):
-        self.n_clusters = n_clusters
+    def __init__(self, k: int = 2, similarity: str = DEFAULT_SIMILARITY,
+                 closure: str = "fast", n_clusters=DEPRECATED):
+        self.k = k
         self.similarity = similarity
         self.closure = closure
+        self.n_clusters = n_clusters
 
     def fit(self, X, y):
         """Run steps 2-5 on candidates ``X`` and thermal error ``y``."""
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
         names = getattr(self, "feature_names_in_", None)
         selection = select_sensitive_points(
-            X, y, self.n_clusters, self.similarity, self.closure, names=names
+            X, y, self._k(), self.similarity, self.closure, names=names
         )
         self.selection_ = selection
         self.eta_ = selection.eta
@@ -213,15 +217,21 @@ class RiseRegressor(LinearRiseModel):
 
 
 def make_selection_pipeline(
-    n_clusters: int = 2,
+    k: int = 2,
     differences: bool = False,
     similarity: str = DEFAULT_SIMILARITY,
     closure: str = "fast",
+    n_clusters: int | None = None,
 ) -> Pipeline:
-    """The paper's model as a Pipeline; feed it rises (``rises(X, groups)``)."""
+    """The paper's model as a Pipeline; feed it rises (``rises(X, groups)``).
+    ``n_clusters`` is the deprecated old name of ``k`` (one release)."""
+    if n_clusters is not None:
+        warnings.warn("make_selection_pipeline: 'n_clusters' is deprecated and will be removed "
+                      "in the next release; use 'k'", FutureWarning, stacklevel=2)
+        k = n_clusters
     steps = [("differences", PairwiseDifferences())] if differences else []
     steps += [
-        ("select", FuzzyClusterSelector(n_clusters, similarity, closure)),
+        ("select", FuzzyClusterSelector(k, similarity, closure)),
         ("regress", RiseRegressor()),
     ]
     return Pipeline(steps)

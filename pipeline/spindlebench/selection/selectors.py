@@ -18,8 +18,14 @@ error, so each composes before any regressor in a ``Pipeline``:
   ``n_blocks`` contiguous time blocks and the first block trains.
 
 Constant candidates are never selected (a ``ClusterSelector`` drops them with a
-``SelectionWarning``, as the paper's selector does). Seeds (``random_state``) are ints so that
-results are reproducible and the callers can record them.
+``SelectionWarning``, as the paper's selector does).
+
+One name for the budget: every selector of the package keeps ``k`` candidates (scikit-learn's
+``SelectKBest`` name, so one grid search spans every method and scikit-learn's own). The old
+names, ``n_clusters`` (cluster selectors) and ``n_features_to_select`` (the others), are
+deprecated aliases for one release: given, they win with a ``FutureWarning``. ``random_state``
+is None, an int or a NumPy ``Generator`` (``selection.randomness``); the commands pass ints so
+that results are reproducible and recorded.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, _fit_context
 from sklearn.feature_selection import SelectorMixin
 from sklearn.linear_model import enet_path, lars_path
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Hidden, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from spindlebench.core.names import DEFAULT_SIMILARITY
@@ -42,6 +48,7 @@ from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
 from spindlebench.selection.forward import Block, greedy_forward
 from spindlebench.selection.grey import DEFAULT_RHO, NORMALISATIONS, grey_relational_grade
+from spindlebench.selection.randomness import RANDOM_STATE_CONSTRAINT, as_generator
 from spindlebench.selection.regression import check_groups
 from spindlebench.selection.similarity import SIMILARITIES, constant_columns, correlation_with
 
@@ -50,6 +57,12 @@ WITHIN: tuple[str, ...] = tuple(WITHIN_CHOICES)
 #: Points on the LASSO / elastic-net path (log-spaced down to 1e-4 of the largest alpha).
 PATH_ALPHAS = 200
 PATH_EPS = 1e-4
+#: The default of a deprecated alias of ``k`` (not given).
+DEPRECATED = "deprecated"
+#: The ``_parameter_constraints`` of ``k`` and of a deprecated alias.
+K_CONSTRAINT: list = [Interval(Integral, 1, None, closed="left")]
+ALIAS_CONSTRAINT: list = [Interval(Integral, 1, None, closed="left"),
+                          Hidden(StrOptions({DEPRECATED}))]
 
 
 def _budget(k: int, n_features: int) -> None:
@@ -83,6 +96,18 @@ class SupportFromSelected(SelectorMixin, BaseEstimator):
         return tags
 
 
+    def _k(self) -> int:
+        """The budget: ``k``, or a deprecated alias given instead (warned)."""
+        for alias in ("n_clusters", "n_features_to_select"):
+            value = getattr(self, alias, DEPRECATED)
+            if not (isinstance(value, str) and value == DEPRECATED):
+                warnings.warn(f"{type(self).__name__}: '{alias}' is deprecated and will be "
+                              f"removed in the next release; use 'k' (it overrides k={self.k})",
+                              FutureWarning, stacklevel=3)
+                return value
+        return self.k
+
+
 class _Selector(SupportFromSelected):
     """A selector of this module: checked data, a target that is not constant."""
 
@@ -98,8 +123,8 @@ class ClusterSelector(_Selector):
 
     Parameters
     ----------
-    n_clusters : int, default=2
-        Number of clusters k, hence of selected candidates.
+    k : int, default=2
+        Number of clusters, hence of selected candidates.
     clustering : {"closure", "fcm", "kmeans", "average", "complete", "ward"}, default="closure"
         How candidates are clustered (``spindlebench.selection.clustering``).
     within : {"psi", "grey"}, default="psi"
@@ -113,8 +138,10 @@ class ClusterSelector(_Selector):
         Normalisation of the grey grade.
     rho : float, default=0.5
         Distinguishing coefficient of the grey grade.
-    random_state : int, default=0
+    random_state : None, int or numpy.random.Generator, default=0
         Seed of ``fcm`` and ``kmeans``.
+    n_clusters : int, deprecated
+        Old name of ``k`` (one release).
 
     Attributes
     ----------
@@ -141,21 +168,22 @@ class ClusterSelector(_Selector):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "n_clusters": [Interval(Integral, 1, None, closed="left")],
+        "k": K_CONSTRAINT,
         "clustering": [StrOptions(set(CLUSTERINGS))],
         "within": [StrOptions(set(WITHIN))],
         "similarity": [StrOptions(set(SIMILARITIES))],
         "closure": [StrOptions(set(CLOSURES))],
         "normalisation": [StrOptions(set(NORMALISATIONS))],
         "rho": [Interval(Real, 0, 1, closed="right")],
-        "random_state": [Interval(Integral, 0, None, closed="left")],
+        "random_state": RANDOM_STATE_CONSTRAINT,
+        "n_clusters": ALIAS_CONSTRAINT,
     }
 
-    def __init__(self, n_clusters: int = 2, clustering: str = "closure", within: str = "psi",
+    def __init__(self, k: int = 2, clustering: str = "closure", within: str = "psi",
                  similarity: str = DEFAULT_SIMILARITY, closure: str = "fast",
                  normalisation: str = "interval", rho: float = DEFAULT_RHO,
-                 random_state: int = 0):
-        self.n_clusters = n_clusters
+                 random_state=0, n_clusters=DEPRECATED):
+        self.k = k
         self.clustering = clustering
         self.within = within
         self.similarity = similarity
@@ -163,6 +191,7 @@ class ClusterSelector(_Selector):
         self.normalisation = normalisation
         self.rho = rho
         self.random_state = random_state
+        self.n_clusters = n_clusters
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y):
@@ -170,18 +199,19 @@ class ClusterSelector(_Selector):
         X, y = self._data(X, y)
         names = getattr(self, "feature_names_in_", None)
         names = None if names is None else [str(n) for n in names]
-        _budget(self.n_clusters, X.shape[1])
+        k = self._k()
+        _budget(k, X.shape[1])
         constant = constant_columns(X)
         kept = np.flatnonzero(~constant)
         if constant.any():
             warnings.warn(f"dropping {int(constant.sum())} constant candidate(s) (zero "
                           f"variance): {column_list(np.flatnonzero(constant), names)}",
                           SelectionWarning, stacklevel=2)
-        if self.n_clusters > kept.size:
-            raise SelectionError(f"cannot make {self.n_clusters} clusters: only {kept.size} "
+        if k > kept.size:
+            raise SelectionError(f"cannot make {k} clusters: only {kept.size} "
                                  "candidate(s) vary")
         kept_names = None if names is None else [names[i] for i in kept]
-        members = cluster_candidates(X[:, kept], self.n_clusters, self.clustering,
+        members = cluster_candidates(X[:, kept], k, self.clustering,
                                      self.similarity, self.closure, self.random_state,
                                      kept_names)
         self.psi_ = np.full(X.shape[1], np.nan)
@@ -199,11 +229,13 @@ class ClusterSelector(_Selector):
 
 
 class TopCorrelatedSelector(_Selector):
-    """The ``n_features_to_select`` candidates most correlated (|psi|) with the error.
+    """The ``k`` candidates most correlated (|psi|) with the error.
 
     Parameters
     ----------
-    n_features_to_select : int, default=2
+    k : int, default=2
+    n_features_to_select : int, deprecated
+        Old name of ``k`` (one release).
 
     Attributes
     ----------
@@ -222,19 +254,22 @@ class TopCorrelatedSelector(_Selector):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "k": K_CONSTRAINT,
+        "n_features_to_select": ALIAS_CONSTRAINT,
     }
 
-    def __init__(self, n_features_to_select: int = 2):
+    def __init__(self, k: int = 2, n_features_to_select=DEPRECATED):
+        self.k = k
         self.n_features_to_select = n_features_to_select
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y):
         """Rank the columns of ``X`` by |psi|."""
         X, y = self._data(X, y)
-        _budget(self.n_features_to_select, X.shape[1])
+        k = self._k()
+        _budget(k, X.shape[1])
         self.scores_ = _abs_psi(X, y)
-        self.selected_ = np.argsort(-self.scores_, kind="stable")[: self.n_features_to_select]
+        self.selected_ = np.argsort(-self.scores_, kind="stable")[:k]
         return self
 
 
@@ -275,9 +310,11 @@ class LassoPathSelector(_Selector):
 
     Parameters
     ----------
-    n_features_to_select : int, default=2
+    k : int, default=2
     l1_ratio : float, default=1.0
         1 is the LASSO; below 1 an elastic net (scikit-learn's ``enet_path``).
+    n_features_to_select : int, deprecated
+        Old name of ``k`` (one release).
 
     Attributes
     ----------
@@ -295,23 +332,26 @@ class LassoPathSelector(_Selector):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "k": K_CONSTRAINT,
+        "n_features_to_select": ALIAS_CONSTRAINT,
         "l1_ratio": [Interval(Real, 0, 1, closed="right")],
     }
 
-    def __init__(self, n_features_to_select: int = 2, l1_ratio: float = 1.0):
-        self.n_features_to_select = n_features_to_select
+    def __init__(self, k: int = 2, l1_ratio: float = 1.0, n_features_to_select=DEPRECATED):
+        self.k = k
         self.l1_ratio = l1_ratio
+        self.n_features_to_select = n_features_to_select
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y):
         """Compute the path on standardised ``X`` and keep its first k entries."""
         X, y = self._data(X, y)
-        _budget(self.n_features_to_select, X.shape[1])
-        self.selected_ = path_order(X, y, self.n_features_to_select, self.l1_ratio)
-        if self.selected_.size < self.n_features_to_select:
+        k = self._k()
+        _budget(k, X.shape[1])
+        self.selected_ = path_order(X, y, k, self.l1_ratio)
+        if self.selected_.size < k:
             raise SelectionError(f"only {self.selected_.size} candidate(s) vary; cannot select "
-                                 f"{self.n_features_to_select}")
+                                 f"{k}")
         return self
 
 
@@ -321,12 +361,14 @@ class StabilitySelector(_Selector):
 
     Parameters
     ----------
-    n_features_to_select : int, default=2
+    k : int, default=2
     n_subsamples : int, default=50
     sample_fraction : float, default=0.5
         Fraction of the rows drawn (without replacement) per subsample.
     l1_ratio : float, default=1.0
-    random_state : int, default=0
+    random_state : None, int or numpy.random.Generator, default=0
+    n_features_to_select : int, deprecated
+        Old name of ``k`` (one release).
 
     Attributes
     ----------
@@ -346,28 +388,30 @@ class StabilitySelector(_Selector):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "k": K_CONSTRAINT,
+        "n_features_to_select": ALIAS_CONSTRAINT,
         "n_subsamples": [Interval(Integral, 1, None, closed="left")],
         "sample_fraction": [Interval(Real, 0, 1, closed="right")],
         "l1_ratio": [Interval(Real, 0, 1, closed="right")],
-        "random_state": [Interval(Integral, 0, None, closed="left")],
+        "random_state": RANDOM_STATE_CONSTRAINT,
     }
 
-    def __init__(self, n_features_to_select: int = 2, n_subsamples: int = 50,
-                 sample_fraction: float = 0.5, l1_ratio: float = 1.0, random_state: int = 0):
-        self.n_features_to_select = n_features_to_select
+    def __init__(self, k: int = 2, n_subsamples: int = 50, sample_fraction: float = 0.5,
+                 l1_ratio: float = 1.0, random_state=0, n_features_to_select=DEPRECATED):
+        self.k = k
         self.n_subsamples = n_subsamples
         self.sample_fraction = sample_fraction
         self.l1_ratio = l1_ratio
         self.random_state = random_state
+        self.n_features_to_select = n_features_to_select
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y):
         """Count, over subsamples, how often each candidate is among the path's first k."""
         X, y = self._data(X, y)
-        k = self.n_features_to_select
+        k = self._k()
         _budget(k, X.shape[1])
-        rng = np.random.default_rng(self.random_state)
+        rng = as_generator(self.random_state)
         size = max(2, round(self.sample_fraction * X.shape[0]))
         counts = np.zeros(X.shape[1])
         for _ in range(self.n_subsamples):
@@ -392,10 +436,12 @@ class GreedyForwardSelector(_Selector):
 
     Parameters
     ----------
-    n_features_to_select : int, default=2
+    k : int, default=2
     n_blocks : int, default=2
         Without ``groups`` at fit: the rows are cut into this many contiguous time blocks, the
         first trains and the others are the "other experiments" that score a candidate set.
+    n_features_to_select : int, deprecated
+        Old name of ``k`` (one release).
 
     Attributes
     ----------
@@ -414,19 +460,21 @@ class GreedyForwardSelector(_Selector):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "n_features_to_select": [Interval(Integral, 1, None, closed="left")],
+        "k": K_CONSTRAINT,
+        "n_features_to_select": ALIAS_CONSTRAINT,
         "n_blocks": [Interval(Integral, 2, None, closed="left")],
     }
 
-    def __init__(self, n_features_to_select: int = 2, n_blocks: int = 2):
-        self.n_features_to_select = n_features_to_select
+    def __init__(self, k: int = 2, n_blocks: int = 2, n_features_to_select=DEPRECATED):
+        self.k = k
         self.n_blocks = n_blocks
+        self.n_features_to_select = n_features_to_select
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, groups=None):
         """Greedy search: train on the first experiment (or block), score on the rest."""
         X, y = self._data(X, y)
-        k = self.n_features_to_select
+        k = self._k()
         _budget(k, X.shape[1])
         if groups is not None:
             groups = check_groups(groups, X.shape[0])
