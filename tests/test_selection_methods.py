@@ -408,3 +408,121 @@ def test_fcm_start_is_what_cmeans_seed_draws():
     np.random.set_state(state)
     by_init = cmeans(data, 3, 2.0, error=1e-6, maxiter=50, init=fcm_init(3, 30, 11))[1]
     np.testing.assert_array_equal(by_seed, by_init)
+
+
+# --- issue 23: GA over clusters, mutual information, mRMR, gradient boosting, MLP ----------
+from spindlebench.selection import genetic, information, nonlinear  # noqa: E402
+from spindlebench.selection.information import MRMRSelector, MutualInfoSelector  # noqa: E402
+from spindlebench.selection.nonlinear import (  # noqa: E402
+    BoostedRiseRegressor,
+    MLPRiseRegressor,
+)
+from spindlebench.selection.selectors import AllCandidates  # noqa: E402
+
+
+@parametrize_with_checks(
+    [ClusterSelector(2, "kmeans", "ga", population=6, generations=3), MutualInfoSelector(),
+     MRMRSelector(), AllCandidates(), BoostedRiseRegressor(n_estimators=10),
+     MLPRiseRegressor(max_iter=200)]
+)
+def test_sklearn_estimator_checks_of_the_new_methods(estimator, check):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SelectionWarning)
+        check(estimator)
+
+
+@pytest.mark.parametrize("module", [genetic, information, nonlinear])
+def test_new_docstring_examples_run(module):
+    failed, attempted = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert failed == 0 and attempted >= (0 if module is genetic else 1)
+
+
+def _ga_case():
+    """Two clusters of near copies; the error is exactly 2*a2 - 3*b1 on the second half, so
+    OLS on (a2, b1) trained on the first half predicts the second half exactly (RMSE 0) while
+    every other pair of members leaves an error: the one best combination, by hand."""
+    t = np.linspace(0, 1, 80)
+    a = [t, t + 0.05 * np.sin(7 * t), t + 0.05 * np.cos(5 * t)]
+    b = [np.sin(3 * t) + 0.05 * t**2, np.sin(3 * t), np.sin(3 * t) + 0.05 * np.sqrt(t)]
+    X = np.column_stack(a + b)
+    return X, 2 * X[:, 1] - 3 * X[:, 4]
+
+
+def test_genetic_choice_finds_the_exact_combination_and_is_seeded():
+    X, y = _ga_case()
+    clusters = [np.array([0, 1, 2]), np.array([3, 4, 5])]
+    columns, score = genetic.genetic_choice(X, y, clusters, [0, 3], random_state=1,
+                                            population=4, generations=15)
+    assert columns.tolist() == [1, 4] and score == pytest.approx(0.0, abs=1e-9)
+    # the hand value of one other combination: OLS of y on (a1, b1) on the first half
+    train, valid = genetic.blocks(X, y)
+    from spindlebench.selection.forward import validation_score
+
+    assert validation_score(train, valid, [0, 3]) > 1e-3
+    again = genetic.genetic_choice(X, y, clusters, [0, 3], random_state=1, population=4,
+                                   generations=15)
+    assert again[0].tolist() == columns.tolist()
+    # the selector: same clusters as kmeans finds, the GA's members
+    selector = ClusterSelector(2, "kmeans", "ga", population=4, generations=15).fit(X, y)
+    assert sorted(selector.selected_.tolist()) == [1, 4]
+
+
+def test_mutual_information_sees_a_nonlinear_driver_correlation_misses():
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(400, 3))
+    y = X[:, 0] ** 2  # Pearson r with X0 is ~0: top-k-correlated cannot see it
+    assert MutualInfoSelector(1).fit(X, y).selected_.tolist() == [0]
+    scores = MutualInfoSelector(3).fit(X, y).scores_
+    assert scores[0] > 0.5 and max(scores[1:]) < 0.1  # nats: independent columns near 0
+
+
+def test_mrmr_by_hand_redundancy():
+    """Relevance minus mean redundancy, computed here from mutual_info_regression itself."""
+    from sklearn.feature_selection import mutual_info_regression
+
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=(2, 300))
+    X = np.column_stack([a, a + 0.01 * rng.normal(size=300), b])
+    y = a + 0.7 * b
+    selector = MRMRSelector(2).fit(X, y)
+    relevance = mutual_info_regression(X, y, n_neighbors=3, random_state=0)
+    np.testing.assert_allclose(selector.relevance_, relevance)
+    first = int(np.argmax(relevance))
+    assert first in (0, 1) and selector.selected_.tolist() == [first, 2]
+    rest = [i for i in range(3) if i != first]
+    redundancy = mutual_info_regression(X[:, rest], X[:, first], n_neighbors=3, random_state=0)
+    assert selector.scores_[1] == pytest.approx(max(relevance[rest] - redundancy))
+    assert (relevance[rest] - redundancy)[rest.index(2)] > (relevance[rest] - redundancy)[0]
+
+
+def test_boosting_stump_and_mlp_identity_by_hand():
+    X = np.array([[0.0], [1.0], [2.0], [3.0], [4.0]])
+    y = np.array([1.0, 1.0, 1.0, 6.0, 6.0])
+    stump = BoostedRiseRegressor(1, max_depth=1, learning_rate=1.0).fit(X, y)
+    # by hand: the best split is between 2 and 3; the leaves are the two means
+    np.testing.assert_allclose(stump.predict([[-5.0], [2.4], [2.6], [99.0]]), [1, 1, 6, 6])
+    assert stump.r2_ == pytest.approx(1.0)
+    lin = np.linspace(0, 5, 40)[:, None] * [1.0, 0.3] + [[0.0, 0.0]]
+    lin[:, 1] += np.sin(lin[:, 0])
+    target = 2.0 * lin[:, 0] - 1.5 * lin[:, 1] + 4.0
+    net = MLPRiseRegressor(activation="identity", alpha=0.0, max_iter=2000).fit(lin, target)
+    np.testing.assert_allclose(net.predict(lin), target, atol=1e-3)
+
+
+def test_new_labels_run_through_evaluate(tmp_path):
+    from spindlebench.selection import evaluate
+
+    files = experiment_files(tmp_path)
+    for label in ("kmeans+ga", "mi", "mrmr+gbr", "all+mlp", "all"):
+        result = evaluate(files[0], files[1:], "drift_um", SIX, k=2, method=parse_label(label))
+        assert np.isfinite(result.mean_rmse_um)
+        expected = 2 if not label.startswith("all") else len(SIX)
+        assert len(result.selected) == expected
+        record = result.to_dict()
+        assert (record["coefficients"] is None) == (label in ("mrmr+gbr", "all+mlp"))
+
+
+def parse_label(label):
+    from spindlebench.selection.registry import parse_method
+
+    return parse_method(label)

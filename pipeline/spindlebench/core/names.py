@@ -75,7 +75,15 @@ DIRECT_METHODS: dict[str, str] = {
                  "50 random half-samples",
     "greedy": "greedy forward selection by cross-experiment RMSE of OLS (train on the first "
               "half of the run, score on the second)",
+    "mi": "the k candidates with the largest mutual information with the error (scikit-learn "
+          "mutual_info_regression, 3 neighbours, seeded)",
+    "mrmr": "minimum redundancy maximum relevance: greedily the candidate whose mutual "
+            "information with the error minus its mean with those chosen is largest",
+    "all": "no selection: every candidate (k is ignored); all+ols is OLS on all sensors, "
+           "all+REGRESSOR gives a regressor or a pipeline of your own every candidate",
 }
+#: The method that keeps every candidate.
+ALL_CANDIDATES = "all"
 METHODS: dict[str, str] = {**CLUSTER_METHODS, **DIRECT_METHODS}
 DEFAULT_METHOD = "closure"
 #: The choice of one candidate inside a cluster.
@@ -83,14 +91,25 @@ WITHIN: dict[str, str] = {
     "psi": "largest |psi|, the Pearson correlation with the error (the paper's eq. 4)",
     "grey": "largest grey relational grade with the error (Deng; interval normalisation, "
             "rho = 0.5)",
+    "ga": "a genetic algorithm picks one member per cluster, minimising the RMSE of OLS "
+          "trained on the first half of the run and scored on the second (population 30, "
+          "40 generations, seeded)",
 }
 DEFAULT_WITHIN = "psi"
-#: The regression after the selector (all on rises, all linear).
+#: The regression after the selector (all on rises; the first three linear).
 REGRESSORS: dict[str, str] = {
     "ols": "ordinary least squares with intercept (the paper's MLR)",
-    "ridge": "ridge on standardised rises, penalty by 5-fold CV over contiguous time blocks",
+    "ridge": "ridge on standardised rises, penalty by 5-fold CV over contiguous time blocks "
+             "(widened once, warned, at the grid's edge)",
     "pls": "partial least squares (scikit-learn PLSRegression, up to 2 components)",
+    "gbr": "gradient boosting (scikit-learn GradientBoostingRegressor, 100 trees of depth 3, "
+           "seeded); nonlinear",
+    "mlp": "a small neural network (scikit-learn MLPRegressor, one hidden layer of 16, "
+           "standardised inputs, seeded); nonlinear",
 }
+#: The regressors whose model is ``intercept + rises @ coefficients``.
+LINEAR_REGRESSORS: tuple[str, ...] = ("ols", "ridge", "pls")
 DEFAULT_REGRESSOR = "ols"
-#: The seed of the seeded methods (fcm, kmeans, stability) unless a command is given another.
+#: The seed of the seeded methods (fcm, kmeans, stability, mi, mrmr, ga, gbr, mlp) unless a
+#: command is given another.
 DEFAULT_METHOD_SEED = 0

@@ -48,7 +48,7 @@ from spindlebench.selection.errors import (
 )
 from spindlebench.selection.pairs import ROW_WISE_ABOVE, PairCandidates
 from spindlebench.selection.registry import MethodChoice, fit_with, select_with
-from spindlebench.selection.regression import LinearFit, rises, rmse
+from spindlebench.selection.regression import EstimatorFit, LinearFit, rises, rmse
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
 
@@ -63,7 +63,16 @@ def _is_frame(value: object) -> bool:
     pandas = sys.modules.get("pandas")
     return pandas is not None and isinstance(value, pandas.DataFrame)
 #: Methods whose result depends on ``seed``.
-SEEDED_METHODS = ("fcm", "kmeans", "stability")
+SEEDED_METHODS = ("fcm", "kmeans", "stability", "mi", "mrmr")
+#: Choices inside clusters and regressors whose result depends on ``seed``.
+SEEDED_PARTS = ("ga", "gbr", "mlp")
+
+
+def seeded(choice: MethodChoice) -> bool:
+    """Whether ``choice``'s result depends on the seed (a user's class may: say so)."""
+    return (choice.method in SEEDED_METHODS or choice.within in SEEDED_PARTS
+            or choice.regressor in SEEDED_PARTS or choice.user_method is not None
+            or choice.user_regressor is not None)
 
 #: ``CandidateSet.matrix`` builds at most this many candidates column by column.
 FEW_CANDIDATES = 8
@@ -309,7 +318,7 @@ class Evaluation:
     sensors: list[str]
     candidates: list[str]
     selection: Selection
-    fit: LinearFit
+    fit: LinearFit | EstimatorFit
     predictions: dict[str, np.ndarray]
     measured: dict[str, np.ndarray]
     rmse_um: dict[str, float]
@@ -339,8 +348,11 @@ class Evaluation:
         return [[self.candidates[i] for i in members] for members in self.selection.clusters]
 
     @property
-    def coefficients(self) -> dict[str, float]:
-        """Intercept, then one coefficient per selected candidate (um per K)."""
+    def coefficients(self) -> dict[str, float] | None:
+        """Intercept, then one coefficient per selected candidate (um per K); None for a
+        model that is not linear (``regression.EstimatorFit``)."""
+        if self.fit.coefficients is None:
+            return None
         out = {"intercept": float(self.fit.intercept)}
         out.update(zip(self.selected, map(float, self.fit.coefficients), strict=True))
         return out
@@ -370,7 +382,7 @@ class Evaluation:
             f"train: {self.train}   target: {self.target}   "
             f"candidates: {len(self.candidates)} ({len(self.selection.dropped)} constant dropped)",
             f"method: {self.method.label}"
-            + (f" (seed {self.seed})" if self.method.method in SEEDED_METHODS else ""),
+            + (f" (seed {self.seed})" if seeded(self.method) else ""),
             f"clusters: {len(self.selection.clusters)}"
             + (f" at eta = {self.selection.eta:.6f}" if math.isfinite(self.selection.eta)
                else ""),
@@ -380,10 +392,14 @@ class Evaluation:
         ):
             shown = ", ".join(members[:8]) + (f", ... ({len(members)})" if len(members) > 8 else "")
             lines.append(f"  {number}: keep {chosen} (psi = {psi:+.4f}) from [{shown}]")
-        terms = " ".join(
-            f"{value:+.4g}*d({name})" for name, value in list(self.coefficients.items())[1:]
-        )
-        lines.append(f"model: {self.target} = {self.fit.intercept:.4g} {terms}")
+        if self.coefficients is None:
+            lines.append(f"model: {self.target} = {type(self.fit.estimator).__name__} of "
+                         f"d({'), d('.join(self.selected)}) (not linear: no coefficients)")
+        else:
+            terms = " ".join(
+                f"{value:+.4g}*d({name})" for name, value in list(self.coefficients.items())[1:]
+            )
+            lines.append(f"model: {self.target} = {self.fit.intercept:.4g} {terms}")
         lines.append(f"training R2: {self.fit.r2:.4f}")
         lines.append("RMSE on the other experiments (um):")
         width = max(len(name) for name in self.rmse_um)
@@ -690,7 +706,7 @@ def evaluate_checked(
         selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure)
         selected_names = [names[i] for i in selection.selected]
         fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
-                       names=selected_names)
+                       names=selected_names, random_state=seed)
     used = [*candidates.sensors_of(selection.selected), target]
     predictions, measured, errors, test_rows = {}, {}, {}, {}
     for name, recording in tests.items():

@@ -6,6 +6,11 @@ one label, ``method[+within][+regressor]`` with the defaults (psi, ols) left out
 ``closure`` (the paper's method), ``kmeans+grey``, ``lasso+ridge``, ``ward+grey+pls``: that
 label is what study files list and what report tables use as a column name.
 
+A part may also be a user's class by import path (``selection.user_methods``):
+``mypkg.sel:MySel``, ``mypkg.sel:MySel[alpha=0.5]+ridge``, ``all+mypkg.reg:MyRegressor``
+(``all`` keeps every candidate, so the regressor or pipeline sees them all). It runs through
+the same ``select_with`` / ``fit_with`` as a built-in.
+
 Examples
 --------
 >>> choice = parse_method("kmeans+grey+pls")
@@ -18,21 +23,30 @@ dict_keys(['differences', 'select', 'regress'])
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import (
+    ALL_CANDIDATES,
     CLUSTER_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_REGRESSOR,
     DEFAULT_SIMILARITY,
     DEFAULT_WITHIN,
+    LINEAR_REGRESSORS,
     METHODS,
     REGRESSORS,
     WITHIN,
 )
 from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.user_methods import (
+    UserMethod,
+    is_import_path,
+    parse_params,
+    parse_user_part,
+    split_label,
+)
 
 if TYPE_CHECKING:  # scikit-learn is imported only by the functions that build estimators:
     # ``evaluate`` with the paper's method never needs it (~3 s of CPU at start-up here)
@@ -52,6 +66,11 @@ class MethodChoice:
         for value, known, what in ((self.method, METHODS, "method"),
                                    (self.within, WITHIN, "within"),
                                    (self.regressor, REGRESSORS, "regressor")):
+            if what != "within" and isinstance(value, str) and is_import_path(value):
+                user = parse_user_part(value)  # checked: imports, and is a selector/regressor
+                object.__setattr__(self, what, user.label)
+                user.build(role=what)
+                continue
             if value not in known:
                 raise SelectionError(f"unknown {what} {value!r}; choose one of "
                                      f"{', '.join(known)} (see 'spindlebench methods')")
@@ -62,6 +81,21 @@ class MethodChoice:
     @property
     def clustered(self) -> bool:
         return self.method in CLUSTER_METHODS
+
+    @property
+    def user_method(self) -> UserMethod | None:
+        """The user's selector when the method is an import path."""
+        return parse_user_part(self.method) if is_import_path(self.method) else None
+
+    @property
+    def user_regressor(self) -> UserMethod | None:
+        """The user's regressor (or pipeline) when the regressor is an import path."""
+        return parse_user_part(self.regressor) if is_import_path(self.regressor) else None
+
+    @property
+    def linear(self) -> bool:
+        """Whether the fitted model is ``intercept + rises @ coefficients``."""
+        return self.regressor in LINEAR_REGRESSORS
 
     @property
     def is_paper(self) -> bool:
@@ -77,8 +111,15 @@ class MethodChoice:
             parts.append(self.regressor)
         return "+".join(parts)
 
-    def to_dict(self) -> dict[str, str]:
-        return {"method": self.method, "within": self.within, "regressor": self.regressor}
+    def to_dict(self) -> dict[str, Any]:
+        """Method, within, regressor; with a user's class, ``code``: its package, version
+        and source hash (``UserMethod.provenance``)."""
+        out: dict[str, Any] = {"method": self.method, "within": self.within,
+                               "regressor": self.regressor}
+        users = [user for user in (self.user_method, self.user_regressor) if user is not None]
+        if users:
+            out["code"] = [user.provenance() for user in users]
+        return out
 
 
 #: The paper's method exactly (closure, |psi|, OLS): ``place``'s ``fuzzy``.
@@ -89,14 +130,14 @@ def parse_method(label: str) -> MethodChoice:
     """``method[+within][+regressor]`` -> ``MethodChoice``; one-line error otherwise."""
     if not isinstance(label, str) or not label.strip():
         raise SelectionError(f"a method label must be a non-empty string, got {label!r}")
-    parts = [part.strip() for part in label.split("+")]
+    parts = split_label(label)
     method, rest = parts[0], parts[1:]
     within, regressor = DEFAULT_WITHIN, DEFAULT_REGRESSOR
     seen_within = seen_regressor = False
     for part in rest:
         if part in WITHIN and not seen_within and not seen_regressor:
             within, seen_within = part, True
-        elif part in REGRESSORS and not seen_regressor:
+        elif (part in REGRESSORS or is_import_path(part)) and not seen_regressor:
             regressor, seen_regressor = part, True
         else:
             raise SelectionError(
@@ -121,11 +162,34 @@ def check_labels(labels, where: str) -> tuple[str, ...]:
     return tuple(out)
 
 
+def with_params(choice: MethodChoice, params: str | list[str] | None) -> MethodChoice:
+    """``choice`` with ``name=value`` parameters (``--method-param``) added to its user
+    class: the method's if it is one, else the regressor's."""
+    if not params:
+        return choice
+    text = ",".join([params] if isinstance(params, str) else params)
+    user, slot = ((choice.user_method, "method") if choice.user_method is not None
+                  else (choice.user_regressor, "regressor"))
+    if user is None:
+        raise SelectionError("--method-param applies to a method or regressor given by import "
+                             f"path (package.module:Class); {choice.label!r} has none")
+    added = dict(user.params)
+    for name, value in parse_params(text, "--method-param"):
+        added[name] = value
+    updated = UserMethod(user.path, tuple(added.items())).label
+    return MethodChoice(**{**{"method": choice.method, "within": choice.within,
+                              "regressor": choice.regressor}, slot: updated})
+
+
 def make_selector(choice: MethodChoice, k: int, similarity: str = DEFAULT_SIMILARITY,
-                  random_state: int = DEFAULT_METHOD_SEED) -> BaseEstimator:
+                  random_state=DEFAULT_METHOD_SEED) -> BaseEstimator:
     """The selector of ``choice`` keeping ``k`` candidates."""
     from spindlebench.selection import selectors
 
+    if choice.user_method is not None:
+        return choice.user_method.build(k, random_state, role="method")
+    if choice.method == ALL_CANDIDATES:
+        return selectors.AllCandidates()
     if choice.clustered:
         return selectors.ClusterSelector(k, clustering=choice.method, within=choice.within,
                                          similarity=similarity, random_state=random_state)
@@ -137,16 +201,27 @@ def make_selector(choice: MethodChoice, k: int, similarity: str = DEFAULT_SIMILA
         return selectors.LassoPathSelector(k, l1_ratio=0.5)
     if choice.method == "stability":
         return selectors.StabilitySelector(k, random_state=random_state)
+    if choice.method in ("mi", "mrmr"):
+        from spindlebench.selection.information import MRMRSelector, MutualInfoSelector
+
+        cls = MutualInfoSelector if choice.method == "mi" else MRMRSelector
+        return cls(k, random_state=random_state)
     return selectors.GreedyForwardSelector(k)
 
 
-def make_regressor(choice: MethodChoice) -> BaseEstimator:
-    """The regressor of ``choice``."""
+def make_regressor(choice: MethodChoice, random_state=DEFAULT_METHOD_SEED) -> BaseEstimator:
+    """The regressor of ``choice`` (seeded ones get ``random_state``)."""
+    from spindlebench.selection import nonlinear, regressors
     from spindlebench.selection.estimators import RiseRegressor
-    from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
 
-    return {"ols": RiseRegressor, "ridge": RidgeRiseRegressor,
-            "pls": PLSRiseRegressor}[choice.regressor]()
+    if choice.user_regressor is not None:
+        return choice.user_regressor.build(None, random_state, role="regressor")
+    if choice.regressor == "gbr":
+        return nonlinear.BoostedRiseRegressor(random_state=random_state)
+    if choice.regressor == "mlp":
+        return nonlinear.MLPRiseRegressor(random_state=random_state)
+    return {"ols": RiseRegressor, "ridge": regressors.RidgeRiseRegressor,
+            "pls": regressors.PLSRiseRegressor}[choice.regressor]()
 
 
 def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
@@ -159,27 +234,40 @@ def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
 
     steps = [("differences", PairwiseDifferences())] if differences else []
     steps += [("select", make_selector(choice, k, similarity, random_state)),
-              ("regress", make_regressor(choice))]
+              ("regress", make_regressor(choice, random_state))]
     return Pipeline(steps)
 
 
 def add_method_arguments(parser) -> None:
     """``--method``, ``--within``, ``--regressor`` and ``--seed`` of a command that runs one
     method (``evaluate``); ``choice_from_args`` reads them back."""
-    parser.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
-                        help="selection method (default: the paper's closure; "
-                        "'spindlebench methods' lists them)")
+    parser.add_argument("--method", default=DEFAULT_METHOD, metavar="METHOD",
+                        help="selection method: a name ('spindlebench methods' lists them; "
+                        "default: the paper's closure), a whole label (kmeans+grey+ridge), or "
+                        "your selector by import path (mypkg.sel:MySel)")
     parser.add_argument("--within", choices=list(WITHIN), default=DEFAULT_WITHIN,
                         help="choice inside a cluster (cluster methods only)")
-    parser.add_argument("--regressor", choices=list(REGRESSORS), default=DEFAULT_REGRESSOR,
-                        help="regression on the selected rises")
+    parser.add_argument("--regressor", default=DEFAULT_REGRESSOR, metavar="REGRESSOR",
+                        help=f"regression on the selected rises ({', '.join(REGRESSORS)}, or "
+                        "your regressor or pipeline by import path)")
+    parser.add_argument("--method-param", action="append", default=[], metavar="NAME=VALUE",
+                        help="a parameter of the method (or regressor) given by import path; "
+                        "repeat for more (values are TOML literals: 3, 0.5, true, \"text\")")
     parser.add_argument("--seed", type=int, default=DEFAULT_METHOD_SEED,
-                        help="seed of fcm, kmeans and stability (recorded in --json)")
+                        help="seed of the seeded methods (fcm, kmeans, stability, ga, gbr, "
+                        "mlp, a user's random_state; recorded in --json)")
 
 
 def choice_from_args(args) -> MethodChoice:
     """The ``MethodChoice`` of ``add_method_arguments``' options (checked: one line)."""
-    return MethodChoice(args.method, args.within, args.regressor)
+    if len(split_label(args.method)) > 1:  # a whole label in --method
+        if args.within != DEFAULT_WITHIN or args.regressor != DEFAULT_REGRESSOR:
+            raise SelectionError(f"--method {args.method!r} is a whole label; give --within "
+                                 "and --regressor in it, not beside it")
+        choice = parse_method(args.method)
+    else:
+        choice = MethodChoice(args.method, args.within, args.regressor)
+    return with_params(choice, getattr(args, "method_param", None))
 
 
 def listing() -> str:
@@ -237,7 +325,12 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
     kept, dropped = split_constant(constant_columns(X), names, k, making=f"select {k}")
     kept_names = None if names is None else [str(names[i]) for i in kept]
     selector = make_selector(choice, k, similarity, random_state).fit(X[:, kept], y)
-    selected = kept[np.asarray(selector.selected_, dtype=np.intp)]
+    chosen = getattr(selector, "selected_", None)
+    if chosen is None:  # a user's selector: its support mask, in column order
+        chosen = np.flatnonzero(np.asarray(selector.get_support(), dtype=bool))
+    if len(chosen) == 0:
+        raise SelectionError(f"method {choice.method!r} selected no candidate")
+    selected = kept[np.asarray(chosen, dtype=np.intp)]
     psi = np.full(X.shape[1], np.nan)
     psi[kept] = correlation_with(X[:, kept], y, kept_names)
     clusters = [kept[c] for c in selector.clusters_] if choice.clustered else \
@@ -271,20 +364,24 @@ def select_each(choice: MethodChoice, X, y, ks, similarity: str = DEFAULT_SIMILA
         yield select_with(choice, X, y, k, similarity, names, random_state, closure)
 
 
-def fit_regressor(regressor: str, X, y, names=None):
-    """The regression ``regressor`` (``names.REGRESSORS``) on rises ``X`` as a
-    ``regression.LinearFit``: ``ols`` is ``regression.fit_ols`` (what ``RiseRegressor``
-    wraps), the others their estimator of ``make_regressor``. Refits that are OLS by
-    definition (the placement score, the sweep's oracle) call it with ``DEFAULT_REGRESSOR``."""
-    from spindlebench.selection.regression import LinearFit, fit_ols
+def fit_regressor(regressor: str, X, y, names=None, random_state=DEFAULT_METHOD_SEED):
+    """The regression ``regressor`` (``names.REGRESSORS``, or a user's by import path) on
+    rises ``X``: a linear one as a ``regression.LinearFit`` (``ols`` is
+    ``regression.fit_ols``, what ``RiseRegressor`` wraps; ``ridge``, ``pls`` their estimator of
+    ``make_regressor``), any other as a ``regression.EstimatorFit`` around the fitted
+    estimator. Refits that are OLS by definition (the placement score, the sweep's oracle)
+    call it with ``DEFAULT_REGRESSOR``."""
+    from spindlebench.selection.regression import EstimatorFit, LinearFit, fit_ols, r2_score
 
     if regressor == DEFAULT_REGRESSOR:
         return fit_ols(X, y, names=names)
-    model = make_regressor(MethodChoice(regressor=regressor)).fit(X, y)
+    model = make_regressor(MethodChoice(regressor=regressor), random_state).fit(X, y)
+    if regressor not in LINEAR_REGRESSORS:
+        return EstimatorFit(model, r2=r2_score(y, EstimatorFit(model, 0.0).predict(X)))
     return LinearFit(intercept=float(model.intercept_), coefficients=model.coef_,
                      r2=float(model.r2_))
 
 
-def fit_with(choice: MethodChoice, X, y, names=None):
-    """The regression of ``choice`` on rises ``X`` as a ``regression.LinearFit``."""
-    return fit_regressor(choice.regressor, X, y, names)
+def fit_with(choice: MethodChoice, X, y, names=None, random_state=DEFAULT_METHOD_SEED):
+    """The regression of ``choice`` on rises ``X`` (``fit_regressor``)."""
+    return fit_regressor(choice.regressor, X, y, names, random_state)

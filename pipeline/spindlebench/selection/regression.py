@@ -166,6 +166,28 @@ class LinearFit:
             return self.intercept + np.asarray(X, dtype=float) @ self.coefficients
 
 
+@dataclass
+class EstimatorFit:
+    """A fitted model that is not ``intercept + X @ coefficients`` (gradient boosting, a
+    network, a user's regressor or pipeline): the estimator, its training R^2; ``intercept``
+    is NaN and ``coefficients`` None, so reports say there are none."""
+
+    estimator: object
+    r2: float
+    intercept: float = math.nan
+    coefficients: None = None
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """The estimator's prediction for candidate values (rises) ``X``, one value a row."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = np.asarray(self.estimator.predict(np.asarray(X, dtype=float)), dtype=float)
+        if values.shape not in ((X.shape[0],), (X.shape[0], 1)):
+            raise SelectionError(f"{type(self.estimator).__name__}.predict gave shape "
+                                 f"{values.shape} for {X.shape[0]} sample(s); one value each "
+                                 "is needed")
+        return values.reshape(-1)
+
+
 def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) -> LinearFit:
     """Ordinary least squares with intercept.
 

@@ -47,6 +47,7 @@ from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
 from spindlebench.selection.forward import Block, greedy_forward
+from spindlebench.selection.genetic import GENERATIONS, POPULATION, genetic_choice
 from spindlebench.selection.grey import DEFAULT_RHO, NORMALISATIONS, grey_relational_grade
 from spindlebench.selection.randomness import RANDOM_STATE_CONSTRAINT, as_generator
 from spindlebench.selection.regression import check_groups
@@ -127,9 +128,10 @@ class ClusterSelector(_Selector):
         Number of clusters, hence of selected candidates.
     clustering : {"closure", "fcm", "kmeans", "average", "complete", "ward"}, default="closure"
         How candidates are clustered (``spindlebench.selection.clustering``).
-    within : {"psi", "grey"}, default="psi"
-        Choice inside a cluster: largest |Pearson r| with the error, or largest grey
-        relational grade.
+    within : {"psi", "grey", "ga"}, default="psi"
+        Choice inside a cluster: largest |Pearson r| with the error, largest grey
+        relational grade, or the combination a genetic algorithm finds best by validation
+        RMSE (``selection.genetic``; starts from the |psi| choice).
     similarity : {"abs-pearson", "literal"}, default="abs-pearson"
         Reading of eq. 1 (for ``closure``, ``average`` and ``complete``).
     closure : {"fast", "squaring"}, default="fast"
@@ -139,7 +141,9 @@ class ClusterSelector(_Selector):
     rho : float, default=0.5
         Distinguishing coefficient of the grey grade.
     random_state : None, int or numpy.random.Generator, default=0
-        Seed of ``fcm`` and ``kmeans``.
+        Seed of ``fcm``, ``kmeans`` and the genetic algorithm.
+    population, generations : int, default=30, 40
+        Of the genetic algorithm (``within="ga"`` only).
     n_clusters : int, deprecated
         Old name of ``k`` (one release).
 
@@ -176,13 +180,16 @@ class ClusterSelector(_Selector):
         "normalisation": [StrOptions(set(NORMALISATIONS))],
         "rho": [Interval(Real, 0, 1, closed="right")],
         "random_state": RANDOM_STATE_CONSTRAINT,
+        "population": [Interval(Integral, 2, None, closed="left")],
+        "generations": [Interval(Integral, 1, None, closed="left")],
         "n_clusters": ALIAS_CONSTRAINT,
     }
 
     def __init__(self, k: int = 2, clustering: str = "closure", within: str = "psi",
                  similarity: str = DEFAULT_SIMILARITY, closure: str = "fast",
                  normalisation: str = "interval", rho: float = DEFAULT_RHO,
-                 random_state=0, n_clusters=DEPRECATED):
+                 random_state=0, population: int = POPULATION, generations: int = GENERATIONS,
+                 n_clusters=DEPRECATED):
         self.k = k
         self.clustering = clustering
         self.within = within
@@ -191,6 +198,8 @@ class ClusterSelector(_Selector):
         self.normalisation = normalisation
         self.rho = rho
         self.random_state = random_state
+        self.population = population
+        self.generations = generations
         self.n_clusters = n_clusters
 
     @_fit_context(prefer_skip_nested_validation=True)
@@ -217,7 +226,7 @@ class ClusterSelector(_Selector):
         self.psi_ = np.full(X.shape[1], np.nan)
         self.psi_[kept] = correlation_with(X[:, kept], y, kept_names)
         self.scores_ = np.full(X.shape[1], np.nan)
-        if self.within == "psi":
+        if self.within in ("psi", "ga"):
             self.scores_[kept] = np.abs(self.psi_[kept])
         else:
             self.scores_[kept] = grey_relational_grade(X[:, kept], y, self.normalisation,
@@ -225,6 +234,10 @@ class ClusterSelector(_Selector):
         self.clusters_ = [kept[m] for m in members]
         self.selected_ = np.array([c[int(np.argmax(self.scores_[c]))] for c in self.clusters_],
                                   dtype=np.intp)
+        if self.within == "ga":
+            self.selected_, self.ga_score_ = genetic_choice(
+                X, y, self.clusters_, self.selected_, self.random_state, self.population,
+                self.generations)
         return self
 
 
@@ -506,4 +519,28 @@ class GreedyForwardSelector(_Selector):
                                  f"select {k}")
         self.selected_ = np.asarray(path.chosen, dtype=np.intp)
         self.scores_ = np.asarray(path.scores)
+        return self
+
+
+class AllCandidates(_Selector):
+    """No selection: every candidate that varies (the ``all`` method; k does not apply).
+
+    ``all+ols`` is OLS on all sensors (a benchmark baseline); ``all+REGRESSOR`` hands a
+    regressor, or a user's pipeline with its own selection, every candidate.
+
+    Attributes
+    ----------
+    selected_ : ndarray
+        Every non-constant input column, in input order.
+    """
+
+    _parameter_constraints: ClassVar[dict] = {}
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Keep the columns of ``X`` that vary."""
+        X, y = self._data(X, y)
+        self.selected_ = np.flatnonzero(~constant_columns(X)).astype(np.intp)
+        if self.selected_.size == 0:
+            raise SelectionError("every candidate is constant; nothing to keep")
         return self
