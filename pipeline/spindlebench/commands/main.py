@@ -32,6 +32,7 @@ COMMANDS: dict[str, str] = {
                  "sweep")
 }
 COMMANDS["export-ssp"] = "spindlebench.commands.export_ssp"  # a name that is no module name
+COMMANDS["benchmark"] = "spindlebench.benchmark.command"
 COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 
 #: Sub-commands that run OpenBLAS with one thread: their large products are single-threaded

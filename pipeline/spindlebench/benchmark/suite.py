@@ -1,0 +1,179 @@
+"""The benchmark suite file: ``benchmarks/<suite>.toml``.
+
+A suite fixes what numbers mean: its tasks (synthetic families, real recordings, with their
+folds), the sensor budget ``k``, the band of "within +-band" and the seed. Its ``version`` is
+written by hand and bumped whenever a task changes; ``tasks_sha256`` is computed from the
+tasks' content (the suite's task tables, the budget, the band, the seed; for a synthetic
+task the checked content of its study file, its machines and the FMU's SHA-256; for a real
+one the source file's SHA-256, added when the data are read), so a result always says which
+tasks made it, and two results with the same hash are comparable. The methods a suite lists are only the
+default entrants: they are not part of the hash.
+
+Format::
+
+    [suite]
+    name = "default"
+    version = "1.0"
+    description = "..."
+    k = 3                 # sensors (candidates) every selection method keeps
+    band_um = 5.0         # "share of time within +-band_um"
+    seed = 0              # seed of the seeded methods
+    methods = ["closure", "lasso", ...]   # default entrants (spindlebench methods)
+
+    [[task]]
+    name = "synthetic"
+    kind = "synthetic"    # a sweep study file's family, simulated with the FMU
+    study = "synthetic-default.toml"      # relative to the suite file
+
+    [[task]]
+    name = "caiviac-heating"
+    kind = "caiviac"      # the CAIVIAC FL_THERMAL runs (read in place)
+    phase = "heating"     # or "cycle"
+    source = "caiviac-fl-thermal/data.csv"  # under the shared recordings folder
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from spindlebench.errors import SpindlebenchError
+from spindlebench.formats.tables import Table, in_range, load_toml, one_of, positive
+from spindlebench.paths import REPO_ROOT
+
+#: Where suites live: the ``benchmarks/`` folder of the checkout.
+SUITES_DIR = (REPO_ROOT if REPO_ROOT is not None else Path.cwd()) / "benchmarks"
+DEFAULT_SUITE = "default"
+TASK_KINDS = ("synthetic", "caiviac")
+PHASES = ("heating", "cycle")
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """One task of a suite as its file defines it."""
+
+    name: str
+    kind: str
+    study: Path | None = None
+    phase: str = "heating"
+    source: str = "caiviac-fl-thermal/data.csv"
+    description: str = ""
+    #: The content the hash covers (the task table as written, plus a study's content).
+    content: dict[str, Any] = field(default_factory=dict, compare=False)
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A checked suite file."""
+
+    path: Path
+    name: str
+    version: str
+    description: str
+    k: int
+    band_um: float
+    seed: int
+    methods: tuple[str, ...]
+    tasks: tuple[TaskSpec, ...]
+
+    @property
+    def tasks_sha256(self) -> str:
+        """SHA-256 of the tasks' content (canonical JSON): what a result's numbers mean."""
+        content = {"k": self.k, "band_um": self.band_um, "seed": self.seed,
+                   "tasks": [task.content for task in self.tasks]}
+        text = json.dumps(content, sort_keys=True, separators=(",", ":"), default=str)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def describe(self) -> dict[str, Any]:
+        """The suite's identity for every output."""
+        return {"name": self.name, "version": self.version, "tasks_sha256": self.tasks_sha256,
+                "file": str(self.path), "k": self.k, "band_um": self.band_um,
+                "seed": self.seed, "tasks": [task.name for task in self.tasks]}
+
+
+def suite_path(name_or_path: str | None) -> Path:
+    """``default`` -> ``benchmarks/default.toml``; a path stays a path."""
+    text = name_or_path or DEFAULT_SUITE
+    path = Path(text)
+    if path.suffix == ".toml" or path.parent != Path("."):
+        return path
+    return SUITES_DIR / f"{text}.toml"
+
+
+def load_suite(name_or_path: str | None = None, recordings_root: Path | None = None) -> Suite:
+    """Read and check a suite (one-line errors naming file and key). A real task's source is
+    found under ``recordings_root`` (default: ``paths.shared_recordings_dir()``)."""
+    from spindlebench.paths import shared_recordings_dir
+
+    root_dir = Path(recordings_root) if recordings_root is not None else shared_recordings_dir()
+    path = suite_path(name_or_path)
+    if not path.is_file():
+        known = sorted(p.stem for p in SUITES_DIR.glob("*.toml")) if SUITES_DIR.is_dir() else []
+        raise SpindlebenchError(f"{path}: no such suite file"
+                                + (f" (suites in {SUITES_DIR}: {', '.join(known)})"
+                                   if known else ""))
+    root = Table(load_toml(path, "benchmark suite"), path)
+    head = root.table("suite")
+    name = head.get("name", str, default=path.stem)
+    version = head.get("version", str)
+    description = head.get("description", str, default="")
+    k = head.get("k", int, check=in_range(1, 1000))
+    band = head.get("band_um", float, default=5.0, check=positive)
+    seed = head.get("seed", int, default=0, check=in_range(0, 2**32 - 1))
+    methods = tuple(head.get_list("methods", str, default=[]))
+    head.finish()
+    from spindlebench.selection.registry import check_labels
+
+    methods = check_labels(methods, f"{path}: key 'suite.methods'")
+    tasks = []
+    for table in root.tables("task"):
+        tasks.append(_task(table, path, root_dir))
+    root.finish()
+    if not tasks:
+        raise root.error("task", "a suite needs at least one [[task]]")
+    names = [task.name for task in tasks]
+    for task_name in names:
+        if names.count(task_name) > 1:
+            raise root.error("task", f"task name {task_name!r} appears twice")
+    return Suite(path=path, name=name, version=version, description=description, k=k,
+                 band_um=band, seed=seed, methods=methods, tasks=tuple(tasks))
+
+
+def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
+    content = dict(table.data)
+    name = table.get("name", str)
+    kind = table.get("kind", str, check=lambda v: one_of(v, TASK_KINDS))
+    description = table.get("description", str, default="")
+    if kind == "synthetic":
+        study = (suite_file.resolve().parent / table.get("study", str)).resolve()
+        table.finish()
+        if not study.is_file():
+            raise table.error("study", f"no such study file: {study}")
+        from spindlebench.machines import load_machine
+        from spindlebench.provenance import sha256_file
+        from spindlebench.studies.study import load_study, pinned_content
+
+        loaded = load_study(study)
+        content["study"] = pinned_content(loaded)
+        content["machines"] = [{**load_machine(m, source=study).provenance(),
+                                "parameters": dict(load_machine(m, source=study).parameters)}
+                               for m in loaded.machines]
+        content["fmu_sha256"] = sha256_file(loaded.fmu)  # another model: other task data
+        return TaskSpec(name, kind, study=study, description=description, content=content)
+    phase = table.get("phase", str, default="heating", check=lambda v: one_of(v, PHASES))
+    source = table.get("source", str, default="caiviac-fl-thermal/data.csv")
+    table.finish()
+    source_path = recordings_root / source
+    if not source_path.is_file():
+        raise table.error("source", f"no such recording {source_path} (real recordings are "
+                                    "read in place; --recordings-root names their folder)")
+    from spindlebench.provenance import sha256_file
+
+    content.setdefault("phase", phase)
+    content.setdefault("source", source)
+    content["source_sha256"] = sha256_file(source_path)
+    return TaskSpec(name, kind, phase=phase, source=str(source_path), description=description,
+                    content=content)
