@@ -49,6 +49,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "others are predicted)")
     parser.add_argument("--target", default="drift_um",
                         help="target column of --recordings (default drift_um)")
+    from spindlebench.formats.columns import add_role_arguments
+
+    add_role_arguments(parser)  # how --recordings are read: as evaluate reads them
     parser.add_argument("--recordings-root", type=Path, default=None, metavar="DIR",
                         help="folder of the real recordings (default: ../shared/recordings "
                         "beside the checkout)")
@@ -104,7 +107,9 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     tasks = [task for spec in specs for task in build_tasks(spec)]
     if args.recordings:
-        tasks.append(own_task(args.recordings, args.target))
+        from spindlebench.formats.columns import ColumnRoles
+
+        tasks.append(own_task(args.recordings, args.target, ColumnRoles.from_args(args)))
     print(f"suite {suite.name} {suite.version} (tasks {suite.tasks_sha256[:12]}): "
           f"{len(tasks)} task(s), {len(choices)} method(s) + {len(BASELINES)} baselines; "
           f"tasks built in {time.perf_counter() - started:.1f} s")

@@ -45,7 +45,7 @@ def rows(entries: Sequence[Entry], band_um: float) -> pd.DataFrame:
     frame = pd.DataFrame.from_records(records)
     frame["rank"] = np.nan
     frame["worse_than"] = ""
-    for task, part in frame.groupby("task", sort=False):
+    for _, part in frame.groupby("task", sort=False):
         scored = part["rmse_um"].astype(float)
         frame.loc[part.index, "rank"] = scored.rank(method="average")
         baselines = {row.method: row.rmse_um for row in part.itertuples()
@@ -73,8 +73,9 @@ def overall(frame: pd.DataFrame) -> pd.DataFrame:
         failed=("error", lambda v: int((v != "").sum())),
     )
     for baseline in BASELINES:
-        table[f"worse_than_{baseline.split(':')[1].replace('-', '_')}"] = frame.groupby("method", sort=False)[
-            "worse_than"].agg(lambda v, b=baseline: int(sum(b in s.split(";") for s in v)))
+        column = f"worse_than_{baseline.split(':')[1].replace('-', '_')}"
+        table[column] = frame.groupby("method", sort=False)["worse_than"].agg(
+            lambda v, b=baseline: int(sum(b in s.split(";") for s in v)))
     table = table.sort_values(["mean_rank", "mean_rmse_um"], kind="stable")
     table.insert(0, "overall_rank", np.arange(1, len(table) + 1))
     return table.reset_index()

@@ -5,9 +5,9 @@ folds), the sensor budget ``k``, the band of "within +-band" and the seed. Its `
 written by hand and bumped whenever a task changes; ``tasks_sha256`` is computed from the
 tasks' content (the suite's task tables, the budget, the band, the seed; for a synthetic
 task the checked content of its study file, its machines and the FMU's SHA-256; for a real
-one the source file's SHA-256, added when the data are read), so a result always says which
-tasks made it, and two results with the same hash are comparable. The methods a suite lists are only the
-default entrants: they are not part of the hash.
+one the source file's SHA-256), so a result always says which tasks made it, and two
+results with the same hash are comparable. The methods a suite lists are only the default
+entrants: they are not part of the hash.
 
 Format::
 

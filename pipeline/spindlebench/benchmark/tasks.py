@@ -135,29 +135,33 @@ def caiviac_task(spec: TaskSpec) -> Task:
                             "runs": list(frames)})
 
 
-def own_task(paths: Sequence[Path], target: str, name: str = "own") -> Task:
-    """The user's recordings as a task: each trains in turn, the others are predicted."""
-    from spindlebench.formats.recording import default_sensors, read_recording
+def own_task(paths: Sequence[Path], target: str, roles=None, name: str = "own") -> Task:
+    """The user's recordings as a task: each trains in turn, the others are predicted.
+
+    Read as ``evaluate`` reads them (``formats.columns``: the time column, the sensors by
+    name, pattern or the temperature rule, the CSV dialect; ``roles`` from the command's
+    flags); every file must have the first file's sensors and a time column (the replay
+    baseline needs the time since the start)."""
+    import dataclasses
+
+    from spindlebench.formats.columns import ColumnRoles, read_with_roles, require_time
     from spindlebench.provenance import file_entry
 
+    roles = roles if roles is not None else ColumnRoles()
     if len(paths) < 2:
         raise SpindlebenchError("--recordings: give at least 2 recordings (one trains, the "
                                 "others are predicted)")
-    frames = {}
+    frames: dict[str, pd.DataFrame] = {}
+    sensors: tuple[str, ...] = ()
     for path in paths:
-        frame = read_recording(path)
-        if target not in frame.columns:
-            raise SpindlebenchError(f"{path}: no target column {target!r} (--target)")
-        if TIME not in frame.columns:
-            raise SpindlebenchError(f"{path}: no {TIME} column (the replay baseline needs "
-                                    "the time since the start)")
+        frame, choice = read_with_roles(Path(path), target, roles)
+        require_time(choice, str(path), "the replay baseline")
+        if not sensors:
+            sensors = tuple(choice.sensors)
+            roles = dataclasses.replace(roles, sensors=sensors, exclude=())
         frames[Path(path).stem] = frame
     if len(frames) < len(paths):
         raise SpindlebenchError("--recordings: two recordings share a file name")
-    first = next(iter(frames.values()))
-    sensors = tuple(default_sensors(first, target))
-    if not sensors:
-        raise SpindlebenchError(f"{paths[0]}: no sensor columns found")
     folds = [Fold(f"train {name}", name, frame,
                   {other: f for other, f in frames.items() if other != name})
              for name, frame in frames.items()]

@@ -1,7 +1,8 @@
 """Bring your own method: a scikit-learn selector, regressor or pipeline named by import path.
 
 A method label's part written ``package.module:Class`` (optionally with parameters,
-``package.module:Class[alpha=0.5,mode="x"]``) names the user's estimator class. In the
+``package.module:Class[alpha=0.5,mode="x"]``; a value ``"@package.module:name"`` is that
+object, e.g. a score function) names the user's estimator class. In the
 method's place it must be a selector (scikit-learn's ``SelectorMixin``, or anything with
 ``get_support()`` after ``fit``); in the regressor's place anything with ``fit`` and
 ``predict`` (a regressor, or a ``Pipeline`` ending in one). Every command that takes method
@@ -84,7 +85,7 @@ class UserMethod:
         if unknown:
             raise SelectionError(f"method {self.path!r}: unknown parameter(s) "
                                  f"{', '.join(unknown)}; it has {', '.join(sorted(known))}")
-        settings = dict(given)
+        settings = {name: _object(value) for name, value in given.items()}
         budget = next((name for name in BUDGET_NAMES if name in known), None)
         if k is not None and budget is not None and budget not in given:
             settings[budget] = int(k)
@@ -134,6 +135,14 @@ def parse_user_part(part: str) -> UserMethod:
                              "package.module:Class, optionally with [name=value,...]")
     params = parse_params(match["params"] or "", part)
     return UserMethod(f"{match['module']}:{match['attr']}", params)
+
+
+def _object(value: Any) -> Any:
+    """A parameter value; ``"@package.module:name"`` is that object (a function, a class:
+    ``SelectKBest[score_func="@sklearn.feature_selection:f_regression"]``)."""
+    if isinstance(value, str) and value.startswith("@") and is_import_path(value):
+        return UserMethod(value[1:]).resolve()
+    return value
 
 
 def parse_params(text: str, where: str) -> tuple[tuple[str, Any], ...]:

@@ -1,0 +1,257 @@
+"""spindlebench benchmark (issue 23): suite identity, baselines, leaderboard numbers equal to
+evaluate's, and a user's method by import path."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import REPO
+from selection_data import experiment_files
+from spindlebench.benchmark import leaderboard, scoring
+from spindlebench.benchmark.suite import load_suite
+from spindlebench.benchmark.tasks import build_tasks
+from spindlebench.cli import main
+from spindlebench.errors import SpindlebenchError
+from spindlebench.selection import evaluate
+
+USER_METHOD_DIR = REPO / "docs" / "examples" / "user-method"
+TINY_STUDY = """\
+[study]
+name = "tiny-benchmark"
+seed = 5
+replicas = 2
+climate = "chongqing"
+
+[experiment]
+duration_min = 40
+step_s = 120.0
+sample_interval_s = 120.0
+
+[axes]
+months = ["Jan", "Jul"]
+speeds_rpm = [2000, 4000]
+noise = ["lab"]
+faults = ["none"]
+
+[noise.lab]
+noise_C = 0.05
+
+[training]
+month = "Jan"
+speed_rpm = 4000
+"""
+SUITE = """\
+[suite]
+name = "tiny"
+version = "0.1"
+k = 2
+seed = 0
+methods = ["closure", "kmeans+grey", "lasso+ridge", "mrmr+gbr"]
+
+[[task]]
+name = "synthetic"
+kind = "synthetic"
+study = "tiny-study.toml"
+"""
+
+
+@pytest.fixture(scope="module")
+def tiny_suite(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("suite")
+    (folder / "tiny-study.toml").write_text(TINY_STUDY)
+    (folder / "tiny.toml").write_text(SUITE)
+    return folder / "tiny.toml"
+
+
+@pytest.fixture(scope="module")
+def board(tiny_suite, tmp_path_factory):
+    """The tiny suite plus the user's recordings and the example user method, run once."""
+    out = tmp_path_factory.mktemp("board")
+    files = experiment_files(tmp_path_factory.mktemp("own"))
+    sys.path.insert(0, str(USER_METHOD_DIR))
+    try:
+        status = main(["benchmark", str(tiny_suite), "--method", "my_selector:DecorrelatedSelector",
+                       "--recordings", *map(str, files), "--sensors", "T1", "T6", "T8", "T10",
+                       "T13", "T16", "-o", str(out)])
+    finally:
+        sys.path.remove(str(USER_METHOD_DIR))
+    assert status == 0
+    return out, files
+
+
+def test_leaderboard_files_and_suite_identity(board, tiny_suite):
+    out, _ = board
+    for name in ("leaderboard.md", "leaderboard.csv", "folds.csv", "leaderboard.json",
+                 "leaderboard.png"):
+        assert (out / name).stat().st_size > 0
+    record = json.loads((out / "leaderboard.json").read_text())
+    suite = load_suite(tiny_suite)
+    assert record["suite"]["version"] == "0.1"
+    assert record["suite"]["tasks_sha256"] == suite.tasks_sha256
+    assert suite.tasks_sha256 in (out / "leaderboard.md").read_text()
+    frame = pd.read_csv(out / "leaderboard.csv")
+    tasks = set(frame["task"])
+    assert tasks == {"synthetic/default/lab+none", "own"}
+    for task in tasks:  # the three baselines are always in, every entrant ranked
+        methods = set(frame.loc[frame["task"] == task, "method"])
+        assert set(scoring.BASELINES) <= methods
+        assert "my_selector:DecorrelatedSelector" in methods
+    assert frame["error"].isna().all()
+
+
+def test_leaderboard_numbers_equal_evaluate(board, tiny_suite):
+    """The test the issue asks for: a built-in method's leaderboard RMSE is the mean over
+    folds of what evaluate gives on the same recordings."""
+    out, files = board
+    frame = pd.read_csv(out / "leaderboard.csv").set_index(["task", "method"])
+    suite = load_suite(tiny_suite)
+    (task,) = build_tasks(suite.tasks[0])
+    for label in suite.methods:
+        by_evaluate = np.mean([evaluate(fold.train, fold.tests, task.target, list(task.sensors),
+                                        k=suite.k, method=_choice(label),
+                                        seed=suite.seed).mean_rmse_um for fold in task.folds])
+        assert frame.loc[(task.name, label), "rmse_um"] == by_evaluate, label
+    six = ["T1", "T6", "T8", "T10", "T13", "T16"]
+    for label in suite.methods:  # the user's recordings, evaluate reading the files itself
+        folds = [evaluate(train, [f for f in files if f != train], "drift_um", six, k=suite.k,
+                          method=_choice(label)).mean_rmse_um for train in files]
+        assert frame.loc[("own", label), "rmse_um"] == pytest.approx(np.mean(folds),
+                                                                     rel=1e-12), label
+
+
+def test_baselines_by_hand(board):
+    out, files = board
+    frame = pd.read_csv(out / "leaderboard.csv").set_index(["task", "method"])
+    runs = [pd.read_csv(f) for f in files]
+    constant, replay = [], []
+    for i, train in enumerate(runs):
+        tests = [r for j, r in enumerate(runs) if j != i]
+        y0 = train["drift_um"].to_numpy()
+        constant.append(np.mean([np.sqrt(np.mean((t["drift_um"] - y0.mean()) ** 2))
+                                 for t in tests]))
+        replay.append(np.mean([np.sqrt(np.mean((t["drift_um"] - np.interp(
+            t["time_s"], train["time_s"], y0)) ** 2)) for t in tests]))
+    assert frame.loc[("own", "baseline:constant"), "rmse_um"] == pytest.approx(np.mean(constant))
+    assert frame.loc[("own", "baseline:replay"), "rmse_um"] == pytest.approx(np.mean(replay))
+    # OLS on all sensors reads all six; a baseline reads no sensor and is never marked
+    assert frame.loc[("own", "baseline:ols-all"), "n_sensors"] == 6
+    assert frame.loc[("own", "baseline:constant"), "n_sensors"] == 0
+
+
+def test_worse_than_a_baseline_is_marked(board):
+    out, _ = board
+    frame = pd.read_csv(out / "leaderboard.csv", keep_default_na=False)
+    for _, part in frame.groupby("task"):
+        base = part.set_index("method").loc[list(scoring.BASELINES), "rmse_um"].astype(float)
+        for row in part.itertuples():
+            if row.method in scoring.BASELINES:
+                assert row.worse_than == ""
+                continue
+            expected = [b for b in scoring.BASELINES if float(row.rmse_um) > base[b]]
+            assert (row.worse_than.split(";") if row.worse_than else []) == expected
+
+
+def test_user_method_provenance(board):
+    out, _ = board
+    record = json.loads((out / "leaderboard.json").read_text())
+    code = record["provenance"]["entrants"]["my_selector:DecorrelatedSelector"]["code"][0]
+    source = USER_METHOD_DIR / "my_selector.py"
+    assert code["source_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    assert code["module"] == "my_selector" and code["path"] == "my_selector:DecorrelatedSelector"
+
+
+def test_user_method_in_evaluate_with_params(tmp_path, monkeypatch, capsys):
+    monkeypatch.syspath_prepend(str(USER_METHOD_DIR))
+    files = experiment_files(tmp_path)
+    out = tmp_path / "r.json"
+    status = main(["evaluate", "--train", str(files[0]), "--test", *map(str, files[1:]),
+                   "--target", "drift_um", "--clusters", "2",
+                   "--method", "my_selector:DecorrelatedSelector+ridge",
+                   "--method-param", "max_overlap=0.9", "--json", str(out)])
+    assert status == 0
+    record = json.loads(out.read_text())
+    assert record["method"]["method"] == "my_selector:DecorrelatedSelector[max_overlap=0.9]"
+    assert record["method"]["code"][0]["params"] == {"max_overlap": 0.9}
+    assert len(record["selected"]) == 2
+    # a regressor in the method's place is one line, not a traceback
+    assert main(["evaluate", "--train", str(files[0]), "--test", str(files[1]),
+                 "--target", "drift_um", "--clusters", "2",
+                 "--method", "sklearn.linear_model:Ridge"]) == 2
+    assert "must be a selector" in capsys.readouterr().err
+
+
+def test_scikit_learn_classes_by_path_match_their_direct_use(tmp_path):
+    """SelectKBest (its k is the package's budget name) and a plain regressor by path give
+    what the same scikit-learn code gives by hand on the rises."""
+    from sklearn.feature_selection import SelectKBest, f_regression
+    from sklearn.linear_model import Ridge
+    from spindlebench.selection import rises
+
+    files = experiment_files(tmp_path)
+    six = ["T1", "T6", "T8", "T10", "T13", "T16"]
+    label = ('sklearn.feature_selection:SelectKBest[score_func="@sklearn.feature_selection:'
+             'f_regression"]+sklearn.linear_model:Ridge[alpha=2.0]')
+    result = evaluate(files[0], files[1:], "drift_um", six, k=2, method=_choice(label))
+    train = pd.read_csv(files[0])
+    X, y = rises(train[six].to_numpy()), train["drift_um"].to_numpy()
+    support = SelectKBest(f_regression, k=2).fit(X, y).get_support()
+    assert result.selected == [s for s, keep in zip(six, support, strict=True) if keep]
+    model = Ridge(alpha=2.0).fit(X[:, support], y)
+    test = pd.read_csv(files[1])
+    predicted = model.predict(rises(test[six].to_numpy())[:, support])
+    np.testing.assert_allclose(result.predictions[str(files[1])], predicted)
+    assert result.to_dict()["coefficients"] is None
+
+
+def test_suite_hash_covers_tasks_not_methods(tiny_suite, tmp_path):
+    base = load_suite(tiny_suite).tasks_sha256
+    (tmp_path / "tiny-study.toml").write_text(TINY_STUDY)
+    (tmp_path / "a.toml").write_text(SUITE.replace('"mrmr+gbr"', '"lasso"'))
+    assert load_suite(tmp_path / "a.toml").tasks_sha256 == base
+    (tmp_path / "b.toml").write_text(SUITE.replace("k = 2", "k = 3"))
+    assert load_suite(tmp_path / "b.toml").tasks_sha256 != base
+    (tmp_path / "tiny-study.toml").write_text(TINY_STUDY.replace("seed = 5", "seed = 6"))
+    assert load_suite(tmp_path / "a.toml").tasks_sha256 != base
+    (tmp_path / "c.toml").write_text(SUITE.replace('kind = "synthetic"', 'kind = "synth"'))
+    with pytest.raises(SpindlebenchError, match=r"c.toml: key 'task\[0\].kind': must be one of"):
+        load_suite(tmp_path / "c.toml")
+    (tmp_path / "d.toml").write_text(SUITE.replace('"closure"', '"closur"'))
+    with pytest.raises(SpindlebenchError, match=r"suite\.methods"):
+        load_suite(tmp_path / "d.toml")
+
+
+def test_default_suite_loads_with_a_version():
+    from conftest import SHARED_RECORDINGS
+
+    root = SHARED_RECORDINGS if SHARED_RECORDINGS.is_dir() else \
+        REPO.parents[1] / "shared" / "recordings"
+    if not (root / "caiviac-fl-thermal" / "data.csv").is_file():
+        pytest.skip("the CAIVIAC recording is not beside this checkout")
+    suite = load_suite("default", root)
+    assert suite.version and len(suite.tasks_sha256) == 64
+    assert [t.kind for t in suite.tasks] == ["synthetic", "caiviac", "caiviac"]
+
+
+def test_stability_and_ranks():
+    assert scoring.stability([("T1", "T2"), ("T1", "T2")]) == 1.0
+    assert scoring.stability([("T1", "T2"), ("T1", "T3")]) == pytest.approx(1 / 3)
+    assert scoring.stability([("T1",)]) is None
+    assert scoring.stability([(), ()]) == 1.0
+    entries = [scoring.Entry("t", name) for name in ("a", "b", *scoring.BASELINES)]
+    for entry, value in zip(entries, (1.0, 9.0, 5.0, 0.5, 2.0), strict=True):
+        entry.folds = [scoring.FoldScore("f", {"x": value}, np.array([value]), ())]
+    frame = leaderboard.rows(entries, 5.0).set_index("method")
+    assert frame.loc["a", "rank"] == 2 and frame.loc["b", "rank"] == 5
+    assert frame.loc["a", "worse_than"] == "baseline:replay"
+    assert frame.loc["b", "worse_than"] == "baseline:constant;baseline:replay;baseline:ols-all"
+
+
+def _choice(label):
+    from spindlebench.selection.registry import parse_method
+
+    return parse_method(label)
