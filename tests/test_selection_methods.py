@@ -513,13 +513,13 @@ def test_new_labels_run_through_evaluate(tmp_path):
     from spindlebench.selection import evaluate
 
     files = experiment_files(tmp_path)
-    for label in ("kmeans+ga", "mi", "mrmr+gbr", "all+mlp", "all"):
+    for label in ("kmeans+ga", "mi", "mrmr+gbr", "all-candidates+mlp", "all-candidates"):
         result = evaluate(files[0], files[1:], "drift_um", SIX, k=2, method=parse_label(label))
         assert np.isfinite(result.mean_rmse_um)
-        expected = 2 if not label.startswith("all") else len(SIX)
+        expected = 2 if not label.startswith("all-candidates") else len(SIX)
         assert len(result.selected) == expected
         record = result.to_dict()
-        assert (record["coefficients"] is None) == (label in ("mrmr+gbr", "all+mlp"))
+        assert (record["coefficients"] is None) == (label in ("mrmr+gbr", "all-candidates+mlp"))
 
 
 def parse_label(label):

@@ -34,7 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="suite name in benchmarks/ or a .toml path (default: default)")
     parser.add_argument("--method", action="append", default=[], metavar="LABEL",
                         help="an entrant: a method label (kmeans+grey+ridge) or your class by "
-                        "import path (mypkg.sel:MySel, all+mypkg.reg:MyRegressor); repeat "
+                        "import path (mypkg.sel:MySel, all-candidates+mypkg.reg:MyReg); repeat "
                         "for more")
     parser.add_argument("--method-param", action="append", default=[], metavar="NAME=VALUE",
                         help="a parameter of every --method given by import path")

@@ -8,8 +8,8 @@ the same recordings; a test checks it). The three baselines are always entered:
 - ``baseline:replay``: the training run's error against time since its start, replayed on
   the held-out run (linear interpolation; held at its last value after its end): what a
   compensation table of one run would do;
-- ``baseline:ols-all``: OLS on the rises of all sensors (the method label ``all``, through
-  ``evaluate`` like any method).
+- ``baseline:ols-all``: OLS on the rises of all sensors (the method label
+  ``all-candidates``, through ``evaluate`` like any method).
 
 Per task and entrant (over all its folds): ``rmse_um`` is the mean over folds of
 ``Evaluation.mean_rmse_um`` (the mean over held-out runs of their RMSE, the paper's score),
@@ -45,7 +45,7 @@ from spindlebench.selection.regression import rmse
 CONSTANT, REPLAY, OLS_ALL = "baseline:constant", "baseline:replay", "baseline:ols-all"
 BASELINES: tuple[str, ...] = (CONSTANT, REPLAY, OLS_ALL)
 #: The method label the OLS-on-all-sensors baseline runs.
-OLS_ALL_LABEL = "all"
+OLS_ALL_LABEL = "all-candidates"
 
 
 @dataclass

@@ -42,10 +42,10 @@ from typing import Any
 
 from spindlebench.errors import SpindlebenchError
 from spindlebench.formats.tables import Table, in_range, load_toml, one_of, positive
-from spindlebench.paths import REPO_ROOT
+from spindlebench.paths import BENCHMARKS_DIR
 
-#: Where suites live: the ``benchmarks/`` folder of the checkout.
-SUITES_DIR = (REPO_ROOT if REPO_ROOT is not None else Path.cwd()) / "benchmarks"
+#: Where suites live: ``benchmarks/`` of the checkout (a wheel's copy when installed).
+SUITES_DIR = BENCHMARKS_DIR
 DEFAULT_SUITE = "default"
 TASK_KINDS = ("synthetic", "caiviac")
 PHASES = ("heating", "cycle")

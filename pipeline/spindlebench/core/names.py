@@ -79,12 +79,15 @@ DIRECT_METHODS: dict[str, str] = {
           "mutual_info_regression, 3 neighbours, seeded)",
     "mrmr": "minimum redundancy maximum relevance: greedily the candidate whose mutual "
             "information with the error minus its mean with those chosen is largest",
-    "all": "no selection: every candidate (k is ignored); all+ols is OLS on all sensors, "
-           "all+REGRESSOR gives a regressor or a pipeline of your own every candidate",
+    "all-candidates": "no selection: every candidate (k does not apply); all-candidates+ols "
+                      "is OLS on all sensors, all-candidates+REGRESSOR gives a regressor or a "
+                      "pipeline of your own every candidate",
 }
 #: The method that keeps every candidate.
-ALL_CANDIDATES = "all"
+ALL_CANDIDATES = "all-candidates"
 METHODS: dict[str, str] = {**CLUSTER_METHODS, **DIRECT_METHODS}
+#: The methods that keep k candidates: what a study file's ``methods = ["all"]`` lists.
+BUDGET_METHODS: tuple[str, ...] = tuple(m for m in METHODS if m != ALL_CANDIDATES)
 DEFAULT_METHOD = "closure"
 #: The choice of one candidate inside a cluster.
 WITHIN: dict[str, str] = {

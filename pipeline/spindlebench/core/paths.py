@@ -37,6 +37,8 @@ MODELS_DIR: Path = DATA_ROOT / "models"
 SCENARIOS_DIR: Path = DATA_ROOT / "scenarios"
 #: Shipped climate tables (``<name>.toml``).
 SEASONS_DIR: Path = SCENARIOS_DIR / "seasons"
+#: The benchmark suites (``<suite>.toml``, ``spindlebench benchmark``).
+BENCHMARKS_DIR: Path = DATA_ROOT / "benchmarks"
 
 
 def shared_recordings_dir() -> Path:

@@ -7,9 +7,10 @@ one label, ``method[+within][+regressor]`` with the defaults (psi, ols) left out
 label is what study files list and what report tables use as a column name.
 
 A part may also be a user's class by import path (``selection.user_methods``):
-``mypkg.sel:MySel``, ``mypkg.sel:MySel[alpha=0.5]+ridge``, ``all+mypkg.reg:MyRegressor``
-(``all`` keeps every candidate, so the regressor or pipeline sees them all). It runs through
-the same ``select_with`` / ``fit_with`` as a built-in.
+``mypkg.sel:MySel``, ``mypkg.sel:MySel[alpha=0.5]+ridge``,
+``all-candidates+mypkg.reg:MyRegressor`` (``all-candidates`` keeps every candidate, so the
+regressor or pipeline sees them all). It runs through the same ``select_with`` /
+``fit_with`` as a built-in.
 
 Examples
 --------

@@ -523,9 +523,10 @@ class GreedyForwardSelector(_Selector):
 
 
 class AllCandidates(_Selector):
-    """No selection: every candidate that varies (the ``all`` method; k does not apply).
+    """No selection: every candidate that varies (``all-candidates``; k does not apply).
 
-    ``all+ols`` is OLS on all sensors (a benchmark baseline); ``all+REGRESSOR`` hands a
+    ``all-candidates+ols`` is OLS on all sensors (a benchmark baseline);
+    ``all-candidates+REGRESSOR`` hands a
     regressor, or a user's pipeline with its own selection, every candidate.
 
     Attributes

@@ -120,7 +120,7 @@ def check_role(estimator: Any, path: str, role: str) -> None:
     if role == "method" and not hasattr(estimator, "get_support"):
         raise SelectionError(f"method {path!r}: a selection method must be a selector "
                              "(scikit-learn SelectorMixin, or get_support()); a regressor or "
-                             "pipeline goes in the regressor's place: all+" + path)
+                             "pipeline goes in the regressor's place: all-candidates+" + path)
     if role == "regressor" and not hasattr(estimator, "predict"):
         raise SelectionError(f"regressor {path!r}: {type(estimator).__name__} has no "
                              "predict()")

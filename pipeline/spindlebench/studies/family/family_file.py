@@ -22,11 +22,11 @@ from typing import Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import (
+    BUDGET_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
     GROUPS,
-    METHODS,
     SENSORS,
     SIMILARITIES,
 )
@@ -556,7 +556,7 @@ def _methods(t: Table) -> Methods:
     t.finish()
     from spindlebench.selection.registry import check_labels
 
-    labels = list(METHODS) if labels == ["all"] else labels
+    labels = list(BUDGET_METHODS) if labels == ["all"] else labels
     try:
         methods = check_labels(labels, "methods")
     except SpindlebenchError as exc:

@@ -42,10 +42,10 @@ from typing import Any
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import (
+    BUDGET_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
-    METHODS,
     MISSING_MODES,
     PAPER_SIX,
     SENSORS,
@@ -230,7 +230,7 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
         elif key == "methods":
             names = _names(table, key)
-            changes[key] = tuple(METHODS) if names == (ALL_METHODS,) else names
+            changes[key] = BUDGET_METHODS if names == (ALL_METHODS,) else names
         elif key == "seed":
             value = table.raw(key)
             if isinstance(value, str) and value.isdigit():
