@@ -57,6 +57,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "beside the checkout)")
     parser.add_argument("-o", "--out", type=Path, default=None, metavar="DIR",
                         help=f"output folder (default: {DEFAULT_OUT}/SUITE)")
+    parser.add_argument("--doc", type=Path, default=None, metavar="FILE.md",
+                        help="also write the leaderboard's tables between the '<!-- "
+                        "leaderboard: start -->' and '<!-- leaderboard: end -->' lines of "
+                        "FILE.md (docs/benchmark.md)")
     parser.set_defaults(func=run)
 
 
@@ -102,6 +106,14 @@ def run(args: argparse.Namespace) -> int:
                                     f"({', '.join(t.name for t in specs)})")
         specs = [t for t in specs if t.name in args.tasks]
     out = args.out if args.out is not None else DEFAULT_OUT / suite.name
+    if args.doc is not None:  # checked before the work, not after it
+        if not args.doc.is_file():
+            raise SpindlebenchError(f"--doc {args.doc}: no such file")
+        text = args.doc.read_text(encoding="utf-8")
+        if leaderboard.DOC_START not in text or leaderboard.DOC_END not in text:
+            raise SpindlebenchError(f"--doc {args.doc}: has no '{leaderboard.DOC_START}' / "
+                                    f"'{leaderboard.DOC_END}' lines to put the leaderboard "
+                                    "between")
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"-o {out}: exists and is not a folder")
     started = time.perf_counter()
@@ -139,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
                           for f in t.folds], **t.provenance} for t in tasks],
         fmu_sha256=_fmu_sha(specs),
     )}
-    written = leaderboard.write(out, suite, entries, record, command)
+    written = leaderboard.write(out, suite, entries, record, command, args.doc)
     print(f"done in {time.perf_counter() - started:.1f} s")
     for path in written:
         print(f"wrote {path}")

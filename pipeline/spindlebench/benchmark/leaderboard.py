@@ -141,7 +141,7 @@ def markdown(suite: Suite, frame: pd.DataFrame, table: pd.DataFrame,
 
 
 def figure(frame: pd.DataFrame, path: Path) -> Path:
-    """RMSE per task (panels) and entrant (bars, baselines grey), log scale."""
+    """RMSE per task (panels) and entrant (bars from zero, baselines grey)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -161,7 +161,7 @@ def figure(frame: pd.DataFrame, path: Path) -> Path:
             "baseline:constant" in part.index else None
         if constant is not None and np.isfinite(constant):
             ax.axhline(constant, color="black", linewidth=0.8, linestyle="--")
-        ax.set_yscale("log")
+        ax.set_ylim(bottom=0)
         ax.set_ylabel("RMSE (µm)")
         ax.set_title(task, fontsize=9, loc="left")
     axes[-1, 0].set_xticks(range(len(methods)))
@@ -176,14 +176,16 @@ def figure(frame: pd.DataFrame, path: Path) -> Path:
 
 
 def write(out: Path, suite: Suite, entries: Sequence[Entry], record: dict[str, Any],
-          command: str) -> list[Path]:
-    """Write the leaderboard's files into ``out``; return their paths."""
+          command: str, doc: Path | None = None) -> list[Path]:
+    """Write the leaderboard's files into ``out`` (and its tables into the marked section of
+    ``doc``); return their paths."""
     out.mkdir(parents=True, exist_ok=True)
     frame = rows(entries, suite.band_um)
     table = overall(frame)
     written = [out / "leaderboard.md", out / "leaderboard.csv", out / "folds.csv",
                out / "leaderboard.json", out / "leaderboard.png"]
-    atomic.write_text(written[0], markdown(suite, frame, table, command))
+    board = markdown(suite, frame, table, command)
+    atomic.write_text(written[0], board)
     write_table(written[1], frame)
     write_table(written[2], fold_rows(entries))
     document = {**record, "suite": suite.describe(),
@@ -193,6 +195,9 @@ def write(out: Path, suite: Suite, entries: Sequence[Entry], record: dict[str, A
     atomic.write_text(written[3], json.dumps(document, indent=2, allow_nan=False,
                                              default=str) + "\n")
     figure(frame, written[4])
+    if doc is not None:
+        update_doc(doc, board)
+        written.append(doc)
     return written
 
 
@@ -203,3 +208,23 @@ def _records(frame: pd.DataFrame) -> list[dict[str, Any]]:
                           value.item() if hasattr(value, "item") else value)
                     for key, value in record.items()})
     return out
+
+
+#: The markers of the section ``--doc`` rewrites.
+DOC_START, DOC_END = "<!-- leaderboard: start -->", "<!-- leaderboard: end -->"
+
+
+def update_doc(path: Path, board_markdown: str) -> None:
+    """Put ``board_markdown`` (headings one level down) between the markers of ``path``."""
+    from spindlebench.errors import SpindlebenchError
+
+    text = path.read_text(encoding="utf-8")
+    if text.count(DOC_START) != 1 or text.count(DOC_END) != 1 or \
+            text.index(DOC_START) > text.index(DOC_END):
+        raise SpindlebenchError(f"--doc {path}: needs one '{DOC_START}' line and one "
+                                f"'{DOC_END}' line after it, where the leaderboard goes")
+    body = "\n".join("#" + line if line.startswith("#") else line
+                      for line in board_markdown.splitlines())
+    head, rest = text.split(DOC_START)
+    _, tail = rest.split(DOC_END)
+    atomic.write_text(path, f"{head}{DOC_START}\n{body}\n{DOC_END}{tail}")

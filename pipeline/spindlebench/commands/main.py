@@ -40,7 +40,7 @@ COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 #: their start-up and spin-waiting: ~0.15 s of CPU of a 0.8 s ``evaluate --differences`` on
 #: 100 sensors (its output and --json are the same bytes either way, tested). Set before
 #: numpy is first imported (later it has no effect), unless the user chose a number.
-ONE_BLAS_THREAD: tuple[str, ...] = ("evaluate",)
+ONE_BLAS_THREAD: tuple[str, ...] = ("evaluate", "benchmark")
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
