@@ -255,3 +255,19 @@ def _choice(label):
     from spindlebench.selection.registry import parse_method
 
     return parse_method(label)
+
+
+@pytest.mark.parametrize(("label", "message"), [
+    ("nope_module_x.mod:Cls", "cannot import 'nope_module_x.mod'"),
+    ("sklearn.linear_model:Nope", "has no 'Nope'"),
+    ("sklearn.feature_selection:SelectKBest[kk=3]", "unknown parameter(s) kk"),
+    ("sklearn.feature_selection:SelectKBest[k=2,k=3]", "given twice"),
+    ("sklearn:", "write an import path"),
+    ("lasso+sklearn.feature_selection:SelectKBest", "has no predict()"),
+])
+def test_bad_user_methods_are_one_line(label, message):
+    from spindlebench.selection.registry import parse_method
+
+    with pytest.raises(SpindlebenchError) as caught:
+        parse_method(label)
+    assert message in str(caught.value) and "\n" not in str(caught.value)

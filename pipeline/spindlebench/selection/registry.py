@@ -281,7 +281,10 @@ def listing() -> str:
     lines += ["regressors (--regressor):"]
     lines += [f"  {name:<{width}}  {text}" for name, text in REGRESSORS.items()]
     lines += ["In study files a combination is one label, method[+within][+regressor], "
-              "defaults (psi, ols) left out: closure, kmeans+grey, lasso+ridge."]
+              "defaults (psi, ols) left out: closure, kmeans+grey, lasso+ridge.",
+              "Your own scikit-learn selector, regressor or pipeline by import path: "
+              "mypkg.sel:MySel, mypkg.sel:MySel[alpha=0.5]+ridge, "
+              "all-candidates+mypkg.reg:MyRegressor (docs/benchmark.md)."]
     return "\n".join(lines)
 
 

@@ -43,8 +43,8 @@ def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Pa
            table[table["retrain"] == rule], out / "compensation.png")
     models = {rule: {name: [{"trained_on_day": m.trained_on_day, "inputs": list(m.selected),
                              "excluded": list(m.excluded),
-                             "coefficients": [float(m.fit.intercept),
-                                              *map(float, m.fit.coefficients)]}
+                             "coefficients": None if m.fit.coefficients is None else
+                             [float(m.fit.intercept), *map(float, m.fit.coefficients)]}
                             for m in versions] for name, versions in o.models.items()}
               for rule, o in outcomes.items()}
     record = provenance.provenance(
