@@ -271,3 +271,20 @@ def test_bad_user_methods_are_one_line(label, message):
     with pytest.raises(SpindlebenchError) as caught:
         parse_method(label)
     assert message in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_user_method_in_a_sweep_study_file(tmp_path, monkeypatch):
+    """Study files take a user's label like a built-in one (sweep, and compensate's
+    group:label models)."""
+    from spindlebench.compensation.study import _check_model
+    from spindlebench.studies.methods import method_specs
+    from spindlebench.studies.study import load_study
+
+    monkeypatch.syspath_prepend(str(USER_METHOD_DIR))
+    label = "my_selector:DecorrelatedSelector[max_overlap=0.9]+ridge"
+    path = tmp_path / "study.toml"
+    path.write_text(TINY_STUDY + f'\n[methods]\nclusters = [2]\nmethods = ["{label}"]\n')
+    specs = method_specs(load_study(path).methods)
+    mine = [s for s in specs if s.name == f"six_diff:{label}"]
+    assert mine and mine[0].choice.user_method.params == (("max_overlap", 0.9),)
+    assert _check_model(f"all_raw:{label}") is None
