@@ -288,3 +288,41 @@ def test_user_method_in_a_sweep_study_file(tmp_path, monkeypatch):
     mine = [s for s in specs if s.name == f"six_diff:{label}"]
     assert mine and mine[0].choice.user_method.params == (("max_overlap", 0.9),)
     assert _check_model(f"all_raw:{label}") is None
+
+
+PIPELINE_MODULE = """\
+from sklearn.feature_selection import SelectKBest, f_regression
+from sklearn.linear_model import Ridge
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+
+
+def ScaledRidge():
+    return Pipeline([("scale", StandardScaler()), ("select", SelectKBest(f_regression, k=2)),
+                     ("ridge", Ridge(alpha=1.0))])
+"""
+
+
+def test_user_pipeline_in_the_regressor_place(tmp_path, monkeypatch):
+    """A user's pipeline (its own selection inside) after all-candidates sees every
+    candidate, its nested parameters set from the label, and predicts as it does by hand."""
+    from spindlebench.selection import rises
+
+    (tmp_path / "mypipe_bench.py").write_text(PIPELINE_MODULE)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    files = experiment_files(tmp_path)
+    six = ["T1", "T6", "T8", "T10", "T13", "T16"]
+    label = "all-candidates+mypipe_bench:ScaledRidge[select__k=3]"
+    result = evaluate(files[0], files[1:], "drift_um", six, k=1, method=_choice(label))
+    assert result.selected == six  # all-candidates: the pipeline selects for itself
+    sys.path.insert(0, str(tmp_path))
+    try:
+        from mypipe_bench import ScaledRidge
+    finally:
+        sys.path.remove(str(tmp_path))
+    train, test = pd.read_csv(files[0]), pd.read_csv(files[2])
+    model = ScaledRidge().set_params(select__k=3).fit(rises(train[six].to_numpy()),
+                                                      train["drift_um"].to_numpy())
+    np.testing.assert_allclose(result.predictions[str(files[2])],
+                               model.predict(rises(test[six].to_numpy())))
+    assert result.to_dict()["method"]["code"][0]["params"] == {"select__k": 3}

@@ -153,7 +153,7 @@ def fold_recordings(fold: Fold):
 def score_baseline(task: Task, name: str, k: int, seed: int) -> Entry:
     """One of ``BASELINES`` on every fold of ``task``."""
     if name == OLS_ALL:
-        entry = score_method(task, parse_method(OLS_ALL_LABEL), len(task.sensors), seed)
+        entry = score_method(task, parse_method(OLS_ALL_LABEL), 1, seed)  # k does not apply
         entry.method = OLS_ALL
         return entry
     entry = Entry(task.name, name)
