@@ -326,3 +326,19 @@ def test_user_pipeline_in_the_regressor_place(tmp_path, monkeypatch):
     np.testing.assert_allclose(result.predictions[str(files[2])],
                                model.predict(rises(test[six].to_numpy())))
     assert result.to_dict()["method"]["code"][0]["params"] == {"select__k": 3}
+
+
+def test_a_missing_real_recording_fails_only_its_task(tiny_suite, tmp_path):
+    text = tiny_suite.read_text() + '\n[[task]]\nname = "real"\nkind = "caiviac"\n' \
+        'source = "nowhere/data.csv"\n'
+    (tmp_path / "tiny-study.toml").write_text(TINY_STUDY)
+    (tmp_path / "s.toml").write_text(text)
+    suite = load_suite(tmp_path / "s.toml", tmp_path)
+    assert suite.tasks[1].content["source_sha256"] == "missing"
+    with pytest.raises(SpindlebenchError, match=r"key 'task\[1\]\.source': no such recording"):
+        build_tasks(suite.tasks[1])
+    assert main(["benchmark", str(tmp_path / "s.toml"), "--recordings-root", str(tmp_path),
+                 "--tasks", "synthetic", "--only", "--method", "closure",
+                 "-o", str(tmp_path / "out")]) == 0
+    record = json.loads((tmp_path / "out" / "leaderboard.json").read_text())
+    assert record["provenance"]["partial"] is True

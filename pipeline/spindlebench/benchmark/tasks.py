@@ -54,6 +54,8 @@ class Task:
 
 def build_tasks(spec: TaskSpec) -> list[Task]:
     """The task(s) of one suite entry (a synthetic entry gives one per machine x condition)."""
+    if spec.missing:
+        raise SpindlebenchError(spec.missing)
     if spec.kind == "synthetic":
         return synthetic_tasks(spec)
     return [caiviac_task(spec)]
