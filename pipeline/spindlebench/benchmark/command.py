@@ -67,12 +67,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def entrants(args: argparse.Namespace, suite_methods: tuple[str, ...]):
     """The method choices to score, checked (one line), in order, without repeats."""
     from spindlebench.selection.registry import parse_method, with_params
-    from spindlebench.selection.user_methods import is_import_path
 
     given = []
     for label in args.method:
         choice = parse_method(label)
-        if args.method_param and is_import_path(choice.method + "+" + choice.regressor):
+        if args.method_param and (choice.user_method or choice.user_regressor):
             choice = with_params(choice, args.method_param)
         given.append(choice)
     if args.method_param and not any(c.user_method or c.user_regressor for c in given):

@@ -94,11 +94,6 @@ class MethodChoice:
         return parse_user_part(self.regressor) if is_import_path(self.regressor) else None
 
     @property
-    def linear(self) -> bool:
-        """Whether the fitted model is ``intercept + rises @ coefficients``."""
-        return self.regressor in LINEAR_REGRESSORS
-
-    @property
     def is_paper(self) -> bool:
         """The paper's method exactly (closure, |psi|, OLS)."""
         return self == MethodChoice()
