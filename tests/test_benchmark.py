@@ -12,12 +12,13 @@ import pandas as pd
 import pytest
 from conftest import REPO
 from selection_data import experiment_files
-from spindlebench.benchmark import leaderboard, scoring
-from spindlebench.benchmark.suite import load_suite
-from spindlebench.benchmark.tasks import build_tasks
-from spindlebench.cli import main
-from spindlebench.errors import SpindlebenchError
+from spindlebench.commands.main import main
+from spindlebench.core.errors import SpindlebenchError
 from spindlebench.selection import evaluate
+from spindlebench.studies.benchmark import benchmark_report as leaderboard
+from spindlebench.studies.benchmark import scoring
+from spindlebench.studies.benchmark.benchmark_file import load_suite
+from spindlebench.studies.benchmark.tasks import build_tasks
 
 USER_METHOD_DIR = REPO / "docs" / "examples" / "user-method"
 TINY_STUDY = """\
@@ -276,9 +277,9 @@ def test_bad_user_methods_are_one_line(label, message):
 def test_user_method_in_a_sweep_study_file(tmp_path, monkeypatch):
     """Study files take a user's label like a built-in one (sweep, and compensate's
     group:label models)."""
-    from spindlebench.compensation.study import _check_model
-    from spindlebench.studies.methods import method_specs
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.compensation.compensation_file import _check_model
+    from spindlebench.studies.family.family_file import load_study
+    from spindlebench.studies.family.methods import method_specs
 
     monkeypatch.syspath_prepend(str(USER_METHOD_DIR))
     label = "my_selector:DecorrelatedSelector[max_overlap=0.9]+ridge"

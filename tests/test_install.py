@@ -23,9 +23,10 @@ def test_installed_wheel_runs_the_demo_from_another_folder(tmp_path):
     assert where[0].startswith(str(site)), where  # the installed copy, not the checkout
     assert where[1].startswith(str(site)), where
     # the benchmark suites travel too, and their task hash does not depend on where they are
-    from spindlebench.benchmark.suite import load_suite
+    from spindlebench.studies.benchmark.benchmark_file import load_suite
 
-    code = ("import sys; from spindlebench.benchmark.suite import load_suite, SUITES_DIR; "
+    code = ("import sys; from spindlebench.studies.benchmark.benchmark_file import "
+            "load_suite, SUITES_DIR; "
             "print(SUITES_DIR, load_suite('default', sys.argv[1]).tasks_sha256)")
     suites, digest = subprocess.run(
         [sys.executable, "-c", code, str(tmp_path)], check=True, cwd=elsewhere, env=env,

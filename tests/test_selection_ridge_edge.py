@@ -54,7 +54,7 @@ def test_widening_finds_an_interior_penalty_without_warning():
 
 def test_edge_warning_is_in_the_evaluate_json(tmp_path):
     from selection_data import experiment_files
-    from spindlebench.cli import main
+    from spindlebench.commands.main import main
 
     files = experiment_files(tmp_path)
     out = tmp_path / "r.json"

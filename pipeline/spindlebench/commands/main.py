@@ -27,12 +27,11 @@ from spindlebench.core.errors import SpindlebenchError
 #: busy machine). ``--help`` and unknown names still import them all.
 COMMANDS: dict[str, str] = {
     name: f"spindlebench.commands.{name.replace('-', '_')}"
-    for name in ("adapt", "build", "calibrate", "compensate", "demo", "evaluate", "fingerprint",
-                 "identify", "iso230-3", "methods", "paper", "place", "plot", "simulate",
-                 "sweep")
+    for name in ("adapt", "benchmark", "build", "calibrate", "compensate", "demo", "evaluate",
+                 "fingerprint", "identify", "iso230-3", "methods", "paper", "place", "plot",
+                 "simulate", "sweep")
 }
 COMMANDS["export-ssp"] = "spindlebench.commands.export_ssp"  # a name that is no module name
-COMMANDS["benchmark"] = "spindlebench.benchmark.command"
 COMMAND_MODULES: tuple[str, ...] = tuple(sorted(set(COMMANDS.values())))
 
 #: Sub-commands that run OpenBLAS with one thread: their large products are single-threaded

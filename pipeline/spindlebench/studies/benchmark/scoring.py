@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 
-from spindlebench.benchmark.tasks import TIME, Fold, Task
 from spindlebench.selection.evaluate import (
     CandidateSet,
     Evaluation,
@@ -41,6 +40,7 @@ from spindlebench.selection.evaluate import (
 )
 from spindlebench.selection.registry import MethodChoice, parse_method
 from spindlebench.selection.regression import rmse
+from spindlebench.studies.benchmark.tasks import TIME, Fold, Task
 
 CONSTANT, REPLAY, OLS_ALL = "baseline:constant", "baseline:replay", "baseline:ols-all"
 BASELINES: tuple[str, ...] = (CONSTANT, REPLAY, OLS_ALL)

@@ -22,9 +22,9 @@ from typing import Any
 
 import pandas as pd
 
-from spindlebench.benchmark.suite import TaskSpec
-from spindlebench.errors import SpindlebenchError
-from spindlebench.names import SENSORS
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.names import SENSORS
+from spindlebench.studies.benchmark.benchmark_file import TaskSpec
 
 TIME = "time_s"
 
@@ -63,7 +63,7 @@ def build_tasks(spec: TaskSpec) -> list[Task]:
 
 def synthetic_tasks(spec: TaskSpec) -> list[Task]:
     from spindlebench.formats.recording import DRIFT_COLUMN, TRUTH_COLUMNS
-    from spindlebench.studies.experiments import (
+    from spindlebench.studies.family.experiments import (
         conditions,
         experiments,
         replicas,
@@ -71,8 +71,8 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
         sensor_seed,
         training_experiments,
     )
-    from spindlebench.studies.jobs import EvaluationJob, measured_frame, simulate_job
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family.family_file import load_study
+    from spindlebench.studies.running.jobs import EvaluationJob, measured_frame, simulate_job
 
     assert spec.study is not None
     base = load_study(spec.study)
@@ -117,7 +117,7 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
 
 def caiviac_task(spec: TaskSpec) -> Task:
     from spindlebench.adapters import caiviac
-    from spindlebench.provenance import file_entry
+    from spindlebench.core.provenance import file_entry
 
     source = caiviac.read_source(spec.source)
     schedule = caiviac.usable_runs(caiviac.find_schedule(source["spindle_rpm"].to_numpy()),
@@ -146,8 +146,8 @@ def own_task(paths: Sequence[Path], target: str, roles=None, name: str = "own") 
     baseline needs the time since the start)."""
     import dataclasses
 
-    from spindlebench.formats.columns import ColumnRoles, read_with_roles, require_time
-    from spindlebench.provenance import file_entry
+    from spindlebench.core.provenance import file_entry
+    from spindlebench.formats.roles import ColumnRoles, read_with_roles, require_time
 
     roles = roles if roles is not None else ColumnRoles()
     if len(paths) < 2:

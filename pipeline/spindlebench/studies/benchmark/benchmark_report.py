@@ -24,10 +24,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from spindlebench import atomic
-from spindlebench.benchmark.scoring import BASELINES, Entry
-from spindlebench.benchmark.suite import Suite
+from spindlebench.core import atomic
 from spindlebench.formats.table_csv import write_table
+from spindlebench.studies.benchmark.benchmark_file import Suite
+from spindlebench.studies.benchmark.scoring import BASELINES, Entry
 
 COLUMNS = ("task", "method", "rank", "rmse_um", "rmse_sd_um", "max_abs_error_um",
            "within_band", "n_sensors", "stability", "worse_than", "folds", "error")
@@ -216,7 +216,7 @@ DOC_START, DOC_END = "<!-- leaderboard: start -->", "<!-- leaderboard: end -->"
 
 def update_doc(path: Path, board_markdown: str) -> None:
     """Put ``board_markdown`` (headings one level down) between the markers of ``path``."""
-    from spindlebench.errors import SpindlebenchError
+    from spindlebench.core.errors import SpindlebenchError
 
     text = path.read_text(encoding="utf-8")
     if text.count(DOC_START) != 1 or text.count(DOC_END) != 1 or \

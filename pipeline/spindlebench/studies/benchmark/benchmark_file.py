@@ -40,9 +40,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from spindlebench.errors import SpindlebenchError
-from spindlebench.formats.tables import Table, in_range, load_toml, one_of, positive
-from spindlebench.paths import BENCHMARKS_DIR
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import BENCHMARKS_DIR
+from spindlebench.formats.toml import Table, in_range, load_toml, one_of, positive
 
 #: Where suites live: ``benchmarks/`` of the checkout (a wheel's copy when installed).
 SUITES_DIR = BENCHMARKS_DIR
@@ -108,7 +108,7 @@ def suite_path(name_or_path: str | None) -> Path:
 def load_suite(name_or_path: str | None = None, recordings_root: Path | None = None) -> Suite:
     """Read and check a suite (one-line errors naming file and key). A real task's source is
     found under ``recordings_root`` (default: ``paths.shared_recordings_dir()``)."""
-    from spindlebench.paths import shared_recordings_dir
+    from spindlebench.core.paths import shared_recordings_dir
 
     root_dir = Path(recordings_root) if recordings_root is not None else shared_recordings_dir()
     path = suite_path(name_or_path)
@@ -154,9 +154,9 @@ def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
         table.finish()
         if not study.is_file():
             raise table.error("study", f"no such study file: {study}")
-        from spindlebench.machines import load_machine
-        from spindlebench.provenance import sha256_file
-        from spindlebench.studies.study import load_study, pinned_content
+        from spindlebench.core.provenance import sha256_file
+        from spindlebench.machines.variants import load_machine
+        from spindlebench.studies.family.family_file import load_study, pinned_content
 
         loaded = load_study(study)
         content["study"] = pinned_content(loaded)
@@ -169,7 +169,7 @@ def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
     source = table.get("source", str, default="caiviac-fl-thermal/data.csv")
     table.finish()
     source_path = recordings_root / source
-    from spindlebench.provenance import sha256_file
+    from spindlebench.core.provenance import sha256_file
 
     content.setdefault("phase", phase)
     content.setdefault("source", source)
