@@ -343,3 +343,17 @@ def test_a_missing_real_recording_fails_only_its_task(tiny_suite, tmp_path):
                  "-o", str(tmp_path / "out")]) == 0
     record = json.loads((tmp_path / "out" / "leaderboard.json").read_text())
     assert record["provenance"]["partial"] is True
+
+
+def test_suite_hash_ignores_comments_but_not_parameters(tmp_path):
+    machine = (REPO / "scenarios" / "machines" / "ambient-following.toml").read_text()
+    (tmp_path / "m.toml").write_text(machine)
+    (tmp_path / "tiny-study.toml").write_text(
+        TINY_STUDY.replace('climate = "chongqing"', 'climate = "chongqing"\nmachine = "m.toml"'))
+    (tmp_path / "s.toml").write_text(SUITE)
+    base = load_suite(tmp_path / "s.toml").tasks_sha256
+    (tmp_path / "m.toml").write_text("# a new comment\n" + machine)
+    assert load_suite(tmp_path / "s.toml").tasks_sha256 == base
+    assert "\nA_column = 5.0" in machine
+    (tmp_path / "m.toml").write_text(machine.replace("\nA_column = 5.0", "\nA_column = 6.0"))
+    assert load_suite(tmp_path / "s.toml").tasks_sha256 != base

@@ -4,7 +4,8 @@ A suite fixes what numbers mean: its tasks (synthetic families, real recordings,
 folds), the sensor budget ``k``, the band of "within +-band" and the seed. Its ``version`` is
 written by hand and bumped whenever a task changes; ``tasks_sha256`` is computed from the
 tasks' content (the suite's task tables, the budget, the band, the seed; for a synthetic
-task the checked content of its study file, its machines and the FMU's SHA-256; for a real
+task the parsed content of its study and climate files, its machines' parameter values and
+the FMU's SHA-256 (comments do not count, a rebuilt model does); for a real
 one the source file's SHA-256), so a result always says which tasks made it, and two
 results with the same hash are comparable. The methods a suite lists are only the default
 entrants: they are not part of the hash.
@@ -144,6 +145,12 @@ def load_suite(name_or_path: str | None = None, recordings_root: Path | None = N
                  band_um=band, seed=seed, methods=methods, tasks=tuple(tasks))
 
 
+def _machine_content(machine) -> dict[str, Any]:
+    """A machine (``machines.variants.Machine``) as the task hash sees it: its name and
+    parameter values."""
+    return {"name": machine.name, "parameters": dict(sorted(machine.parameters.items()))}
+
+
 def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
     content = dict(table.data)
     name = table.get("name", str)
@@ -155,13 +162,15 @@ def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
         if not study.is_file():
             raise table.error("study", f"no such study file: {study}")
         from spindlebench.core.provenance import sha256_file
-        from spindlebench.machines.variants import load_machine
         from spindlebench.studies.family.family_file import load_study, pinned_content
 
         loaded = load_study(study)
-        content["study"] = pinned_content(loaded)
-        content["machines"] = [{**load_machine(m, source=study).provenance(),
-                                "parameters": dict(load_machine(m, source=study).parameters)}
+        # parsed content only: a comment edited in a machine file (its bytes' SHA-256) must
+        # not make the same tasks look different
+        from spindlebench.machines.variants import load_machine
+
+        content["study"] = {**pinned_content(loaded), "machine": _machine_content(loaded.machine)}
+        content["machines"] = [_machine_content(load_machine(m, source=study))
                                for m in loaded.machines]
         content["fmu_sha256"] = sha256_file(loaded.fmu)  # another model: other task data
         return TaskSpec(name, kind, study=study, description=description, content=content)
