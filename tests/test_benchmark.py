@@ -235,7 +235,7 @@ def test_default_suite_loads_with_a_version():
         pytest.skip("the CAIVIAC recording is not beside this checkout")
     suite = load_suite("default", root)
     assert suite.version and len(suite.tasks_sha256) == 64
-    assert [t.kind for t in suite.tasks] == ["synthetic", "caiviac", "caiviac"]
+    assert [t.kind for t in suite.tasks] == ["synthetic", "synthetic", "caiviac", "caiviac"]
 
 
 def test_stability_and_ranks():
