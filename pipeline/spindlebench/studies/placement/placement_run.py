@@ -103,8 +103,11 @@ class PlacementStudyRun:
         characters.
         """
         runs, failed = self.simulations.runs(), self.simulations.failed()
-        if not failed:
-            return "no runs"
+        if not failed:  # a recording neither stored nor failed: name it, do not say "none"
+            missing = [f"r{r} {e.id}" for r, e in runs
+                       if not self.store.has_recording(recording_path(r, e))]
+            return (f"no simulation failed, but {len(missing)} of {len(runs)} have no stored "
+                    f"recording, first {missing[0]}" if missing else "no simulation failed")
         errors = [self.simulations.error(r, e) for r, e in failed]
         replica, experiment = failed[0]
         others = len(set(errors)) - 1
