@@ -92,11 +92,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--machine", metavar="NAME",
                         help="compare with this machine's paper experiments instead of the "
                         "default's (a name from scenarios/machines/ or a .toml file; "
-                        "simulated once into results/fingerprint_reference/NAME/)")
+                        "simulated once into fingerprint_reference/NAME/ of the per-user cache, "
+                        "~/.cache/spindlebench or $SPINDLEBENCH_CACHE)")
     parser.add_argument("--reference", type=Path, metavar="DIR",
                         help="recordings of the default machine to compare with (default: "
                         "the paper experiments simulated once with the committed FMU into "
-                        "results/fingerprint_reference/)")
+                        "fingerprint_reference/ of the per-user cache)")
     parser.set_defaults(func=run)
 
 
