@@ -76,6 +76,19 @@ for _label, ((_old, _new), _key) in SCENARIO_EDITS.items():
     case(f"scenario: {_label}")(_build)
 
 
+# Issue 25: the inputs against the FMU's declared min/max (35 000 rpm ran to the end).
+INPUT_EDITS = {
+    "speed above the FMU's declared max": (("rpm = 3000", "rpm = 35000"),
+                                           ["key 'speed'", "spindle_speed_rpm = 35000",
+                                            "0..30000 rev/min"]),
+}
+for _label, ((_old, _new), _expected) in INPUT_EDITS.items():
+    def _build(tmp: Path, old: str = _old, new: str = _new, expected: list = _expected):
+        scenario = write(tmp, "bad.toml", QUICK.replace(old, new, 1))
+        return ["simulate", str(scenario), "-o", "out"], [str(scenario), *expected]
+    case(f"scenario: {_label}")(_build)
+
+
 @case("scenario: TOML syntax error")
 def _(tmp):
     scenario = write(tmp, "bad.toml", QUICK + "\n[speed\n")
@@ -489,6 +502,8 @@ STUDY_EDITS = {
     "name escapes results/": (('name = "tiny-sweep"', 'name = "../../escape"'), "study.name"),
     "negative speed": (("speeds_rpm = [2000, 4000]", "speeds_rpm = [-2000, 4000]"),
                        "axes.speeds_rpm"),
+    "speed above the FMU's declared max": (("speeds_rpm = [2000, 4000]",
+                                            "speeds_rpm = [2000, 35000]"), "axes.speeds_rpm"),
     "unknown parameter": (("[training]", "[parameters]\nno_such = 1.0\n\n[training]"),
                           "parameters.no_such"),
 }
