@@ -412,7 +412,51 @@ def sentinel(tmp: Path) -> Path:
     return role_recording(tmp, frame)
 
 
+def with_column(name: str, values) -> Callable[[Path], Path]:
+    """The role recording with one more column (a time axis another logger wrote)."""
+    def make(tmp: Path) -> Path:
+        frame = role_frame()
+        return role_recording(tmp, frame.assign(**{name: values(frame)}))
+    return make
+
+
+def latin1(tmp: Path) -> Path:
+    frame = role_frame().rename(columns={"T1": "T1 [°C]"})
+    return write(tmp, "rec.csv", frame.to_csv(index=False).encode("latin-1"))
+
+
+def constant_target(tmp: Path) -> Path:
+    return role_recording(tmp, role_frame().assign(drift_um=3.0))
+
+
 ROLE_CASES = {
+    # issue 25: time units, sample indices, dates, encodings, roles
+    "sample index as time": (with_column("sample", lambda f: range(len(f))),
+                             ["--time-column", "sample"], ["rec.csv", "'sample'",
+                                                           "sample index", "--time-unit"]),
+    "time unit contradicts the name": (with_column("Zeit [min]", lambda f: f["time_s"] / 60),
+                                       ["--time-column", "Zeit [min]", "--time-unit", "h"],
+                                       ["rec.csv", "--time-unit h", "'Zeit [min]'"]),
+    "bad time unit": (lambda t: role_recording(t), ["--time-unit", "fortnight"],
+                      ["--time-unit"]),
+    "time unit without a time column": (lambda t: role_recording(t, role_frame(None)),
+                                        ["--time-unit", "min"], ["rec.csv", "--time-unit"]),
+    "date column with a bad cell": (with_column("stamp", lambda f: [
+        "2024-03-01 08:00:00" if i != 7 else "yesterday" for i in range(len(f))]),
+        ["--time-column", "stamp"], ["rec.csv", "line 9", "'stamp'", "date/time"]),
+    "Latin-1 without --encoding": (latin1, [], ["rec.csv", "not UTF-8", "--encoding"]),
+    "unknown encoding": (lambda t: role_recording(t), ["--encoding", "klingon"],
+                         ["--encoding klingon"]),
+    "speed column not found": (lambda t: role_recording(t), ["--speed-column", "Drehzahl"],
+                               ["rec.csv", "--speed-column 'Drehzahl'"]),
+    "speed column is a sensor": (lambda t: role_recording(t),
+                                 ["--sensors", "T1,T6", "--speed-column", "T6"],
+                                 ["rec.csv", "--speed-column 'T6'"]),
+    "target as the time column": (lambda t: role_recording(t), ["--time-column", "drift_um"],
+                                  ["rec.csv", "'drift_um'", "time column"]),
+    "time column named as a sensor": (lambda t: role_recording(t),
+                                      ["--sensors", "T1,time_s"],
+                                      ["rec.csv", "--sensors", "'time_s'"]),
     "copy of the target": (lambda t: role_recording(t), ["--sensors", "T1,T6,drift_copy"],
                            ["rec.csv", "drift_copy", "|r|"]),
     "no time column": (lambda t: role_recording(t, role_frame(None)), [],
@@ -444,6 +488,12 @@ for _command, _argv in ROLE_COMMANDS.items():
         def _build(tmp: Path, make=_make, flags=_flags, expect=_expect, argv=_argv):
             return argv(make(tmp)) + flags, expect
         case(f"{_command}: {_label}")(_build)
+
+
+@case("fingerprint: constant target")
+def _(tmp):
+    return ["fingerprint", str(constant_target(tmp)), "--target", "drift_um"], [
+        "rec.csv", "'drift_um' is constant"]
 
 
 CALIBRATION_MAP = """[inputs]

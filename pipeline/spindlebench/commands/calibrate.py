@@ -65,7 +65,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "parameters")
     parser.add_argument("--description", default=None, help="machine description")
     parser.add_argument("--verbose", action="store_true", help="print the solver's progress")
-    add_role_arguments(parser, sensors=False, exclude=False)  # the map names the columns
+    # the map names the columns
+    add_role_arguments(parser, sensors=False, exclude=False, speed=False)
     parser.set_defaults(func=_run)
 
 
