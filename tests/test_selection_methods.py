@@ -26,7 +26,13 @@ from spindlebench.selection.clustering import (
 )
 from spindlebench.selection.estimators import RiseRegressor
 from spindlebench.selection.grey import grey_relational_grade
-from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
+from spindlebench.selection.registry import fit_regressor
+from spindlebench.selection.regressors import (
+    RIDGE_ALPHAS,
+    PLSRiseRegressor,
+    RidgeRiseRegressor,
+    grid_edge,
+)
 from spindlebench.selection.selectors import (
     ClusterSelector,
     GreedyForwardSelector,
@@ -335,3 +341,18 @@ def test_cli_methods_lists_every_name(capsys):
     printed = capsys.readouterr().out
     for name in (*METHODS, *WITHIN, *REGRESSORS):
         assert f"  {name} " in printed
+
+
+def test_ridge_says_when_its_penalty_is_at_the_end_of_its_grid():
+    """Issue 25: the penalty at the grid's edge was silent (the best may lie beyond it)."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(60, 3))
+    y = X @ [2.0, -1.0, 0.5] + 0.01 * rng.normal(size=60)  # nearly noise-free: tiny alpha
+    with pytest.warns(SelectionWarning, match=r"ridge: .* is the lower end of its grid 1\.\.10"):
+        model = RidgeRiseRegressor(alphas=[1.0, 3.0, 10.0]).fit(X, y)
+    assert model.alpha_ == 1.0 and model.alpha_at_edge_ == "lower"
+    assert (grid_edge(1e-4, RIDGE_ALPHAS), grid_edge(1e4, RIDGE_ALPHAS),
+            grid_edge(1.0, RIDGE_ALPHAS)) == ("lower", "upper", None)
+    fit = fit_regressor("ridge", X, y)
+    assert fit.penalty["grid"] == [1e-4, 1e4] and fit.penalty["alpha"] > 0
+    assert fit_regressor("ols", X, y).penalty is None

@@ -276,13 +276,21 @@ def fit_regressor(regressor: str, X, y, names=None):
     ``regression.LinearFit``: ``ols`` is ``regression.fit_ols`` (what ``RiseRegressor``
     wraps), the others their estimator of ``make_regressor``. Refits that are OLS by
     definition (the placement score, the sweep's oracle) call it with ``DEFAULT_REGRESSOR``."""
+    import numpy as np
+
     from spindlebench.selection.regression import LinearFit, fit_ols
+    from spindlebench.selection.regressors import RIDGE_ALPHAS
 
     if regressor == DEFAULT_REGRESSOR:
         return fit_ols(X, y, names=names)
     model = make_regressor(MethodChoice(regressor=regressor)).fit(X, y)
+    penalty = None
+    if hasattr(model, "alpha_"):  # ridge: its penalty, and whether the grid's end bound it
+        grid = np.asarray(model.alphas if model.alphas is not None else RIDGE_ALPHAS, float)
+        penalty = {"alpha": float(model.alpha_), "grid": [float(grid.min()), float(grid.max())],
+                   "at_edge": model.alpha_at_edge_}
     return LinearFit(intercept=float(model.intercept_), coefficients=model.coef_,
-                     r2=float(model.r2_))
+                     r2=float(model.r2_), penalty=penalty)
 
 
 def fit_with(choice: MethodChoice, X, y, names=None):

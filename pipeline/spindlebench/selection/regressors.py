@@ -15,6 +15,7 @@ um/K), which is what ``evaluate`` reports and what a controller would run.
 
 from __future__ import annotations
 
+import warnings
 from numbers import Integral
 from typing import ClassVar
 
@@ -25,6 +26,7 @@ from sklearn.model_selection import KFold
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from spindlebench.selection.errors import SelectionWarning
 from spindlebench.selection.regression import r2_score
 
 RIDGE_ALPHAS = np.logspace(-4, 4, 17)
@@ -90,6 +92,18 @@ def _fold_errors(X: np.ndarray, y: np.ndarray, alphas: np.ndarray, n_folds: int,
     return errors
 
 
+def grid_edge(alpha: float, alphas: np.ndarray) -> str | None:
+    """"lower" or "upper" when ``alpha`` is the smallest or largest of ``alphas`` (the search
+    ran into the end of its grid), else None."""
+    if len(alphas) < 2:
+        return None
+    if alpha == float(np.min(alphas)):
+        return "lower"
+    if alpha == float(np.max(alphas)):
+        return "upper"
+    return None
+
+
 class LinearRiseModel(RegressorMixin, BaseEstimator):
     """A fitted ``error = intercept_ + rises @ coef_``: the prediction every rise regressor
     shares (OLS, ridge, PLS); subclasses fit ``intercept_`` and ``coef_``."""
@@ -115,6 +129,9 @@ class RidgeRiseRegressor(LinearRiseModel):
     ----------
     alpha_ : float
         The chosen penalty.
+    alpha_at_edge_ : str or None
+        "lower" or "upper" when ``alpha_`` is an end of ``alphas``: the best penalty may lie
+        beyond the grid (a ``SelectionWarning`` says so in one line); None inside it.
     intercept_ : float
     coef_ : ndarray of shape (n_features_in_,)
         In the units of the input (um/K for rises), not of the standardised columns.
@@ -146,6 +163,12 @@ class RidgeRiseRegressor(LinearRiseModel):
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
         alphas = RIDGE_ALPHAS if self.alphas is None else np.asarray(self.alphas, dtype=float)
         self.alpha_ = blocked_cv_alpha(X, y, alphas, self.n_folds)
+        self.alpha_at_edge_ = grid_edge(self.alpha_, alphas)
+        if self.alpha_at_edge_ is not None:
+            warnings.warn(f"ridge: the cross-validated penalty alpha = {self.alpha_:g} is the "
+                          f"{self.alpha_at_edge_} end of its grid {alphas.min():g}.."
+                          f"{alphas.max():g}; the best may lie beyond it (give a wider "
+                          "alphas grid)", SelectionWarning, stacklevel=2)
         mean, scale = X.mean(axis=0), X.std(axis=0)
         scale[scale == 0] = 1.0
         Z = (X - mean) / scale
