@@ -415,42 +415,55 @@ class Fit:
         return self.theta[self.layout.blocks[recording][1]]
 
 
-def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
-    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf')."""
+def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose, progress=False):
+    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf');
+    ``progress``: a bar of model evaluations (at most ``max_iter``) with the cost."""
+    from spindlebench.core.progress import bar as progress_bar
+
     cache: dict[bytes, Evaluation] = {}
+    shown = progress_bar(max_iter, "calibrate", "evaluations", progress)
 
     def at(theta: np.ndarray) -> Evaluation:
         key = theta.tobytes()
         if key not in cache:
             cache.clear()
             cache[key] = evaluate(d, series_list, layout, theta)
+            if shown is not None:
+                r = cache[key].residuals
+                shown.set_postfix_str(f"cost {0.5 * float(r @ r):.4g}", refresh=False)
+                shown.update(1)
         return cache[key]
 
     lower = np.full(layout.size, -np.inf)
     upper = np.full(layout.size, np.inf)
     lower[: layout.n_s], upper[: layout.n_s] = d.log_bounds()
-    result = scipy.optimize.least_squares(
-        lambda t: at(t).residuals, theta0, jac=lambda t: at(t).jacobian,
-        bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
-        xtol=1e-8, ftol=1e-7, gtol=1e-8, verbose=2 if verbose else 0,
-    )
+    try:
+        result = scipy.optimize.least_squares(
+            lambda t: at(t).residuals, theta0, jac=lambda t: at(t).jacobian,
+            bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
+            xtol=1e-8, ftol=1e-7, gtol=1e-8, verbose=2 if verbose else 0,
+        )
+    finally:
+        if shown is not None:
+            shown.close()
     return result.x, int(result.nfev), str(result.message)
 
 
 def calibrate(d: Discretisation, series_list: Sequence[Series], *, method: str = "gauss-newton",
-              max_iter: int = 50, verbose: bool = False) -> Fit:
-    """Fit ``d.fit`` (and initial states, unknown ambients, probe offsets) to the recordings."""
+              max_iter: int = 50, verbose: bool = False, progress: bool = False) -> Fit:
+    """Fit ``d.fit`` (and initial states, unknown ambients, probe offsets) to the recordings;
+    ``progress``: a bar of the Gauss-Newton's model evaluations on stderr."""
     with threadpool_limits(1):  # 94 x 94 solves: threads only contend (and see docs: SIGSEGV)
-        return _calibrate(d, series_list, method, max_iter, verbose)
+        return _calibrate(d, series_list, method, max_iter, verbose, progress)
 
 
-def _calibrate(d, series_list, method, max_iter, verbose) -> Fit:
+def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit:
     started = time.perf_counter()
     layout = Layout.of(d, series_list)
     theta0 = layout.start(series_list)
     if method == "gauss-newton":
         theta, evaluations, status = _gauss_newton(d, series_list, layout, theta0, max_iter,
-                                                    verbose)
+                                                    verbose, progress)
     elif method == "ipopt":
         from spindlebench.calibration.ipopt import solve_ipopt
 

@@ -35,7 +35,8 @@ def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
                         help="local worker processes (default: all cores; 0 = in-process)")
     parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
                         help="run on an existing Dask distributed cluster instead")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("-q", "--quiet", "--no-progress", dest="no_progress",
+                        action="store_true", help="no progress bar or step lines on stderr")
     add_machine_argument(parser, "machine variant of every run",
                          "the study's [study] machine, else 'default'")
 

@@ -25,6 +25,7 @@ from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.paths import MODELS_DIR
+from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument, load_machine
@@ -65,6 +66,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "parameters")
     parser.add_argument("--description", default=None, help="machine description")
     parser.add_argument("--verbose", action="store_true", help="print the solver's progress")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no step lines or progress bar on stderr")
     # the map names the columns
     add_role_arguments(parser, sensors=False, exclude=False, speed=False)
     parser.set_defaults(func=_run)
@@ -102,7 +105,10 @@ def _run(args: argparse.Namespace) -> int:
     roles = ColumnRoles.from_args(args)
     for path in args.recordings:  # a wrong file or time column before the slow translation
         check_roles(Path(path), roles)
+    stages = Stages("calibrate", enabled=not args.quiet)
+    stages(f"translating the model in {args.models} ({args.segments} segments per part)")
     ode = explicit_ode(args.models, segments=args.segments)
+    stages(f"reading {len(args.recordings)} recording(s) through {args.map_file}")
     recording_map = read_map(args.map_file, ode.outputs)
     fit_names = check_fit_names(
         split_list_flag("--fit", args.fit, "parameter") if args.fit is not None else DEFAULT_FIT,
@@ -117,8 +123,10 @@ def _run(args: argparse.Namespace) -> int:
     machine = load_machine(args.machine)
     base = ode.parameter_vector(**machine.parameters)
     discretisation = Discretisation(ode, fit_names, base)
+    stages(f"fitting {len(fit_names)} parameter(s) by {args.method} (at most "
+           f"{args.max_iter} model evaluations)")
     fit = calibrate(discretisation, series_list, method=args.method, max_iter=args.max_iter,
-                    verbose=args.verbose)
+                    verbose=args.verbose, progress=not args.quiet and not args.verbose)
     for line in summary_lines(fit):
         print(line)
     model_file = Path(args.models) / MODEL_FILE
@@ -143,14 +151,17 @@ def _run(args: argparse.Namespace) -> int:
     if args.design:
         from spindlebench.calibration.design import design_lines, rank_excitations
 
+        stages("ranking excitations (--design)")
         ranking = rank_excitations(discretisation, fit, series_list)
         content["design"] = ranking
         for line in design_lines(ranking):
             print(line)
+    stages("writing the machine file, its report and figure")
     report.figure(fit, figure_path, title=f"{name}: measured (dots) vs calibrated (lines)")
     report.write_report(report_path, content)
     atomic.write_text(out, machine_text)
     print(f"wrote {out} (+ {report_path.name}, {figure_path.name}); "
-          f"{fit.evaluations} evaluations, {fit.seconds:.0f} s, {fit.status}")
+          f"{fit.evaluations} evaluations, fit {fit.seconds:.0f} s, {stages.seconds:.0f} s in "
+          f"all, {fit.status}")
     return 0
 

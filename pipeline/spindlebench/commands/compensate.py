@@ -10,13 +10,13 @@ residual over the run) and ``provenance.json``.
 from __future__ import annotations
 
 import argparse
-import sys
 from dataclasses import replace
 
 import pandas as pd
 
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.progress import Stages
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
@@ -41,6 +41,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="override [compensate] days: 'continuous' (one machine, the "
                         "state carried from day to day) or 'cold-starts' (every day on its "
                         "own)")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no step lines on stderr")
     parser.set_defaults(func=run)
 
 
@@ -53,13 +55,16 @@ def run(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else default_results_folder(args.study, study.name)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
-    truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
+    stages = Stages("compensate", enabled=not getattr(args, "quiet", False))
+    truths = simulate_days(study, fmu, progress=stages)
+    stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
     outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
     days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
     series = pd.concat([part for o in outcomes.values() for part in o.series],
                        ignore_index=True)
     table = summary(study, days, series)
+    stages(f"writing tables, figure and README into {out}")
     write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
     print(summary_text(table))
-    print(f"wrote {out / 'README.md'} and 5 more files")
+    print(f"wrote {out / 'README.md'} and 5 more files; {stages.seconds:.1f} s in all")
     return 0
