@@ -46,7 +46,9 @@ def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) 
     if args.workers is not None and args.dask_address:
         raise SpindlebenchError("give either --workers or --dask-address, not both")
     if args.out is not None:
-        return args.out
+        from spindlebench.core.files import check_output
+
+        return check_output(args.out, "-o", [args.study], folder=True)
     return default_results_folder(args.study, study_name(args.study))
 
 

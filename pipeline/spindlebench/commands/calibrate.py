@@ -23,11 +23,13 @@ from spindlebench.calibration.problem import Discretisation, Fit, calibrate
 from spindlebench.calibration.series import check_roles, load_series
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.paths import MODELS_DIR
 from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
+from spindlebench.formats.toml import load_toml
 from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument, load_machine
 from spindlebench.model import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
 from spindlebench.model.equations import explicit_ode
@@ -98,6 +100,9 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".toml":
         raise SpindlebenchError(f"-o {out}: a machine file ends in .toml")
+    report_path, figure_path = report.report_paths(out)
+    for written in (out, report_path, figure_path):
+        check_output(written, "-o", [*args.recordings, args.map_file])
     if not 2 <= args.segments <= MAX_SEGMENTS:
         raise SpindlebenchError(f"--segments {args.segments}: must be in [2, {MAX_SEGMENTS}]")
     if args.step_s is not None and not args.step_s > 0:
@@ -105,6 +110,7 @@ def _run(args: argparse.Namespace) -> int:
     roles = ColumnRoles.from_args(args)
     for path in args.recordings:  # a wrong file or time column before the slow translation
         check_roles(Path(path), roles)
+    load_toml(args.map_file, "map")  # an unreadable map too (its names need the model)
     stages = Stages("calibrate", enabled=not args.quiet)
     stages(f"translating the model in {args.models} ({args.segments} segments per part)")
     ode = explicit_ode(args.models, segments=args.segments)

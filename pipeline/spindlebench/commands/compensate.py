@@ -16,6 +16,7 @@ import pandas as pd
 
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.progress import Stages
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
@@ -48,11 +49,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load, simulate, write."""
+    if args.out is not None:  # before the study is read: a device or / is never a folder
+        check_output(args.out, "-o", [args.study], folder=True)
     study = load_compensation(args.study)
     if args.days is not None and args.days != study.days:
         study = replace(study, days=args.days)
     fmu = check_fmu(study.family)
     out = args.out if args.out is not None else default_results_folder(args.study, study.name)
+    check_output(out, "-o", [args.study], folder=True)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
     stages = Stages("compensate", enabled=not getattr(args, "quiet", False))

@@ -29,6 +29,7 @@ from typing import Any
 
 from spindlebench.core import atomic, provenance
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.listflags import expand_folders
 from spindlebench.formats.recording import TIME_COLUMN
 from spindlebench.formats.roles import (
@@ -122,6 +123,9 @@ def run(args: argparse.Namespace) -> int:
         if out is not None and out.is_dir():
             raise SpindlebenchError(f"{out}: is a directory")
     args.recordings = recording_files(args.recordings)
+    for out, flag in ((args.json, "--json"), (args.figure, "--figure")):
+        if out is not None:
+            check_output(out, flag, args.recordings)
     results = []
     for path in args.recordings:
         result, choice = fingerprint_recording(path, args.target, roles)

@@ -60,6 +60,7 @@ import numpy as np
 
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.provenance import sha256_file
 
@@ -282,6 +283,7 @@ def read_table(
     path = Path(path)
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
+    check_input(path, "recording", max_bytes=None)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
     dialect = _Dialect(delimiter, decimal, check_encoding(encoding))
@@ -498,6 +500,7 @@ def read_header(path: str | os.PathLike[str], delimiter: str = ",",
                 encoding: str | None = None) -> list[str]:
     """A recording's column names (stripped), checked like ``read_recording`` checks them."""
     path = Path(path)
+    check_input(path, "recording", max_bytes=None)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: "
                                 f"{'not a file' if path.exists() else 'file not found'}")
@@ -818,6 +821,7 @@ def read_end_state(source: str | os.PathLike[str], where: str,
     text after it for a file that is not there.
     """
     try:
+        check_input(source, "sidecar (.json)")
         text = Path(source).read_text(encoding="utf-8")
     except FileNotFoundError:
         missing = missing or f"no such file {source} (simulate the previous run first)"

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import (
@@ -201,6 +202,7 @@ def detect_dialect(path: Path, delimiter: str | None = None,
     data line into as many; a decimal comma is assumed when the delimiter is not a comma and
     the data line has numbers like ``21,5``.
     """
+    check_input(path, "recording", max_bytes=None)  # opening a FIFO would block here
     try:
         with open(path, encoding=check_encoding(encoding), newline="") as handle:
             lines = [handle.readline() for _ in range(2)]

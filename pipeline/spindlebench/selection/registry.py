@@ -177,8 +177,21 @@ def add_method_arguments(parser) -> None:
                         help="seed of fcm, kmeans and stability (recorded in --json)")
 
 
+def method_seed_problem(seed: object) -> str | None:
+    """Why ``seed`` cannot seed the methods (None when it can): an integer in
+    0 .. ``MAX_METHOD_SEED``."""
+    from spindlebench.core.names import MAX_METHOD_SEED
+
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_METHOD_SEED:
+        return f"must be an integer from 0 to {MAX_METHOD_SEED} (2**32 - 1), got {seed!r}"
+    return None
+
+
 def choice_from_args(args) -> MethodChoice:
     """The ``MethodChoice`` of ``add_method_arguments``' options (checked: one line)."""
+    problem = method_seed_problem(getattr(args, "seed", DEFAULT_METHOD_SEED))
+    if problem:
+        raise SpindlebenchError(f"--seed: {problem}")
     return MethodChoice(args.method, args.within, args.regressor)
 
 

@@ -47,6 +47,7 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 
 from spindlebench.core import interrupts
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState, is_probe_output
@@ -93,6 +94,7 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
     """Read an FMU's model description and check it offers the contract's interface (once
     per process and file version)."""
     fmu_path = Path(fmu_path)
+    check_input(fmu_path, "FMU (.fmu)", max_bytes=None)
     if not fmu_path.is_file():
         hint = " (build it with `spindlebench build`)" if fmu_path == DEFAULT_FMU else ""
         raise SpindlebenchError(f"{fmu_path}: no such FMU{hint}")

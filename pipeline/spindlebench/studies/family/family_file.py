@@ -568,9 +568,10 @@ def _methods(t: Table) -> Methods:
                        check=lambda v: one_of(v, SIMILARITIES))
     ground_truth = t.get("ground_truth", bool, default=True)
     labels = t.get_list("methods", str, default=[DEFAULT_METHOD])
-    seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
+    from spindlebench.selection.registry import check_labels, method_seed_problem
+
+    seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=method_seed_problem)
     t.finish()
-    from spindlebench.selection.registry import check_labels
 
     labels = list(METHODS) if labels == ["all"] else labels
     try:
