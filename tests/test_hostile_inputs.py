@@ -836,6 +836,18 @@ def _(tmp):
                                                            "at most 1,000,000"]
 
 
+for _command in ("sweep", "place", "compensate"):
+    def _build(tmp: Path, command: str = _command):
+        """A study without -o wrote into results/<name> of the current folder."""
+        text = {"sweep": TINY, "place": (REPO / "scenarios" / "studies" / "tiny_placement.toml")
+                .read_text(encoding="utf-8"),
+                "compensate": (REPO / "scenarios" / "studies" / "compensate_month.toml")
+                .read_text(encoding="utf-8")}[command]
+        study = write(tmp, "study.toml", text)
+        return [command, str(study)], [str(study), "-o/--out", "results/"]
+    case(f"study: {_command} without -o")(_build)
+
+
 @case("study: inproc Dask address")
 def _(tmp):
     study = write(tmp, "study.toml", TINY)

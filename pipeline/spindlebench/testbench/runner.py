@@ -511,6 +511,9 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     set_stop_time = _cvode_set_stop_time()
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
+    problem = step_count_problem(scenario.duration_s, scenario.step_s)
+    if problem:  # before drive() makes arrays of that many steps
+        raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
     signals = drive(scenario)
     check_scenario(scenario, fmu_info, signals=signals)  # initial_state() checks the start
     inputs = np.ascontiguousarray(signals.matrix)
