@@ -827,6 +827,20 @@ for _label, _cell in (("full-width digits", "１８"), ("Arabic-Indic digits", "
     case(f"ambient CSV: {_label}")(_build)
 
 
+@case("recording: a 3 GB sparse file")
+def _(tmp):
+    big = tmp / "big.csv"
+    with open(big, "wb") as handle:  # sparse: no disk space used
+        handle.truncate(3 * 1024**3)
+    return ["plot", str(big), "-o", "fig.png"], ["big.csv", "too large"]
+
+
+@case("recording: a 200 000-character header field")
+def _(tmp):
+    rec = write(tmp, "rec.csv", "time_s," + "T" * 200_000 + ",drift_um\n0,1,0\n60,2,1\n")
+    return ["plot", str(rec), "-o", "fig.png"], ["rec.csv", "line 1", "field limit"]
+
+
 @case("scenario: 7.8 M samples (90 days at 1 s)")
 def _(tmp):
     scenario = write(tmp, "big.toml", QUICK.replace("duration_s = 600", "duration_s = 7776000")

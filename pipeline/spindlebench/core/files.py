@@ -20,6 +20,9 @@ from spindlebench.core.errors import SpindlebenchError
 #: The largest text file (TOML, JSON, a measured-ambient CSV) a reader takes in at once:
 #: far above any real one (the shipped files are kilobytes), far below the memory.
 MAX_TEXT_BYTES = 64 * 1024 * 1024
+#: The largest recording CSV: read whole (and parsed to float64) it needs a few times its
+#: size in memory; a 4 GB sparse file was a traceback. Real ones here are under 100 MB.
+MAX_RECORDING_BYTES = 2 * 1024**3
 
 
 def special_kind(mode: int) -> str | None:

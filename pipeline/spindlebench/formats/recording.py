@@ -60,7 +60,7 @@ import numpy as np
 
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.files import check_input
+from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.provenance import sha256_file
 
@@ -283,7 +283,7 @@ def read_table(
     path = Path(path)
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
-    check_input(path, "recording", max_bytes=None)
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
     dialect = _Dialect(delimiter, decimal, check_encoding(encoding))
@@ -500,7 +500,7 @@ def read_header(path: str | os.PathLike[str], delimiter: str = ",",
                 encoding: str | None = None) -> list[str]:
     """A recording's column names (stripped), checked like ``read_recording`` checks them."""
     path = Path(path)
-    check_input(path, "recording", max_bytes=None)
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: "
                                 f"{'not a file' if path.exists() else 'file not found'}")
@@ -527,6 +527,9 @@ def _read_header(path: Path, dialect: _Dialect = _Dialect()) -> list[str]:
     try:
         with open(path, newline="", encoding=dialect.encoding) as handle:
             header = next(csv.reader(handle, delimiter=dialect.delimiter), None)
+    except csv.Error as exc:  # a field over the csv module's limit (131 072 characters)
+        raise SpindlebenchError(f"recording {path}, line 1: not a header of column names "
+                                f"({exc})") from None
     except UnicodeDecodeError as exc:
         raise SpindlebenchError(f"recording {path}: not {_encoding_name(dialect)} text; save "
                                 "it as UTF-8 or give its encoding with --encoding (e.g. "

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.files import check_input
+from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import (
@@ -202,13 +202,21 @@ def detect_dialect(path: Path, delimiter: str | None = None,
     data line into as many; a decimal comma is assumed when the delimiter is not a comma and
     the data line has numbers like ``21,5``.
     """
-    check_input(path, "recording", max_bytes=None)  # opening a FIFO would block here
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)  # opening a FIFO would block here
     try:
         with open(path, encoding=check_encoding(encoding), newline="") as handle:
             lines = [handle.readline() for _ in range(2)]
     except (OSError, UnicodeDecodeError, SpindlebenchError):
         return delimiter or ",", decimal or "."  # the reader names the problem
     header, first = lines[0], lines[1]
+    try:
+        return _detected(path, header, first, delimiter, decimal)
+    except csv.Error:  # a field over the csv module's limit: the header reader names it
+        return delimiter or ",", decimal or "."
+
+
+def _detected(path: Path, header: str, first: str, delimiter: str | None,
+              decimal: str | None) -> tuple[str, str]:
     if delimiter is None:
         counts = {d: len(next(csv.reader([header], delimiter=d), [])) for d in DELIMITERS}
         agreeing = [d for d in DELIMITERS if counts[d] > 1 and (
