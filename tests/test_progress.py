@@ -28,6 +28,17 @@ def test_build_names_each_of_its_four_steps(tmp_path, monkeypatch):
     assert "compiling" in heard[3]
 
 
+def test_build_calibrate_and_compensate_speak_only_to_a_terminal(monkeypatch):
+    import sys
+
+    from spindlebench.core.progress import for_terminal
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert for_terminal(quiet=False) and not for_terminal(quiet=True)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
+    assert not for_terminal(quiet=False)
+
+
 def test_stages_print_on_stderr_with_the_time_so_far_and_stay_quiet_when_off(capsys):
     Stages("demo")("step one")
     Stages("demo", enabled=False)("never")

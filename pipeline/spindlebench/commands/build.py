@@ -13,7 +13,7 @@ from pathlib import Path
 from fmpy import read_model_description
 
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.progress import Stages
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.model.build import build_fmu
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
                                 f"{args.segments}")
     target = output_path(args.out, args.segments)
-    stages = Stages("build", enabled=not args.quiet)
+    stages = Stages("build", enabled=for_terminal(args.quiet))
     path = build_fmu(args.models, target, segments=args.segments, say=stages)
     elapsed = stages.seconds
     description = read_model_description(str(path))

@@ -26,7 +26,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.paths import MODELS_DIR
-from spindlebench.core.progress import Stages
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.formats.toml import load_toml
@@ -111,7 +111,7 @@ def _run(args: argparse.Namespace) -> int:
     for path in args.recordings:  # a wrong file or time column before the slow translation
         check_roles(Path(path), roles)
     load_toml(args.map_file, "map")  # an unreadable map too (its names need the model)
-    stages = Stages("calibrate", enabled=not args.quiet)
+    stages = Stages("calibrate", enabled=for_terminal(args.quiet))
     stages(f"translating the model in {args.models} ({args.segments} segments per part)")
     ode = explicit_ode(args.models, segments=args.segments)
     stages(f"reading {len(args.recordings)} recording(s) through {args.map_file}")
@@ -132,7 +132,7 @@ def _run(args: argparse.Namespace) -> int:
     stages(f"fitting {len(fit_names)} parameter(s) by {args.method} (at most "
            f"{args.max_iter} model evaluations)")
     fit = calibrate(discretisation, series_list, method=args.method, max_iter=args.max_iter,
-                    verbose=args.verbose, progress=not args.quiet and not args.verbose)
+                    verbose=args.verbose, progress=for_terminal(args.quiet) and not args.verbose)
     for line in summary_lines(fit):
         print(line)
     model_file = Path(args.models) / MODEL_FILE

@@ -17,7 +17,7 @@ import pandas as pd
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
-from spindlebench.core.progress import Stages
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(out, "-o", [args.study], folder=True)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
-    stages = Stages("compensate", enabled=not getattr(args, "quiet", False))
+    stages = Stages("compensate", enabled=for_terminal(getattr(args, "quiet", False)))
     truths = simulate_days(study, fmu, progress=stages)
     stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
     outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}

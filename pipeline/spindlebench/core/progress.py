@@ -3,7 +3,10 @@
 Every command that can run longer than a few seconds shows where it is: a bar with counts
 and an estimate (tqdm) where the work is counted (simulations, solver evaluations), a line
 per step where it is not (translating the model, compiling it, writing figures), and its
-summary line reports the whole wall time. ``-q`` turns all of it off.
+summary line reports the whole wall time. ``-q`` turns all of it off; commands without a
+progress bar of their own (``build``, ``calibrate``, ``compensate``) speak only to a terminal
+(``for_terminal``), as ``simulate``'s bar does, so a failing command's stderr stays its one
+error line in logs and tests.
 """
 
 from __future__ import annotations
@@ -30,6 +33,11 @@ class Stages:
         if self.enabled:
             print(f"{self.label}: {what} ({self.seconds:.0f} s so far)", file=sys.stderr,
                   flush=True)
+
+
+def for_terminal(quiet: bool) -> bool:
+    """Whether a command's step lines are wanted: not ``-q`` and stderr is a terminal."""
+    return not quiet and sys.stderr.isatty()
 
 
 def bar(total: int | None, desc: str, unit: str, enabled: bool = True) -> Any:
