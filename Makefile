@@ -11,12 +11,19 @@ STAMP := $(VENV)/.installed
 ## machine) it never is, which cost a short command ~0.1 s of CPU. pip compiles the
 ## dependencies at install; `compile` does the same for pipeline/ (only changed modules;
 ## __pycache__ is git-ignored, and a stale .pyc is ignored by Python, never used).
+## The install says what it does (it takes minutes on a fresh machine): a line per step, and
+## pip's own line per package it collects and installs.
 $(STAMP): requirements.txt pyproject.toml
+	@echo "[1/4] creating the virtual environment $(VENV) with $(PYTHON)"
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet -r requirements.txt
+	@echo "[2/4] installing the pinned requirements (requirements.txt; several minutes on a fresh machine)"
+	$(PY) -m pip install --progress-bar on -r requirements.txt
+	@echo "[3/4] installing spindlebench itself (editable)"
 	$(PY) -m pip install --quiet --no-deps -e .
+	@echo "[4/4] compiling the package's modules"
 	$(PY) -m compileall -q pipeline
 	touch $(STAMP)
+	@echo "installed into $(VENV)"
 
 compile: $(STAMP)
 	$(PY) -m compileall -q pipeline

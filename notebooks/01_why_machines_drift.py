@@ -42,7 +42,7 @@ from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
 from spindlebench.formats.recording import read_recording
 
-work = course.start("01")  # this notebook's own files go into work/01
+work = course.start("01")  # this notebook's own files: the folder it prints
 
 # %% [markdown]
 # ## A scenario: what the machine does

@@ -100,7 +100,10 @@ print(f"smallest similarity {off_diagonal.min():.2f}; "
 #
 # The closure is drawn as a tree (a *dendrogram*): two branches join at the height
 # 1 − t(R) where they become similar. Cutting the tree at 1 − η gives the clusters; the
-# dashed line is the cut that leaves 3 clusters.
+# dashed line is the cut that leaves 3 clusters. It is drawn halfway between the last merge
+# the cut keeps and the first it undoes, not at 1 − η itself: η equals one of the closed
+# similarities, so 1 − η lies exactly on a merge and a line there would hide which side of
+# it the cut falls (the legend gives η).
 
 # %%
 T = transitive_closure(R)

@@ -80,6 +80,7 @@ spindlebench("sweep", study, "-o", work / "sweep", "--workers", "0")  # in this 
 
 # %%
 results = pd.read_csv(work / "sweep" / "results.csv")
+results["k"] = results["k"].astype("Int64")  # a whole number (a column with gaps reads as float)
 measured = results[(results["data"] == "measured") & results["error"].isna()]
 print(len(measured), "scores;", measured["test_experiment"].nunique(), "held-out days")
 measured[["test_experiment", "method", "k", "rmse_um", "selected"]].head()

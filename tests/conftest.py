@@ -60,3 +60,40 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         return SLOW_FIRST.index(name) if name in SLOW_FIRST else len(SLOW_FIRST)
 
     items.sort(key=rank)  # stable: the order inside each module is kept
+
+
+#: What a test run may add to the checkout: caches of Python and of the tools themselves.
+_ALLOWED_LEFTOVERS = ("__pycache__", ".pytest_cache", ".ruff_cache", ".venv", ".egg-info",
+                      "build/")
+_checkout_before: set[str] | None = None
+
+
+def _untracked() -> set[str] | None:
+    """The checkout's untracked and ignored entries (``git status``), or None without git."""
+    import subprocess
+
+    try:
+        done = subprocess.run(["git", "-C", str(REPO), "status", "--porcelain", "--ignored"],
+                              capture_output=True, text=True, timeout=60, check=True)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return {line[3:] for line in done.stdout.splitlines()
+            if line[:2] in ("??", "!!") and not any(a in line for a in _ALLOWED_LEFTOVERS)}
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    global _checkout_before
+    if not hasattr(session.config, "workerinput"):  # the controller, not an xdist worker
+        _checkout_before = _untracked()
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Fail the run if it left files in the checkout (tests write under ``tmp_path``; the
+    commands' caches go to the per-user cache): ``make test`` wrote ``results/`` before."""
+    if _checkout_before is None or hasattr(session.config, "workerinput"):
+        return
+    after = _untracked()
+    new = sorted((after or set()) - _checkout_before)
+    if new:
+        print(f"\nerror: the tests wrote into the checkout {REPO}: {', '.join(new[:5])}")
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED

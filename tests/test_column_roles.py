@@ -64,7 +64,7 @@ def test_patterns_and_exclude(capsys):
                                 "Spindle speed*")
     assert status == 0, err
     assert out.splitlines()[0].startswith(
-        "sensors (--sensors): took Spindle front [degC], Spindle rear [degC], "
+        "sensors (--sensors): took Spindle front [degC], Spindle motor [degC], "
         "Workshop air [degC]; skipped: Spindle speed [rpm] (--exclude)")
     status, _, err = evaluate(capsys, "--sensors", "Nozzle*")
     assert status == 2 and "sensor pattern matches no column: Nozzle*" in err
@@ -82,12 +82,12 @@ def test_the_dialect_is_detected_and_a_wrong_delimiter_says_which_it_looks_like(
 
 def test_a_logger_sentinel_in_one_cell_is_named_by_file_line_and_column(tmp_path, capsys):
     frame = pd.read_csv(EXAMPLE / "run1.csv", sep=";", decimal=",")
-    frame.loc[57, "Motor housing [degC]"] = 9.9e37
+    frame.loc[57, "Headstock side [degC]"] = 9.9e37
     train = tmp_path / "sentinel.csv"
     frame.to_csv(train, sep=";", decimal=",", index=False)
     status, out, err = evaluate(capsys, train=train)
     assert status == 2 and out == ""
-    assert err == (f"error: recording {train}, line 59, column 'Motor housing [degC]': 9.9e+37 "
+    assert err == (f"error: recording {train}, line 59, column 'Headstock side [degC]': 9.9e+37 "
                    "is not a plausible temperature (-273.15..10000 °C; a logger's error "
                    "value?); 1 such cell(s); remove those samples or --exclude the column\n")
 
@@ -137,8 +137,8 @@ def test_the_example_can_be_regenerated(tmp_path):
             ".venv/bin/python docs/examples/other-logger/make_example.py and commit it")
 
 
-SENSORS = ["Spindle front [degC]", "Spindle rear [degC]", "Motor housing [degC]",
-           "Headstock top [degC]", "Column front [degC]", "Bed [degC]", "Workshop air [degC]"]
+SENSORS = ["Spindle front [degC]", "Seat flange [degC]", "Headstock side [degC]",
+           "Spindle motor [degC]", "Workshop air [degC]", "X motor [degC]", "Y motor [degC]"]
 
 
 def paper_folder(tmp_path: Path, extra: str = "") -> Path:
@@ -185,11 +185,11 @@ def test_plot_takes_the_roles_and_needs_the_time_column(tmp_path, capsys):
     assert err == (f"error: recording {EXAMPLE / 'run1.csv'}: no time column 'time_s'; a plot "
                    "over time needs one: name it with --time-column (or time_column)\n")
     assert not out.exists()
-    assert cli.main([*args, "--time-column", "Time [s]", "--exclude", "Bed*"]) == 0
+    assert cli.main([*args, "--time-column", "Time [s]", "--exclude", "X motor*"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith(f"sensors (temperature-looking columns) in {EXAMPLE / 'run1.csv'}"
                                ": took Spindle front [degC], ")
-    assert "Bed [degC] (--exclude)" in lines[0] and "dx [um] (displacement" in lines[0]
+    assert "X motor [degC] (--exclude)" in lines[0] and "dx [um] (displacement" in lines[0]
     assert lines[2] == str(out) and out.read_bytes()[:4] == b"\x89PNG"
 
 
@@ -199,12 +199,12 @@ def test_plot_draws_only_the_named_sensors(tmp_path, capsys):
 
     roles = ColumnRoles(time_column="Time [s]", sensors=("Spindle*",), exclude=("*[rpm]",))
     frame, choice = read_with_roles(EXAMPLE / "run1.csv", TARGET, roles, extra=("dx [um]",))
-    assert list(frame.columns) == ["time_s", "Spindle front [degC]", "Spindle rear [degC]",
+    assert list(frame.columns) == ["time_s", "Spindle front [degC]", "Spindle motor [degC]",
                                    "dz [um]", "dx [um]"]  # the time axis renamed, dx kept
     figure = recordings_figure([frame], ["run1"], target=TARGET, sensors=[choice.sensors])
     try:
         drawn = {line.get_label() for line in figure.axes[0].get_lines()}
-        assert drawn == {"Spindle front [degC]", "Spindle rear [degC]"}
+        assert drawn == {"Spindle front [degC]", "Spindle motor [degC]"}
     finally:
         import matplotlib.pyplot as plt
 
@@ -241,7 +241,7 @@ ambient_C = "Workshop air [degC]"
 column = "dz [um]"
 [temperatures]
 "Spindle front [degC]" = "T1"
-"Motor housing [degC]" = "T8"
+"Spindle motor [degC]" = "T8"
 """
 
 
@@ -261,7 +261,7 @@ def test_calibrate_reads_another_loggers_recording_with_its_roles(tmp_path):
     frame = pd.read_csv(run1, sep=";", decimal=",")
     assert np.array_equal(series.time_s, frame["Time [s]"].to_numpy())
     assert [c.column for c in series.channels] == ["Spindle front [degC]",
-                                                   "Motor housing [degC]", "dz [um]"]
+                                                   "Spindle motor [degC]", "dz [um]"]
     assert "Time [s]" not in series.ignored and "dx [um]" in series.ignored
     path.write_text(CALIBRATION_MAP + '"dx [um]" = "T2"\n', encoding="utf-8")
     with pytest.raises(SpindlebenchError, match=r"sensor 'dx \[um\]' follows the target "

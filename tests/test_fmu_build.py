@@ -187,7 +187,7 @@ def test_build_with_other_segments_keeps_the_default_fmu(coarse, tmp_path, monke
     from spindlebench.commands import build
     from spindlebench.commands import main as cli
 
-    def fake_build(model_dir, out_path, segments):
+    def fake_build(model_dir, out_path, segments, **_):
         assert segments == 6
         Path(out_path).parent.mkdir(parents=True, exist_ok=True)
         return Path(shutil.copyfile(coarse, out_path))

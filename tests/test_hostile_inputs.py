@@ -76,6 +76,19 @@ for _label, ((_old, _new), _key) in SCENARIO_EDITS.items():
     case(f"scenario: {_label}")(_build)
 
 
+# Issue 25: the inputs against the FMU's declared min/max (35 000 rpm ran to the end).
+INPUT_EDITS = {
+    "speed above the FMU's declared max": (("rpm = 3000", "rpm = 35000"),
+                                           ["key 'speed'", "spindle_speed_rpm = 35000",
+                                            "0..30000 rev/min"]),
+}
+for _label, ((_old, _new), _expected) in INPUT_EDITS.items():
+    def _build(tmp: Path, old: str = _old, new: str = _new, expected: list = _expected):
+        scenario = write(tmp, "bad.toml", QUICK.replace(old, new, 1))
+        return ["simulate", str(scenario), "-o", "out"], [str(scenario), *expected]
+    case(f"scenario: {_label}")(_build)
+
+
 @case("scenario: TOML syntax error")
 def _(tmp):
     scenario = write(tmp, "bad.toml", QUICK + "\n[speed\n")
@@ -306,6 +319,11 @@ EVALUATE_FLAGS = {
     "too many clusters": (["--clusters", "99"], ["--clusters", "train.csv"]),
     "copy of the target": (["--sensors", "T1,T6,drift_copy"], ["train.csv", "drift_copy"]),
     "json into a folder": (["--json", "."], ["--json .", "is a directory"]),
+    "unknown time unit": (["--time-unit", "fortnight"], ["--time-unit"]),
+    "unknown encoding": (["--encoding", "klingon"], ["--encoding klingon"]),
+    "speed column not found": (["--speed-column", "Drehzahl"], ["train.csv", "Drehzahl"]),
+    "target as the time column": (["--time-column", "drift_um"], ["train.csv", "time column"]),
+    "time column named as a sensor": (["--sensors", "T1,time_s"], ["train.csv", "'time_s'"]),
 }
 for _label, (_flags, _expect) in EVALUATE_FLAGS.items():
     def _build(tmp: Path, flags: list[str] = _flags, expect: list[str] = _expect):
@@ -399,7 +417,51 @@ def sentinel(tmp: Path) -> Path:
     return role_recording(tmp, frame)
 
 
+def with_column(name: str, values) -> Callable[[Path], Path]:
+    """The role recording with one more column (a time axis another logger wrote)."""
+    def make(tmp: Path) -> Path:
+        frame = role_frame()
+        return role_recording(tmp, frame.assign(**{name: values(frame)}))
+    return make
+
+
+def latin1(tmp: Path) -> Path:
+    frame = role_frame().rename(columns={"T1": "T1 [°C]"})
+    return write(tmp, "rec.csv", frame.to_csv(index=False).encode("latin-1"))
+
+
+def constant_target(tmp: Path) -> Path:
+    return role_recording(tmp, role_frame().assign(drift_um=3.0))
+
+
 ROLE_CASES = {
+    # issue 25: time units, sample indices, dates, encodings, roles
+    "sample index as time": (with_column("sample", lambda f: range(len(f))),
+                             ["--time-column", "sample"], ["rec.csv", "'sample'",
+                                                           "sample index", "--time-unit"]),
+    "time unit contradicts the name": (with_column("Zeit [min]", lambda f: f["time_s"] / 60),
+                                       ["--time-column", "Zeit [min]", "--time-unit", "h"],
+                                       ["rec.csv", "--time-unit h", "'Zeit [min]'"]),
+    "bad time unit": (lambda t: role_recording(t), ["--time-unit", "fortnight"],
+                      ["--time-unit"]),
+    "time unit without a time column": (lambda t: role_recording(t, role_frame(None)),
+                                        ["--time-unit", "min"], ["rec.csv", "--time-unit"]),
+    "date column with a bad cell": (with_column("stamp", lambda f: [
+        "2024-03-01 08:00:00" if i != 7 else "yesterday" for i in range(len(f))]),
+        ["--time-column", "stamp"], ["rec.csv", "line 9", "'stamp'", "date/time"]),
+    "Latin-1 without --encoding": (latin1, [], ["rec.csv", "not UTF-8", "--encoding"]),
+    "unknown encoding": (lambda t: role_recording(t), ["--encoding", "klingon"],
+                         ["--encoding klingon"]),
+    "speed column not found": (lambda t: role_recording(t), ["--speed-column", "Drehzahl"],
+                               ["rec.csv", "--speed-column 'Drehzahl'"]),
+    "speed column is a sensor": (lambda t: role_recording(t),
+                                 ["--sensors", "T1,T6", "--speed-column", "T6"],
+                                 ["rec.csv", "--speed-column 'T6'"]),
+    "target as the time column": (lambda t: role_recording(t), ["--time-column", "drift_um"],
+                                  ["rec.csv", "'drift_um'", "time column"]),
+    "time column named as a sensor": (lambda t: role_recording(t),
+                                      ["--sensors", "T1,time_s"],
+                                      ["rec.csv", "--sensors", "'time_s'"]),
     "copy of the target": (lambda t: role_recording(t), ["--sensors", "T1,T6,drift_copy"],
                            ["rec.csv", "drift_copy", "|r|"]),
     "no time column": (lambda t: role_recording(t, role_frame(None)), [],
@@ -431,6 +493,12 @@ for _command, _argv in ROLE_COMMANDS.items():
         def _build(tmp: Path, make=_make, flags=_flags, expect=_expect, argv=_argv):
             return argv(make(tmp)) + flags, expect
         case(f"{_command}: {_label}")(_build)
+
+
+@case("fingerprint: constant target")
+def _(tmp):
+    return ["fingerprint", str(constant_target(tmp)), "--target", "drift_um"], [
+        "rec.csv", "'drift_um' is constant"]
 
 
 CALIBRATION_MAP = """[inputs]
@@ -489,6 +557,8 @@ STUDY_EDITS = {
     "name escapes results/": (('name = "tiny-sweep"', 'name = "../../escape"'), "study.name"),
     "negative speed": (("speeds_rpm = [2000, 4000]", "speeds_rpm = [-2000, 4000]"),
                        "axes.speeds_rpm"),
+    "speed above the FMU's declared max": (("speeds_rpm = [2000, 4000]",
+                                            "speeds_rpm = [2000, 35000]"), "axes.speeds_rpm"),
     "unknown parameter": (("[training]", "[parameters]\nno_such = 1.0\n\n[training]"),
                           "parameters.no_such"),
 }
@@ -542,6 +612,263 @@ def _(tmp):
             ["SpindleBench.mo:2"])
 
 
+# --------------------------------------------------------------------------- issue 25
+
+# Special files as inputs: a FIFO blocked forever (no writer), /dev/zero never ended (it
+# filled the memory). Each input kind of each command, as a FIFO and as /dev/zero.
+def fifo(tmp: Path, name: str) -> Path:
+    import os
+
+    path = tmp / name
+    os.mkfifo(path)
+    return path
+
+
+SPECIAL_INPUTS: dict[str, Callable[[Path, Path], list[str]]] = {
+    "simulate scenario": lambda tmp, p: ["simulate", str(p), "-o", "out.csv"],
+    "sweep study": lambda tmp, p: ["sweep", str(p), "-o", "out", "--workers", "0", "-q"],
+    "place study": lambda tmp, p: ["place", str(p), "-o", "out", "--workers", "0", "-q"],
+    "compensate study": lambda tmp, p: ["compensate", str(p), "-o", "out"],
+    "plot recording": lambda tmp, p: ["plot", str(p), "-o", "fig.png"],
+    "fingerprint recording": lambda tmp, p: ["fingerprint", str(p), "--target", "drift_um"],
+    "evaluate train": lambda tmp, p: ["evaluate", "--train", str(p), "--test",
+                                      str(write(tmp, "test.csv", recording_text(1))),
+                                      "--target", "drift_um", "--clusters", "2"],
+    "evaluate test": lambda tmp, p: ["evaluate", "--train",
+                                     str(write(tmp, "train.csv", recording_text(0))),
+                                     "--test", str(p), "--target", "drift_um",
+                                     "--clusters", "2"],
+    "calibrate recording": lambda tmp, p: ["calibrate", str(p), "--map",
+                                           str(write(tmp, "map.toml", CALIBRATION_MAP)),
+                                           "-o", "m.toml"],
+    "calibrate map": lambda tmp, p: ["calibrate", str(role_recording(tmp)), "--map", str(p),
+                                     "-o", "m.toml"],
+    "simulate machine": lambda tmp, p: ["simulate", str(write(tmp, "q.toml", QUICK)),
+                                        "-o", "out.csv", "--machine", str(p)],
+    "simulate FMU": lambda tmp, p: ["simulate", str(write(tmp, "q.toml", QUICK)),
+                                    "-o", "out.csv", "--fmu", str(p)],
+    "paper config": lambda tmp, p: ["paper", "--recordings", str(tmp), "--config", str(p),
+                                    "--out", str(tmp / "o")],
+    "measured ambient": lambda tmp, p: ["simulate", str(write(tmp, "q.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0',
+        f'kind = "csv"\nfile = "{p}"\ntime_column = "time_s"\nvalue_column = "ambient_C"'))),
+        "-o", "out.csv"],
+}
+for _label, _argv in SPECIAL_INPUTS.items():
+    def _fifo(tmp: Path, argv=_argv, label=_label):
+        path = fifo(tmp, "in.toml" if "toml" in label or "study" in label or "scenario" in label
+                    or "map" in label or "machine" in label else "in.csv")
+        return argv(tmp, path), [str(path), "FIFO", "not a regular file"]
+
+    def _zero(tmp: Path, argv=_argv):
+        return argv(tmp, Path("/dev/zero")), ["/dev/zero", "character device"]
+    case(f"special file: FIFO as {_label}")(_fifo)
+    if _label != "simulate machine":  # a name or a .toml path: /dev/zero is neither
+        case(f"special file: /dev/zero as {_label}")(_zero)
+
+
+# An output over an input, a device, a FIFO or the root folder: the input was replaced.
+@case("output: evaluate --json naming the training CSV")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    return [*argv, "--json", argv[2]], ["--json", "train.csv", "inputs"]
+
+
+@case("output: evaluate --json naming a test CSV")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    return [*argv, "--json", argv[4]], ["--json", "test.csv", "inputs"]
+
+
+@case("output: evaluate --json onto a character device")
+def _(tmp):
+    return [*evaluate_case(tmp, recording_text()), "--json", "/dev/null"], [
+        "--json /dev/null", "character device"]
+
+
+@case("output: evaluate --json onto a FIFO")
+def _(tmp):
+    out = fifo(tmp, "out.json")
+    return [*evaluate_case(tmp, recording_text()), "--json", str(out)], [
+        "--json", "out.json", "FIFO"]
+
+
+@case("output: fingerprint --json onto a FIFO")
+def _(tmp):
+    out = fifo(tmp, "out.json")
+    return ["fingerprint", str(role_recording(tmp)), "--target", "drift_um", "--json",
+            str(out)], ["--json", "out.json", "FIFO"]
+
+
+@case("output: plot -o onto a FIFO")
+def _(tmp):
+    out = fifo(tmp, "fig.png")
+    return ["plot", str(role_recording(tmp)), "-o", str(out)], ["-o", "fig.png", "FIFO"]
+
+
+@case("output: simulate -o naming its measured-ambient CSV")
+def _(tmp):
+    air = write(tmp, "air.csv", AIR)
+    scenario = write(tmp, "q.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0',
+        'kind = "csv"\nfile = "air.csv"\ntime_column = "time_s"\nvalue_column = "ambient_C"'))
+    return ["simulate", str(scenario), "-o", str(air)], ["-o", "air.csv", "inputs"]
+
+
+for _where, _make in (("/", lambda tmp: "/"), ("a character device", lambda tmp: "/dev/null"),
+                      ("a FIFO", lambda tmp: str(fifo(tmp, "out")))):
+    for _command in ("simulate", "sweep", "place"):
+        def _build(tmp: Path, make=_make, command=_command):
+            target = make(tmp)
+            source = write(tmp, "study.toml", TINY if command == "sweep" else
+                           QUICK if command == "simulate" else
+                           (REPO / "scenarios" / "studies" / "tiny_placement.toml")
+                           .read_text(encoding="utf-8"))
+            extra = [] if command == "simulate" else ["--workers", "0", "-q"]
+            return [command, str(source), "-o", target, *extra], ["-o", Path(target).name
+                                                                   or "/"]
+        if not (_where == "/" and _command in ("simulate", "sweep")):  # those two are below
+            case(f"output: {_command} -o {_where}")(_build)
+
+
+@case("output: fingerprint --figure onto a FIFO")
+def _(tmp):
+    out = fifo(tmp, "fig.png")
+    return (["fingerprint", str(role_recording(tmp)), "--target", "drift_um", "--figure",
+             str(out)], ["--figure", "fig.png", "FIFO"])
+
+
+@case("output: calibrate -o onto a FIFO")
+def _(tmp):
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    out = fifo(tmp, "m.toml")
+    return (["calibrate", str(role_recording(tmp)), "--map", str(mapping), "-o", str(out)],
+            ["-o", "m.toml", "FIFO"])
+
+
+@case("output: simulate -o the root folder")
+def _(tmp):
+    return ["simulate", str(write(tmp, "q.toml", QUICK)), "-o", "/"], ["-o /", "root folder"]
+
+
+@case("output: sweep -o the root folder")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    return ["sweep", str(study), "-o", "/", "--workers", "0", "-q"], ["-o /", "root folder"]
+
+
+@case("output: compensate -o a character device")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    return ["compensate", str(study), "-o", "/dev/null"], ["-o /dev/null", "character device"]
+
+
+@case("output: calibrate -o naming its map")
+def _(tmp):
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    return (["calibrate", str(role_recording(tmp)), "--map", str(mapping), "-o",
+             str(mapping)], ["-o", "map.toml", "inputs"])
+
+
+# Numbers: seeds out of the generators' range, nested TOML, Unicode digits, huge scenarios.
+for _seed in ("18446744073709551616", "-1", "4294967296"):
+    def _build(tmp: Path, seed: str = _seed):
+        return [*evaluate_case(tmp, recording_text()), "--method", "kmeans", "--seed",
+                seed], ["--seed", seed, "2**32 - 1"]
+    case(f"evaluate: seed {_seed}")(_build)
+
+
+@case("paper: seed 2**64 in its config")
+def _(tmp):
+    for i in range(1, 3):
+        write(tmp, f"runs/exp{i}.csv", recording_text(i))
+    config = write(tmp, "config.toml", 'train = "exp1"\ntests = ["exp2"]\n'
+                   'seed = 18446744073709551616\n')
+    return ["paper", "--recordings", str(tmp / "runs"), "--config", str(config), "--out",
+            str(tmp / "o")], ["config.toml", "seed", "2**32 - 1"]
+
+
+@case("study: methods seed 2**64")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY.replace("[methods]", "[methods]\nseed = "
+                                                  "18446744073709551616"))
+    return ["sweep", str(study), "--workers", "0", "-q"], [str(study), "methods.seed"]
+
+
+DEEP = {"arrays": "x = " + "[" * 3000 + "]" * 3000 + "\n",
+        "inline tables": "x = " + "{a = " * 1000 + "1" + "}" * 1000 + "\n"}
+for _what, _text in DEEP.items():
+    def _scenario(tmp: Path, text: str = _text):
+        scenario = write(tmp, "deep.toml", QUICK + text)
+        return ["simulate", str(scenario), "-o", "out.csv"], [str(scenario), "nested too deeply"]
+
+    def _study(tmp: Path, text: str = _text):
+        study = write(tmp, "deep.toml", text + TINY)
+        return ["sweep", str(study), "--workers", "0", "-q"], [str(study), "nested too deeply"]
+
+    def _map(tmp: Path, text: str = _text):
+        mapping = write(tmp, "deep.toml", text + CALIBRATION_MAP)
+        return (["calibrate", str(role_recording(tmp)), "--map", str(mapping), "-o", "m.toml"],
+                [str(mapping), "nested too deeply"])
+    case(f"scenario: deeply nested {_what}")(_scenario)
+    case(f"study: deeply nested {_what}")(_study)
+    case(f"calibrate: map with deeply nested {_what}")(_map)
+
+
+for _label, _cell in (("full-width digits", "１８"), ("Arabic-Indic digits", "١٨"),
+                      ("superscript digits", "¹⁸")):
+    def _build(tmp: Path, cell: str = _cell):
+        write(tmp, "air.csv", f"time_s,ambient_C\n0,18\n300,{cell}\n600,19\n")
+        scenario = write(tmp, "q.toml", QUICK.replace(
+            'kind = "constant"\ntemperature_C = 18.0',
+            'kind = "csv"\nfile = "air.csv"\ntime_column = "time_s"\n'
+            'value_column = "ambient_C"'))
+        return ["simulate", str(scenario), "-o", "out.csv"], ["air.csv", "line 3", "ASCII"]
+    case(f"ambient CSV: {_label}")(_build)
+
+
+@case("recording: a 3 GB sparse file")
+def _(tmp):
+    big = tmp / "big.csv"
+    with open(big, "wb") as handle:  # sparse: no disk space used
+        handle.truncate(3 * 1024**3)
+    return ["plot", str(big), "-o", "fig.png"], ["big.csv", "too large"]
+
+
+@case("recording: a 200 000-character header field")
+def _(tmp):
+    rec = write(tmp, "rec.csv", "time_s," + "T" * 200_000 + ",drift_um\n0,1,0\n60,2,1\n")
+    return ["plot", str(rec), "-o", "fig.png"], ["rec.csv", "line 1", "field limit"]
+
+
+@case("scenario: 7.8 M samples (90 days at 1 s)")
+def _(tmp):
+    scenario = write(tmp, "big.toml", QUICK.replace("duration_s = 600", "duration_s = 7776000")
+                     .replace("step_s = 10.0", "step_s = 1.0")
+                     .replace("sample_interval_s = 60", "sample_interval_s = 1"))
+    return ["simulate", str(scenario), "-o", "out.csv"], [str(scenario), "sample_interval_s",
+                                                           "at most 1,000,000"]
+
+
+for _command in ("sweep", "place", "compensate"):
+    def _build(tmp: Path, command: str = _command):
+        """A study without -o wrote into results/<name> of the current folder."""
+        text = {"sweep": TINY, "place": (REPO / "scenarios" / "studies" / "tiny_placement.toml")
+                .read_text(encoding="utf-8"),
+                "compensate": (REPO / "scenarios" / "studies" / "compensate_month.toml")
+                .read_text(encoding="utf-8")}[command]
+        study = write(tmp, "study.toml", text)
+        return [command, str(study)], [str(study), "-o/--out", "results/"]
+    case(f"study: {_command} without -o")(_build)
+
+
+@case("study: inproc Dask address")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    return (["sweep", str(study), "-o", "out", "--dask-address", "inproc://x"],
+            ["--dask-address", "inproc://x", "tcp://HOST:PORT"])
+
+
 # --------------------------------------------------------------------------- the test
 
 
@@ -549,8 +876,8 @@ def snapshot(folder: Path) -> set[str]:
     return {str(p.relative_to(folder)) for p in folder.rglob("*")}
 
 
-def test_there_are_at_least_60_hostile_inputs():
-    assert len(CASES) >= 60, len(CASES)
+def test_there_are_at_least_200_hostile_inputs():
+    assert len(CASES) >= 200, len(CASES)
     commands = {name.split(":")[0] for name in CASES}
     assert {"fingerprint", "plot", "calibrate", "paper", "evaluate", "recording"} <= commands
 

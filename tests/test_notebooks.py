@@ -61,4 +61,25 @@ def test_render_writes_each_notebook_as_html_with_its_figures_and_an_index(tmp_p
     html = (out / "01_tiny.html").read_text(encoding="utf-8")
     assert "<h1" in html and "data:image/png;base64" in html
     assert 'href="01_tiny.html"' in (out / "index.html").read_text(encoding="utf-8")
-    assert (out / "work" / "01_tiny" / "work" / "01").is_dir()  # ran in its own folder
+    assert (out / "work" / "01_tiny" / "01").is_dir()  # ran in its own folder
+
+
+def test_start_keeps_a_students_files_and_writes_nothing_into_the_current_folder(
+        tmp_path, monkeypatch):
+    """``start`` emptied ``work/NN`` under the current folder on every run: a student's
+    exercise files there were lost, and the outputs landed wherever the notebook ran."""
+    from spindlebench.commands import course
+
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    monkeypatch.setenv("SPINDLEBENCH_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv(course.COURSE_DIR_ENV, raising=False)
+    folder = course.start("01")
+    assert folder == tmp_path / "cache" / "course" / "01"
+    (folder / "my_exercise.py").write_text("mine", encoding="utf-8")
+    assert course.start("01") == folder
+    assert (folder / "my_exercise.py").read_text(encoding="utf-8") == "mine"
+    given = course.start("02", tmp_path / "given")
+    assert given == tmp_path / "given" / "02" and given.is_dir()
+    assert list(here.iterdir()) == []

@@ -168,3 +168,63 @@ def test_the_shared_speed_axis_shows_the_fastest_recording():
         assert all(ax.get_ylim()[1] > 4000 for ax in inputs)
     finally:
         plt.close(fig)
+
+
+def long_named(n: int = 40) -> pd.DataFrame:
+    """Another logger's names: longer line-end labels than T1 … T20."""
+    t = np.arange(n) * 300.0
+    return pd.DataFrame({"time_s": t, "Spindle front [degC]": 20 + t / 3600,
+                         "Headstock side [degC]": 20 + t / 7200, "dz [um]": t / 600})
+
+
+def test_long_line_end_labels_stay_inside_the_figure_and_clear_of_the_next_column():
+    """Issue 25: the labels had a fixed 0.55 in: ``Spindle front [degC]`` was clipped."""
+    import matplotlib.pyplot as plt
+
+    fig = recordings_figure([long_named(), long_named()], ["a", "b"], target="dz [um]")
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        width = fig.bbox.width
+        left_panel, right_panel = fig.axes[0], fig.axes[1]  # row-major: the top row
+        assert right_panel.get_position().x0 > left_panel.get_position().x1
+        for ax in (left_panel, right_panel):
+            for text in ax.texts:
+                if not hasattr(text, "xyann"):
+                    continue
+                box = text.get_window_extent(renderer)
+                assert box.x1 <= width, (text.get_text(), box.x1, width)
+                if ax is left_panel:  # left of the next column's tick labels
+                    ticks = right_panel.get_tightbbox(renderer)
+                    assert box.x1 < ticks.x0, text.get_text()
+    finally:
+        plt.close(fig)
+
+
+def test_the_recording_title_is_above_the_panel_label_and_the_part_legend_colours_differ():
+    """Issue 25: in exp1_overview.png the title sat on the panel label's line, and the
+    legend's darkest red (spindle front) and darkest purple (headstock) looked alike."""
+    import matplotlib.pyplot as plt
+
+    fig = recordings_figure([full_frame()], ["exp1"])
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        top = fig.axes[0]
+        (title,) = [t for t in top.texts if t.get_text() == "exp1"]
+        label = top.title if top.get_title() else top._left_title
+        assert title.get_window_extent(renderer).y0 >= \
+            top._left_title.get_window_extent(renderer).y1 - 0.5, label
+        colours = [np.array(to_rgba(h.get_color())[:3]) for h in
+                   top.get_legend().get_lines()]
+        assert len(colours) == 2 and np.abs(colours[0] - colours[1]).max() > 0.3
+    finally:
+        plt.close(fig)
+
+
+def test_every_placement_method_has_its_own_colour():
+    from spindlebench.studies.placement.schematic import method_colour
+
+    methods = ["fuzzy", "greedy", "exhaustive", "kmeans+grey", "lasso", "ward", "fcm+grey"]
+    colours = [method_colour(m, methods) for m in methods]
+    assert len(set(colours)) == len(methods)  # "kmeans+grey" and "lasso" were both purple

@@ -13,7 +13,11 @@ from spindlebench.commands.main import main
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.studies.placement.candidates import candidate_set
-from spindlebench.studies.placement.placement_file import fmu_nodes, load_placement_study
+from spindlebench.studies.placement.placement_file import (
+    fmu_nodes,
+    is_rotating,
+    load_placement_study,
+)
 from spindlebench.studies.placement.placement_run import PlacementStudyRun
 
 TINY = REPO / "scenarios" / "studies" / "tiny_placement.toml"
@@ -32,8 +36,28 @@ def tiny_run(tmp_path_factory):
 def test_shipped_studies_load():
     for path in (TINY, SHIPPED):
         study = load_placement_study(path)
-        assert study.nodes == tuple(fmu_nodes(DEFAULT_FMU))
+        assert study.nodes == tuple(n for n in fmu_nodes(DEFAULT_FMU) if not is_rotating(n))
         assert study.test_replicas and study.design_replica not in study.test_replicas
+
+
+def test_rotating_parts_are_no_candidates_unless_a_telemetry_study_asks(tmp_path, tiny_run):
+    """``place`` recommended sensors on the spindle shaft and the tool, where no probe can be
+    glued; the README now names the candidates and what was left out."""
+    study = load_placement_study(TINY)
+    rotating = [n for n in fmu_nodes(DEFAULT_FMU) if is_rotating(n)]
+    assert {"tool", "spindle_shaft_1", "spindle_shaft_12", "z_screw"} <= set(rotating)
+    assert not set(rotating) & set(study.nodes)
+    assert study.rotating_excluded == tuple(rotating)
+    telemetry = tmp_path / "telemetry.toml"
+    telemetry.write_text(TINY.read_text(encoding="utf-8").replace(
+        "[placement]", "[placement]\nrotating_nodes = true"), encoding="utf-8")
+    assert load_placement_study(telemetry).nodes == tuple(fmu_nodes(DEFAULT_FMU))
+    out, table = tiny_run
+    readme = (out / "README.md").read_text(encoding="utf-8")
+    assert f"- Candidate nodes ({len(study.nodes)}): front_bearing," in readme
+    assert "Rotating parts left out" in readme and "spindle_shaft_12" in readme
+    chosen = ";".join(table["variables"].fillna("")).replace("-", ";").split(";")
+    assert not [n for n in chosen if n and is_rotating(n)]
 
 
 def test_place_writes_every_output(tiny_run):

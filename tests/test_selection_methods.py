@@ -26,7 +26,11 @@ from spindlebench.selection.clustering import (
 )
 from spindlebench.selection.estimators import RiseRegressor
 from spindlebench.selection.grey import grey_relational_grade
-from spindlebench.selection.regressors import PLSRiseRegressor, RidgeRiseRegressor
+from spindlebench.selection.registry import fit_regressor
+from spindlebench.selection.regressors import (
+    PLSRiseRegressor,
+    RidgeRiseRegressor,
+)
 from spindlebench.selection.selectors import (
     ClusterSelector,
     GreedyForwardSelector,
@@ -526,3 +530,13 @@ def parse_label(label):
     from spindlebench.selection.registry import parse_method
 
     return parse_method(label)
+
+
+def test_a_ridge_fit_reports_its_penalty_and_ols_none():
+    """Issue 25: the penalty (and whether it sits at its grid's edge) goes into the JSON."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(60, 3))
+    y = X @ [2.0, -1.0, 0.5] + 0.5 * rng.normal(size=60)
+    fit = fit_regressor("ridge", X, y)
+    assert fit.penalty["alpha"] > 0 and set(fit.penalty) == {"alpha", "grid", "at_edge"}
+    assert fit_regressor("ols", X, y).penalty is None

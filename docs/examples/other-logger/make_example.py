@@ -26,12 +26,12 @@ NAMES = {
     "time_s": "Time [s]",
     "spindle_speed_rpm": "Spindle speed [rpm]",
     "T1": "Spindle front [degC]",
-    "T2": "Spindle rear [degC]",
-    "T6": "Motor housing [degC]",
-    "T8": "Headstock top [degC]",
-    "T10": "Column front [degC]",
-    "T13": "Bed [degC]",
-    "T16": "Workshop air [degC]",
+    "T2": "Seat flange [degC]",
+    "T6": "Headstock side [degC]",
+    "T8": "Spindle motor [degC]",
+    "T10": "Workshop air [degC]",
+    "T13": "X motor [degC]",
+    "T16": "Y motor [degC]",
     "drift_um": "dz [um]",
 }
 

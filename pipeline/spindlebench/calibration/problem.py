@@ -419,23 +419,31 @@ class StepFailedError(SpindlebenchError):
     """A model step did not converge at some parameter values."""
 
 
-def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
-    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf').
+def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose, progress=False):
+    """Bounded Gauss-Newton with a trust region (SciPy's ``least_squares``, 'trf');
+    ``progress``: a bar of model evaluations (at most ``max_iter``) with the cost.
 
     A trial point whose integration fails (a step that does not converge near a bound) is
     rejected, not the fit: its residuals are returned as infinite, on which 'trf' shrinks
     the trust region to a quarter of the step and tries again. Only a failure at the start
     values is an error. The count of rejected points is in the returned message.
     """
+    from spindlebench.core.progress import bar as progress_bar
+
     cache: dict[bytes, Evaluation] = {}
     rejected = [0]
     size = [0]
+    shown = progress_bar(max_iter, "calibrate", "evaluations", progress)
 
     def at(theta: np.ndarray) -> Evaluation:
         key = theta.tobytes()
         if key not in cache:
             cache.clear()
             cache[key] = evaluate(d, series_list, layout, theta)
+            if shown is not None:
+                r = cache[key].residuals
+                shown.set_postfix_str(f"cost {0.5 * float(r @ r):.4g}", refresh=False)
+                shown.update(1)
         return cache[key]
 
     lower = np.full(layout.size, -np.inf)
@@ -452,11 +460,15 @@ def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
         size[0] = len(values)
         return values
 
-    result = scipy.optimize.least_squares(
-        residuals, theta0, jac=lambda t: at(t).jacobian,
-        bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
-        xtol=1e-8, ftol=1e-7, gtol=1e-8, verbose=2 if verbose else 0,
-    )
+    try:
+        result = scipy.optimize.least_squares(
+            residuals, theta0, jac=lambda t: at(t).jacobian,
+            bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=max_iter,
+            xtol=1e-8, ftol=1e-7, gtol=1e-8, verbose=2 if verbose else 0,
+        )
+    finally:
+        if shown is not None:
+            shown.close()
     message = str(result.message)
     if rejected[0]:
         message += f" ({rejected[0]} trial point(s) rejected: the model step failed there)"
@@ -464,19 +476,20 @@ def _gauss_newton(d, series_list, layout, theta0, max_iter, verbose):
 
 
 def calibrate(d: Discretisation, series_list: Sequence[Series], *, method: str = "gauss-newton",
-              max_iter: int = 50, verbose: bool = False) -> Fit:
-    """Fit ``d.fit`` (and initial states, unknown ambients, probe offsets) to the recordings."""
+              max_iter: int = 50, verbose: bool = False, progress: bool = False) -> Fit:
+    """Fit ``d.fit`` (and initial states, unknown ambients, probe offsets) to the recordings;
+    ``progress``: a bar of the Gauss-Newton's model evaluations on stderr."""
     with threadpool_limits(1):  # 94 x 94 solves: threads only contend (and see docs: SIGSEGV)
-        return _calibrate(d, series_list, method, max_iter, verbose)
+        return _calibrate(d, series_list, method, max_iter, verbose, progress)
 
 
-def _calibrate(d, series_list, method, max_iter, verbose) -> Fit:
+def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit:
     started = time.perf_counter()
     layout = Layout.of(d, series_list)
     theta0 = layout.start(series_list)
     if method == "gauss-newton":
         theta, evaluations, status = _gauss_newton(d, series_list, layout, theta0, max_iter,
-                                                    verbose)
+                                                    verbose, progress)
     elif method == "ipopt":
         from spindlebench.calibration.ipopt import solve_ipopt
 

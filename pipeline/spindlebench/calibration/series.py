@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -113,12 +114,28 @@ def noise_estimate(values: np.ndarray, kind: str) -> float:
     return float(max(mad, MIN_NOISE[kind]))
 
 
+#: |°C| within which every mapped temperature starting means "rises from zero", not °C.
+RISE_START_C = 0.5
+
+
+def refuse_rises(frame: Any, columns: list[str], path: Path) -> None:
+    """The model is integrated from absolute temperatures (°C): a recording whose every
+    temperature column starts at 0 (rises, not temperatures) fitted a machine at 0 °C
+    without a word."""
+    starts = [float(frame[c].to_numpy(dtype=float)[0]) for c in columns]
+    if starts and all(abs(v) <= RISE_START_C for v in starts):
+        raise SpindlebenchError(
+            f"recording {path}: every mapped temperature column starts at 0 °C "
+            f"({', '.join(columns[:3])}{', …' if len(columns) > 3 else ''}): rises, not "
+            "temperatures; the calibration needs absolute °C (add the start temperature)")
+
+
 def check_roles(path: Path, roles: ColumnRoles) -> tuple[str, str, str]:
     """The delimiter, decimal mark and time column of a recording, from its header alone:
     ``calibrate`` checks them before the slow model translation."""
-    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
+    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal, roles.encoding)
     time_column = roles.time_column or TIME_COLUMN
-    if time_column not in read_header(path, delimiter):
+    if time_column not in read_header(path, delimiter, roles.encoding):
         raise SpindlebenchError(f"recording {path}: no time column {time_column!r}; the "
                                 "calibration integrates the model over time and needs one: "
                                 "name it with --time-column")
@@ -138,10 +155,10 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
     delimiter, decimal, time_column = check_roles(path, roles)
     frame = read_recording(path, allow_missing=True,
                            columns=[*recording_map.columns(), time_column],
-                           delimiter=delimiter, decimal=decimal)
+                           delimiter=delimiter, decimal=decimal, encoding=roles.encoding)
     header = frame.attrs.get("header", list(frame.columns))
     ignored = recording_map.check_columns(header, path, time_column)
-    frame = as_time_s(frame, time_column, path)
+    frame = as_time_s(frame, time_column, path, roles.time_unit)
     refuse_implausible_temperatures(frame, list(recording_map.temperatures), str(path))
     if recording_map.error_column:
         refuse_target_copies(frame, recording_map.error_column, list(recording_map.temperatures),
@@ -175,6 +192,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
             inputs[i] = column
         else:
             inputs[i] = source
+    refuse_rises(frame, list(recording_map.temperatures), path)
     channels = []
     for column, output in recording_map.temperatures.items():
         values = measured[column]

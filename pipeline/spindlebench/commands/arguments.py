@@ -10,6 +10,7 @@ import functools
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import NoReturn
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.machines.variants import add_machine_argument
@@ -25,7 +26,8 @@ def add_study_file_arguments(parser: argparse.ArgumentParser, example: str) -> N
     every command that runs a study file (``sweep``, ``place``, ``compensate``)."""
     parser.add_argument("study", type=Path, help=f"study file (e.g. {example})")
     parser.add_argument("-o", "--out", type=Path, default=None,
-                        help="results folder (default: results/<study name>)")
+                        help="results folder (required: e.g. results/<study name>; a study "
+                        "writes nowhere else)")
 
 
 def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
@@ -35,7 +37,8 @@ def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
                         help="local worker processes (default: all cores; 0 = in-process)")
     parser.add_argument("--dask-address", default=None, metavar="tcp://HOST:PORT",
                         help="run on an existing Dask distributed cluster instead")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("-q", "--quiet", "--no-progress", dest="no_progress",
+                        action="store_true", help="no progress bar or step lines on stderr")
     add_machine_argument(parser, "machine variant of every run",
                          "the study's [study] machine, else 'default'")
 
@@ -45,19 +48,24 @@ def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) 
     if args.workers is not None and args.dask_address:
         raise SpindlebenchError("give either --workers or --dask-address, not both")
     if args.out is not None:
-        return args.out
+        from spindlebench.core.files import check_output
+
+        return check_output(args.out, "-o", [args.study], folder=True)
     return default_results_folder(args.study, study_name(args.study))
 
 
-def default_results_folder(study_path: Path, name: str) -> Path:
-    """``results/<name>`` for a study without ``-o``, or one line if the study's name cannot
-    be a folder there."""
-    # The name becomes a folder under results/: '../x', 'a/b' or '' would write elsewhere.
+def default_results_folder(study_path: Path, name: str) -> NoReturn:
+    """A study without ``-o``: one line asking for it, suggesting ``results/<name>``.
+
+    It wrote into ``results/<name>`` of whatever folder it was run from (a checkout, a
+    student's folder): a command writes only where it is told. The study is read first, so
+    its own errors come first; a name that cannot be a folder is said so."""
     if not FOLDER_NAME.fullmatch(name) or set(name) == {"."}:
         raise SpindlebenchError(
             f"{study_path}: key 'study.name': {name!r} cannot name a folder under results/ "
             "(use only letters, digits, '.', '_' and '-'), or give -o/--out")
-    return Path("results") / name
+    raise SpindlebenchError(f"{study_path}: give the results folder with -o/--out (e.g. -o "
+                            f"results/{name}); a study writes only into the folder it is given")
 
 
 #: What a study kind writes over a population's machines once each has run (None: the

@@ -8,12 +8,12 @@ The build itself is ``spindlebench.model.build.build_fmu``.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 from fmpy import read_model_description
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.model.build import build_fmu
@@ -49,6 +49,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="also write the FMI Cross-Check folders (me and cs: the FMU, reference results, "
         "options and inputs of the paper's experiment 1) under DIR",
     )
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no step lines on stderr while it builds")
     parser.set_defaults(func=run)
 
 
@@ -73,14 +75,15 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
                                 f"{args.segments}")
     target = output_path(args.out, args.segments)
-    started = time.perf_counter()
-    path = build_fmu(args.models, target, segments=args.segments)
-    elapsed = time.perf_counter() - started
+    stages = Stages("build", enabled=for_terminal(args.quiet))
+    path = build_fmu(args.models, target, segments=args.segments, say=stages)
+    elapsed = stages.seconds
     description = read_model_description(str(path))
     nodes = sum(v.name.startswith("node_") for v in description.modelVariables)
     print(
         f"built {path}: {args.segments} segments per part, {nodes} nodes, "
-        f"{len(description.derivatives)} states, {elapsed:.1f} s, sha256 {sha256_file(path)[:12]}"
+        f"{len(description.derivatives)} states, {elapsed:.1f} s in all, "
+        f"sha256 {sha256_file(path)[:12]}"
     )
     if getattr(args, "cross_check", None):
         from spindlebench.core.paths import SCENARIOS_DIR

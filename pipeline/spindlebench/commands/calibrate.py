@@ -23,10 +23,13 @@ from spindlebench.calibration.problem import Discretisation, Fit, calibrate
 from spindlebench.calibration.series import check_roles, load_series
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.paths import MODELS_DIR
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
+from spindlebench.formats.toml import load_toml
 from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument, load_machine
 from spindlebench.model import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
 from spindlebench.model.equations import explicit_ode
@@ -65,7 +68,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "parameters")
     parser.add_argument("--description", default=None, help="machine description")
     parser.add_argument("--verbose", action="store_true", help="print the solver's progress")
-    add_role_arguments(parser, sensors=False, exclude=False)  # the map names the columns
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no step lines or progress bar on stderr")
+    # the map names the columns
+    add_role_arguments(parser, sensors=False, exclude=False, speed=False)
     parser.set_defaults(func=_run)
 
 
@@ -94,6 +100,9 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".toml":
         raise SpindlebenchError(f"-o {out}: a machine file ends in .toml")
+    report_path, figure_path = report.report_paths(out)
+    for written in (out, report_path, figure_path):
+        check_output(written, "-o", [*args.recordings, args.map_file])
     if not 2 <= args.segments <= MAX_SEGMENTS:
         raise SpindlebenchError(f"--segments {args.segments}: must be in [2, {MAX_SEGMENTS}]")
     if args.step_s is not None and not args.step_s > 0:
@@ -101,7 +110,11 @@ def _run(args: argparse.Namespace) -> int:
     roles = ColumnRoles.from_args(args)
     for path in args.recordings:  # a wrong file or time column before the slow translation
         check_roles(Path(path), roles)
+    load_toml(args.map_file, "map")  # an unreadable map too (its names need the model)
+    stages = Stages("calibrate", enabled=for_terminal(args.quiet))
+    stages(f"translating the model in {args.models} ({args.segments} segments per part)")
     ode = explicit_ode(args.models, segments=args.segments)
+    stages(f"reading {len(args.recordings)} recording(s) through {args.map_file}")
     recording_map = read_map(args.map_file, ode.outputs)
     fit_names = check_fit_names(
         split_list_flag("--fit", args.fit, "parameter") if args.fit is not None else DEFAULT_FIT,
@@ -116,8 +129,10 @@ def _run(args: argparse.Namespace) -> int:
     machine = load_machine(args.machine)
     base = ode.parameter_vector(**machine.parameters)
     discretisation = Discretisation(ode, fit_names, base)
+    stages(f"fitting {len(fit_names)} parameter(s) by {args.method} (at most "
+           f"{args.max_iter} model evaluations)")
     fit = calibrate(discretisation, series_list, method=args.method, max_iter=args.max_iter,
-                    verbose=args.verbose)
+                    verbose=args.verbose, progress=for_terminal(args.quiet) and not args.verbose)
     for line in summary_lines(fit):
         print(line)
     model_file = Path(args.models) / MODEL_FILE
@@ -146,15 +161,17 @@ def _run(args: argparse.Namespace) -> int:
     if args.design:
         from spindlebench.calibration.design import design_lines, rank_excitations
 
+        stages("ranking excitations (--design)")
         ranking = rank_excitations(discretisation, fit, series_list)
         content["design"] = ranking
         for line in design_lines(ranking):
             print(line)
+    stages("writing the machine file, its report and figure")
     report.figure(fit, figure_path, title=f"{name}: measured (dots) vs calibrated (lines)")
     report.write_report(report_path, content)
     atomic.write_text(out, machine_text)
     print(f"wrote {out} (+ {report_path.name}, {figure_path.name}); "
-          f"{fit.evaluations} of at most {args.max_iter} evaluations, {fit.seconds:.0f} s; "
-          f"stopped: {content['stop_reason']}")
+          f"{fit.evaluations} of at most {args.max_iter} evaluations, fit {fit.seconds:.0f} s, "
+          f"{stages.seconds:.0f} s in all; stopped: {content['stop_reason']}")
     return 0
 

@@ -10,13 +10,14 @@ residual over the run) and ``provenance.json``.
 from __future__ import annotations
 
 import argparse
-import sys
 from dataclasses import replace
 
 import pandas as pd
 
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
+from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
@@ -41,25 +42,33 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="override [compensate] days: 'continuous' (one machine, the "
                         "state carried from day to day) or 'cold-starts' (every day on its "
                         "own)")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no step lines on stderr")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Load, simulate, write."""
+    if args.out is not None:  # before the study is read: a device or / is never a folder
+        check_output(args.out, "-o", [args.study], folder=True)
     study = load_compensation(args.study)
     if args.days is not None and args.days != study.days:
         study = replace(study, days=args.days)
     fmu = check_fmu(study.family)
     out = args.out if args.out is not None else default_results_folder(args.study, study.name)
+    check_output(out, "-o", [args.study], folder=True)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
-    truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
+    stages = Stages("compensate", enabled=for_terminal(getattr(args, "quiet", False)))
+    truths = simulate_days(study, fmu, progress=stages)
+    stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
     outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
     days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
     series = pd.concat([part for o in outcomes.values() for part in o.series],
                        ignore_index=True)
     table = summary(study, days, series)
+    stages(f"writing tables, figure and README into {out}")
     write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
     print(summary_text(table))
-    print(f"wrote {out / 'README.md'} and 5 more files")
+    print(f"wrote {out / 'README.md'} and 5 more files; {stages.seconds:.1f} s in all")
     return 0

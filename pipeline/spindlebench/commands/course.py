@@ -8,23 +8,29 @@ same way, so the course cannot rot. ``make notebooks`` calls::
 
     python -m spindlebench.commands.course results/notebooks
 
-Each notebook runs in its own working folder (``<out>/work/<notebook>/``), where it writes
-its recordings and figures; it finds the shipped scenarios and the FMU through
-``spindlebench.core.paths``.
+Each notebook writes its recordings and figures into its own working folder, which
+``start`` makes (``<base>/<NN>``): ``base`` is the folder given to ``start``, else
+``$SPINDLEBENCH_COURSE_DIR`` (``execute`` sets it to ``<out>/work/<notebook>`` for
+``make notebooks`` and the tests), else ``course/`` in the per-user cache
+(``core.paths.user_cache_dir``). Never the folder the notebook runs from, and nothing is deleted:
+a student's own files beside the outputs stay (the commands replace only their own outputs).
+It finds the shipped scenarios and the FMU through ``spindlebench.core.paths``.
 """
 
 from __future__ import annotations
 
-import shutil
+import os
 import sys
 from pathlib import Path
 
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.paths import REPO_ROOT
+from spindlebench.core.paths import REPO_ROOT, user_cache_dir
 
 #: The notebooks live in the checkout, beside the package (not in an installed wheel).
 NOTEBOOKS = (REPO_ROOT or Path.cwd()) / "notebooks"
+#: Names the folder the notebooks' working folders go into (see ``work_base``).
+COURSE_DIR_ENV = "SPINDLEBENCH_COURSE_DIR"
 #: Seconds one cell may take before the run is stopped as hung.
 CELL_TIMEOUT_S = 600
 
@@ -65,9 +71,22 @@ def spindlebench(*arguments: object) -> None:
         raise RuntimeError(f"spindlebench {' '.join(words)} failed (status {status})")
 
 
-def start(name: str) -> Path:
-    """Begin a notebook: its working folder for its own files, emptied first
-    (``work/<name>`` under the folder the notebook runs in), and figures shown inline.
+def work_base(base: str | Path | None = None) -> Path:
+    """The folder the notebooks' working folders go into: ``base``, else
+    ``$SPINDLEBENCH_COURSE_DIR``, else ``course/`` in the per-user cache."""
+    if base is not None:
+        return Path(base)
+    return Path(os.environ.get(COURSE_DIR_ENV) or user_cache_dir() / "course")
+
+
+def start(name: str, base: str | Path | None = None) -> Path:
+    """Begin a notebook: its working folder ``<base>/<name>`` (see ``work_base``), made if
+    missing and never emptied, and figures shown inline.
+
+    It deleted ``work/<name>`` under the current folder before: a student's own files there
+    were lost. Now nothing is deleted; each command of the notebook replaces its own outputs
+    (atomically), a study resumes its folder. To start a notebook afresh, delete the folder
+    it prints.
 
     The figure modules select matplotlib's file-only Agg backend when they are imported
     (some only when their command runs), which would hide the notebook's own figures; the
@@ -77,16 +96,16 @@ def start(name: str) -> Path:
 
     build_parser()  # imports every command module now, before the backend is chosen
     _figures_inline()
-    folder = Path.cwd() / "work" / name
-    if folder.exists():
-        shutil.rmtree(folder)
-    folder.mkdir(parents=True)
+    folder = work_base(base) / name
+    folder.mkdir(parents=True, exist_ok=True)
+    print(f"this notebook writes its files into {folder}")
     return folder
 
 
 def execute(path: Path, cwd: Path):
-    """Run the notebook ``path`` with ``cwd`` as its working directory; return it with its
-    outputs. A failing cell raises ``nbclient.exceptions.CellExecutionError`` naming it."""
+    """Run the notebook ``path`` with ``cwd`` as its working directory and the base of its
+    working folder (``$SPINDLEBENCH_COURSE_DIR``); return it with its outputs. A failing cell
+    raises ``nbclient.exceptions.CellExecutionError`` naming it."""
     import jupytext
     from nbclient import NotebookClient
 
@@ -94,7 +113,7 @@ def execute(path: Path, cwd: Path):
     cwd.mkdir(parents=True, exist_ok=True)
     client = NotebookClient(notebook, timeout=CELL_TIMEOUT_S, kernel_name="python3",
                             resources={"metadata": {"path": str(cwd)}})
-    client.execute()
+    client.execute(env={**os.environ, COURSE_DIR_ENV: str(cwd)})
     return notebook
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from spindlebench.core import atomic, provenance
+from spindlebench.core.files import check_output
 from spindlebench.core.names import DEFAULT_SIMILARITY, MISSING_MODES
 from spindlebench.formats.recording import MissingValueError, RecordingTable, read_header
 from spindlebench.formats.roles import (
@@ -105,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         raise SelectionError(f"--clusters: must be at least 1, got {args.clusters}")
     if args.json is not None and args.json.is_dir():
         raise SelectionError(f"--json {args.json}: is a directory; give a file OUT.json")
+    if args.json is not None:
+        check_output(args.json, "--json", [args.train, *args.test])
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)

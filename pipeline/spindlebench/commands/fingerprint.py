@@ -29,6 +29,7 @@ from typing import Any
 
 from spindlebench.core import atomic, provenance
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.listflags import expand_folders
 from spindlebench.formats.recording import TIME_COLUMN
 from spindlebench.formats.roles import (
@@ -92,11 +93,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--machine", metavar="NAME",
                         help="compare with this machine's paper experiments instead of the "
                         "default's (a name from scenarios/machines/ or a .toml file; "
-                        "simulated once into results/fingerprint_reference/NAME/)")
+                        "simulated once into fingerprint_reference/NAME/ of the per-user cache, "
+                        "~/.cache/spindlebench or $SPINDLEBENCH_CACHE)")
     parser.add_argument("--reference", type=Path, metavar="DIR",
                         help="recordings of the default machine to compare with (default: "
                         "the paper experiments simulated once with the committed FMU into "
-                        "results/fingerprint_reference/)")
+                        "fingerprint_reference/ of the per-user cache)")
     parser.set_defaults(func=run)
 
 
@@ -121,6 +123,9 @@ def run(args: argparse.Namespace) -> int:
         if out is not None and out.is_dir():
             raise SpindlebenchError(f"{out}: is a directory")
     args.recordings = recording_files(args.recordings)
+    for out, flag in ((args.json, "--json"), (args.figure, "--figure")):
+        if out is not None:
+            check_output(out, flag, args.recordings)
     results = []
     for path in args.recordings:
         result, choice = fingerprint_recording(path, args.target, roles)

@@ -8,6 +8,7 @@ are ``commands.arguments``.
 from __future__ import annotations
 
 import argparse
+import time
 from pathlib import Path
 
 from spindlebench.commands.arguments import register_study_command
@@ -35,6 +36,7 @@ def _family(path: Path) -> SweepStudy:
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    started = time.perf_counter()
     outcome = run_placement(args.study, out, workers=args.workers,
                             dask_address=args.dask_address, progress=not args.no_progress,
                             machine=machine)
@@ -42,7 +44,8 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     print(f"{'resumed' if outcome.resumed else 'ran'}: {outcome.stats.total('simulation')} "
           f"simulation(s) in {outcome.stats.seconds:.1f} s; {len(found)} placement(s) found "
           f"in {outcome.search_seconds:.1f} s ({len(outcome.placements) - len(found)} "
-          f"skipped); {len(outcome.failures)} failed simulation(s)")
+          f"skipped); {len(outcome.failures)} failed simulation(s); "
+          f"{time.perf_counter() - started:.1f} s in all")
     print(search_times(outcome.placements))
     print(report_best(outcome.table))
     print(f"results: {outcome.out_dir / 'README.md'}")

@@ -15,6 +15,7 @@ import argparse
 from pathlib import Path
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.formats.recording import DRIFT_COLUMN, true_column
 from spindlebench.formats.roles import (
     ColumnRoles,
@@ -50,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"-o {out}: the figure is written as PNG; name it *.png")
     if out.is_dir():
         raise SpindlebenchError(f"-o {out}: is a directory; give a file name FIG.png")
+    check_output(out, "-o", recordings)
     roles = ColumnRoles.from_args(args)
     frames, sensors = [], []
     for path in recordings:

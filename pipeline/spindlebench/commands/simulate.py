@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_output
 from spindlebench.core.listflags import expand_folders
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import (
@@ -19,6 +20,7 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.testbench.batch import check_batch, plan_batch
+from spindlebench.testbench.scenario import MeasuredAmbient
 from spindlebench.testbench.simulate import record_run
 
 
@@ -55,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if args.seed is not None and args.seed < 0:
         raise SpindlebenchError(f"--seed: must be >= 0, got {args.seed}")
     files = _scenario_files(args.scenarios)
+    check_output(args.output, "-o", folder=True)  # not the root folder, a device or a FIFO
     targets = _output_targets(files, Path(args.output))
     if args.plot:
         for target in targets:
@@ -63,6 +66,16 @@ def run(args: argparse.Namespace) -> int:
                                         "--plot writes the figure there (choose another -o)")
     # validate all first: a typo in the last file should cost nothing
     plan = plan_batch(files, targets, args.machine)
+    inputs = [*files, *(s.ambient.file for s in plan.scenarios if isinstance(s.ambient,
+                                                                             MeasuredAmbient)),
+              *(s.initial.from_file for s, ours in zip(plan.scenarios, plan.state_from_batch,
+                                                        strict=True)
+                if s.initial.from_file and not ours),  # an earlier run's sidecar is ours
+              *([args.fmu] if args.fmu else [])]
+    for target in targets:  # the recording, its sidecar, its figure: none over an input
+        for written in (target, target.with_suffix(".json"),
+                        *([target.with_suffix(".png")] if args.plot else [])):
+            check_output(written, "-o", inputs)
     check_batch(plan, args.fmu)
     show_progress = not args.quiet and sys.stderr.isatty()
     continued = {p for p in plan.producers if p is not None}

@@ -7,6 +7,7 @@ The sweep itself is ``studies.sweep.sweep_run``; the options every study command
 from __future__ import annotations
 
 import argparse
+import time
 from pathlib import Path
 
 from spindlebench.commands.arguments import register_study_command
@@ -28,6 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    started = time.perf_counter()
     outcome = run_sweep(args.study, out, workers=args.workers,
                         dask_address=args.dask_address, progress=not args.no_progress,
                         machine=machine)
@@ -38,5 +40,5 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
           f"simulation(s) and {outcome.evaluated} evaluation(s) in "
           f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
           f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
-          f"{failed} with errors")
+          f"{failed} with errors; {time.perf_counter() - started:.1f} s in all")
     print(f"results: {outcome.out_dir / 'README.md'}")

@@ -116,3 +116,6 @@ DEFAULT_REGRESSOR = "ols"
 #: The seed of the seeded methods (fcm, kmeans, stability, mi, mrmr, ga, gbr, mlp) unless a
 #: command is given another.
 DEFAULT_METHOD_SEED = 0
+#: The largest seed of the seeded methods (fcm, kmeans, stability): scikit-learn's and NumPy's
+#: legacy generators take 0 .. 2**32 - 1 (a larger one was a traceback deep inside them).
+MAX_METHOD_SEED = 2**32 - 1

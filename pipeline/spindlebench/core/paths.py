@@ -41,6 +41,24 @@ SEASONS_DIR: Path = SCENARIOS_DIR / "seasons"
 BENCHMARKS_DIR: Path = DATA_ROOT / "benchmarks"
 
 
+#: Overrides where the package keeps what it computes once and reuses (``user_cache_dir``).
+CACHE_ENV = "SPINDLEBENCH_CACHE"
+
+
+def user_cache_dir() -> Path:
+    """The per-user folder for reusable computed data (soak states, the fingerprint
+    reference, the course's default working folders): ``$SPINDLEBENCH_CACHE``, else
+    ``$XDG_CACHE_HOME/spindlebench``, else ``~/.cache/spindlebench``.
+
+    Never the current folder: a command writes there only what it is told to write (its
+    ``-o``/``--out``), so running one inside a checkout or a student's folder leaves nothing
+    behind that nobody asked for."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "spindlebench"
+
+
 def shared_recordings_dir() -> Path:
     """Real recordings: ``../shared/recordings`` beside the checkout (never copied into it);
     installed, beside the current folder."""

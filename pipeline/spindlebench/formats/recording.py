@@ -60,6 +60,7 @@ import numpy as np
 
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.provenance import sha256_file
 
@@ -243,6 +244,7 @@ def read_recording(
     columns: Iterable[str] | None = None,
     delimiter: str = ",",
     decimal: str = ".",
+    encoding: str | None = None,
 ) -> pd.DataFrame:
     """Read and validate one recording; all columns become float64.
 
@@ -259,7 +261,8 @@ def read_recording(
     The DataFrame of ``read_table(..., engine="pandas")``: the same checks and values.
     """
     return read_table(path, allow_missing=allow_missing, columns=columns,
-                      delimiter=delimiter, decimal=decimal, engine="pandas").frame()
+                      delimiter=delimiter, decimal=decimal, engine="pandas",
+                      encoding=encoding).frame()
 
 
 def read_table(
@@ -270,21 +273,24 @@ def read_table(
     delimiter: str = ",",
     decimal: str = ".",
     engine: str = "numpy",
+    encoding: str | None = None,
 ) -> RecordingTable:
     """Read and validate one recording as arrays (see ``read_recording`` for the rules and
-    ``ENGINES`` for ``engine``; the rules and the values do not depend on it)."""
+    ``ENGINES`` for ``engine``; the rules and the values do not depend on it).
+    ``encoding``: the file's text encoding (default UTF-8, a BOM allowed; ``--encoding``)."""
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     path = Path(path)
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: not a file")
-    dialect = _Dialect(delimiter, decimal)
+    dialect = _Dialect(delimiter, decimal, check_encoding(encoding))
     header = _read_header(path, dialect)
     keep = header if columns is None else _kept(header, columns)
     values = None
-    if engine == "numpy":
+    if engine == "numpy" and dialect.encoding == ENCODING:  # it reads the bytes as UTF-8
         values = _parse_with_numpy(path, header, allow_missing, keep, dialect)
     if values is None:  # not a plain file: what pandas' tokenizer reads
         values = _parse_with_pandas(path, header, allow_missing, keep, dialect)
@@ -319,6 +325,7 @@ class FileHeader(list):
 class _Dialect:
     delimiter: str = ","
     decimal: str = "."
+    encoding: str = ENCODING
 
 
 def _kept(header: list[str], columns: Iterable[str]) -> list[str]:
@@ -347,7 +354,7 @@ def _parse_with_pandas(
     na = {"keep_default_na": False, "na_values": _FAST_NA_VALUES} if allow_missing else {}
     try:
         frame = pd.read_csv(
-            path, skip_blank_lines=False, engine="c", encoding=ENCODING,
+            path, skip_blank_lines=False, engine="c", encoding=dialect.encoding,
             sep=dialect.delimiter, decimal=dialect.decimal, **na
         )
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError):
@@ -461,12 +468,13 @@ def _read_diagnosing(
     try:
         raw = pd.read_csv(
             path, dtype=str, keep_default_na=False, skip_blank_lines=False, engine="c",
-            encoding=ENCODING, sep=dialect.delimiter,
+            encoding=dialect.encoding, sep=dialect.delimiter,
         )
     except UnicodeDecodeError as exc:
         line = path.read_bytes()[: exc.start].count(b"\n") + 1
-        raise SpindlebenchError(f"recording {path}, line {line}: not UTF-8 text (byte "
-                                f"{exc.start}); save it as UTF-8") from exc
+        raise SpindlebenchError(f"recording {path}, line {line}: not {_encoding_name(dialect)} "
+                                f"text (byte {exc.start}); save it as UTF-8 or give its "
+                                "encoding with --encoding (e.g. latin-1)") from exc
     except (pd.errors.ParserError, ValueError) as exc:
         detail = " ".join(str(exc).split())
         fields = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", detail)
@@ -481,28 +489,51 @@ def _read_diagnosing(
     raw = _drop_trailing_blank_rows(raw)
     if allow_missing or len(keep) < len(header):
         # pandas pads short rows with empty cells: those are not missing values
-        _check_field_counts(path, len(header), len(raw), dialect.delimiter)
+        _check_field_counts(path, len(header), len(raw), dialect.delimiter, dialect.encoding)
     values = np.empty((len(raw), len(keep)))
     for i, name in enumerate(keep):
         values[:, i] = _numeric_column(path, name, raw[name], allow_missing, dialect.decimal)
     return values
 
 
-def read_header(path: str | os.PathLike[str], delimiter: str = ",") -> list[str]:
+def read_header(path: str | os.PathLike[str], delimiter: str = ",",
+                encoding: str | None = None) -> list[str]:
     """A recording's column names (stripped), checked like ``read_recording`` checks them."""
     path = Path(path)
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
         raise SpindlebenchError(f"recording {path}: "
                                 f"{'not a file' if path.exists() else 'file not found'}")
-    return _read_header(path, _Dialect(delimiter))
+    return _read_header(path, _Dialect(delimiter, encoding=check_encoding(encoding)))
+
+
+def check_encoding(encoding: str | None) -> str:
+    """A text encoding a user named (``--encoding``), checked; None is UTF-8 (BOM allowed)."""
+    if encoding is None:
+        return ENCODING
+    try:
+        name = codecs.lookup(encoding).name
+    except LookupError:
+        raise SpindlebenchError(f"--encoding {encoding}: not a known text encoding (e.g. "
+                                "utf-8, latin-1, cp1252)") from None
+    return ENCODING if name == "utf-8" else name
+
+
+def _encoding_name(dialect: _Dialect) -> str:
+    return "UTF-8" if dialect.encoding == ENCODING else dialect.encoding
 
 
 def _read_header(path: Path, dialect: _Dialect = _Dialect()) -> list[str]:
     try:
-        with open(path, newline="", encoding=ENCODING) as handle:
+        with open(path, newline="", encoding=dialect.encoding) as handle:
             header = next(csv.reader(handle, delimiter=dialect.delimiter), None)
+    except csv.Error as exc:  # a field over the csv module's limit (131 072 characters)
+        raise SpindlebenchError(f"recording {path}, line 1: not a header of column names "
+                                f"({exc})") from None
     except UnicodeDecodeError as exc:
-        raise SpindlebenchError(f"recording {path}: not UTF-8 text") from exc
+        raise SpindlebenchError(f"recording {path}: not {_encoding_name(dialect)} text; save "
+                                "it as UTF-8 or give its encoding with --encoding (e.g. "
+                                "latin-1)") from exc
     if not header:
         raise SpindlebenchError(f"recording {path}: empty file (no header line)")
     names = [name.strip() for name in header]
@@ -523,9 +554,10 @@ def _read_header(path: Path, dialect: _Dialect = _Dialect()) -> list[str]:
     return names
 
 
-def _check_field_counts(path: Path, width: int, rows: int, delimiter: str = ",") -> None:
+def _check_field_counts(path: Path, width: int, rows: int, delimiter: str = ",",
+                        encoding: str = ENCODING) -> None:
     """Raise naming the first of the first ``rows`` data lines without ``width`` fields."""
-    with open(path, newline="", encoding=ENCODING) as handle:
+    with open(path, newline="", encoding=encoding) as handle:
         lines = csv.reader(handle, delimiter=delimiter)
         next(lines, None)
         for number, fields in enumerate(itertools.islice(lines, rows), start=2):
@@ -792,6 +824,7 @@ def read_end_state(source: str | os.PathLike[str], where: str,
     text after it for a file that is not there.
     """
     try:
+        check_input(source, "sidecar (.json)")
         text = Path(source).read_text(encoding="utf-8")
     except FileNotFoundError:
         missing = missing or f"no such file {source} (simulate the previous run first)"

@@ -14,7 +14,16 @@ A recording from another logger names its columns its own way (``Time``, ``Spind
 - A candidate whose |r| with the target exceeds :data:`COPY_R` is refused as a likely copy
   of the target (a second displacement channel) unless ``allow_target_copy``.
 - ``delimiter`` / ``decimal`` (``--delimiter``/``--decimal``): the CSV dialect, detected from
-  the header and first data line when not given (``;`` with decimal comma, tab, ``|``).
+  the header and first data line when not given (``;`` with decimal comma, tab, ``|``);
+  ``encoding`` (``--encoding``): the text encoding (default UTF-8; ``latin-1``, ``cp1252``).
+- ``time_unit`` (``--time-unit``): the unit of the time column (``s``, ``ms``, ``min``,
+  ``h``, ``d``). Without it the unit is read from the column's name (``Zeit [min]``,
+  ``time (h)``, ``t_min``), and said in :meth:`RoleChoice.report`; a name without a unit is
+  seconds, except that a column counting 0, 1, 2, … (a sample index, not a time) is refused
+  until ``--time-unit`` says what it counts. A date/time column (``2024-03-01 08:00:00``) is
+  read as seconds elapsed since its first row.
+- ``speed_column`` (``--speed-column``): the user's spindle-speed column (rev/min), read as
+  ``spindle_speed_rpm`` so ``plot`` draws the inputs and ``fingerprint`` knows the programme.
 """
 
 from __future__ import annotations
@@ -31,15 +40,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import (
     TIME_COLUMN,
     RecordingTable,
+    check_encoding,
     not_sensor_reason,
     read_header,
     read_table,
 )
+from spindlebench.formats.time_axis import TIME_UNITS, time_axis_seconds, unit_from_name
 
 if TYPE_CHECKING:  # a DataFrame only where a caller asks for one: ``evaluate`` needs none
     import pandas as pd
@@ -70,6 +82,9 @@ class ColumnRoles:
     allow_target_copy: bool = False
     delimiter: str | None = None
     decimal: str | None = None
+    encoding: str | None = None
+    time_unit: str | None = None
+    speed_column: str | None = None
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> ColumnRoles:
@@ -81,7 +96,10 @@ class ColumnRoles:
                    exclude=tuple(exclude or ()),
                    allow_target_copy=getattr(args, "allow_target_copy", False),
                    delimiter=_delimiter(args.delimiter, "--delimiter"),
-                   decimal=_decimal(args.decimal, "--decimal"))
+                   decimal=_decimal(args.decimal, "--decimal"),
+                   encoding=getattr(args, "encoding", None),
+                   time_unit=getattr(args, "time_unit", None),
+                   speed_column=getattr(args, "speed_column", None))
 
 
 @dataclass
@@ -92,6 +110,8 @@ class RoleChoice:
     sensors: list[str]
     skipped: list[tuple[str, str]] = field(default_factory=list)  # (column, why)
     by_rule: bool = True
+    #: How the time column was read, when not plain seconds (``as_time_s`` sets it).
+    time_note: str | None = None
 
     def report(self, where: str | None = None) -> str:
         """One line: the sensors taken (``in <where>`` for a command reading several
@@ -111,20 +131,35 @@ class RoleChoice:
                 parts.append(f"{group[0]}, {group[1]}, ... ({len(group)} columns: {why})")
         skipped = "; ".join(parts) or "none"
         place = "" if where is None else f" in {where}"
-        return f"sensors ({how}){place}: took {', '.join(self.sensors)}; skipped: {skipped}"
+        time = f"; time: {self.time_note}" if self.time_note else ""
+        return (f"sensors ({how}){place}: took {', '.join(self.sensors)}; skipped: {skipped}"
+                f"{time}")
 
 
 def add_role_arguments(parser: argparse.ArgumentParser, *, sensors: bool = True,
-                       exclude: bool = True, copies: bool = True) -> None:
+                       exclude: bool = True, copies: bool = True, speed: bool = True) -> None:
     """The column-role flags every command that reads user recordings shares.
 
     ``sensors=False``: the command names its sensors another way (a study's
     ``sensors_all``), so no ``--sensors``; ``exclude=False``: every column it uses is
     named (a calibration map), so no ``--exclude``; ``copies=False``: the command fits
-    nothing, so a copy of the target is not refused and ``--allow-target-copy`` is absent.
+    nothing, so a copy of the target is not refused and ``--allow-target-copy`` is absent;
+    ``speed=False``: the command's columns are mapped another way (a calibration map).
     """
     parser.add_argument("--time-column", metavar="NAME", default=None,
-                        help=f"the time column in seconds (default: {TIME_COLUMN})")
+                        help=f"the time column (default: {TIME_COLUMN}); numbers in the unit "
+                        "of --time-unit or of its name ('Zeit [min]'), or dates/times")
+    parser.add_argument("--time-unit", metavar="UNIT", default=None,
+                        choices=sorted(TIME_UNITS, key=TIME_UNITS.get),
+                        help="unit of the time column: s, ms, min, h or d (default: from the "
+                        "column's name, else seconds)")
+    if speed:
+        parser.add_argument("--speed-column", metavar="NAME", default=None,
+                            help="the spindle-speed column in rev/min (read as "
+                            "spindle_speed_rpm: plot draws it, fingerprint reports the "
+                            "programme)")
+    parser.add_argument("--encoding", metavar="NAME", default=None,
+                        help="text encoding of the recording (default: UTF-8; e.g. latin-1)")
     if sensors:
         parser.add_argument(
             "--sensors", nargs="+", metavar="NAME",
@@ -160,19 +195,28 @@ def _decimal(value: str | None, where: str) -> str | None:
 
 
 def detect_dialect(path: Path, delimiter: str | None = None,
-                   decimal: str | None = None) -> tuple[str, str]:
+                   decimal: str | None = None, encoding: str | None = None) -> tuple[str, str]:
     """The delimiter and decimal mark of a CSV: as given, or detected from its first lines.
 
     The delimiter is the candidate that splits the header into the most fields and the first
     data line into as many; a decimal comma is assumed when the delimiter is not a comma and
     the data line has numbers like ``21,5``.
     """
+    check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)  # opening a FIFO would block here
     try:
-        with open(path, encoding="utf-8-sig", newline="") as handle:
+        with open(path, encoding=check_encoding(encoding), newline="") as handle:
             lines = [handle.readline() for _ in range(2)]
-    except (OSError, UnicodeDecodeError):
+    except (OSError, UnicodeDecodeError, SpindlebenchError):
         return delimiter or ",", decimal or "."  # the reader names the problem
     header, first = lines[0], lines[1]
+    try:
+        return _detected(path, header, first, delimiter, decimal)
+    except csv.Error:  # a field over the csv module's limit: the header reader names it
+        return delimiter or ",", decimal or "."
+
+
+def _detected(path: Path, header: str, first: str, delimiter: str | None,
+              decimal: str | None) -> tuple[str, str]:
     if delimiter is None:
         counts = {d: len(next(csv.reader([header], delimiter=d), [])) for d in DELIMITERS}
         agreeing = [d for d in DELIMITERS if counts[d] > 1 and (
@@ -226,6 +270,9 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
                                 f"found (columns are: {', '.join(header)})")
     if time_column not in header:
         time_column = None
+    if time_column is not None and time_column == target:
+        raise SpindlebenchError(f"recording {where}: the target {target!r} is also the time "
+                                "column; name the time axis with --time-column")
     for pattern in roles.exclude:
         if not any(matches(name, [pattern]) for name in header):
             raise SpindlebenchError(f"recording {where}: --exclude {pattern!r} matches no "
@@ -250,6 +297,9 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
             if name == target:
                 raise SpindlebenchError(f"recording {where}: the target {target!r} is also "
                                         "listed as a sensor")
+            if name == time_column and name in roles.sensors:  # named, not matched by a pattern
+                raise SpindlebenchError(f"recording {where}: --sensors names the time column "
+                                        f"{name!r}; a time is not a temperature sensor")
             if name == time_column or matches(name, roles.exclude):
                 sensors.remove(name)
                 skipped.append((name, "time column" if name == time_column else "--exclude"))
@@ -262,6 +312,8 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
                 skipped.append((name, "target"))
             elif name == time_column:
                 skipped.append((name, "time column"))
+            elif name == roles.speed_column:
+                skipped.append((name, "--speed-column"))
             elif matches(name, roles.exclude):
                 skipped.append((name, "--exclude"))
             elif looks_like_time(name):
@@ -394,24 +446,108 @@ def read_table_with_roles(path: Path, target: str, roles: ColumnRoles, *,
                           engine: str = "numpy") -> tuple[RecordingTable, RoleChoice]:
     """``read_with_roles`` as a ``RecordingTable`` (no pandas with ``engine="numpy"``; see
     ``recording.ENGINES``): the same columns, checks, values and messages."""
-    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal)
-    header = read_header(path, delimiter)
+    delimiter, decimal = detect_dialect(path, roles.delimiter, roles.decimal, roles.encoding)
+    header = read_header(path, delimiter, roles.encoding)
     choice = choose(header, target, roles, str(path))
-    wanted = [target, *choice.sensors] + ([choice.time_column] if choice.time_column else []) \
-        + [name for name in extra if name in header]
+    speed = roles.speed_column
+    if speed is not None and speed not in header:
+        raise SpindlebenchError(f"recording {path}: --speed-column {speed!r} not found "
+                                f"(columns are: {', '.join(header)})")
+    if speed is not None and (speed in choice.sensors or speed in (target, choice.time_column)):
+        raise SpindlebenchError(f"recording {path}: --speed-column {speed!r} is also the "
+                                "target, the time column or a sensor; name another column")
+    dates = (_date_times(path, choice.time_column, header, delimiter, roles.encoding)
+             if choice.time_column else None)
+    wanted = [target, *choice.sensors] + (
+        [choice.time_column] if choice.time_column and dates is None else []) \
+        + [name for name in (*extra, *([speed] if speed else [])) if name in header]
     table = read_table(path, allow_missing=allow_missing, columns=wanted,
-                       delimiter=delimiter, decimal=decimal, engine=engine)
-    if choice.time_column:
-        table = as_time_s(table, choice.time_column, path)
+                       delimiter=delimiter, decimal=decimal, engine=engine,
+                       encoding=roles.encoding)
+    if dates is not None:
+        table = _with_time_s(table, dates, choice.time_column)
+        choice.time_note = f"{choice.time_column!r} read as dates/times, seconds since the first"
+    elif choice.time_column:
+        table, choice.time_note = timed(table, choice.time_column, path, roles.time_unit)
+    elif roles.time_unit is not None:
+        raise SpindlebenchError(f"recording {path}: --time-unit {roles.time_unit} but no time "
+                                f"column {TIME_COLUMN!r}; name it with --time-column")
+    if speed is not None and speed != SPEED_COLUMN:
+        table = table.renamed(speed, SPEED_COLUMN)
     refuse_implausible_temperatures(table, choice.sensors, str(path))
     return table, choice
 
 
+#: What ``--speed-column`` is read as (the testbench's input name).
+SPEED_COLUMN = "spindle_speed_rpm"
+
+
+def _date_times(path: Path, column: str, header: Sequence[str], delimiter: str,
+                encoding: str | None) -> np.ndarray | None:
+    """Seconds since the first row when ``column`` holds dates/times, else None."""
+    from spindlebench.formats.time_axis import parse_datetimes
+
+    position = list(header).index(column)
+    try:
+        with open(path, encoding=check_encoding(encoding), newline="") as handle:
+            rows = csv.reader(handle, delimiter=delimiter)
+            next(rows, None)
+            first = next(rows, None)
+            if first is None or position >= len(first) or not _is_date(first[position]):
+                return None
+            cells = [first[position]] + [row[position] if position < len(row) else ""
+                                         for row in rows if row]
+    except (OSError, UnicodeDecodeError):
+        return None  # the table reader names the problem
+    return parse_datetimes(cells, column, str(path))
+
+
+def _is_date(cell: str) -> bool:
+    return bool(re.match(r"\s*\d{4}-\d{2}-\d{2}", cell))
+
+
+def _with_time_s(table: RecordingTable, seconds: np.ndarray, column: str) -> RecordingTable:
+    """``table`` with ``seconds`` as its ``time_s`` column, first (a date column's values)."""
+    if len(seconds) != len(table):
+        raise SpindlebenchError(f"recording {table.path}: the time column {column!r} has "
+                                f"{len(seconds)} rows, the others {len(table)}")
+    keep = [i for i, name in enumerate(table.columns) if name != TIME_COLUMN]
+    values = np.column_stack([seconds, table.values[:, keep]])
+    table = RecordingTable(table.path, table.header,
+                           (TIME_COLUMN, *(table.columns[i] for i in keep)), values)
+    _check_increasing(table, Path(table.path))
+    return table
+
+
+def timed(frame: pd.DataFrame | RecordingTable, time_column: str, path: Path,
+          unit: str | None = None) -> tuple[pd.DataFrame | RecordingTable, str | None]:
+    """``as_time_s`` and the note that says how the time column was read (None: seconds)."""
+    seconds, note = time_axis_seconds(np.asarray(frame[time_column], dtype=float),
+                                      time_column, unit, str(path))
+    frame = _renamed_time(frame, time_column, path)
+    if note is not None:
+        if isinstance(frame, RecordingTable):
+            values = frame.values.copy()
+            values[:, frame.columns.index(TIME_COLUMN)] = seconds
+            frame = RecordingTable(frame.path, frame.header, frame.columns, values)
+        else:
+            frame = frame.assign(**{TIME_COLUMN: seconds})
+    return frame, note
+
+
 def as_time_s(frame: pd.DataFrame | RecordingTable, time_column: str,
-              path: Path) -> pd.DataFrame | RecordingTable:
+              path: Path, unit: str | None = None) -> pd.DataFrame | RecordingTable:
     """``frame`` with its time axis ``time_column`` named ``time_s`` (downstream code has one
     name), checked to increase; ``read_recording`` keeps a ``time_s`` column whenever the
-    file has one, so a named time axis replaces it."""
+    file has one, so a named time axis replaces it. ``unit`` (``--time-unit``) or the unit
+    in the column's name converts it to seconds (``formats.time_axis``)."""
+    if unit is not None or (time_column != TIME_COLUMN and unit_from_name(time_column)):
+        return timed(frame, time_column, path, unit)[0]
+    return _renamed_time(frame, time_column, path)
+
+
+def _renamed_time(frame: pd.DataFrame | RecordingTable, time_column: str,
+                  path: Path) -> pd.DataFrame | RecordingTable:
     if time_column == TIME_COLUMN:
         return frame
     if isinstance(frame, RecordingTable):

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 
 T = TypeVar("T")
 
@@ -36,6 +37,7 @@ def load_toml(path: str | Path, what: str = "") -> dict[str, Any]:
     """
     path = Path(path)
     kind = f"{what} file" if what else "file"
+    check_input(path, f"{kind} (.toml)")
     try:
         text = path.read_bytes().decode("utf-8")
     except FileNotFoundError:
@@ -51,6 +53,9 @@ def load_toml(path: str | Path, what: str = "") -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpindlebenchError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays or inline tables nested thousands deep
+        raise SpindlebenchError(f"{path}: not valid TOML here: arrays or tables nested too "
+                                "deeply") from None
 
 
 def range_problem(value: float, minimum: float | None = None, maximum: float | None = None,

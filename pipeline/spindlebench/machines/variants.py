@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.names import FINGERPRINT_KEYS as KEYS
 from spindlebench.core.paths import SCENARIOS_DIR
 from spindlebench.core.provenance import sha256_file
@@ -125,6 +126,7 @@ def _load_cached(path: Path, sha256: str) -> Machine:
 
 
 def _load(path: Path) -> Machine:
+    check_input(path, "machine file (.toml)")  # before sha256_file reads a FIFO forever
     if not path.is_file():
         raise SpindlebenchError(f"{path}: machine file not found")
     return _load_cached(path, sha256_file(path))

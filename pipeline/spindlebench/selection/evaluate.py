@@ -374,6 +374,8 @@ class Evaluation:
             "rmse_um": {name: float(value) for name, value in self.rmse_um.items()},
             "mean_rmse_um": self.mean_rmse_um,
             "method": {**self.method.to_dict(), "label": self.method.label, "seed": self.seed},
+            **({"penalty": penalty} if (penalty := getattr(self.fit, "penalty", None))
+               is not None else {}),
         }
 
     def summary(self) -> str:

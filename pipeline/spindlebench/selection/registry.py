@@ -254,8 +254,21 @@ def add_method_arguments(parser) -> None:
                         "mlp, a user's random_state; recorded in --json)")
 
 
+def method_seed_problem(seed: object) -> str | None:
+    """Why ``seed`` cannot seed the methods (None when it can): an integer in
+    0 .. ``MAX_METHOD_SEED``."""
+    from spindlebench.core.names import MAX_METHOD_SEED
+
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_METHOD_SEED:
+        return f"must be an integer from 0 to {MAX_METHOD_SEED} (2**32 - 1), got {seed!r}"
+    return None
+
+
 def choice_from_args(args) -> MethodChoice:
     """The ``MethodChoice`` of ``add_method_arguments``' options (checked: one line)."""
+    problem = method_seed_problem(getattr(args, "seed", DEFAULT_METHOD_SEED))
+    if problem:
+        raise SpindlebenchError(f"--seed: {problem}")
     if len(split_label(args.method)) > 1:  # a whole label in --method
         if args.within != DEFAULT_WITHIN or args.regressor != DEFAULT_REGRESSOR:
             raise SelectionError(f"--method {args.method!r} is a whole label; give --within "
@@ -370,6 +383,8 @@ def fit_regressor(regressor: str, X, y, names=None, random_state=DEFAULT_METHOD_
     ``make_regressor``), any other as a ``regression.EstimatorFit`` around the fitted
     estimator. Refits that are OLS by definition (the placement score, the sweep's oracle)
     call it with ``DEFAULT_REGRESSOR``."""
+    import numpy as np
+
     from spindlebench.selection.regression import EstimatorFit, LinearFit, fit_ols, r2_score
 
     if regressor == DEFAULT_REGRESSOR:
@@ -377,8 +392,14 @@ def fit_regressor(regressor: str, X, y, names=None, random_state=DEFAULT_METHOD_
     model = make_regressor(MethodChoice(regressor=regressor), random_state).fit(X, y)
     if regressor not in LINEAR_REGRESSORS:
         return EstimatorFit(model, r2=r2_score(y, EstimatorFit(model, 0.0).predict(X)))
+    penalty = None
+    if hasattr(model, "alpha_"):  # ridge: its penalty, the grid it was chosen on, its edge
+        grid = np.asarray(getattr(model, "alphas_", None) if getattr(model, "alphas_", None)
+                          is not None else model.alphas, float)
+        penalty = {"alpha": float(model.alpha_), "grid": [float(grid.min()), float(grid.max())],
+                   "at_edge": model.alpha_at_edge_}
     return LinearFit(intercept=float(model.intercept_), coefficients=model.coef_,
-                     r2=float(model.r2_))
+                     r2=float(model.r2_), penalty=penalty)
 
 
 def fit_with(choice: MethodChoice, X, y, names=None, random_state=DEFAULT_METHOD_SEED):

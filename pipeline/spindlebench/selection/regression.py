@@ -159,6 +159,9 @@ class LinearFit:
     intercept: float
     coefficients: np.ndarray
     r2: float
+    #: A penalised fit's penalty (ridge: ``alpha``, the grid ``grid`` and ``at_edge``,
+    #: "lower"/"upper" when the cross-validation chose an end of the grid); None for OLS.
+    penalty: dict | None = None
 
     def predict(self, X: np.ndarray) -> np.ndarray:
         """Predicted error for candidate values (rises) ``X`` (inf where they overflow)."""

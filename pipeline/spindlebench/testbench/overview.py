@@ -30,6 +30,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.transforms import offset_copy
 
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
@@ -40,7 +41,13 @@ from spindlebench.formats.recording import (
     recording_name,
     true_column,
 )
-from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, part_of, sensor_colours
+from spindlebench.testbench.sensor_parts import (
+    AMBIENT_SENSOR,
+    PARTS,
+    part_colour,
+    part_of,
+    sensor_colours,
+)
 
 AMBIENT_DRIVER = "ambient_C"
 SPEED = "spindle_speed_rpm"
@@ -115,8 +122,10 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
     panels = _temperature_panels(frames, target, sensors)
     has_inputs = any(SPEED in f or any(c in f for c in FEEDS) for f in frames)
     heights = [3.0] * len(panels) + [1.9] + ([1.4] if has_inputs else [])
+    room = label_room_in([s for p in panels for s in p.sensors] + ["ambient air"])
     fig, axes = plt.subplots(len(heights), len(frames), squeeze=False, sharex="col",
-                             sharey="row", figsize=(1.3 + 5.6 * len(frames), sum(heights) + 1),
+                             sharey="row", figsize=(1.3 + (5.05 + room) * len(frames),
+                                                    sum(heights) + 1),
                              gridspec_kw={"height_ratios": heights})
     try:
         colours = _colours([s for p in panels for s in p.sensors])
@@ -125,7 +134,10 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
         for column, (frame, title) in enumerate(zip(frames, titles, strict=True)):
             _draw_column(frame, axes[:, column], panels, colours, rises, target,
                          speed_top if has_inputs else None)
-            axes[0, column].set_title(title, fontsize=10)
+            # a line above the panel label (as a centre title it sat on the label's line)
+            top = axes[0, column]
+            top.text(0.5, 1.0, title, ha="center", va="bottom", fontsize=10,
+                     transform=offset_copy(top.transAxes, fig=fig, y=17, units="points"))
         for row, panel in enumerate(panels):
             axes[row, 0].set_ylabel("rise since start (K)" if rises else "temperature (°C)")
             _part_legend(axes[row, 0], panel)
@@ -137,14 +149,37 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
         if suptitle:
             fig.suptitle(suptitle)
         fig.tight_layout()
-        width_in = fig.get_figwidth()  # room right of each column for the line-end labels
-        fig.subplots_adjust(wspace=0.3, right=min(fig.subplotpars.right, 1 - 0.55 / width_in))
+        fit_label_room(fig, len(frames), room)
         for ax in axes[:len(panels), :].flat:
             label_line_ends(ax)
     except BaseException:
         plt.close(fig)
         raise
     return fig
+
+
+#: Inches a line-end label's character takes at ``LABEL_FONTSIZE`` (DejaVu Sans averages
+#: about 0.6 em), the leader before it, and the tick labels of the next column.
+_CHAR_IN = 0.62 * LABEL_FONTSIZE / 72.0
+_LEADER_IN = 0.2
+_TICKS_IN = 0.5
+
+
+def label_room_in(labels: Sequence[str]) -> float:
+    """Inches right of a column its longest line-end label needs (``Spindle front [degC]``
+    was clipped by the next column or the figure's edge: the room was a fixed 0.55 in)."""
+    return _LEADER_IN + _CHAR_IN * max((len(str(label)) for label in labels), default=4)
+
+
+def fit_label_room(fig: Figure, columns: int, room_in: float) -> None:
+    """Leave ``room_in`` right of every column (and the next column's ticks after it)."""
+    width_in = fig.get_figwidth()
+    left = fig.subplotpars.left
+    right = min(fig.subplotpars.right, 1 - room_in / width_in)
+    gap_in = room_in + _TICKS_IN
+    axes_in = ((right - left) * width_in - (columns - 1) * gap_in) / columns
+    fig.subplots_adjust(right=right, wspace=gap_in / max(axes_in, 0.5) if columns > 1
+                        else fig.subplotpars.wspace)
 
 
 def _draw_column(frame: pd.DataFrame, axes: np.ndarray, panels: Sequence[_Panel],
@@ -211,8 +246,8 @@ def _part_legend(ax: Axes, panel: _Panel) -> None:
     for part in PARTS:
         shown = [s for s in part.sensors if s in panel.sensors]
         if shown:
-            shade = "black" if part.sensors == (AMBIENT_SENSOR,) else \
-                sensor_colours(part)[part.sensors[-1]]
+            # the family's middle shade: the darkest reds and purples looked alike
+            shade = "black" if part.sensors == (AMBIENT_SENSOR,) else part_colour(part)
             handles.append(Line2D([], [], color=shade, lw=2,
                                   label=f"{part.name}: {_span(shown)}"))
     if handles:

@@ -47,6 +47,7 @@ from fmpy.model_description import ModelDescription, ScalarVariable, ValidationE
 
 from spindlebench.core import interrupts
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState, is_probe_output
@@ -82,6 +83,8 @@ class FmuInterface:
     #: ``<ModelExchange canGetAndSetFMUState canSerializeFMUState>`` (FMPy's FMI 3 reader
     #: keeps neither flag, so they are read from the XML here)
     saves_states: bool = False
+    #: The inputs by name (``INPUT_NAMES``), with the ``min``/``max`` the FMU declares.
+    inputs: Mapping[str, ScalarVariable] = field(repr=False, default_factory=dict)
 
 
 #: FMUs already read and checked in this process, by (resolved path, size, mtime): a sweep
@@ -94,6 +97,7 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
     """Read an FMU's model description and check it offers the contract's interface (once
     per process and file version)."""
     fmu_path = Path(fmu_path)
+    check_input(fmu_path, "FMU (.fmu)", max_bytes=None)
     if not fmu_path.is_file():
         hint = " (build it with `spindlebench build`)" if fmu_path == DEFAULT_FMU else ""
         raise SpindlebenchError(f"{fmu_path}: no such FMU{hint}")
@@ -128,7 +132,7 @@ def _read_and_check(fmu_path: Path) -> FmuInterface:
         var = by_name.get(name)
         if var is None or var.causality != "input" or var.type != "Float64":
             raise SpindlebenchError(f"{fmu_path}: no Float64 input {name!r}")
-        inputs.append(var.valueReference)
+        inputs.append(var)
     outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Float64"]
     names = {v.name for v in outputs}
     for required in (*SENSOR_OUTPUTS, DRIFT_COLUMN):
@@ -140,13 +144,14 @@ def _read_and_check(fmu_path: Path) -> FmuInterface:
     return FmuInterface(
         path=fmu_path,
         model_description=md,
-        input_vrs=tuple(inputs),
+        input_vrs=tuple(v.valueReference for v in inputs),
         output_names=tuple(v.name for v in outputs),
         output_vrs=tuple(v.valueReference for v in outputs),
         state_names=tuple(v.name for v in states),
         state_vrs=tuple(v.valueReference for v in states),
         parameters=parameters,
         saves_states=_declares_saved_states(fmu_path),
+        inputs={v.name: v for v in inputs},
     )
 
 
@@ -439,8 +444,42 @@ def saved_state(start: EndState, fmu: FmuInterface) -> dict[str, float]:
     return {name: float(saved[name]) for name in fmu.state_names}
 
 
+#: The scenario table that sets each input (what a refusal names).
+INPUT_KEYS = {"spindle_speed_rpm": "speed", "feed_x_mm_per_min": "feed",
+              "feed_y_mm_per_min": "feed", "ambient_C": "ambient"}
+
+
+def check_inputs(scenario: Scenario, fmu: FmuInterface, signals: DriverSignals) -> None:
+    """Refuse driver values outside the FMU's declared ``min``/``max`` of each input.
+
+    The FMU's model description is the one home of these limits (declared in the Modelica
+    source): a scenario at 35 000 rpm against ``max = 30000`` ran to the end without a word
+    (T1 at 65.8 °C in ten minutes), as the model's friction laws are not meant for it."""
+    for name in INPUT_NAMES:
+        variable = fmu.inputs.get(name)
+        if variable is None:
+            continue
+        low, high = declared_bounds(variable)
+        values = np.asarray(getattr(signals, name), dtype=float)
+        outside = np.zeros(values.shape, dtype=bool)
+        if low is not None:
+            outside |= ~(values >= low)
+        if high is not None:
+            outside |= ~(values <= high)
+        hits = np.flatnonzero(outside)
+        if hits.size:
+            i = int(hits[0])
+            unit = f" {variable.unit}" if getattr(variable, "unit", None) else ""
+            raise SpindlebenchError(
+                f"{scenario.path}: key '{INPUT_KEYS[name]}': input {name} = {values[i]:g}{unit} "
+                f"at t = {signals.time_s[i]:g} s is outside the range "
+                f"{'-inf' if low is None else f'{low:g}'}..{'inf' if high is None else f'{high:g}'}"
+                f"{unit} that {fmu.path.name} declares for it; change the scenario (or use an "
+                "FMU built for it)")
+
+
 def check_scenario(scenario: Scenario, fmu: FmuInterface, *,
-                   start: EndState | None = None) -> None:
+                   start: EndState | None = None, signals: DriverSignals | None = None) -> None:
     """Everything about a scenario that needs the FMU, checked without simulating.
 
     A batch runs this for every scenario before the first simulation, so a bad parameter
@@ -452,6 +491,7 @@ def check_scenario(scenario: Scenario, fmu: FmuInterface, *,
     if problem:
         raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
     parameter_values(scenario, fmu)
+    check_inputs(scenario, fmu, drive(scenario) if signals is None else signals)
     if scenario.initial.kind == "continue" and start is not None:
         saved_state(start, fmu)
 
@@ -496,8 +536,11 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     set_stop_time = _cvode_set_stop_time()
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
-    check_scenario(scenario, fmu_info)  # initial_state() checks the start state
+    problem = step_count_problem(scenario.duration_s, scenario.step_s)
+    if problem:  # before drive() makes arrays of that many steps
+        raise SpindlebenchError(f"{scenario.path}: key 'step_s': {problem}")
     signals = drive(scenario)
+    check_scenario(scenario, fmu_info, signals=signals)  # initial_state() checks the start
     inputs = np.ascontiguousarray(signals.matrix)
     jumps = signals.jumps()
     x0 = initial_state(scenario, fmu_info, float(signals.ambient_C[0]), start)

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.files import check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
@@ -44,6 +45,9 @@ MIN_STEP_S = 1e-3
 #: Most communication steps of one run: 90 days at 1 s; the driver arrays (4 inputs × 8 bytes
 #: a step) and the run time stay bounded.
 MAX_STEPS = 10_000_000
+#: Samples a recording may have: ~140 columns of float64 at 1 M samples are 1.1 GB (9 M
+#: samples, 90 days at 1 s, failed deep in numpy allocating the output matrix).
+MAX_SAMPLES = 1_000_000
 #: Longest soak history (days) before a run: the slowest node (the floor slab, about a day)
 #: has long forgotten its cold start by then.
 MAX_SOAK_DAYS = 60
@@ -531,6 +535,10 @@ def _read_ambient_csv(
 
     Lines starting with ``#`` are comments (a place for the series' origin and units).
     """
+    try:
+        check_input(file, "measured-ambient CSV")
+    except SpindlebenchError as exc:
+        raise t.error("file", str(exc)) from None
     if not file.is_file():
         raise t.error("file", f"no such file: {file}")
     times: list[float] = []
@@ -562,6 +570,10 @@ def _read_ambient_csv(
                 raise SpindlebenchError(f"{where}: {len(cells)} field(s), the header has "
                                         f"{len(header)}")
             try:
+                if not (cells[i_time].isascii() and cells[i_value].isascii()):
+                    # float() reads full-width or Arabic-Indic digits: not what a logger writes
+                    raise SpindlebenchError(f"{where}: {cells[i_time]!r}, {cells[i_value]!r}: "
+                                            "numbers must be plain ASCII digits")
                 time_s = float(cells[i_time])
                 value = float(cells[i_value])
             except (IndexError, ValueError):
@@ -786,6 +798,12 @@ def load_scenario(path: str | Path) -> Scenario:
                        f"duration ({duration_s:g} s)")
     _check_grid(top, "sample_interval_s", sample_interval_s, "step_s", step_s)
     _check_grid(top, "duration_s", duration_s, "sample_interval_s", sample_interval_s)
+    samples = duration_s / sample_interval_s + 1
+    if samples > MAX_SAMPLES:
+        raise top.error("sample_interval_s", f"{sample_interval_s:g} s gives {samples:,.0f} "
+                        f"samples over {duration_s:g} s; at most {MAX_SAMPLES:,} (a recording "
+                        "of every output would need gigabytes of memory): use a larger "
+                        "sample_interval_s")
     seed = top.integer("seed", 0, minimum=0)
     scenario = Scenario(
         path=path,

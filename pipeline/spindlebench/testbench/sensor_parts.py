@@ -67,6 +67,14 @@ def part_of(sensor: str) -> SensorPart | None:
     return None
 
 
+def part_colour(part: SensorPart) -> tuple[float, float, float, float]:
+    """The part's colour in a legend: its family's middle shade (the darkest shades of two
+    families, a red and a purple, are hard to tell apart)."""
+    from matplotlib import colormaps
+
+    return colormaps[part.colormap](0.7)
+
+
 def sensor_colours(part: SensorPart) -> dict[str, tuple[float, float, float, float]]:
     """One shade of the part's colour family per sensor, light to dark, none too pale."""
     from matplotlib import colormaps

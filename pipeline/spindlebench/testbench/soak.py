@@ -17,12 +17,13 @@ depends only on the FMU, the parameters, the cycle and the number of days, so ev
 month of a sweep (each speed, programme, replica) shares one soak.
 
 Soaks are cached twice: in memory for the process, and as JSON files in the folder
-``SPINDLEBENCH_SOAK_CACHE`` (default ``results/cache/soak``), named by a SHA-256 of everything
-the soak depends on (the FMU's hash, the runner's source and the package versions included),
-written atomically, so parallel workers and later runs reuse them and a stale entry cannot be
-hit. Beside each JSON file, ``<key>.fmustate`` holds the FMU's serialised state at the soak's
-end (``fmi3SerializeFMUState``), for an FMU that saves states: the runner restores it into
-every run of the same soak (``soak_start``), one warm state forked into many scenarios.
+``SPINDLEBENCH_SOAK_CACHE`` (default ``soak/`` in ``paths.user_cache_dir()``), named by a
+SHA-256 of everything the soak depends on (the FMU's hash, the runner's source and the package
+versions included), written atomically, so parallel workers and later runs reuse them and a
+stale entry cannot be hit. Beside each JSON file, ``<key>.fmustate`` holds the FMU's serialised
+state at the soak's end (``fmi3SerializeFMUState``), for an FMU that saves states: the runner
+restores it into every run of the same soak (``soak_start``), one warm state forked into many
+scenarios.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from typing import Any
 
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import user_cache_dir
 from spindlebench.core.provenance import sha256_file, source_sha256
 from spindlebench.testbench.runner import co_simulate
 from spindlebench.testbench.scenario import (
@@ -56,7 +58,6 @@ SOAK_STEP_S = 300.0
 #: mode (and its cache file) must be one computation.
 SOAK_INPUTS = "continuous"
 CACHE_ENV = "SPINDLEBENCH_SOAK_CACHE"
-DEFAULT_CACHE = Path("results") / "cache" / "soak"
 #: Bumped when the soak's recipe changes, so old cache files are not reused.
 RECIPE = 2
 #: The modules whose source (with the package versions) is part of the cache key: a changed
@@ -72,8 +73,9 @@ FMU_STATE_MAGIC = b"SBFMUST\x00"
 
 
 def cache_dir() -> Path:
-    """Where soak states are kept (``$SPINDLEBENCH_SOAK_CACHE`` or ``results/cache/soak``)."""
-    return Path(os.environ.get(CACHE_ENV) or DEFAULT_CACHE)
+    """Where soak states are kept: ``$SPINDLEBENCH_SOAK_CACHE``, else ``soak/`` in the
+    per-user cache (``paths.user_cache_dir``), never the current folder."""
+    return Path(os.environ.get(CACHE_ENV) or user_cache_dir() / "soak")
 
 
 def soak_scenario(scenario: Scenario) -> Scenario:

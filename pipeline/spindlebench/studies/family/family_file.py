@@ -277,6 +277,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         machine_axis: tuple[str, ...] = ()
     else:
         machine_axis = tuple(axes.get_list("machines", str, default=[]))
+    if fmu_parameters is not None:
+        _check_input_axis(axes, "speeds_rpm", speeds, "spindle_speed_rpm", fmu)
     axes.finish()
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
@@ -341,6 +343,20 @@ def _check_machine(machine: Machine, known: Mapping[str, Any], fmu: Path) -> Non
     from spindlebench.testbench.runner import check_machine
 
     check_machine(machine, known, fmu.name)
+
+
+def _check_input_axis(axes: Table, key: str, values: tuple[float, ...], input_name: str,
+                      fmu: Path) -> None:
+    """An axis of input values within the FMU's declared bounds of that input (the model
+    description is the one home of the limits; the worker's check would fail every run)."""
+    from spindlebench.testbench.runner import bound_problem, declared_bounds, inspect_fmu
+
+    variable = inspect_fmu(fmu).inputs.get(input_name)
+    for value in values if variable is not None else ():
+        if bound_problem(variable, value):
+            low, high = declared_bounds(variable)
+            raise axes.error(key, f"{value:g} {variable.unit or ''} is outside {low:g}..{high:g},"
+                             f" the range {fmu.name} declares for {input_name}")
 
 
 def _soak_days(exp: Table) -> int | None:
@@ -552,9 +568,10 @@ def _methods(t: Table) -> Methods:
                        check=lambda v: one_of(v, SIMILARITIES))
     ground_truth = t.get("ground_truth", bool, default=True)
     labels = t.get_list("methods", str, default=[DEFAULT_METHOD])
-    seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
+    from spindlebench.selection.registry import check_labels, method_seed_problem
+
+    seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=method_seed_problem)
     t.finish()
-    from spindlebench.selection.registry import check_labels
 
     labels = list(BUDGET_METHODS) if labels == ["all"] else labels
     try:

@@ -17,6 +17,7 @@ import numpy as np
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, read_header, sidecar_path
 from spindlebench.formats.roles import (
+    SPEED_COLUMN,
     ColumnRoles,
     RoleChoice,
     detect_dialect,
@@ -42,12 +43,27 @@ class Fingerprinted:
     rises: np.ndarray  # n x m sensor rises (K)
     error: np.ndarray  # n error rise
     stats: dict[str, float]
+    #: The spindle-speed programme (``spindle_speed_rpm`` or ``--speed-column``), or None.
+    programme: list[dict[str, float]] | None = None
 
     def row(self) -> dict[str, Any]:
         """The JSON row: which file and columns, then the statistics (NaN as null)."""
         return {"recording": str(self.path), "target": self.target,
                 "time_column": self.time_column, "sensors": list(self.sensors),
-                "samples": int(self.time.size), **json_stats(self.stats)}
+                "samples": int(self.time.size), "programme": self.programme,
+                **json_stats(self.stats)}
+
+
+#: A programme with more speed changes than this is summarised by its first ones.
+MAX_PROGRAMME_STEPS = 50
+
+
+def programme(time_s: np.ndarray, speed_rpm: np.ndarray) -> list[dict[str, float]]:
+    """The speed programme as steps ``{"start_h", "rpm"}``: one per change of speed."""
+    speed = np.asarray(speed_rpm, dtype=float)
+    starts = [0] + [int(i) + 1 for i in np.flatnonzero(np.diff(speed) != 0)]
+    return [{"start_h": round(float(time_s[i]) / 3600.0, 6), "rpm": float(speed[i])}
+            for i in starts[:MAX_PROGRAMME_STEPS] if np.isfinite(speed[i])]
 
 
 def json_stats(stats: dict[str, float]) -> dict[str, float | None]:
@@ -71,20 +87,26 @@ def fingerprint_recording(path: Path, target: str | None = None,
     one error line. The time column is required (t63 is a time); a sensor that copies the
     target (|r| > 0.999) is refused unless the roles allow it (it would give ψ = 1)."""
     roles = roles or ColumnRoles()
-    delimiter, _ = detect_dialect(path, roles.delimiter, roles.decimal)
-    target = target or _default_target(path, read_header(path, delimiter))
-    frame, choice = read_with_roles(path, target, roles)
+    delimiter, _ = detect_dialect(path, roles.delimiter, roles.decimal, roles.encoding)
+    target = target or _default_target(path, read_header(path, delimiter, roles.encoding))
+    frame, choice = read_with_roles(path, target, roles, extra=(SPEED_COLUMN,))
     require_time(choice, str(path), "the fingerprint (t63 is a time)")
     refuse_target_copies(frame, target, choice.sensors, str(path), roles.allow_target_copy)
     time = frame[TIME_COLUMN].to_numpy(dtype=float)
     temps = frame[choice.sensors].to_numpy(dtype=float)
     error = frame[target].to_numpy(dtype=float)
+    if np.ptp(error) == 0:
+        raise SpindlebenchError(f"recording {path}: target column {target!r} is constant "
+                                f"({error[0]:g}): no thermal error to fingerprint; name the "
+                                "error column with --target")
+    steps = (programme(time, frame[SPEED_COLUMN].to_numpy(dtype=float))
+             if SPEED_COLUMN in frame else None)
     try:
         stats = fingerprint(time, temps, error)
     except SpindlebenchError as exc:
         raise SpindlebenchError(f"recording {path}: {exc}") from exc
     return Fingerprinted(path, target, str(choice.time_column), list(choice.sensors), time,
-                         temps - temps[0], error - error[0], stats), choice
+                         temps - temps[0], error - error[0], stats, steps), choice
 
 
 def _default_target(path: Path, header: list[str]) -> str:

@@ -6,7 +6,8 @@ places:
 
 - ``--reference DIR``: any folder of recordings, e.g. ``results/paper`` from ``make run``
   (every ``*.csv`` in it is used, with ``drift_um`` as the error);
-- otherwise a cache, ``results/fingerprint_reference/`` (``.../<machine>/`` with
+- otherwise a cache, ``fingerprint_reference/`` in the per-user cache
+  (``paths.user_cache_dir()``, never the current folder; ``.../<machine>/`` with
   ``--machine``): the five experiments simulated with
   the committed FMU the first time they are needed (a few seconds each), reused while the
   FMU, the scenario files (``scenarios/paper/*.toml`` and ``scenarios/machines/*.toml``
@@ -26,7 +27,7 @@ from typing import Any
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import expand_folders
-from spindlebench.core.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown
+from spindlebench.core.paths import DATA_ROOT, DEFAULT_FMU, SCENARIOS_DIR, shown, user_cache_dir
 from spindlebench.core.provenance import sha256_file, source_sha256
 from spindlebench.formats.recording import DRIFT_COLUMN, write_recording
 from spindlebench.machines.variants import load_machine
@@ -35,7 +36,11 @@ from spindlebench.testbench.simulate import record
 
 PAPER_SCENARIOS = SCENARIOS_DIR / "paper"
 MACHINES = SCENARIOS_DIR / "machines"
-DEFAULT_CACHE = Path("results") / "fingerprint_reference"
+def default_cache() -> Path:
+    """The reference's cache folder: ``fingerprint_reference/`` in the per-user cache."""
+    return user_cache_dir() / "fingerprint_reference"
+
+
 KEY_FILE = "reference.json"
 #: The code that turns scenarios into recordings: a change in it (or in a tracked package's
 #: version) resimulates the reference, as a changed FMU or scenario does.
@@ -78,11 +83,12 @@ def explicit_reference(folder: Path) -> Reference:
     return Reference(recordings, {"kind": "folder", "path": str(folder)})
 
 
-def cached_reference(cache: Path = DEFAULT_CACHE, fmu: Path = DEFAULT_FMU,
+def cached_reference(cache: Path | None = None, fmu: Path = DEFAULT_FMU,
                      scenarios: Path = PAPER_SCENARIOS, machines: Path = MACHINES,
                      say=print, machine: str | None = None) -> Reference:
     """The paper experiments on the default machine (or on ``machine``, a name or a .toml
     file, in ``cache/<its name>/``), simulated once into ``cache``."""
+    cache = default_cache() if cache is None else cache
     label = "default"
     machine_entry: dict[str, Any] = {}
     if machine is not None:

@@ -158,8 +158,10 @@ class StudyConfig:
         labels = check_labels(self.methods, f"{where}: key 'methods'")
         if not labels:
             raise fail("methods", "need one or more method labels")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise fail("seed", f"must be an integer >= 0, got {self.seed!r}")
+        from spindlebench.selection.registry import method_seed_problem
+
+        if method_seed_problem(self.seed):
+            raise fail("seed", method_seed_problem(self.seed))
         return replace(self, methods=labels)
 
     def to_dict(self) -> dict[str, Any]:

@@ -17,6 +17,10 @@ specific to placement:
 - ``measured``: read the node temperatures through the study's noise level (default) or use
   the noise-free field.
 - ``exclude_nodes``: nodes where no sensor can go (names as in the FMU, without ``node_``).
+- ``rotating_nodes``: false (default) leaves out the nodes of parts that turn
+  (``ROTATING_PARTS``: the spindle shaft, the tool with its holder, the ball screws): a
+  probe cannot be glued there; true keeps them, for a telemetry study (a sensor in the
+  rotor sending by radio or slip ring). The results README lists the candidates.
 - ``similarity``: the fuzzy similarity, as for the sweep.
 
 Replica 1 is the *design* day set (placements are chosen on it); every further replica is a
@@ -38,6 +42,15 @@ from spindlebench.formats.toml import Table, in_range, load_toml, one_of
 from spindlebench.studies.family.family_file import NO_FAULT, SweepStudy, check_fmu, load_study
 
 METHODS = ("fuzzy", "greedy", "exhaustive")
+#: Parts that rotate in service (node names ``<part>`` or ``<part>_<i>``): the spindle shaft,
+#: the tool holder with its test mandrel, and the ball screws (the nut is what stands).
+ROTATING_PARTS = ("spindle_shaft", "tool", "x_screw", "y_screw", "z_screw")
+
+
+def is_rotating(node: str) -> bool:
+    """Whether a node belongs to a part of ``ROTATING_PARTS``."""
+    return any(node == part or (node.startswith(part + "_") and
+                                node[len(part) + 1:].isdigit()) for part in ROTATING_PARTS)
 DEFAULT_EXHAUSTIVE_LIMIT = 500_000
 MAX_EXHAUSTIVE_LIMIT = 10**9
 MAX_BUDGET = 10
@@ -72,6 +85,8 @@ class PlacementStudy:
     similarity: str
     nodes: tuple[str, ...]  # candidate nodes (FMU order, exclusions removed)
     excluded: tuple[str, ...]
+    rotating_nodes: bool = False  #: whether nodes of rotating parts are candidates
+    rotating_excluded: tuple[str, ...] = ()  #: the rotating nodes left out by default
 
     @property
     def path(self) -> Path:
@@ -149,6 +164,7 @@ def load_placement_study(path: str | Path, machine: str | None = None) -> Placem
     similarity = table.get("similarity", str, default=DEFAULT_SIMILARITY,
                            check=lambda v: one_of(v, SIMILARITIES))
     excluded = table.get_list("exclude_nodes", str, default=[], allow_empty=True)
+    rotating = table.get("rotating_nodes", bool, default=False)
     table.finish()
 
     nodes = fmu_nodes(check_fmu(family))
@@ -159,14 +175,17 @@ def load_placement_study(path: str | Path, machine: str | None = None) -> Placem
     if unknown:
         raise table.error("exclude_nodes", f"no node named '{unknown[0]}' in the FMU (nodes: "
                                            f"{', '.join(nodes[:6])}, ...)")
-    candidates = tuple(name for name in nodes if name not in excluded)
+    turning = () if rotating else tuple(n for n in nodes if is_rotating(n) and
+                                        n not in excluded)
+    candidates = tuple(name for name in nodes if name not in excluded and name not in turning)
     if len(candidates) < max(budgets):
         raise table.error("budgets", f"budget {max(budgets)} exceeds the {len(candidates)} "
                                      "candidate nodes")
     return PlacementStudy(family=family, budgets=budgets, methods=methods,
                           with_differences=with_differences, measured=measured,
                           exhaustive_limit=limit, similarity=similarity, nodes=candidates,
-                          excluded=tuple(excluded))
+                          excluded=tuple(excluded), rotating_nodes=rotating,
+                          rotating_excluded=turning)
 
 
 def describe(study: PlacementStudy) -> dict[str, Any]:
@@ -179,5 +198,7 @@ def describe(study: PlacementStudy) -> dict[str, Any]:
                with_differences=list(study.with_differences), measured=study.measured,
                exhaustive_limit=study.exhaustive_limit, similarity=study.similarity,
                candidate_nodes=len(study.nodes), excluded_nodes=list(study.excluded),
+               rotating_nodes=study.rotating_nodes,
+               rotating_excluded=list(study.rotating_excluded),
                design_replica=study.design_replica, test_replicas=list(study.test_replicas))
     return out

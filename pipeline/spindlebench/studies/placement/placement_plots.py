@@ -13,7 +13,7 @@ import matplotlib.ticker as ticker
 import pandas as pd
 
 from spindlebench.core.atomic import atomic_path
-from spindlebench.studies.placement.schematic import METHOD_COLOURS
+from spindlebench.studies.placement.schematic import method_colour
 
 
 def comparison(table: pd.DataFrame, path: Path,
@@ -32,7 +32,7 @@ def comparison(table: pd.DataFrame, path: Path,
         at = at.sort_values("m")
         method = at["method"].iloc[0]
         style = "--" if bool(at["differences"].iloc[0]) else "-"
-        colour = METHOD_COLOURS.get(method, "purple")
+        colour = method_colour(method, list(ok["method"]))
         mean = at["test_mean_rmse_um"].to_numpy(float)
         if seasons:
             per_season = at[seasons].to_numpy(float)

@@ -143,6 +143,12 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
         "## What was run", "",
         f"- Candidates: {sets}; node temperatures {instruments}"
         + (f"; excluded nodes: {', '.join(study.excluded)}" if study.excluded else "") + ".",
+        f"- Candidate nodes ({n}): {', '.join(study.nodes)}.",
+        (f"- Rotating parts left out (no probe can be glued there; `rotating_nodes = true` "
+         f"keeps them for a telemetry study): {', '.join(study.rotating_excluded)}."
+         if study.rotating_excluded else
+         "- Nodes of rotating parts are candidates (`rotating_nodes = true`: a telemetry "
+         "study)." if study.rotating_nodes else "- No node of a rotating part in the model."),
         f"- Days: climate {family.climate.name}, months {', '.join(family.months)}, speeds "
         f"{', '.join(f'{s:g}' for s in family.speeds_rpm)} rpm, programmes "
         f"{', '.join(p.name for p in family.programmes)}, cooling "

@@ -14,7 +14,7 @@ command is ``commands.place``).
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,6 +23,7 @@ import pandas as pd
 
 from spindlebench.core.atomic import write_text
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import read_recording
 from spindlebench.selection import rmse
@@ -103,8 +104,11 @@ class PlacementStudyRun:
         characters.
         """
         runs, failed = self.simulations.runs(), self.simulations.failed()
-        if not failed:
-            return "no runs"
+        if not failed:  # a recording neither stored nor failed: name it, do not say "none"
+            missing = [f"r{r} {e.id}" for r, e in runs
+                       if not self.store.has_recording(recording_path(r, e))]
+            return (f"no simulation failed, but {len(missing)} of {len(runs)} have no stored "
+                    f"recording, first {missing[0]}" if missing else "no simulation failed")
         errors = [self.simulations.error(r, e) for r, e in failed]
         replica, experiment = failed[0]
         others = len(set(errors)) - 1
@@ -132,20 +136,24 @@ def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | No
                   machine: str | None = None) -> PlacementOutcome:
     """Run (or resume) a placement study and write every output; return what was done.
     ``machine`` replaces the study's machine variant."""
+    stages = Stages(Path(study_path).stem, enabled=progress)  # timed from the start
     study = load_placement_study(study_path, machine)
+    stages.label = study.name
     work = PlacementStudyRun(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="run")
     # an unreachable scheduler fails before the folder is made (and locked)
     with runner.connected(), work.store.locked():
         stats, resumed = work.simulate(runner)
-        return _place(work, runner, stats, resumed)
+        return _place(work, runner, stats, resumed, stages)
 
 
 def _place(work: PlacementStudyRun, runner: TaskRunner, stats: RunStats,
-           resumed: bool) -> PlacementOutcome:
-    """Search, score and write the placements of simulated runs."""
+           resumed: bool, say: Callable[[str], None] = lambda _: None) -> PlacementOutcome:
+    """Search, score and write the placements of simulated runs (``say`` hears each step:
+    the searches and figures come after the simulations' progress bar)."""
     study = work.study
+    say("reading the simulated runs")
     failures = work.failures()
     runs: dict[int, tuple[list[Run], list[Run]]] = {}
     for replica in replicas(study.family):
@@ -157,8 +165,11 @@ def _place(work: PlacementStudyRun, runner: TaskRunner, stats: RunStats,
                                 f"failed to simulate ({work.failure_summary()})")
     start = time.perf_counter()
     train_runs, valid_runs = runs[study.design_replica]
+    say(f"searching placements: {len(study.methods)} method(s) x {len(study.budgets)} "
+        f"budget(s) over {len(study.nodes)} candidate nodes")
     placements = find_placements(study, train_runs, valid_runs)
     search_seconds = time.perf_counter() - start
+    say(f"scoring {len(placements)} placement(s) on {len(runs)} replica(s)")
     scores = score_all(study, placements, runs)
     table = placements_table(study, placements, scores)
     tested = [run for r in study.test_replicas if r in runs for run in runs[r][1]]
@@ -166,6 +177,7 @@ def _place(work: PlacementStudyRun, runner: TaskRunner, stats: RunStats,
                               for run in tested]))
     outcome = PlacementOutcome(work.store.root, placements, table, scores, stats, resumed,
                                failures, search_seconds, no_model)
+    say("writing tables, figures, schematic drawings and README")
     write_outputs(work, outcome, runner, sorted(runs))
     return outcome
 

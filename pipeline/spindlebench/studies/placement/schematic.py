@@ -89,6 +89,20 @@ PART_LABEL_AT = {"housing": (0.97, 2.38)}
 
 _INDEXED = re.compile(r"^(?P<part>.+)_(?P<index>\d+)$")
 METHOD_COLOURS = {"fuzzy": "#d9622b", "greedy": "#2b7bd9", "exhaustive": "#2a9d52"}
+#: Colours of the other methods (``kmeans+grey``, ``lasso``, ...), in the study's order,
+#: each apart from the three above and from each other (every such method was "purple": two
+#: identical purples in one legend).
+OTHER_COLOURS = ("#7b3fa0", "#b8860b", "#17a2b8", "#d63384", "#6c757d", "#8c564b",
+                 "#9acd32", "#000000")
+
+
+def method_colour(method: str, methods: Sequence[str]) -> str:
+    """The colour of ``method`` among the study's ``methods`` (one home for both figures)."""
+    if method in METHOD_COLOURS:
+        return METHOD_COLOURS[method]
+    others = [m for m in dict.fromkeys(methods) if m not in METHOD_COLOURS]
+    index = others.index(method) if method in others else len(others)
+    return OTHER_COLOURS[index % len(OTHER_COLOURS)]
 
 
 def node_positions(nodes: Sequence[str]) -> tuple[dict[str, tuple[float, float]], list[str]]:
@@ -229,7 +243,7 @@ def placement_legend(fig: plt.Figure, methods: Sequence[str]) -> None:
     """What the colours and markers mean, once for the whole figure."""
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], ls="", marker="o", ms=8, color=METHOD_COLOURS.get(m, "purple"),
+    handles = [Line2D([], [], ls="", marker="o", ms=8, color=method_colour(m, methods),
                       mec="black", label=m) for m in dict.fromkeys(methods)]
     grey = "#555555"
     handles += [
@@ -281,7 +295,8 @@ def budget_figure(nodes: Sequence[str], placements: Sequence[Placement], table: 
     for i, placement in enumerate(chosen):
         row, col = divmod(i, cols)
         ax = fig.add_subplot(grid[2 * row, col])
-        draw_placement(ax, nodes, placement, METHOD_COLOURS.get(placement.method, "purple"))
+        draw_placement(ax, nodes, placement,
+                       method_colour(placement.method, [p.method for p in placements]))
         found = table[(table["label"] == placement.label) & (table["m"] == budget)]
         rmse = found["test_mean_rmse_um"].iloc[0] if len(found) else float("nan")
         ax.set_title(f"{placement.label}, m = {budget}: test RMSE {rmse:.2f} µm", fontsize=8)

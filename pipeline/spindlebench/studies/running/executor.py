@@ -36,7 +36,7 @@ from spindlebench.core.console import one_line_error
 from spindlebench.core.errors import SpindlebenchError
 
 #: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
-DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$|^inproc://\S+$")
+DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$")
 
 
 @dataclass(frozen=True)
@@ -200,7 +200,7 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
         raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
     try:
         client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except Exception as exc:  # OSError, TimeoutError, a non-Dask peer's protocol error ...
         raise SpindlebenchError(
             f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
         ) from None
@@ -219,6 +219,10 @@ class TaskRunner:
         if workers is not None and workers < 0:
             raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
         self.workers = default_workers() if workers is None else workers
+        if dask_address is not None and dask_address.startswith("inproc://"):
+            raise SpindlebenchError(f"--dask-address {dask_address!r}: an in-process address "
+                                    "names a scheduler inside this very process, and there is "
+                                    "none; give a running cluster's tcp://HOST:PORT")
         if dask_address is not None and not DASK_ADDRESS.match(dask_address):
             raise SpindlebenchError(f"--dask-address {dask_address!r}: expected a scheduler "
                                     "address like tcp://HOST:PORT")

@@ -12,7 +12,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from spindlebench.core.provenance import sha256_file
-from spindlebench.formats.recording import write_recording
 from spindlebench.studies.family.experiments import Experiment, replicas, scenario_for
 from spindlebench.studies.family.family_file import SweepStudy, pinned_content
 from spindlebench.studies.running.executor import Outcome, Task
@@ -76,7 +75,7 @@ class Simulations:
         replica, experiment = self._keys[outcome.task.key]
         if outcome.ok:
             frame, sidecar = outcome.value
-            write_recording(self.store.path(recording_path(replica, experiment)), frame, sidecar)
+            self.store.write_recording(recording_path(replica, experiment), frame, sidecar)
             self.store.remove(failure_path(replica, experiment))
         else:
             self.store.write_json(failure_path(replica, experiment),

@@ -36,6 +36,7 @@ import pandas as pd
 from spindlebench.core.atomic import atomic_path, write_text
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.recording import write_recording
 from spindlebench.formats.table_csv import write_table
 
 STATE_FILE = "state.json"
@@ -188,6 +189,19 @@ class ResultStore:
     def _save_manifest(self) -> None:
         write_text(self.path(MANIFEST_FILE),
                    json.dumps(dict(sorted(self.manifest().items())), indent=1) + "\n")
+
+    def write_recording(self, relative: str | Path, frame: pd.DataFrame,
+                        sidecar: dict[str, Any]) -> Path:
+        """Write a recording (CSV, then its sidecar) and count it as intact from now on.
+
+        The recording writer hashes the CSV into its own sidecar, not into the manifest, so
+        the store must forget what it concluded about an earlier file at this path: a CSV
+        found without its sidecar was marked not intact, and once redone it stayed so for the
+        rest of the process (``place`` then found no runs and exited 2)."""
+        target = self.path(relative)
+        write_recording(target, frame, sidecar)
+        self._verified[Path(relative).as_posix()] = True
+        return target
 
     def remove(self, relative: str | Path) -> None:
         key = Path(relative).as_posix()

@@ -14,7 +14,7 @@ the data) and ``provenance.json``.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,6 +22,7 @@ import pandas as pd
 
 from spindlebench.core.atomic import write_text
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import TRUTH_COLUMNS, read_back, read_recording
 from spindlebench.studies.family.experiments import (
@@ -256,32 +257,40 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
               machine: str | None = None) -> SweepOutcome:
     """Run (or resume) a sweep and write every output; return what was done. ``machine``
     replaces the study's machine variant."""
+    stages = Stages(Path(study_path).stem, enabled=progress)  # timed from the start
     study = load_study(study_path, machine=machine)
+    stages.label = study.name
     sweep = Sweep(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="job")
     # an unreachable scheduler fails before the folder is made (and locked)
     with runner.connected(), sweep.store.locked():
         outcome = sweep.run(runner)
-        write_outputs(sweep, outcome, runner)
+        write_outputs(sweep, outcome, runner, stages)
     return outcome
 
 
-def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner) -> None:
-    """results.csv, summary, plots, README and provenance (all atomic)."""
+def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
+                  say: Callable[[str], None] = lambda _: None) -> None:
+    """results.csv, summary, plots, README and provenance (all atomic); ``say`` hears each
+    step (a third of a sweep's wall time comes after its progress bar)."""
     from spindlebench.studies.sweep import summary
     from spindlebench.studies.sweep import sweep_plots as plots
     from spindlebench.studies.sweep import sweep_report as report
 
     store, study = sweep.store, sweep.study
     results = outcome.results
+    say(f"writing results.csv ({len(results)} rows)")
     store.write_frame("results.csv", results)
     if not results["rmse_um"].notna().any():
         raise nothing_to_summarise(sweep, results)
+    say("summarising the results per method, season and condition")
     tables = summary.summarise(results)
     for name, table in tables.items():
         store.write_frame(f"summary/{name}.csv", table)
+    say("drawing the box plots")
     figures = plots.box_plots(results, store.path("plots"))
+    say("writing provenance.json and README.md")
     seeds = {f"r{r}": {e.id: sensor_seed(study, r, e) for e in sweep.family}
              for r in replicas(study)}
     record = provenance(
