@@ -22,7 +22,6 @@ from typing import Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import (
-    BUDGET_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
@@ -554,9 +553,10 @@ def _methods(t: Table) -> Methods:
     labels = t.get_list("methods", str, default=[DEFAULT_METHOD])
     seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=non_negative)
     t.finish()
+    from spindlebench.selection.method_registry import method_names
     from spindlebench.selection.registry import check_labels
 
-    labels = list(BUDGET_METHODS) if labels == ["all"] else labels
+    labels = list(method_names(budget=True)) if labels == ["all"] else labels
     try:
         methods = check_labels(labels, "methods")
     except SpindlebenchError as exc:
