@@ -17,6 +17,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.limits import (
+    COLDEST_AMBIENT_C,
+    FOLLOW_AMBIENT_MAX_K,
+    KELVIN_SUSPECT_C,
+    MAX_FEED_MM_PER_MIN,
+    MAX_LAG1,
+    MAX_NOISE_C,
+    MAX_OFFSET_C,
+    MAX_PROBE_DRIFT_UM,
+    MAX_PROBE_NOISE_UM,
+    MAX_RPM,
+)
 from spindlebench.core.names import SENSORS
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
@@ -24,20 +36,7 @@ from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machin
 if TYPE_CHECKING:
     from spindlebench.formats.recording import EndState
 
-#: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
-KELVIN_SUSPECT_C = 60.0
-#: Largest sensor noise and quantisation step (°C), probe noise and step (µm), offset fault (K).
-MAX_NOISE_C, MAX_PROBE_NOISE_UM, MAX_OFFSET_C = 5.0, 100.0, 50.0
-#: Largest offset (K) of a cooling setpoint that follows the ambient.
-FOLLOW_AMBIENT_MAX_K = 20.0
-#: Coldest ambient a workshop scenario may ask for (°C).
-COLDEST_AMBIENT_C = -40.0
-#: Fastest spindle a scenario may ask for (rev/min): the studies' limit; high-speed spindles
-#: of machining centres reach 30 000-40 000 rpm, the model's bearing losses are not meant beyond.
-MAX_RPM = 40_000.0
-#: Fastest mean feed (mm/min): 60 m/min is the rapid traverse of fast machining centres; above
-#: it the feed-drive friction heat of the model has no physical meaning.
-MAX_FEED_MM_PER_MIN = 60_000.0
+# The physical limits (rpm, feed, ambient, noise) have their one home in ``core.limits``.
 #: Smallest communication step (s): the thermal time constants are minutes, a millisecond step
 #: already resolves them a thousand times over.
 MIN_STEP_S = 1e-3
@@ -232,10 +231,6 @@ class SensorFault:
 
 #: Temperature noise processes: independent per sample, AR(1), or a random walk.
 NOISE_KINDS = ("white", "ar1", "random_walk")
-#: Largest AR(1) lag-1 coefficient (1 would be a random walk, which has its own kind).
-MAX_LAG1 = 0.9999
-#: Largest probe drift (µm per √h for the walk, µm/h for the creep).
-MAX_PROBE_DRIFT_UM = 100.0
 
 
 @dataclass(frozen=True)

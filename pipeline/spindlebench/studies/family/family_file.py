@@ -21,6 +21,16 @@ from pathlib import Path
 from typing import Any
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.limits import (
+    FOLLOW_AMBIENT_MAX_K,
+    MAX_FEED_MM_PER_MIN,
+    MAX_LAG1,
+    MAX_NOISE_C,
+    MAX_OFFSET_C,
+    MAX_PROBE_DRIFT_UM,
+    MAX_PROBE_NOISE_UM,
+    MAX_RPM,
+)
 from spindlebench.core.names import (
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
@@ -44,14 +54,6 @@ from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machin
 from spindlebench.studies.family.population import Population, read_population
 from spindlebench.studies.family.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import (
-    FOLLOW_AMBIENT_MAX_K,
-    MAX_FEED_MM_PER_MIN,
-    MAX_LAG1,
-    MAX_NOISE_C,
-    MAX_OFFSET_C,
-    MAX_PROBE_DRIFT_UM,
-    MAX_PROBE_NOISE_UM,
-    MAX_RPM,
     MAX_SOAK_DAYS,
     NOISE_KINDS,
     IndoorAmbient,
