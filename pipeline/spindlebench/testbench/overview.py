@@ -34,7 +34,11 @@ from matplotlib.lines import Line2D
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
     DRIFT_COLUMN,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    SPEED_COLUMN,
     TIME_COLUMN,
     default_sensors,
     recording_name,
@@ -42,9 +46,9 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.testbench.sensor_parts import AMBIENT_SENSOR, PARTS, part_of, sensor_colours
 
-AMBIENT_DRIVER = "ambient_C"
-SPEED = "spindle_speed_rpm"
-FEEDS = ("feed_x_mm_per_min", "feed_y_mm_per_min")
+AMBIENT_DRIVER = AMBIENT_COLUMN
+SPEED = SPEED_COLUMN
+FEEDS = (FEED_X_COLUMN, FEED_Y_COLUMN)
 PANEL_TITLES = {"spindle": "spindle and headstock", "axes": "feed axes and ambient air",
                 "other": "sensors"}
 LABEL_FONTSIZE = 6.5

@@ -49,7 +49,13 @@ from spindlebench.core import interrupts
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU
-from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState, is_probe_output
+from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
+    DRIFT_COLUMN,
+    SENSOR_OUTPUTS,
+    EndState,
+    is_probe_output,
+)
 from spindlebench.machines.variants import Machine
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
@@ -565,8 +571,8 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             hooks = _HeldInputs(fmu, input_vrs, inputs, step_s)
             set_time, max_step = fmu.setTime, step_s
         else:
-            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index("ambient_C")],
-                                      inputs[:, INPUT_NAMES.index("ambient_C")], step_s)
+            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index(AMBIENT_COLUMN)],
+                                      inputs[:, INPUT_NAMES.index(AMBIENT_COLUMN)], step_s)
             set_time, max_step = hooks.set_time, float("inf")
         solver = CVodeSolver(
             nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,

@@ -30,6 +30,7 @@ from spindlebench.core.limits import (
     MAX_RPM,
 )
 from spindlebench.core.names import SENSORS
+from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
 
@@ -504,8 +505,8 @@ def _read_ambient(top: Table, scenario_dir: Path, duration_s: float,
         )
     else:
         file_name = t.string("file")
-        time_column = t.string("time_column", "time_s")
-        value_column = t.string("value_column", "ambient_C")
+        time_column = t.string("time_column", TIME_COLUMN)
+        value_column = t.string("value_column", AMBIENT_COLUMN)
         file = (scenario_dir / file_name).resolve()
         times, values = _read_ambient_csv(t, file, time_column, value_column)
         if times[0] > 0.0 or times[-1] < duration_s:

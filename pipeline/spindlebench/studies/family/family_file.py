@@ -41,6 +41,7 @@ from spindlebench.core.names import (
 )
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.recording import FEED_X_COLUMN, FEED_Y_COLUMN
 from spindlebench.formats.toml import (
     Table,
     in_range,
@@ -250,8 +251,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
                          check=in_range(0, 10, "K"))
     feed = exp.get("feed", str, default="constant",
                    check=lambda v: one_of(v, ("constant", "with_spindle")))
-    feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=_feed)
-    feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=_feed)
+    feed_x = exp.get(FEED_X_COLUMN, float, default=1500.0, check=_feed)
+    feed_y = exp.get(FEED_Y_COLUMN, float, default=1500.0, check=_feed)
     soak_days = _soak_days(exp)
     indoor = _indoor(exp)
     exp.finish()

@@ -29,6 +29,7 @@ import numpy as np
 
 from spindlebench.core.names import KELVIN_OFFSET, SENSORS
 from spindlebench.core.paths import DEFAULT_FMU, SCENARIOS_DIR
+from spindlebench.formats.recording import AMBIENT_COLUMN, DRIFT_COLUMN, TIME_COLUMN
 from spindlebench.machines.variants import (
     PAPER_RUNS,
     Machine,
@@ -44,7 +45,7 @@ from spindlebench.testbench.scenario import load_scenario
 
 PAPER_DIR = SCENARIOS_DIR / "paper"
 SAMPLE_S = 60.0
-ERROR = "drift_um"
+ERROR = DRIFT_COLUMN
 
 
 def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
@@ -70,7 +71,7 @@ def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
                           output_interval=SAMPLE_S, output=outputs, relative_tolerance=1e-6,
                           fmi_type="ModelExchange")  # CVode (FMPy would pick co-simulation)
     frame = {name: np.asarray(result[name], dtype=float) for name in outputs}
-    frame["time_s"] = np.asarray(result["time"], dtype=float)
+    frame[TIME_COLUMN] = np.asarray(result["time"], dtype=float)
     return frame
 
 
@@ -94,7 +95,7 @@ def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEF
 def run_fingerprint(frame: Mapping[str, np.ndarray]) -> dict[str, float]:
     """The fingerprint of one simulated run."""
     temps = np.column_stack([frame[f"{s}_C"] for s in SENSORS])
-    return fingerprint(frame["time_s"], temps, frame[ERROR])
+    return fingerprint(frame[TIME_COLUMN], temps, frame[ERROR])
 
 
 def paper_fingerprints(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
@@ -131,7 +132,7 @@ def ambient_step_response(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
     stop_s = max(hours) * 3600.0
     drift = []
     for ambient_C in (20.0, 20.0 + STEP_K):
-        start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, "ambient_C": ambient_C}
+        start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, AMBIENT_COLUMN: ambient_C}
         result = simulate_fmu(str(fmu_path), start_values=start, stop_time=stop_s,
                               output_interval=600.0, output=[ERROR], relative_tolerance=1e-8,
                               fmi_type="ModelExchange")
