@@ -269,14 +269,14 @@ def parse_method(label: str) -> MethodChoice:
     return parse(label)
 
 
-def make_pipeline(method: str | MethodChoice = "closure", k: int = 2, *,
+def make_pipeline(method: str | MethodChoice | None = None, k: int = 2, *,
                   differences: bool = False, **options: Any) -> Pipeline:
     """The scikit-learn ``Pipeline`` of a method: (differences) -> selector -> regressor.
 
     Parameters
     ----------
-    method : str or MethodChoice
-        A label (``parse_method``) or a parsed choice.
+    method : str or MethodChoice, optional
+        A label (``parse_method``) or a parsed choice; default the paper's method.
     k : int
         How many candidates the selector keeps.
     differences : bool
@@ -299,7 +299,10 @@ def make_pipeline(method: str | MethodChoice = "closure", k: int = 2, *,
     from spindlebench.selection.registry import make_pipeline as make
     from spindlebench.selection.registry import parse_method as parse
 
-    choice = method if isinstance(method, MethodChoice) else parse(method)
+    if method is None:
+        choice = MethodChoice()
+    else:
+        choice = method if isinstance(method, MethodChoice) else parse(method)
     return make(choice, k, differences=differences, **options)
 
 

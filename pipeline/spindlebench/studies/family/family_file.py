@@ -66,7 +66,10 @@ from spindlebench.testbench.scenario import (
 
 #: Most replicas and clusters a study may ask for.
 MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
-BASELINES = ("top-k-correlated", "ridge")
+#: The sweep's baselines: the top-k-correlated selection method on the raw sensors then OLS,
+#: and ridge on all sensors; their names are the method's and the regressor's.
+TOP_K_BASELINE, RIDGE_BASELINE = "top-k-correlated", "ridge"
+BASELINES = (TOP_K_BASELINE, RIDGE_BASELINE)
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
 COOLING_MODES = ("off", "absolute", "follow_ambient")
