@@ -580,7 +580,13 @@ def _read_ambient_csv(
 
 
 def _read_cooling(top: Table) -> Cooling:
-    t = top.table("cooling", required=False)
+    return read_cooling(top.table("cooling", required=False))
+
+
+def read_cooling(t: Table) -> Cooling:
+    """A ``[cooling]`` table: a scenario's, or a study's ``[cooling.NAME]`` axis value (the
+    one reader of the cooling keys). ``follow_ambient`` without ``setpoint_C`` follows the
+    ambient exactly (offset 0 K)."""
     mode = t.string("mode", "off", choices=("off", "absolute", "follow_ambient"))
     if mode == "off":
         cooling = Cooling()
@@ -589,7 +595,7 @@ def _read_cooling(top: Table) -> Cooling:
     else:
         cooling = Cooling(
             mode="follow_ambient",
-            setpoint_C=t.number("setpoint_C", minimum=-FOLLOW_AMBIENT_MAX_K,
+            setpoint_C=t.number("setpoint_C", 0.0, minimum=-FOLLOW_AMBIENT_MAX_K,
                                 maximum=FOLLOW_AMBIENT_MAX_K, unit="K from ambient"),
         )
     t.finish()
@@ -597,8 +603,13 @@ def _read_cooling(top: Table) -> Cooling:
 
 
 def _read_sensors(top: Table, duration_s: float) -> SensorModel:
-    t = top.table("sensors", required=False)
-    defaults = SensorModel()
+    return read_sensor_model(top.table("sensors", required=False), duration_s)
+
+
+def read_sensor_model(t: Table, duration_s: float,
+                      defaults: SensorModel = SensorModel()) -> SensorModel:
+    """A ``[sensors]`` table: a scenario's, or a study's ``[noise.NAME]`` axis value (the one
+    reader of the instrument keys); keys not given take ``defaults``."""
     noise = t.number("noise_C", defaults.noise_C, minimum=0.0, maximum=MAX_NOISE_C)
     quantum = t.number("quantum_C", defaults.quantum_C, minimum=0.0, maximum=MAX_NOISE_C)
     probe_noise = t.number("probe_noise_um", defaults.probe_noise_um, minimum=0.0,

@@ -16,8 +16,8 @@ import numpy as np
 
 from spindlebench.studies.family.family_file import (
     NO_FAULT,
+    AxisValue,
     Fault,
-    NoiseLevel,
     Programme,
     SweepStudy,
 )
@@ -26,7 +26,6 @@ from spindlebench.testbench.scenario import (
     AmbientModel,
     ConstantFeed,
     ConstantSpeed,
-    Cooling,
     FeedWithSpindle,
     InitialState,
     Scenario,
@@ -58,7 +57,7 @@ class Experiment:
 class Condition:
     """How the experiments are measured: a noise level and an optional fault."""
 
-    noise: NoiseLevel
+    noise: AxisValue[SensorModel]
     fault: Fault | None
 
     @property
@@ -139,19 +138,13 @@ def _speed(programme: Programme, rpm: float):
         for at, fraction in zip(programme.step_at_s, programme.step_fraction, strict=True)))
 
 
-def sensor_model(noise: NoiseLevel, fault: Fault | None) -> SensorModel:
-    """The testbench's sensor model for a noise level and an optional fault (to the end)."""
-    faults: tuple[SensorFault, ...] = ()
-    if fault is not None:
-        faults = (SensorFault(fault.sensor, fault.kind, fault.start_s, None,  # type: ignore[arg-type]
-                              fault.value_C, fault.offset_C),)
-    return SensorModel(noise_C=noise.noise_C, quantum_C=noise.quantum_C,
-                       probe_noise_um=noise.probe_noise_um,
-                       probe_quantum_um=noise.probe_quantum_um, faults=faults,
-                       noise_kind=noise.noise_kind,  # type: ignore[arg-type]
-                       noise_lag1=noise.noise_lag1,
-                       probe_drift_um_per_sqrt_h=noise.probe_drift_um_per_sqrt_h,
-                       probe_drift_rate_um_per_h=noise.probe_drift_rate_um_per_h)
+def sensor_model(noise: AxisValue[SensorModel], fault: Fault | None) -> SensorModel:
+    """The testbench's sensor model of a noise level with an optional fault (to the end)."""
+    if fault is None:
+        return noise.value
+    return replace(noise.value, faults=(SensorFault(
+        fault.sensor, fault.kind, fault.start_s, None,  # type: ignore[arg-type]
+        fault.value_C, fault.offset_C),))
 
 
 def ambient_for(study: SweepStudy, replica: int, experiment: Experiment) -> AmbientModel:
@@ -202,7 +195,7 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         speed=_speed(programme, experiment.speed_rpm),
         feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
         ambient=ambient_for(study, replica, experiment),
-        cooling=Cooling(mode=cooling.mode, setpoint_C=cooling.setpoint_C),  # type: ignore[arg-type]
+        cooling=cooling.value,
         sensors=sensor_model(study.noise[0], None),
         initial=initial_for(study, experiment),
         parameters=dict(study.parameters),

@@ -16,19 +16,14 @@ Every problem becomes one line naming the study file and the dotted key.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.limits import (
-    FOLLOW_AMBIENT_MAX_K,
     MAX_FEED_MM_PER_MIN,
-    MAX_LAG1,
-    MAX_NOISE_C,
     MAX_OFFSET_C,
-    MAX_PROBE_DRIFT_UM,
-    MAX_PROBE_NOISE_UM,
     MAX_RPM,
 )
 from spindlebench.core.names import (
@@ -56,13 +51,18 @@ from spindlebench.studies.family.population import Population, read_population
 from spindlebench.studies.family.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import (
     MAX_SOAK_DAYS,
-    NOISE_KINDS,
+    Cooling,
     IndoorAmbient,
     InitialState,
+    SensorModel,
     read_building,
+    read_cooling,
+    read_sensor_model,
     step_count_problem,
     temperature_problem,
 )
+
+V = TypeVar("V")
 
 #: Most replicas and clusters a study may ask for.
 MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
@@ -72,7 +72,6 @@ TOP_K_BASELINE, RIDGE_BASELINE = "top-k-correlated", "ridge"
 BASELINES = (TOP_K_BASELINE, RIDGE_BASELINE)
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
-COOLING_MODES = ("off", "absolute", "follow_ambient")
 FAULT_KINDS = ("dropout", "stuck", "offset")
 NO_FAULT = "none"
 
@@ -90,25 +89,29 @@ class Programme:
 
 
 @dataclass(frozen=True)
-class CoolingMode:
-    name: str
-    mode: str
-    setpoint_C: float = 0.0  # noqa: N815
-
-
-@dataclass(frozen=True)
-class NoiseLevel:
-    """Instrument model of a condition (maps onto the testbench's ``SensorModel``)."""
+class AxisValue(Generic[V]):
+    """One named value of a study axis: the testbench's own type (``Cooling``,
+    ``SensorModel``), read from the ``[AXIS.NAME]`` table by the scenario's reader of that key
+    path (``SCENARIO_AXES``), so the study mirrors no scenario type."""
 
     name: str
-    noise_C: float  # noqa: N815
-    quantum_C: float  # noqa: N815
-    probe_noise_um: float
-    probe_quantum_um: float
-    noise_kind: str = "white"
-    noise_lag1: float = 0.86
-    probe_drift_um_per_sqrt_h: float = 0.0
-    probe_drift_rate_um_per_h: float = 0.0
+    value: V
+
+
+#: The axes whose values are scenario tables: axis -> (the scenario key path its
+#: ``[AXIS.NAME]`` tables are, the scenario's reader of that table). A scenario key a study
+#: can vary is added here (one entry) once its reader exists in ``testbench.scenario``.
+SCENARIO_AXES: dict[str, tuple[str, Callable[..., Any]]] = {
+    "cooling": ("cooling", lambda t, study: read_cooling(t)),
+    "noise": ("sensors", lambda t, study: read_sensor_model(t, study["duration_s"],
+                                                              STUDY_SENSORS)),
+}
+#: A study's instruments unless its ``[noise.NAME]`` says otherwise (the scenario's
+#: ``SensorModel`` defaults, with a probe of 0.3 µm noise), and its ``default`` noise level.
+STUDY_SENSORS = SensorModel(probe_noise_um=0.3)
+#: The axis values a study may name without defining them.
+BUILT_IN_VALUES: dict[str, tuple[str, Any]] = {"cooling": ("off", Cooling()),
+                                               "noise": ("default", STUDY_SENSORS)}
 
 
 @dataclass(frozen=True)
@@ -168,8 +171,8 @@ class SweepStudy:
     months: tuple[str, ...]
     speeds_rpm: tuple[float, ...]
     programmes: tuple[Programme, ...]
-    cooling: tuple[CoolingMode, ...]
-    noise: tuple[NoiseLevel, ...]
+    cooling: tuple[AxisValue[Cooling], ...]
+    noise: tuple[AxisValue[SensorModel], ...]
     faults: tuple[Fault | None, ...]
     training: Training
     methods: Methods
@@ -295,8 +298,11 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
 
     programmes = tuple(_programme(definitions["programmes"], axes, n, duration_s)
                        for n in programme_names)
-    cooling = tuple(_cooling(definitions["cooling"], axes, n) for n in cooling_names)
-    noise = tuple(_noise(definitions["noise"], axes, n) for n in noise_names)
+    known = {"duration_s": duration_s}
+    cooling = tuple(_scenario_axis("cooling", definitions["cooling"], axes, n, known)
+                    for n in cooling_names)
+    noise = tuple(_scenario_axis("noise", definitions["noise"], axes, n, known)
+                  for n in noise_names)
     faults = tuple(_fault(definitions["faults"], axes, n, duration_s) for n in fault_names)
     for table in definitions.values():
         for defined in table.unused():
@@ -459,48 +465,18 @@ def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Progr
     return programme
 
 
-def _cooling(table: Table, axes: Table, name: str) -> CoolingMode:
-    if name == "off" and not table.has(name):
-        return CoolingMode(name, "off")
-    t = _definition(table, axes, "cooling", name)
-    mode = t.get("mode", str, check=lambda v: one_of(v, COOLING_MODES))
-    setpoint = 0.0
-    if mode == "absolute":
-        setpoint = t.get("setpoint_C", float, check=temperature_problem)
-    elif mode == "follow_ambient":
-        setpoint = t.get("setpoint_C", float, default=0.0,
-                         check=in_range(-FOLLOW_AMBIENT_MAX_K, FOLLOW_AMBIENT_MAX_K,
-                                        "K from ambient"))
-    t.finish()
-    return CoolingMode(name, mode, setpoint)
-
-
-def _noise(table: Table, axes: Table, name: str) -> NoiseLevel:
-    if name == "default" and not table.has(name):
-        return NoiseLevel(name, 0.05, 0.1, 0.3, 0.1)
-    t = _definition(table, axes, "noise", name)
-
-    level = NoiseLevel(
-        name,
-        noise_C=t.get("noise_C", float, check=in_range(0, MAX_NOISE_C)),
-        quantum_C=t.get("quantum_C", float, default=0.1, check=in_range(0, MAX_NOISE_C)),
-        probe_noise_um=t.get("probe_noise_um", float, default=0.3,
-                             check=in_range(0, MAX_PROBE_NOISE_UM)),
-        probe_quantum_um=t.get("probe_quantum_um", float, default=0.1,
-                               check=in_range(0, MAX_PROBE_NOISE_UM)),
-        noise_kind=t.get("noise_kind", str, default="white",
-                         check=lambda v: one_of(v, NOISE_KINDS)),
-        probe_drift_um_per_sqrt_h=t.get("probe_drift_um_per_sqrt_h", float, default=0.0,
-                                        check=in_range(0, MAX_PROBE_DRIFT_UM)),
-        probe_drift_rate_um_per_h=t.get("probe_drift_rate_um_per_h", float, default=0.0,
-                                        check=in_range(-MAX_PROBE_DRIFT_UM,
-                                                       MAX_PROBE_DRIFT_UM)),
-    )
-    if level.noise_kind == "ar1":  # the coefficient of the AR(1) process only
-        level = replace(level, noise_lag1=t.get("noise_lag1", float, default=level.noise_lag1,
-                                                check=in_range(0, MAX_LAG1)))
-    t.finish()
-    return level
+def _scenario_axis(axis: str, table: Table, axes: Table, name: str,
+                   study: Mapping[str, Any]) -> AxisValue:
+    """The value ``name`` of ``axis``: its ``[AXIS.NAME]`` table read by the scenario's reader
+    of the axis's key path (``SCENARIO_AXES``), or the built-in value of that name."""
+    built_in, value = BUILT_IN_VALUES.get(axis, (None, None))
+    if name == built_in and not table.has(name):
+        return AxisValue(name, value)
+    t = _definition(table, axes, axis, name)
+    if axis == "noise" and t.has("faults"):
+        raise t.error("faults", "a study's sensor faults are its [faults] axis")
+    _, read = SCENARIO_AXES[axis]
+    return AxisValue(name, read(t, study))
 
 
 def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | None:
