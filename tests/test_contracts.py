@@ -48,7 +48,8 @@ def test_every_home_the_contracts_name_exists():
         token = token.rstrip(".,;:")
         if token.endswith(".py") and "/" in token and "*" not in token \
                 and "NAME" not in token and "<" not in token:
-            if not any((base / token).is_file() for base in (PACKAGE, REPO, REPO / "tests")):
+            if not any((base / token).is_file()
+                       for base in (PACKAGE, PACKAGE.parent, REPO, REPO / "tests")):
                 missing.append(token)
         elif (found := _module_attribute(token)) is not None:
             path, names = found
@@ -298,3 +299,20 @@ def test_recipe_a_recording_column_is_read_through_its_name(tmp_path):
     frame = pd.DataFrame({TIME_COLUMN: [0.0, 60.0], SPEED_COLUMN: [0.0, 3000.0]})
     csv = write_recording(tmp_path / "r.csv", frame, {"source": "test"})
     assert read_recording(csv)[SPEED_COLUMN].tolist() == [0.0, 3000.0]
+
+
+def test_importing_the_package_stays_cheap():
+    """``import spindlebench`` loads no NumPy, pandas or scikit-learn (PEP 562 API)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, spindlebench; "
+            "print(sorted(m for m in ('numpy', 'pandas', 'sklearn') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={"PYTHONPATH": str(PACKAGE.parent)})
+    assert out.stdout.strip() == "[]"
+    import spindlebench
+
+    assert callable(spindlebench.rises) and "rises" in dir(spindlebench)
+    with pytest.raises(AttributeError):
+        spindlebench.no_such_name  # noqa: B018
