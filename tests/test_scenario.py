@@ -114,7 +114,7 @@ BAD_CASES = {
     "wrong type": (BASE.replace("rpm = 4000", 'rpm = "fast"'), "speed.rpm", "number"),
     "boolean as number": (BASE.replace("seed = 3", "seed = true"), "seed", "integer"),
     "negative speed": (BASE.replace("rpm = 4000", "rpm = -4000"), "speed.rpm",
-                       "in [0, 30000] rev/min, got -4000"),
+                       "in [0, 30000] rev/min (the FMU's declared range), got -4000"),
     "kelvin ambient": (BASE.replace("high_C = 10.4", "high_C = 283.5"), "ambient.high_C",
                        "kelvin"),
     "high below low": (BASE.replace("high_C = 10.4", "high_C = 1.0"), "ambient.high_C",

@@ -20,6 +20,8 @@ from __future__ import annotations
 #: declared ``max`` of ``spindle_speed_rpm`` (high-speed spindles of machining centres reach
 #: 30 000 rpm; the model's bearing losses are not meant beyond).
 MAX_RPM = 30_000.0
+#: The unit text of a speed range message: the bound is the FMU's, say so.
+RPM_RANGE_UNIT = "rev/min (the FMU's declared range)"
 #: Fastest mean feed (mm/min), the declared ``max`` of ``feed_x/y_mm_per_min``: 60 m/min is
 #: the rapid traverse of fast machining centres; above it the feed-drive friction heat of the
 #: model has no physical meaning.

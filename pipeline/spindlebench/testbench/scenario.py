@@ -28,6 +28,7 @@ from spindlebench.core.limits import (
     MAX_PROBE_DRIFT_UM,
     MAX_PROBE_NOISE_UM,
     MAX_RPM,
+    RPM_RANGE_UNIT,
 )
 from spindlebench.core.names import SENSORS
 from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
@@ -373,7 +374,7 @@ def _kind(table: Table, choices: tuple[str, ...], default: str | None = None) ->
 
 
 def _rpm(t: Table) -> float:
-    return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit="rev/min")
+    return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit=RPM_RANGE_UNIT)
 
 
 def _feed(t: Table, name: str) -> float:

@@ -25,6 +25,7 @@ from spindlebench.core.limits import (
     MAX_FEED_MM_PER_MIN,
     MAX_OFFSET_C,
     MAX_RPM,
+    RPM_RANGE_UNIT,
 )
 from spindlebench.core.names import (
     DEFAULT_METHOD,
@@ -274,7 +275,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     months = tuple(axes.get_list("months", str, check=lambda m: None if m in MONTHS
                                  else f"not a month (use {', '.join(MONTHS)})"))
     speeds = tuple(axes.get_list("speeds_rpm", float,
-                                 check=in_range(maximum=MAX_RPM, unit="rev/min", positive=True)))
+                                 check=in_range(maximum=MAX_RPM, unit=RPM_RANGE_UNIT,
+                                                positive=True)))
     programme_names = axes.get_list("programmes", str, default=["constant"])
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
