@@ -130,8 +130,8 @@ def readme(study: CompensationStudy, study_path: Path, days: pd.DataFrame,
     c = study.controller
     rate = "none" if c.rate_limit_um_per_s is None else f"{c.rate_limit_um_per_s:g} µm/s"
     fault = "none" if study.fault is None else (
-        f"{study.fault.name} ({study.fault.kind} of {study.fault.sensor} from "
-        f"{study.fault.start_s / 3600:g} h into every day from day {study.fault_from_day})")
+        f"{study.fault.name} ({study.fault.value.kind} of {study.fault.value.sensor} from "
+        f"{study.fault.value.start_s / 3600:g} h into every day from day {study.fault_from_day})")
     lines = [f"# Compensation in the loop: {study.name}", "",
              f"Made by `spindlebench compensate {study_path}`. Every number is computed from "
              "the simulated samples (`timeseries.csv.gz` holds those of the first rule).", "",

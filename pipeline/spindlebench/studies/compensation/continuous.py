@@ -175,8 +175,8 @@ def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int
     if study.fault is not None:
         fault_day = next((d for d in days if d.fault_active), None)
         if fault_day is not None:
-            fault = replace(study.fault,
-                            start_s=day_start_s(study, fault_day.number) + study.fault.start_s)
+            start_s = day_start_s(study, fault_day.number) + study.fault.value.start_s
+            fault = replace(study.fault, value=replace(study.fault.value, start_s=start_s))
     model = sensor_model(family.noise[0], fault)
     readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
                               derive_seed(family.seed, "compensate", "continuous"))

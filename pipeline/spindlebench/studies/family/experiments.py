@@ -17,7 +17,6 @@ import numpy as np
 from spindlebench.studies.family.family_file import (
     NO_FAULT,
     AxisValue,
-    Fault,
     Programme,
     SweepStudy,
 )
@@ -58,7 +57,7 @@ class Condition:
     """How the experiments are measured: a noise level and an optional fault."""
 
     noise: AxisValue[SensorModel]
-    fault: Fault | None
+    fault: AxisValue[SensorFault] | None
 
     @property
     def id(self) -> str:
@@ -138,13 +137,12 @@ def _speed(programme: Programme, rpm: float):
         for at, fraction in zip(programme.step_at_s, programme.step_fraction, strict=True)))
 
 
-def sensor_model(noise: AxisValue[SensorModel], fault: Fault | None) -> SensorModel:
+def sensor_model(noise: AxisValue[SensorModel],
+                 fault: AxisValue[SensorFault] | None) -> SensorModel:
     """The testbench's sensor model of a noise level with an optional fault (to the end)."""
     if fault is None:
         return noise.value
-    return replace(noise.value, faults=(SensorFault(
-        fault.sensor, fault.kind, fault.start_s, None,  # type: ignore[arg-type]
-        fault.value_C, fault.offset_C),))
+    return replace(noise.value, faults=(fault.value,))
 
 
 def ambient_for(study: SweepStudy, replica: int, experiment: Experiment) -> AmbientModel:

@@ -55,6 +55,7 @@ from spindlebench.testbench.scenario import (
     Cooling,
     IndoorAmbient,
     InitialState,
+    SensorFault,
     SensorModel,
     read_building,
     read_cooling,
@@ -115,16 +116,11 @@ BUILT_IN_VALUES: dict[str, tuple[str, Any]] = {"cooling": ("off", Cooling()),
                                                "noise": ("default", STUDY_SENSORS)}
 
 
-@dataclass(frozen=True)
-class Fault:
-    """One sensor fault applied to every held-out experiment from ``start_s`` on."""
-
-    name: str
-    sensor: str
-    kind: str
-    start_s: float
-    value_C: float | None = None  # noqa: N815
-    offset_C: float | None = None  # noqa: N815
+#: A study's fault: the testbench's ``SensorFault`` (to the end of the run, ``end_s`` None)
+#: applied to every held-out experiment from ``start_s`` on, under its ``[faults.NAME]`` name.
+#: Its table is the family's own (``start_h``, hours into the run; a compensation study
+#: shifts it into each day), not a scenario's ``[[sensors.faults]]``.
+Fault = AxisValue
 
 
 @dataclass(frozen=True)
@@ -174,7 +170,7 @@ class SweepStudy:
     programmes: tuple[Programme, ...]
     cooling: tuple[AxisValue[Cooling], ...]
     noise: tuple[AxisValue[SensorModel], ...]
-    faults: tuple[Fault | None, ...]
+    faults: tuple[AxisValue[SensorFault] | None, ...]
     training: Training
     methods: Methods
     parameters: dict[str, float] = field(default_factory=dict)
@@ -481,7 +477,8 @@ def _scenario_axis(axis: str, table: Table, axes: Table, name: str,
     return AxisValue(name, read(t, study))
 
 
-def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | None:
+def _fault(table: Table, axes: Table, name: str,
+           duration_s: float) -> AxisValue[SensorFault] | None:
     if name == NO_FAULT:
         if table.has(name):
             raise table.error(name, f"'{NO_FAULT}' is reserved for 'no fault'")
@@ -499,7 +496,7 @@ def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | N
         offset = t.get("offset_C", float, check=lambda v: "must be non-zero" if v == 0 else
                        range_problem(v, -MAX_OFFSET_C, MAX_OFFSET_C, "K"))
     t.finish()
-    return Fault(name, sensor, kind, start_s, value, offset)
+    return AxisValue(name, SensorFault(sensor, kind, start_s, None, value, offset))
 
 
 def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
