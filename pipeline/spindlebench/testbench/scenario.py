@@ -96,6 +96,15 @@ class SpeedCycles:
 SpeedProgramme = ConstantSpeed | SteppedSpeed | SpeedCycles
 
 
+def at_speed(programme: SpeedProgramme, rpm: float) -> SpeedProgramme:
+    """``programme`` with every speed multiplied by ``rpm``: a programme written at unit speed
+    (1 = a study's axis speed, a step's speed a fraction of it) at the experiment's speed."""
+    if isinstance(programme, SteppedSpeed):
+        return replace(programme, steps=tuple(replace(step, rpm=rpm * step.rpm)
+                                              for step in programme.steps))
+    return replace(programme, rpm=rpm * programme.rpm)
+
+
 @dataclass(frozen=True)
 class ConstantFeed:
     """Both feed axes move all the time at these mean absolute feed rates."""

@@ -17,23 +17,19 @@ import numpy as np
 from spindlebench.studies.family.family_file import (
     NO_FAULT,
     AxisValue,
-    Programme,
     SweepStudy,
 )
 from spindlebench.studies.family.seeds import derive_seed
 from spindlebench.testbench.scenario import (
     AmbientModel,
     ConstantFeed,
-    ConstantSpeed,
     FeedWithSpindle,
     InitialState,
     Scenario,
     SeasonAmbient,
     SensorFault,
     SensorModel,
-    SpeedCycles,
-    SpeedStep,
-    SteppedSpeed,
+    at_speed,
 )
 
 
@@ -127,16 +123,6 @@ def day_weather(study: SweepStudy, replica: int, experiment: Experiment) -> tupl
     return round(normal.low_C + shift, 3), round(normal.high_C + shift, 3)
 
 
-def _speed(programme: Programme, rpm: float):
-    if programme.kind == "constant":
-        return ConstantSpeed(rpm=rpm)
-    if programme.kind == "cycles":
-        return SpeedCycles(rpm=rpm, on_s=programme.on_s, off_s=programme.off_s)
-    return SteppedSpeed(steps=tuple(
-        SpeedStep(at_s=at, rpm=rpm * fraction)
-        for at, fraction in zip(programme.step_at_s, programme.step_fraction, strict=True)))
-
-
 def sensor_model(noise: AxisValue[SensorModel],
                  fault: AxisValue[SensorFault] | None) -> SensorModel:
     """The testbench's sensor model of a noise level with an optional fault (to the end)."""
@@ -190,7 +176,7 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         step_s=study.step_s,
         sample_interval_s=study.sample_interval_s,
         seed=sensor_seed(study, replica, experiment),
-        speed=_speed(programme, experiment.speed_rpm),
+        speed=at_speed(programme.value, experiment.speed_rpm),
         feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
         ambient=ambient_for(study, replica, experiment),
         cooling=cooling.value,

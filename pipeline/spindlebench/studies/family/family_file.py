@@ -52,11 +52,16 @@ from spindlebench.studies.family.population import Population, read_population
 from spindlebench.studies.family.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import (
     MAX_SOAK_DAYS,
+    ConstantSpeed,
     Cooling,
     IndoorAmbient,
     InitialState,
     SensorFault,
     SensorModel,
+    SpeedCycles,
+    SpeedProgramme,
+    SpeedStep,
+    SteppedSpeed,
     read_building,
     read_cooling,
     read_sensor_model,
@@ -76,18 +81,6 @@ TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
 FAULT_KINDS = ("dropout", "stuck", "offset")
 NO_FAULT = "none"
-
-
-@dataclass(frozen=True)
-class Programme:
-    """A speed programme relative to the experiment's speed (the speed is an axis)."""
-
-    name: str
-    kind: str
-    on_s: float = 0.0
-    off_s: float = 0.0
-    step_at_s: tuple[float, ...] = ()
-    step_fraction: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -121,6 +114,11 @@ BUILT_IN_VALUES: dict[str, tuple[str, Any]] = {"cooling": ("off", Cooling()),
 #: Its table is the family's own (``start_h``, hours into the run; a compensation study
 #: shifts it into each day), not a scenario's ``[[sensors.faults]]``.
 Fault = AxisValue
+#: A study's speed programme: the testbench's own speed type written at unit speed (1 = the
+#: experiment's speed, an axis; ``testbench.scenario.at_speed`` scales it), under its
+#: ``[programmes.NAME]`` name. Its table is the family's own (``on_min``/``off_min``,
+#: ``at_h``/``fraction`` of the axis speed), not a scenario's ``[speed]``.
+Programme = AxisValue
 
 
 @dataclass(frozen=True)
@@ -167,7 +165,7 @@ class SweepStudy:
     feed_y_mm_per_min: float
     months: tuple[str, ...]
     speeds_rpm: tuple[float, ...]
-    programmes: tuple[Programme, ...]
+    programmes: tuple[AxisValue[SpeedProgramme], ...]
     cooling: tuple[AxisValue[Cooling], ...]
     noise: tuple[AxisValue[SensorModel], ...]
     faults: tuple[AxisValue[SensorFault] | None, ...]
@@ -435,20 +433,22 @@ def _definition(table: Table, axes: Table, axis: str, name: str) -> Table:
     return table.table(name)
 
 
-def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Programme:
+def _programme(table: Table, axes: Table, name: str,
+               duration_s: float) -> AxisValue[SpeedProgramme]:
     if name == "constant" and not table.has(name):
-        return Programme(name, "constant")
+        return AxisValue(name, ConstantSpeed(rpm=1.0))
     t = _definition(table, axes, "programmes", name)
     kind = t.get("kind", str, check=lambda v: one_of(v, PROGRAMME_KINDS))
+    programme: SpeedProgramme
     if kind == "constant":
-        programme = Programme(name, kind)
+        programme = ConstantSpeed(rpm=1.0)
     elif kind == "cycles":
         on_s = t.get("on_min", float, check=positive) * 60.0
         off_s = t.get("off_min", float, check=positive) * 60.0
         if on_s + off_s > duration_s:
             raise t.error("on_min", f"one cycle ({(on_s + off_s) / 60:g} min) is longer than "
                                     f"the experiment ({duration_s / 60:g} min)")
-        programme = Programme(name, kind, on_s=on_s, off_s=off_s)
+        programme = SpeedCycles(rpm=1.0, on_s=on_s, off_s=off_s)
     else:
         at_h = t.get_list("at_h", float, check=non_negative)
         fractions = t.get_list("fraction", float,
@@ -457,10 +457,11 @@ def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Progr
             raise t.error("fraction", f"has {len(fractions)} values but at_h has {len(at_h)}")
         if at_h != sorted(at_h) or at_h[-1] * 3600.0 >= duration_s:
             raise t.error("at_h", "must increase and stay within the experiment's duration")
-        programme = Programme(name, kind, step_at_s=tuple(h * 3600.0 for h in at_h),
-                              step_fraction=tuple(fractions))
+        programme = SteppedSpeed(steps=tuple(SpeedStep(at_s=h * 3600.0, rpm=fraction)
+                                             for h, fraction in zip(at_h, fractions,
+                                                                    strict=True)))
     t.finish()
-    return programme
+    return AxisValue(name, programme)
 
 
 def _scenario_axis(axis: str, table: Table, axes: Table, name: str,
