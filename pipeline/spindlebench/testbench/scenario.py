@@ -98,7 +98,16 @@ SpeedProgramme = ConstantSpeed | SteppedSpeed | SpeedCycles
 
 def at_speed(programme: SpeedProgramme, rpm: float) -> SpeedProgramme:
     """``programme`` with every speed multiplied by ``rpm``: a programme written at unit speed
-    (1 = a study's axis speed, a step's speed a fraction of it) at the experiment's speed."""
+    (1 = a study's axis speed, a step's speed a fraction of it) at the experiment's speed.
+
+    Examples
+    --------
+    >>> at_speed(SpeedCycles(rpm=1.0, on_s=600.0, off_s=300.0), 4000.0).rpm
+    4000.0
+    >>> [s.rpm for s in at_speed(SteppedSpeed((SpeedStep(0.0, 1.0), SpeedStep(60.0, 0.5))),
+    ...                          3000.0).steps]
+    [3000.0, 1500.0]
+    """
     if isinstance(programme, SteppedSpeed):
         return replace(programme, steps=tuple(replace(step, rpm=rpm * step.rpm)
                                               for step in programme.steps))
