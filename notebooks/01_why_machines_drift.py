@@ -40,7 +40,7 @@ from IPython.display import Image, display
 
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.formats.recording import read_recording
+from spindlebench import read_recording
 
 work = course.start("01")  # this notebook's own files: the folder it prints
 

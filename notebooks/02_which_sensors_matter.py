@@ -36,14 +36,14 @@ from IPython.display import Image, display
 from scipy.cluster.hierarchy import dendrogram
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.formats.recording import read_recording
-from spindlebench.studies.paper.figures import cut_height
-from spindlebench.core.paths import SCENARIOS_DIR
-from spindlebench.selection import (
+from spindlebench import (
+    SCENARIOS_DIR,
     correlation_with,
     cut_for_clusters,
+    cut_height,
     evaluate,
     linkage_from_similarity,
+    read_recording,
     rises,
     similarity_matrix,
     transitive_closure,

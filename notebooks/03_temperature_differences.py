@@ -39,10 +39,7 @@ from IPython.display import Image, display
 
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.core.names import PAPER_SIX
-from spindlebench.core.paths import SCENARIOS_DIR
-from spindlebench.formats.recording import read_recording
-from spindlebench.selection import evaluate, with_differences
+from spindlebench import PAPER_SIX, SCENARIOS_DIR, evaluate, read_recording, with_differences
 
 work = course.start("03")
 EXPERIMENTS = ("exp1", "exp2", "exp4")  # January 4000 rpm, February 2000 rpm, April 4000 rpm

@@ -36,9 +36,7 @@ from IPython.display import Image, display
 
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.core.paths import SCENARIOS_DIR
-from spindlebench.formats.recording import read_recording
-from spindlebench.studies.placement.schematic import draw_machine, node_positions
+from spindlebench import SCENARIOS_DIR, draw_machine, node_positions, read_recording
 
 work = course.start("05")
 

@@ -30,9 +30,14 @@ from IPython.display import Image, display
 
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.core.paths import SCENARIOS_DIR
-from spindlebench.formats.recording import default_sensors, read_recording
-from spindlebench.selection import correlation_with, evaluate, rises
+from spindlebench import (
+    SCENARIOS_DIR,
+    correlation_with,
+    default_sensors,
+    evaluate,
+    read_recording,
+    rises,
+)
 
 work = course.start("06")
 spindlebench("adapt", "caiviac", "--out", work / "caiviac")

@@ -48,7 +48,7 @@ import matplotlib.pyplot as plt
 from IPython.display import Image, display
 from spindlebench.commands import course
 from spindlebench.commands.course import spindlebench
-from spindlebench.formats.recording import read_recording
+from spindlebench import read_recording
 
 work = course.start("07")
 

@@ -285,7 +285,7 @@ def test_shipped_realistic_example_and_study_load():
     root = Path(__file__).parents[1]
     study = load_study(root / "scenarios" / "studies" / "season_sweep_realistic.toml")
     assert study.soak_days == 7 and study.indoor is not None
-    assert {level.noise_kind for level in study.noise} == {"ar1"}
+    assert {level.value.noise_kind for level in study.noise} == {"ar1"}
     scenario = load_scenario(root / "scenarios" / "examples" / "realistic_day.toml")
     assert isinstance(scenario.ambient, IndoorAmbient) and scenario.initial.kind == "soak"
     assert scenario.sensors.noise_kind == "ar1"

@@ -273,7 +273,8 @@ def test_every_selector_composes_with_every_regressor(selector, regressor):
 # --- the registry, evaluate --method and spindlebench methods --------------------------------
 
 def test_method_labels_round_trip_and_refuse_nonsense():
-    from spindlebench.core.names import METHODS, REGRESSORS
+    from spindlebench.core.names import REGRESSORS
+    from spindlebench.selection.method_registry import METHOD_REGISTRY as METHODS
     from spindlebench.selection.registry import MethodChoice, parse_method
 
     for method in METHODS:
@@ -333,7 +334,8 @@ def test_cli_evaluate_method_within_regressor(tmp_path, capsys):
 
 def test_cli_methods_lists_every_name(capsys):
     from spindlebench.commands import main as cli
-    from spindlebench.core.names import METHODS, REGRESSORS, WITHIN
+    from spindlebench.core.names import REGRESSORS, WITHIN
+    from spindlebench.selection.method_registry import METHOD_REGISTRY as METHODS
 
     assert cli.main(["methods"]) == 0
     printed = capsys.readouterr().out

@@ -59,7 +59,8 @@ def test_chongqing_climate_is_complete_and_plausible():
         ({'months = ["Jan", "Jul"]': 'months = ["Jan", "Jan"]'},
          "key 'axes.months': item 'Jan' appears twice"),
         ({"speeds_rpm = [2000, 4000]": "speeds_rpm = [2000, -4000]"},
-         "key 'axes.speeds_rpm': item 2 (-4000): must be in (0, 40000] rev/min"),
+         "key 'axes.speeds_rpm': item 2 (-4000): must be in (0, 30000] rev/min (the FMU's "
+         "declared range)"),
         ({'noise = ["lab"]': 'noise = ["lab", "shop"]'},
          "key 'axes.noise': 'shop' is not defined (add a [noise.shop] table)"),
         ({'sensor = "T1"': 'sensor = "T21"'}, "key 'faults.T1-stuck.sensor': must be one of"),

@@ -43,12 +43,17 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.core.paths import shared_recordings_dir
 from spindlebench.core.provenance import file_entry, provenance
-from spindlebench.formats.recording import check_recording_targets, write_recording
+from spindlebench.formats.recording import (
+    SPEED_COLUMN,
+    TIME_COLUMN,
+    check_recording_targets,
+    write_recording,
+)
 
 DATASET = "caiviac-fl-thermal"
 TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
 DISPLACEMENTS = tuple(f"ch{i}_um" for i in range(1, 6))
-SOURCE_COLUMNS = ("time_s", "spindle_rpm", *DISPLACEMENTS, *TEMPERATURES)
+SOURCE_COLUMNS = (TIME_COLUMN, "spindle_rpm", *DISPLACEMENTS, *TEMPERATURES)
 AXIAL_TARGET = "ch3_um"
 #: What each displacement channel is, as far as the data tell (the source documents neither
 #: direction nor position; the names stay the source's channel numbers, in µm). The pairs are
@@ -160,7 +165,7 @@ def read_source(path: str | Path) -> pd.DataFrame:
         frame[column] = values.astype(float)
     if len(frame) < 2:
         raise SpindlebenchError(f"{path}: fewer than two data rows")
-    steps = np.diff(frame["time_s"].to_numpy())
+    steps = np.diff(frame[TIME_COLUMN].to_numpy())
     bad = np.flatnonzero((steps <= 0) | ~np.isclose(steps, steps[0]))
     if bad.size:
         raise SpindlebenchError(
@@ -199,8 +204,8 @@ def find_schedule(spindle_rpm: np.ndarray) -> Schedule:
 def canonical_run(source: pd.DataFrame, run: Run, phase: Phase) -> tuple[pd.DataFrame, dict]:
     """The canonical table of one run and the zero offsets subtracted from the channels."""
     rows = source.iloc[run.rows(phase).start : run.rows(phase).stop]
-    table = pd.DataFrame({"time_s": rows["time_s"].to_numpy() - rows["time_s"].iloc[0]})
-    table["spindle_speed_rpm"] = rows["spindle_rpm"].to_numpy()
+    table = pd.DataFrame({TIME_COLUMN: rows[TIME_COLUMN].to_numpy() - rows[TIME_COLUMN].iloc[0]})
+    table[SPEED_COLUMN] = rows["spindle_rpm"].to_numpy()
     for column in TEMPERATURES:
         table[column] = rows[column].to_numpy()
     offsets = {column: float(rows[column].iloc[0]) for column in DISPLACEMENTS}
@@ -299,8 +304,8 @@ def write_runs(
             run=asdict(run),
             source_rows={"first": rows.start, "last": rows.stop - 1, "count": len(rows)},
             source_time_s={
-                "first": float(source["time_s"].iloc[rows.start]),
-                "last": float(source["time_s"].iloc[rows.stop - 1]),
+                "first": float(source[TIME_COLUMN].iloc[rows.start]),
+                "last": float(source[TIME_COLUMN].iloc[rows.stop - 1]),
             },
             speeds_rpm=list(run.speeds_rpm),
             axial_target=AXIAL_TARGET,

@@ -20,6 +20,7 @@ import numpy as np
 from spindlebench.calibration.mapping import INPUTS
 from spindlebench.calibration.problem import Discretisation, Fit, ambient_series, trajectory
 from spindlebench.calibration.series import Series
+from spindlebench.formats.recording import AMBIENT_COLUMN
 
 #: Candidates last as long as the first recording, at most this long.
 MAX_CANDIDATE_HOURS = 8.0
@@ -71,7 +72,7 @@ def _candidate(series: Series, ambient_C: float, programme: Programme) -> Series
 
 def _information(d: Discretisation, candidate: Series, s: np.ndarray) -> np.ndarray:
     """Fisher information of the log-factors from the candidate's channels."""
-    ambient0 = float(candidate.inputs[INPUTS.index("ambient_C"), 0])
+    ambient0 = float(candidate.inputs[INPUTS.index(AMBIENT_COLUMN), 0])
     z0 = np.full(d.n_x, ambient0)
     states, S = trajectory(d, candidate, z0, s, np.zeros(0))
     names = [c.output for c in candidate.channels]

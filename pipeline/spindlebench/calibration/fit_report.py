@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from spindlebench.calibration.problem import Fit
 from spindlebench.core import atomic
+from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
 
 
 def report_paths(machine_file: Path) -> tuple[Path, Path]:
@@ -74,7 +75,7 @@ def report_dict(fit: Fit, provenance: Mapping[str, Any], ignored: Mapping[str, S
         ],
         "correlation": {"names": fit.fit, "matrix": np.round(fit.correlation, 4).tolist()},
         "residuals": fit.channel_rmse,
-        "ambient_C": [np.round(t["ambient_C"], 3).tolist() for t in fit.trajectories],
+        AMBIENT_COLUMN: [np.round(t[AMBIENT_COLUMN], 3).tolist() for t in fit.trajectories],
         "ignored_columns": {k: list(v) for k, v in ignored.items()},
     }
 
@@ -90,7 +91,7 @@ def figure(fit: Fit, path: Path, title: str = "") -> Path:
     axes = fig.subplots(2, count, squeeze=False, sharex="col")
     colours = [f"C{i}" for i in range(10)]
     for column, curves in enumerate(fit.trajectories):
-        hours = (curves["time_s"] - curves["time_s"][0]) / 3600.0
+        hours = (curves[TIME_COLUMN] - curves[TIME_COLUMN][0]) / 3600.0
         top, bottom = axes[0, column], axes[1, column]
         temperatures = [c for c in curves["channels"] if c["kind"] == "temperature"]
         for i, channel in enumerate(temperatures):
@@ -98,7 +99,7 @@ def figure(fit: Fit, path: Path, title: str = "") -> Path:
             top.plot(hours, channel["measured"], ".", ms=1.5, color=colour, alpha=0.5)
             top.plot(hours, channel["model"], "-", lw=1.0, color=colour,
                      label=f"{channel['column']} → {channel['output'].removesuffix('_C')}")
-        top.plot(hours, curves["ambient_C"], "--", color="grey", lw=1.0, label="ambient")
+        top.plot(hours, curves[AMBIENT_COLUMN], "--", color="grey", lw=1.0, label="ambient")
         top.set_ylabel("temperature (°C)")
         top.set_title(curves["recording"])
         if temperatures:

@@ -27,6 +27,7 @@ from spindlebench.calibration.problem import (
     trajectory,
 )
 from spindlebench.calibration.series import Series
+from spindlebench.formats.recording import AMBIENT_COLUMN
 
 
 def _recording_terms(d: Discretisation, series: Series, s: ca.MX, tag: str,
@@ -42,7 +43,7 @@ def _recording_terms(d: Discretisation, series: Series, s: ca.MX, tag: str,
     offset = ca.MX.sym(f"c_{tag}", 1 if any(c.kind == "error" for c in series.channels) else 0)
     U = ca.MX(ca.DM(np.nan_to_num(series.inputs)))
     if basis is not None:
-        U[INPUTS.index("ambient_C"), :] = ca.mtimes(ca.DM(basis), knots).T
+        U[INPUTS.index(AMBIENT_COLUMN), :] = ca.mtimes(ca.DM(basis), knots).T
     states = ca.horzcat(z0, Z)
     h = ca.DM(np.diff(series.time_s)).T
     G = d.step.map(n)(states[:, :-1], states[:, 1:], U[:, :-1], h, s)

@@ -52,7 +52,9 @@ import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
     DRIFT_COLUMN,
+    DRIVER_COLUMNS,
     NODE_PREFIX,
     TEMPERATURE_SUFFIX,
     TIME_COLUMN,
@@ -61,7 +63,7 @@ from spindlebench.formats.recording import (
 )
 from spindlebench.formats.toml import Table, load_toml
 
-INPUTS = ("spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C")
+INPUTS = DRIVER_COLUMNS
 UNKNOWN = "unknown"
 DRIFT_OUTPUT = DRIFT_COLUMN
 _SENSOR = re.compile(r"^T([1-9]|1[0-9]|20)$")
@@ -99,7 +101,7 @@ class RecordingMap:
 
     @property
     def ambient_unknown(self) -> bool:
-        return self.inputs["ambient_C"] == UNKNOWN
+        return self.inputs[AMBIENT_COLUMN] == UNKNOWN
 
     def columns(self) -> list[str]:
         """Every recording column the map uses."""
@@ -164,10 +166,10 @@ def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
     outputs = set(outputs)
     top = Table(load_toml(path, "map"), path)
     inputs_table = top.table("inputs")
-    inputs = {key: _column_or_constant(inputs_table, key, key == "ambient_C") for key in INPUTS}
+    inputs = {key: _column_or_constant(inputs_table, key, key == AMBIENT_COLUMN) for key in INPUTS}
     inputs_table.finish()
     ambient = top.table("ambient", required=False)
-    if ambient.data and inputs["ambient_C"] != UNKNOWN:
+    if ambient.data and inputs[AMBIENT_COLUMN] != UNKNOWN:
         raise ambient.error(next(ambient.names()), "only with inputs.ambient_C = \"unknown\"")
     knot_h = ambient.number("knot_h", 4.0, minimum=0.0, unit="h")
     ambient.finish()

@@ -42,7 +42,7 @@ from spindlebench.calibration.mapping import INPUTS
 from spindlebench.calibration.series import Series
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import KELVIN_OFFSET
-from spindlebench.formats.recording import node_output
+from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN, node_output
 from spindlebench.model.equations import ExplicitOde
 
 #: Prior sd (K) of the uniform shift of the initial state.
@@ -55,7 +55,7 @@ MAX_CHORD_ITERATIONS = 30
 #: (n / n_ref)^(2/3) has an infinite partial at n = 0, which numeric AD multiplies by a zero
 #: seed into NaN: a standing spindle is given as this speed (no heat to speak of).
 MIN_SPEED_RPM = 1e-3
-AMBIENT = INPUTS.index("ambient_C")
+AMBIENT = INPUTS.index(AMBIENT_COLUMN)
 
 
 class _Dense:
@@ -513,8 +513,8 @@ def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit
 
     channel_rmse, trajectories = [], []
     for i, series in enumerate(series_list):
-        curves = {"recording": series.name, "time_s": series.time_s,
-                  "ambient_C": ambient_series(series, theta[layout.blocks[i][1]]),
+        curves = {"recording": series.name, TIME_COLUMN: series.time_s,
+                  AMBIENT_COLUMN: ambient_series(series, theta[layout.blocks[i][1]]),
                   "channels": []}
         for channel, model in zip(series.channels, final.models[i], strict=True):
             valid = np.isfinite(channel.values)

@@ -40,7 +40,15 @@ from spindlebench.calibration.problem import Discretisation, Fit, calibrate, tra
 from spindlebench.calibration.series import Series, load_series
 from spindlebench.core import atomic
 from spindlebench.core.paths import MODELS_DIR
-from spindlebench.formats.recording import read_recording
+from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
+    DRIFT_COLUMN,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    SPEED_COLUMN,
+    TIME_COLUMN,
+    read_recording,
+)
 from spindlebench.model.equations import explicit_ode
 
 TRAIN = ("run1_1250rpm", "run2_2500rpm", "run3_3750rpm")
@@ -62,8 +70,8 @@ FIT = [name for name in DEFAULT_FIT if name not in ("c_x_motor", "c_y_motor")]
 def _map(temperatures: dict[str, str], runs_dir: Path) -> RecordingMap:
     return RecordingMap(
         path=runs_dir / "(generated map)",
-        inputs={"spindle_speed_rpm": "spindle_speed_rpm", "feed_x_mm_per_min": 0.0,
-                "feed_y_mm_per_min": 0.0, "ambient_C": "unknown"},
+        inputs={SPEED_COLUMN: SPEED_COLUMN, FEED_X_COLUMN: 0.0,
+                FEED_Y_COLUMN: 0.0, AMBIENT_COLUMN: "unknown"},
         ambient_knot_h=4.0, error_column=ERROR, error_sign=ERROR_SIGN,
         temperatures=temperatures,
     )
@@ -123,13 +131,13 @@ def _load(runs_dir: Path, names: tuple[str, ...], recording_map: RecordingMap) -
 def predict_error(d: Discretisation, fit: Fit, runs: list[Series]) -> list[np.ndarray]:
     """Predicted error of each run from the speed programme alone (see the module docstring)."""
     joined = _joined(runs)
-    ambient = float(np.mean(np.concatenate([t["ambient_C"] for t in fit.trajectories])))
+    ambient = float(np.mean(np.concatenate([t[AMBIENT_COLUMN] for t in fit.trajectories])))
     joined = replace(joined, ambient_unknown=False,
                      inputs=np.vstack([joined.inputs[:3], np.full(len(joined.time_s), ambient)]))
     states, _ = trajectory(d, joined, fit.initial_states[0], fit.log_factors, np.zeros(0),
                            sensitivities=False)
     Y = np.asarray(d.outputs.map(joined.intervals + 1)(states, joined.inputs, fit.log_factors))
-    drift = Y[d.output_index["drift_um"]]
+    drift = Y[d.output_index[DRIFT_COLUMN]]
     predictions, start = [], 0
     for series in runs:
         piece = drift[start:start + len(series.time_s)]
@@ -212,7 +220,7 @@ def _figure(fit: Fit, predicted, mlr, measured, path: Path) -> None:
     axes = fig.subplots(2, 3)
     for k, curves in enumerate(fit.trajectories):
         ax = axes[0, k]
-        hours = curves["time_s"] / 3600
+        hours = curves[TIME_COLUMN] / 3600
         for i, channel in enumerate(c for c in curves["channels"] if c["kind"] == "temperature"):
             if i % 4:
                 continue  # every fourth sensor keeps the panel readable

@@ -14,6 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from spindlebench.formats.recording import DRIFT_COLUMN
 from spindlebench.studies.benchmark.benchmark_run import DEFAULT_OUT
 
 
@@ -44,7 +45,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--recordings", nargs="+", type=Path, metavar="CSV",
                         help="your own recordings as one more task (each trains in turn, the "
                         "others are predicted)")
-    parser.add_argument("--target", default="drift_um",
+    parser.add_argument("--target", default=DRIFT_COLUMN,
                         help="target column of --recordings (default drift_um)")
     from spindlebench.formats.roles import add_role_arguments
 

@@ -15,6 +15,7 @@ from fmpy import read_model_description
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.recording import NODE_PREFIX
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.model.build import build_fmu
 
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     path = build_fmu(args.models, target, segments=args.segments, say=stages)
     elapsed = stages.seconds
     description = read_model_description(str(path))
-    nodes = sum(v.name.startswith("node_") for v in description.modelVariables)
+    nodes = sum(v.name.startswith(NODE_PREFIX) for v in description.modelVariables)
     print(
         f"built {path}: {args.segments} segments per part, {nodes} nodes, "
         f"{len(description.derivatives)} states, {elapsed:.1f} s in all, "

@@ -27,7 +27,7 @@ from spindlebench.calibration.series import Series, load_series
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.provenance import file_entry, provenance
-from spindlebench.formats.recording import NODE_PREFIX, node_output
+from spindlebench.formats.recording import AMBIENT_COLUMN, NODE_PREFIX, SPEED_COLUMN, node_output
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.formats.toml import load_toml
 from spindlebench.identification.model import (
@@ -82,7 +82,7 @@ def _map(path: str):
     outputs = {node_output(str(v).removeprefix(NODE_PREFIX).removesuffix("_C"))
                for v in temperatures.values() if isinstance(v, str)}
     recording_map = read_map(path, outputs)
-    speed = recording_map.inputs["spindle_speed_rpm"]
+    speed = recording_map.inputs[SPEED_COLUMN]
     if not isinstance(speed, str):
         raise SpindlebenchError(f"{path}: key 'inputs.spindle_speed_rpm': identification needs "
                                 "the speed programme as a column, got a constant")
@@ -119,7 +119,7 @@ def _run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"-o {out}: the model file ends in .json")
     recording_map = _map(args.map_file)
     roles = ColumnRoles.from_args(args)
-    ambient = isinstance(recording_map.inputs["ambient_C"], str) and \
+    ambient = isinstance(recording_map.inputs[AMBIENT_COLUMN], str) and \
         not recording_map.ambient_unknown
     series = [load_series(p, recording_map, args.step_s, roles) for p in args.recordings]
     parts = [_parts(s, ambient) for s in series]

@@ -30,7 +30,7 @@ from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import DEFAULT_FMU, SCENARIOS_DIR
 from spindlebench.core.provenance import file_entry, provenance
-from spindlebench.formats.recording import read_recording, write_recording
+from spindlebench.formats.recording import SPEED_COLUMN, read_recording, write_recording
 from spindlebench.formats.table_csv import write_table
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.studies.iso230_3 import evaluation
@@ -170,7 +170,7 @@ def write_report(test: str, data: TestData, numbers: dict[str, Any], source: dic
     columns.update({f"{k}_C" if not k.endswith("_C") else k: v
                     for k, v in data.temperatures.items()})
     if data.speed_rpm is not None:
-        columns["spindle_speed_rpm"] = data.speed_rpm
+        columns[SPEED_COLUMN] = data.speed_rpm
     series = out_dir / f"{test}_series.csv"
     with atomic.atomic_path(series) as tmp:
         write_table(tmp, pd.DataFrame(columns))

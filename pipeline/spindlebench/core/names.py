@@ -53,42 +53,11 @@ FINGERPRINT_KEYS: tuple[str, ...] = (
 #: Degrees Celsius to kelvin.
 KELVIN_OFFSET = 273.15
 
-#: The selection methods every command, study file and report knows, with one line each
-#: (``spindlebench methods`` prints them; ``selection.registry`` builds the estimators). The
-#: first is the paper's. Cluster methods pick one candidate per cluster (``WITHIN``); the others
-#: choose k candidates directly.
-CLUSTER_METHODS: dict[str, str] = {
-    "closure": "the paper's fuzzy equivalence closure t(R) cut into k clusters "
-               "(single linkage on 1 - R)",
-    "fcm": "fuzzy c-means (scikit-fuzzy cmeans, fuzzifier 2) on the standardised series; "
-           "each candidate to its largest membership",
-    "kmeans": "k-means (scikit-learn, 10 starts) on the standardised series",
-    "average": "hierarchical clustering, average linkage on 1 - R (SciPy)",
-    "complete": "hierarchical clustering, complete linkage on 1 - R (SciPy)",
-    "ward": "hierarchical clustering, Ward linkage on the standardised series (SciPy)",
-}
-DIRECT_METHODS: dict[str, str] = {
-    "top-k-correlated": "the k candidates with the largest |psi|, no clustering",
-    "lasso": "the first k candidates to enter the LASSO path (standardised rises)",
-    "elastic-net": "the first k candidates to enter the elastic-net path (l1_ratio 0.5)",
-    "stability": "stability selection: the k most frequent on the LASSO path's first k over "
-                 "50 random half-samples",
-    "greedy": "greedy forward selection by cross-experiment RMSE of OLS (train on the first "
-              "half of the run, score on the second)",
-    "mi": "the k candidates with the largest mutual information with the error (scikit-learn "
-          "mutual_info_regression, 3 neighbours, seeded)",
-    "mrmr": "minimum redundancy maximum relevance: greedily the candidate whose mutual "
-            "information with the error minus its mean with those chosen is largest",
-    "all-candidates": "no selection: every candidate (k does not apply); all-candidates+ols "
-                      "is OLS on all sensors, all-candidates+REGRESSOR gives a regressor or a "
-                      "pipeline of your own every candidate",
-}
-#: The method that keeps every candidate.
-ALL_CANDIDATES = "all-candidates"
-METHODS: dict[str, str] = {**CLUSTER_METHODS, **DIRECT_METHODS}
-#: The methods that keep k candidates: what a study file's ``methods = ["all"]`` lists.
-BUDGET_METHODS: tuple[str, ...] = tuple(m for m in METHODS if m != ALL_CANDIDATES)
+#: The paper's selection method. Every method's name, line and kind is in the one registry,
+#: ``selection.method_registry.METHOD_REGISTRY`` (``spindlebench methods`` prints it).
 DEFAULT_METHOD = "closure"
+#: The method that keeps every candidate (k does not apply).
+ALL_CANDIDATES = "all-candidates"
 #: The choice of one candidate inside a cluster.
 WITHIN: dict[str, str] = {
     "psi": "largest |psi|, the Pearson correlation with the error (the paper's eq. 4)",

@@ -72,6 +72,13 @@ if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` 
 TIME_COLUMN = "time_s"
 #: The measured thermal error (the probe's reading), µm.
 DRIFT_COLUMN = "drift_um"
+#: The driver inputs: the FMU's input names and their recording columns (rev/min, mm/min, °C).
+SPEED_COLUMN = "spindle_speed_rpm"
+FEED_X_COLUMN = "feed_x_mm_per_min"
+FEED_Y_COLUMN = "feed_y_mm_per_min"
+AMBIENT_COLUMN = "ambient_C"
+#: The driver columns in the FMU's input order.
+DRIVER_COLUMNS: tuple[str, ...] = (SPEED_COLUMN, FEED_X_COLUMN, FEED_Y_COLUMN, AMBIENT_COLUMN)
 #: Prefix of a noise-free FMU output's column.
 TRUE_PREFIX = "true_"
 #: FMU outputs: a sensor ``T1`` is output ``T1_C``; a field node ``housing_3`` is output
@@ -128,6 +135,10 @@ def node_column(node: str) -> str:
     return true_column(node_output(node))
 
 
+#: The noise-free thermal error's column (``true_drift_um``).
+TRUE_DRIFT_COLUMN = true_column(DRIFT_COLUMN)
+#: The noise-free sensor temperatures' columns (``true_T1_C`` ...), in ``SENSORS`` order.
+TRUE_SENSOR_COLUMNS: tuple[str, ...] = tuple(true_column(o) for o in SENSOR_OUTPUTS)
 #: Truth columns a study's evaluation needs from a recording.
 TRUTH_COLUMNS: tuple[str, ...] = (TIME_COLUMN, *(true_column(o) for o in SENSOR_OUTPUTS),
                                   true_column(DRIFT_COLUMN))

@@ -44,6 +44,7 @@ from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import (
+    SPEED_COLUMN,
     TIME_COLUMN,
     RecordingTable,
     check_encoding,
@@ -478,8 +479,7 @@ def read_table_with_roles(path: Path, target: str, roles: ColumnRoles, *,
     return table, choice
 
 
-#: What ``--speed-column`` is read as (the testbench's input name).
-SPEED_COLUMN = "spindle_speed_rpm"
+#: What ``--speed-column`` is read as: the testbench's speed input, ``recording.SPEED_COLUMN``.
 
 
 def _date_times(path: Path, column: str, header: Sequence[str], delimiter: str,

@@ -29,6 +29,13 @@ import numpy as np
 from spindlebench.adapters import caiviac
 from spindlebench.core import atomic
 from spindlebench.core.provenance import file_entry, provenance
+from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
+    DRIFT_COLUMN,
+    SPEED_COLUMN,
+    TIME_COLUMN,
+    TRUE_DRIFT_COLUMN,
+)
 from spindlebench.identification.estimators import (
     ObserverRegressor,
     ThermalNetworkRegressor,
@@ -72,7 +79,7 @@ def top_correlated(T: np.ndarray, y: np.ndarray, runs, train, k: int) -> list[in
 
 def run_split(frame, schedule, train_numbers) -> dict:
     """Every model on one split: per held-out run RMSE (um) and the fit times (s)."""
-    t = frame["time_s"].to_numpy(float)
+    t = frame[TIME_COLUMN].to_numpy(float)
     n = frame["spindle_rpm"].to_numpy(float)
     y = frame[TARGET].to_numpy(float)
     T = frame[list(caiviac.TEMPERATURES)].to_numpy(float)
@@ -121,7 +128,7 @@ def room_proxy_split(frame, schedule, train_numbers) -> dict:
     """The speed-only network against the same network given a room proxy: the sensor that
     moves least over the training runs (the smallest range; chosen without the error) as the
     ambient column. How much of the gap to MLR an ambient channel would close."""
-    t = frame["time_s"].to_numpy(float)
+    t = frame[TIME_COLUMN].to_numpy(float)
     n = frame["spindle_rpm"].to_numpy(float)
     y = frame[TARGET].to_numpy(float)
     T = frame[list(caiviac.TEMPERATURES)].to_numpy(float)
@@ -199,13 +206,13 @@ def synthetic(folder: Path) -> dict:
 
     def arrays(name):
         frame = read_recording(folder / f"{name}.csv")
-        t = frame["time_s"].to_numpy(float)
-        n = frame["spindle_speed_rpm"].to_numpy(float)
-        return (frame, np.column_stack([t, n]), np.column_stack([t, n, frame["ambient_C"]]),
+        t = frame[TIME_COLUMN].to_numpy(float)
+        n = frame[SPEED_COLUMN].to_numpy(float)
+        return (frame, np.column_stack([t, n]), np.column_stack([t, n, frame[AMBIENT_COLUMN]]),
                 frame[[f"T{i}" for i in range(1, 21)]].to_numpy(float))
 
     train, speed, with_room, T = arrays("train")
-    y = train["drift_um"].to_numpy(float)
+    y = train[DRIFT_COLUMN].to_numpy(float)
     chosen = np.argsort([-abs(np.corrcoef(T[:, j] - T[0, j], y)[0, 1]) for j in range(20)])[:4]
     models = {
         "transfer function, 1st order (speed)": (TransferFunctionRegressor(order=1), "speed"),
@@ -229,17 +236,17 @@ def synthetic(folder: Path) -> dict:
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     results["rmse_um"]["MLR, 20 sensors"] = {
         name: float(np.sqrt(np.mean((np.column_stack([Tt - Tt[0], np.ones(len(Tt))]) @ coef
-                                     - f["true_drift_um"].to_numpy()) ** 2)))
+                                     - f[TRUE_DRIFT_COLUMN].to_numpy()) ** 2)))
         for name, (f, _, _, Tt) in tests.items()}
     for label, (model, kind) in models.items():
         model.fit(design(kind, speed, with_room, T), y)
         results["train_rmse_um"][label] = float(np.sqrt(np.mean(
-            (model.predict(design(kind, speed, with_room, T)) - train["true_drift_um"]) ** 2)))
+            (model.predict(design(kind, speed, with_room, T)) - train[TRUE_DRIFT_COLUMN]) ** 2)))
         results["models"][label] = {"tau_h": [x / 3600 for x in model.fit_.taus_s],
                                     "exponents": model.fit_.exponents.tolist()}
         results["rmse_um"][label] = {
             name: float(np.sqrt(np.mean((model.predict(design(kind, sx, rx, Tt))
-                                         - f["true_drift_um"].to_numpy()) ** 2)))
+                                         - f[TRUE_DRIFT_COLUMN].to_numpy()) ** 2)))
             for name, (f, sx, rx, Tt) in tests.items()}
     return results
 

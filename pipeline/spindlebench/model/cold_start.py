@@ -19,6 +19,7 @@ import pandas as pd
 from spindlebench.core import atomic
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DATA_ROOT, DEFAULT_FMU
+from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN
 
 DEFAULT_FIGURE = DATA_ROOT / "docs" / "figures" / "model_cold_start.png"
 FIGURE_SENSORS = ("T1_C", "T6_C", "T8_C", "T10_C", "T13_C", "T16_C")
@@ -65,12 +66,12 @@ def cold_start(
         relative_tolerance=1e-6,
     )
     frame = pd.DataFrame({name: result[name] for name in result.dtype.names})
-    return frame.rename(columns={"time": "time_s"})
+    return frame.rename(columns={"time": TIME_COLUMN})
 
 
 def rise(frame: pd.DataFrame, column: str, minutes: float) -> float:
     """Change of ``column`` from the first sample to ``minutes`` into the run."""
-    times = frame["time_s"].to_numpy()
+    times = frame[TIME_COLUMN].to_numpy()
     values = frame[column].to_numpy()
     return float(np.interp(minutes * 60.0, times, values) - values[0])
 
@@ -96,7 +97,7 @@ def plot(fmu_path: str | Path = DEFAULT_FMU, out_path: str | Path = DEFAULT_FIGU
     fig = Figure(figsize=(11.5, 4.4), layout="constrained")
     fig.get_layout_engine().set(wspace=0.12)  # room for the line-end labels between panels
     left, right = fig.subplots(1, 2, width_ratios=[1.15, 1.0])
-    hours = fast["time_s"] / 3600.0
+    hours = fast[TIME_COLUMN] / 3600.0
     left.plot(hours, np.full(len(hours), ambient_C), color="0.6", lw=4, alpha=0.5,
               gid=END_LABEL, label="room air")
     for output in FIGURE_SENSORS:
@@ -112,7 +113,7 @@ def plot(fmu_path: str | Path = DEFAULT_FMU, out_path: str | Path = DEFAULT_FIGU
              title=f"Cold start at 4000 rpm, X/Y at 1500 mm/min, room at {ambient_C:g} °C")
     left.grid(alpha=0.3)
     for frame, label, style in ((fast, "4000 rpm", "-"), (slow, "2000 rpm", "--")):
-        right.plot(frame["time_s"] / 3600.0, frame["drift_um"] - frame["drift_um"].iloc[0],
+        right.plot(frame[TIME_COLUMN] / 3600.0, frame[DRIFT_COLUMN] - frame[DRIFT_COLUMN].iloc[0],
                    color="tab:brown", ls=style, label=label)
     right.axvline(50 / 60, color="0.4", ls=":", lw=1)
     right.set(xlabel="time (h)", ylabel="drift since start (µm)",

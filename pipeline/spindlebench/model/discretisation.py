@@ -15,6 +15,7 @@ import numpy as np
 
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import MODELS_DIR
+from spindlebench.formats.recording import DRIFT_COLUMN
 from spindlebench.model.equations import explicit_ode
 
 HOURS = (1.0, 2.0, 4.0)
@@ -33,7 +34,7 @@ def drift_rise(segments: int, hours: tuple[float, ...] = HOURS, ambient_C: float
     xdot, y = ode.ode(x, inputs, params)
     rhs = ca.Function("xdot", [x], [xdot])
     jac = ca.Function("xdot_x", [x], [ca.jacobian(xdot, x)])
-    drift = ca.Function("drift_um", [x], [y[ode.outputs.index("drift_um")]])
+    drift = ca.Function(DRIFT_COLUMN, [x], [y[ode.outputs.index(DRIFT_COLUMN)]])
     x0 = np.full(len(ode.states), ambient_C + KELVIN_OFFSET)
     times = [h * 3600.0 for h in hours]
     sol = solve_ivp(lambda t, s: np.array(rhs(s)).ravel(), (0.0, times[-1]), x0, method="BDF",

@@ -38,13 +38,16 @@ from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import transitive_closure
 from spindlebench.selection.cut import cut_for_clusters
 from spindlebench.selection.errors import SelectionError, SelectionWarning
+from spindlebench.selection.method_registry import method_names
 from spindlebench.selection.randomness import fcm_init, int_seed
 from spindlebench.selection.similarity import similarity_matrix, standardized
 
-CLUSTERINGS: tuple[str, ...] = ("closure", "fcm", "kmeans", "average", "complete", "ward")
+#: The clusterings ``cluster_candidates`` implements: the built-in clustered methods of the
+#: registry (``method_registry``), read when this module is imported.
+CLUSTERINGS: tuple[str, ...] = method_names(clustered=True)
 #: The clusterings that form an n x n matrix over the n candidates (R, or SciPy's condensed
 #: distances for ward); fcm and k-means work on the n candidate columns as points.
-PAIRWISE_CLUSTERINGS: tuple[str, ...] = ("closure", "average", "complete", "ward")
+PAIRWISE_CLUSTERINGS: tuple[str, ...] = method_names(clustered=True, pairwise=True)
 #: The fuzzifier of fuzzy c-means (the usual value, and the issue's).
 FCM_FUZZIFIER = 2.0
 FCM_TOLERANCE = 1e-6

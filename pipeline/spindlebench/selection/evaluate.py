@@ -46,6 +46,7 @@ from spindlebench.selection.errors import (
     SelectionWarning,
     column_list,
 )
+from spindlebench.selection.method_registry import METHOD_REGISTRY
 from spindlebench.selection.pairs import ROW_WISE_ABOVE, PairCandidates
 from spindlebench.selection.registry import MethodChoice, fit_with, select_with
 from spindlebench.selection.regression import EstimatorFit, LinearFit, rises, rmse
@@ -62,15 +63,15 @@ def _is_frame(value: object) -> bool:
     """Whether ``value`` is a DataFrame (none can be before pandas is imported)."""
     pandas = sys.modules.get("pandas")
     return pandas is not None and isinstance(value, pandas.DataFrame)
-#: Methods whose result depends on ``seed``.
-SEEDED_METHODS = ("fcm", "kmeans", "stability", "mi", "mrmr")
 #: Choices inside clusters and regressors whose result depends on ``seed``.
 SEEDED_PARTS = ("ga", "gbr", "mlp")
 
 
 def seeded(choice: MethodChoice) -> bool:
-    """Whether ``choice``'s result depends on the seed (a user's class may: say so)."""
-    return (choice.method in SEEDED_METHODS or choice.within in SEEDED_PARTS
+    """Whether ``choice``'s result depends on the seed (a registry method marked ``seeded``,
+    a seeded part, or a user's class, which may: say so)."""
+    entry = METHOD_REGISTRY.get(choice.method)
+    return ((entry is not None and entry.seeded) or choice.within in SEEDED_PARTS
             or choice.regressor in SEEDED_PARTS or choice.user_method is not None
             or choice.user_regressor is not None)
 
@@ -614,9 +615,9 @@ def evaluate(
     ``default_sensors`` of the training file, and every test file must then have exactly the
     same sensor columns; with explicit ``sensors`` the files only need to contain them.
     ``missing`` is ``"error"`` or ``"drop-rows"`` (see the module docstring).
-    ``method``, ``within`` and ``regressor`` choose the method (``names.METHODS`` ...; the
-    default is the paper's); ``method`` may also be a ``MethodChoice``. ``seed`` seeds fcm,
-    kmeans and stability selection.
+    ``method``, ``within`` and ``regressor`` choose the method (``method_registry.METHOD_REGISTRY``
+    ...; the default is the paper's); ``method`` may also be a ``MethodChoice``. ``seed`` seeds
+    the registry's seeded methods (fcm, kmeans, stability).
     Warnings (``SelectionWarning``): constant candidates dropped, ties in the cut, and with
     ``"drop-rows"`` incomplete samples dropped and sparse sensors left out.
     Errors (``SelectionError``, one line naming the file): missing target or sensor columns,

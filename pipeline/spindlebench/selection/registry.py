@@ -1,8 +1,9 @@
 """The one front door from a method's name to its scikit-learn estimators.
 
-A method choice is a selection method (``names.METHODS``), the choice inside a cluster
-(``names.WITHIN``, cluster methods only) and a regressor (``names.REGRESSORS``). Written as
-one label, ``method[+within][+regressor]`` with the defaults (psi, ols) left out, e.g.
+A method choice is a selection method (``method_registry.METHOD_REGISTRY``), the choice
+inside a cluster (``names.WITHIN``, cluster methods only) and a regressor
+(``names.REGRESSORS``). Written as one label, ``method[+within][+regressor]`` with the
+defaults (psi, ols) left out, e.g.
 ``closure`` (the paper's method), ``kmeans+grey``, ``lasso+ridge``, ``ward+grey+pls``: that
 label is what study files list and what report tables use as a column name.
 
@@ -28,19 +29,17 @@ from typing import TYPE_CHECKING, Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import (
-    ALL_CANDIDATES,
-    CLUSTER_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_REGRESSOR,
     DEFAULT_SIMILARITY,
     DEFAULT_WITHIN,
     LINEAR_REGRESSORS,
-    METHODS,
     REGRESSORS,
     WITHIN,
 )
 from spindlebench.selection.errors import SelectionError
+from spindlebench.selection.method_registry import METHOD_REGISTRY, descriptions, method_names
 from spindlebench.selection.user_methods import (
     UserMethod,
     is_import_path,
@@ -64,7 +63,7 @@ class MethodChoice:
     regressor: str = DEFAULT_REGRESSOR
 
     def __post_init__(self) -> None:
-        for value, known, what in ((self.method, METHODS, "method"),
+        for value, known, what in ((self.method, METHOD_REGISTRY, "method"),
                                    (self.within, WITHIN, "within"),
                                    (self.regressor, REGRESSORS, "regressor")):
             if what != "within" and isinstance(value, str) and is_import_path(value):
@@ -76,12 +75,14 @@ class MethodChoice:
                 raise SelectionError(f"unknown {what} {value!r}; choose one of "
                                      f"{', '.join(known)} (see 'spindlebench methods')")
         if self.within != DEFAULT_WITHIN and not self.clustered:
+            clustered = ", ".join(method_names(clustered=True))
             raise SelectionError(f"method {self.method!r} has no clusters; 'within' "
-                                 f"({self.within!r}) applies to {', '.join(CLUSTER_METHODS)}")
+                                 f"({self.within!r}) applies to {clustered}")
 
     @property
     def clustered(self) -> bool:
-        return self.method in CLUSTER_METHODS
+        entry = METHOD_REGISTRY.get(self.method)  # None: a user's class by import path
+        return entry is not None and entry.clustered
 
     @property
     def user_method(self) -> UserMethod | None:
@@ -179,30 +180,12 @@ def with_params(choice: MethodChoice, params: str | list[str] | None) -> MethodC
 
 def make_selector(choice: MethodChoice, k: int, similarity: str = DEFAULT_SIMILARITY,
                   random_state=DEFAULT_METHOD_SEED) -> BaseEstimator:
-    """The selector of ``choice`` keeping ``k`` candidates."""
-    from spindlebench.selection import selectors
-
+    """The selector of ``choice`` keeping ``k`` candidates: a user's class by import path, or
+    the factory of its registry entry (``method_registry``)."""
     if choice.user_method is not None:
         return choice.user_method.build(k, random_state, role="method")
-    if choice.method == ALL_CANDIDATES:
-        return selectors.AllCandidates()
-    if choice.clustered:
-        return selectors.ClusterSelector(k, clustering=choice.method, within=choice.within,
-                                         similarity=similarity, random_state=random_state)
-    if choice.method == "top-k-correlated":
-        return selectors.TopCorrelatedSelector(k)
-    if choice.method == "lasso":
-        return selectors.LassoPathSelector(k, l1_ratio=1.0)
-    if choice.method == "elastic-net":
-        return selectors.LassoPathSelector(k, l1_ratio=0.5)
-    if choice.method == "stability":
-        return selectors.StabilitySelector(k, random_state=random_state)
-    if choice.method in ("mi", "mrmr"):
-        from spindlebench.selection.information import MRMRSelector, MutualInfoSelector
-
-        cls = MutualInfoSelector if choice.method == "mi" else MRMRSelector
-        return cls(k, random_state=random_state)
-    return selectors.GreedyForwardSelector(k)
+    return METHOD_REGISTRY[choice.method].make(k, within=choice.within, similarity=similarity,
+                                               random_state=random_state)
 
 
 def make_regressor(choice: MethodChoice, random_state=DEFAULT_METHOD_SEED) -> BaseEstimator:
@@ -281,9 +264,10 @@ def choice_from_args(args) -> MethodChoice:
 
 def listing() -> str:
     """What ``spindlebench methods`` prints: every name with its line."""
-    width = max(len(name) for name in (*METHODS, *WITHIN, *REGRESSORS))
+    methods = descriptions()
+    width = max(len(name) for name in (*methods, *WITHIN, *REGRESSORS))
     lines = ["selection methods (--method; cluster methods first, the paper's is closure):"]
-    lines += [f"  {name:<{width}}  {text}" for name, text in METHODS.items()]
+    lines += [f"  {name:<{width}}  {text}" for name, text in methods.items()]
     lines += ["choice inside a cluster (--within; cluster methods only):"]
     lines += [f"  {name:<{width}}  {text}" for name, text in WITHIN.items()]
     lines += ["regressors (--regressor):"]

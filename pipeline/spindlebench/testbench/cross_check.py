@@ -31,6 +31,7 @@ from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import FMU_NAME
 from spindlebench.core.provenance import file_entry, provenance
+from spindlebench.formats.recording import DRIFT_COLUMN
 
 #: Exporting tool name and version in the layout (the package's).
 TOOL = "spindlebench"
@@ -42,7 +43,7 @@ REFERENCE_RTOL = 1e-10
 #: Options of the reference: the importer's communication step and tolerance.
 STEP_SIZE_S = 1.0
 REL_TOL = 1e-6
-REFERENCE_OUTPUTS = ("drift_um", *(f"T{i}_C" for i in range(1, 21)))
+REFERENCE_OUTPUTS = (DRIFT_COLUMN, *(f"T{i}_C" for i in range(1, 21)))
 
 
 def _version() -> str:

@@ -13,6 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import lfilter
 
+from spindlebench.formats.recording import (
+    DRIVER_COLUMNS,
+)
 from spindlebench.testbench.scenario import (
     AmbientModel,
     ConstantAmbient,
@@ -31,7 +34,7 @@ from spindlebench.testbench.scenario import (
 )
 
 #: FMU input names, in the order of the columns of ``DriverSignals.matrix``.
-INPUT_NAMES = ("spindle_speed_rpm", "feed_x_mm_per_min", "feed_y_mm_per_min", "ambient_C")
+INPUT_NAMES = DRIVER_COLUMNS
 
 
 @dataclass(frozen=True)

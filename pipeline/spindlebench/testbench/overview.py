@@ -35,7 +35,11 @@ from matplotlib.transforms import offset_copy
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
     DRIFT_COLUMN,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    SPEED_COLUMN,
     TIME_COLUMN,
     default_sensors,
     recording_name,
@@ -49,9 +53,9 @@ from spindlebench.testbench.sensor_parts import (
     sensor_colours,
 )
 
-AMBIENT_DRIVER = "ambient_C"
-SPEED = "spindle_speed_rpm"
-FEEDS = ("feed_x_mm_per_min", "feed_y_mm_per_min")
+AMBIENT_DRIVER = AMBIENT_COLUMN
+SPEED = SPEED_COLUMN
+FEEDS = (FEED_X_COLUMN, FEED_Y_COLUMN)
 PANEL_TITLES = {"spindle": "spindle and headstock", "axes": "feed axes and ambient air",
                 "other": "sensors"}
 LABEL_FONTSIZE = 6.5

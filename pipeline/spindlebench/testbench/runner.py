@@ -50,7 +50,16 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_input
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU
-from spindlebench.formats.recording import DRIFT_COLUMN, SENSOR_OUTPUTS, EndState, is_probe_output
+from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
+    DRIFT_COLUMN,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    SENSOR_OUTPUTS,
+    SPEED_COLUMN,
+    EndState,
+    is_probe_output,
+)
 from spindlebench.machines.variants import Machine
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
@@ -445,8 +454,8 @@ def saved_state(start: EndState, fmu: FmuInterface) -> dict[str, float]:
 
 
 #: The scenario table that sets each input (what a refusal names).
-INPUT_KEYS = {"spindle_speed_rpm": "speed", "feed_x_mm_per_min": "feed",
-              "feed_y_mm_per_min": "feed", "ambient_C": "ambient"}
+INPUT_KEYS = {SPEED_COLUMN: "speed", FEED_X_COLUMN: "feed", FEED_Y_COLUMN: "feed",
+              AMBIENT_COLUMN: "ambient"}
 
 
 def check_inputs(scenario: Scenario, fmu: FmuInterface, signals: DriverSignals) -> None:
@@ -608,8 +617,8 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
             hooks = _HeldInputs(fmu, input_vrs, inputs, step_s)
             set_time, max_step = fmu.setTime, step_s
         else:
-            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index("ambient_C")],
-                                      inputs[:, INPUT_NAMES.index("ambient_C")], step_s)
+            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index(AMBIENT_COLUMN)],
+                                      inputs[:, INPUT_NAMES.index(AMBIENT_COLUMN)], step_s)
             set_time, max_step = hooks.set_time, float("inf")
         solver = CVodeSolver(
             nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,

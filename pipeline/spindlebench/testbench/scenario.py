@@ -18,27 +18,28 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_input
+from spindlebench.core.limits import (
+    COLDEST_AMBIENT_C,
+    FOLLOW_AMBIENT_MAX_K,
+    KELVIN_SUSPECT_C,
+    MAX_FEED_MM_PER_MIN,
+    MAX_LAG1,
+    MAX_NOISE_C,
+    MAX_OFFSET_C,
+    MAX_PROBE_DRIFT_UM,
+    MAX_PROBE_NOISE_UM,
+    MAX_RPM,
+    RPM_RANGE_UNIT,
+)
 from spindlebench.core.names import SENSORS
+from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
 
 if TYPE_CHECKING:
     from spindlebench.formats.recording import EndState
 
-#: Ambient or sensor temperatures above this (°C) are almost certainly given in kelvin.
-KELVIN_SUSPECT_C = 60.0
-#: Largest sensor noise and quantisation step (°C), probe noise and step (µm), offset fault (K).
-MAX_NOISE_C, MAX_PROBE_NOISE_UM, MAX_OFFSET_C = 5.0, 100.0, 50.0
-#: Largest offset (K) of a cooling setpoint that follows the ambient.
-FOLLOW_AMBIENT_MAX_K = 20.0
-#: Coldest ambient a workshop scenario may ask for (°C).
-COLDEST_AMBIENT_C = -40.0
-#: Fastest spindle a scenario may ask for (rev/min): the studies' limit; high-speed spindles
-#: of machining centres reach 30 000-40 000 rpm, the model's bearing losses are not meant beyond.
-MAX_RPM = 40_000.0
-#: Fastest mean feed (mm/min): 60 m/min is the rapid traverse of fast machining centres; above
-#: it the feed-drive friction heat of the model has no physical meaning.
-MAX_FEED_MM_PER_MIN = 60_000.0
+# The physical limits (rpm, feed, ambient, noise) have their one home in ``core.limits``.
 #: Smallest communication step (s): the thermal time constants are minutes, a millisecond step
 #: already resolves them a thousand times over.
 MIN_STEP_S = 1e-3
@@ -97,6 +98,24 @@ class SpeedCycles:
 
 
 SpeedProgramme = ConstantSpeed | SteppedSpeed | SpeedCycles
+
+
+def at_speed(programme: SpeedProgramme, rpm: float) -> SpeedProgramme:
+    """``programme`` with every speed multiplied by ``rpm``: a programme written at unit speed
+    (1 = a study's axis speed, a step's speed a fraction of it) at the experiment's speed.
+
+    Examples
+    --------
+    >>> at_speed(SpeedCycles(rpm=1.0, on_s=600.0, off_s=300.0), 4000.0).rpm
+    4000.0
+    >>> [s.rpm for s in at_speed(SteppedSpeed((SpeedStep(0.0, 1.0), SpeedStep(60.0, 0.5))),
+    ...                          3000.0).steps]
+    [3000.0, 1500.0]
+    """
+    if isinstance(programme, SteppedSpeed):
+        return replace(programme, steps=tuple(replace(step, rpm=rpm * step.rpm)
+                                              for step in programme.steps))
+    return replace(programme, rpm=rpm * programme.rpm)
 
 
 @dataclass(frozen=True)
@@ -236,10 +255,6 @@ class SensorFault:
 
 #: Temperature noise processes: independent per sample, AR(1), or a random walk.
 NOISE_KINDS = ("white", "ar1", "random_walk")
-#: Largest AR(1) lag-1 coefficient (1 would be a random walk, which has its own kind).
-MAX_LAG1 = 0.9999
-#: Largest probe drift (µm per √h for the walk, µm/h for the creep).
-MAX_PROBE_DRIFT_UM = 100.0
 
 
 @dataclass(frozen=True)
@@ -381,7 +396,7 @@ def _kind(table: Table, choices: tuple[str, ...], default: str | None = None) ->
 
 
 def _rpm(t: Table) -> float:
-    return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit="rev/min")
+    return t.number("rpm", minimum=0.0, maximum=MAX_RPM, unit=RPM_RANGE_UNIT)
 
 
 def _feed(t: Table, name: str) -> float:
@@ -513,8 +528,8 @@ def _read_ambient(top: Table, scenario_dir: Path, duration_s: float,
         )
     else:
         file_name = t.string("file")
-        time_column = t.string("time_column", "time_s")
-        value_column = t.string("value_column", "ambient_C")
+        time_column = t.string("time_column", TIME_COLUMN)
+        value_column = t.string("value_column", AMBIENT_COLUMN)
         file = (scenario_dir / file_name).resolve()
         times, values = _read_ambient_csv(t, file, time_column, value_column)
         if times[0] > 0.0 or times[-1] < duration_s:
@@ -596,7 +611,13 @@ def _read_ambient_csv(
 
 
 def _read_cooling(top: Table) -> Cooling:
-    t = top.table("cooling", required=False)
+    return read_cooling(top.table("cooling", required=False))
+
+
+def read_cooling(t: Table) -> Cooling:
+    """A ``[cooling]`` table: a scenario's, or a study's ``[cooling.NAME]`` axis value (the
+    one reader of the cooling keys). ``follow_ambient`` without ``setpoint_C`` follows the
+    ambient exactly (offset 0 K)."""
     mode = t.string("mode", "off", choices=("off", "absolute", "follow_ambient"))
     if mode == "off":
         cooling = Cooling()
@@ -605,7 +626,7 @@ def _read_cooling(top: Table) -> Cooling:
     else:
         cooling = Cooling(
             mode="follow_ambient",
-            setpoint_C=t.number("setpoint_C", minimum=-FOLLOW_AMBIENT_MAX_K,
+            setpoint_C=t.number("setpoint_C", 0.0, minimum=-FOLLOW_AMBIENT_MAX_K,
                                 maximum=FOLLOW_AMBIENT_MAX_K, unit="K from ambient"),
         )
     t.finish()
@@ -613,8 +634,13 @@ def _read_cooling(top: Table) -> Cooling:
 
 
 def _read_sensors(top: Table, duration_s: float) -> SensorModel:
-    t = top.table("sensors", required=False)
-    defaults = SensorModel()
+    return read_sensor_model(top.table("sensors", required=False), duration_s)
+
+
+def read_sensor_model(t: Table, duration_s: float,
+                      defaults: SensorModel = SensorModel()) -> SensorModel:
+    """A ``[sensors]`` table: a scenario's, or a study's ``[noise.NAME]`` axis value (the one
+    reader of the instrument keys); keys not given take ``defaults``."""
     noise = t.number("noise_C", defaults.noise_C, minimum=0.0, maximum=MAX_NOISE_C)
     quantum = t.number("quantum_C", defaults.quantum_C, minimum=0.0, maximum=MAX_NOISE_C)
     probe_noise = t.number("probe_noise_um", defaults.probe_noise_um, minimum=0.0,

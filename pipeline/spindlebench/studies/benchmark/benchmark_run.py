@@ -16,6 +16,7 @@ from pathlib import Path
 
 from spindlebench.core import provenance
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.formats.recording import DRIFT_COLUMN
 
 DEFAULT_OUT = Path("results") / "benchmark"
 
@@ -30,7 +31,7 @@ class BenchmarkRequest:
     only: bool = False
     tasks: Sequence[str] | None = None
     recordings: Sequence[Path] | None = None
-    target: str = "drift_um"
+    target: str = DRIFT_COLUMN
     roles: object = None
     recordings_root: Path | None = None
     out: Path | None = None

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from spindlebench.core.names import ALL_CANDIDATES
 from spindlebench.selection.evaluate import (
     CandidateSet,
     Evaluation,
@@ -45,7 +46,7 @@ from spindlebench.studies.benchmark.tasks import TIME, Fold, Task
 CONSTANT, REPLAY, OLS_ALL = "baseline:constant", "baseline:replay", "baseline:ols-all"
 BASELINES: tuple[str, ...] = (CONSTANT, REPLAY, OLS_ALL)
 #: The method label the OLS-on-all-sensors baseline runs.
-OLS_ALL_LABEL = "all-candidates"
+OLS_ALL_LABEL = ALL_CANDIDATES
 
 
 @dataclass

@@ -24,9 +24,10 @@ import pandas as pd
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
+from spindlebench.formats.recording import TIME_COLUMN
 from spindlebench.studies.benchmark.benchmark_file import TaskSpec
 
-TIME = "time_s"
+TIME = TIME_COLUMN
 
 
 @dataclass

@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 
 from spindlebench.core import atomic, provenance
 from spindlebench.core.names import SIX_DIFF
+from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN
 from spindlebench.studies.compensation.compensation_file import (
     CompensationStudy,
 )
@@ -78,8 +79,8 @@ def figure(study: CompensationStudy, series: pd.DataFrame, days: pd.DataFrame,
     fig = Figure(figsize=(11, 6.5))
     top, bottom = fig.subplots(2, 1, sharex=True)
     first = series[series["model"] == study.models[0]]
-    hours = (first["day"] - 2) * duration_h + first["time_s"] / 3600.0
-    top.plot(hours, first["true_drift_um"], color="black", lw=1.0, label="uncompensated drift")
+    hours = (first["day"] - 2) * duration_h + first[TIME_COLUMN] / 3600.0
+    top.plot(hours, first[TRUE_DRIFT_COLUMN], color="black", lw=1.0, label="uncompensated drift")
     shown = [best] + [m for m in study.models if m == SIX_DIFF and m != best]
     for name in shown:
         at = series[series["model"] == name]
@@ -129,8 +130,8 @@ def readme(study: CompensationStudy, study_path: Path, days: pd.DataFrame,
     c = study.controller
     rate = "none" if c.rate_limit_um_per_s is None else f"{c.rate_limit_um_per_s:g} µm/s"
     fault = "none" if study.fault is None else (
-        f"{study.fault.name} ({study.fault.kind} of {study.fault.sensor} from "
-        f"{study.fault.start_s / 3600:g} h into every day from day {study.fault_from_day})")
+        f"{study.fault.name} ({study.fault.value.kind} of {study.fault.value.sensor} from "
+        f"{study.fault.value.start_s / 3600:g} h into every day from day {study.fault_from_day})")
     lines = [f"# Compensation in the loop: {study.name}", "",
              f"Made by `spindlebench compensate {study_path}`. Every number is computed from "
              "the simulated samples (`timeseries.csv.gz` holds those of the first rule).", "",

@@ -28,6 +28,7 @@ import pandas as pd
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
+from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN, TRUE_SENSOR_COLUMNS
 from spindlebench.studies.family.experiments import (
     ambient_for,
     initial_for,
@@ -146,13 +147,13 @@ def continuous_scenario(study, days) -> Scenario:
 
 def split_days(study, days, truth: pd.DataFrame) -> dict[int, pd.DataFrame]:
     """Each day's working hours of the continuous truth, time from its power-on."""
-    time_s = truth["time_s"].to_numpy(float)
+    time_s = truth[TIME_COLUMN].to_numpy(float)
     out = {}
     for day in days:
         start = day_start_s(study, day.number)
         at = (time_s >= start - 1e-6) & (time_s <= start + study.family.duration_s + 1e-6)
         part = truth.loc[at].reset_index(drop=True)
-        part["time_s"] = part["time_s"] - start
+        part[TIME_COLUMN] = part[TIME_COLUMN] - start
         out[day.number] = part
     return out
 
@@ -165,17 +166,17 @@ def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int
 
     family = study.family
     starts = [day_start_s(study, d.number) for d in days]
-    time_s = np.concatenate([truths[d.number]["time_s"].to_numpy(float) + s
+    time_s = np.concatenate([truths[d.number][TIME_COLUMN].to_numpy(float) + s
                              for d, s in zip(days, starts, strict=True)])
-    temperatures = np.vstack([truths[d.number][[f"true_{s}_C" for s in SENSORS]]
+    temperatures = np.vstack([truths[d.number][list(TRUE_SENSOR_COLUMNS)]
                               .to_numpy(float) for d in days])
-    drift = np.concatenate([truths[d.number]["true_drift_um"].to_numpy(float) for d in days])
+    drift = np.concatenate([truths[d.number][TRUE_DRIFT_COLUMN].to_numpy(float) for d in days])
     fault = None
     if study.fault is not None:
         fault_day = next((d for d in days if d.fault_active), None)
         if fault_day is not None:
-            fault = replace(study.fault,
-                            start_s=day_start_s(study, fault_day.number) + study.fault.start_s)
+            start_s = day_start_s(study, fault_day.number) + study.fault.value.start_s
+            fault = replace(study.fault, value=replace(study.fault.value, start_s=start_s))
     model = sensor_model(family.noise[0], fault)
     readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
                               derive_seed(family.seed, "compensate", "continuous"))
@@ -185,7 +186,7 @@ def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int
     for day in days:
         n = len(truths[day.number])
         rows = slice(offset, offset + n)
-        frame = pd.DataFrame({"time_s": time_s[rows] - day_start_s(study, day.number)})
+        frame = pd.DataFrame({TIME_COLUMN: time_s[rows] - day_start_s(study, day.number)})
         frame[list(SENSORS)] = readings.iloc[rows].to_numpy()
         frame[TARGET] = probe[rows] - probe[offset]
         frame[TRUTH] = drift[rows] - drift[offset]

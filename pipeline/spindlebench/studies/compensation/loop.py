@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.core.names import SENSORS, SIX_DIFF
+from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN, TRUE_SENSOR_COLUMNS
 from spindlebench.selection import SelectionWarning, evaluate
 from spindlebench.selection.evaluate import CandidateSet
 from spindlebench.selection.regression import LinearFit
@@ -79,13 +80,13 @@ def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame) -> pd.Data
     """What the controller reads on ``day``: T1..T20 (a dropout held at its last reading),
     the probe's drift (``drift_um``, for training) and the true drift rise (``TRUTH``)."""
     family = study.family
-    temperatures = truth[[f"true_{s}_C" for s in SENSORS]].to_numpy(float)
-    drift = truth["true_drift_um"].to_numpy(float)
-    time_s = truth["time_s"].to_numpy(float)
+    temperatures = truth[list(TRUE_SENSOR_COLUMNS)].to_numpy(float)
+    drift = truth[TRUE_DRIFT_COLUMN].to_numpy(float)
+    time_s = truth[TIME_COLUMN].to_numpy(float)
     model = sensor_model(family.noise[0], study.fault if day.fault_active else None)
     readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
                               sensor_seed(family, day.replica, day.experiment))
-    frame = pd.DataFrame({"time_s": time_s})
+    frame = pd.DataFrame({TIME_COLUMN: time_s})
     frame[list(SENSORS)] = pd.DataFrame(readings).ffill().bfill().to_numpy()
     frame[TARGET] = probe
     frame[TRUTH] = drift - drift[0]
@@ -199,7 +200,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
                 current[name] = train(name, study, frame, 1)
                 outcome.models[name] = [current[name]]
             continue
-        time_s = frame["time_s"].to_numpy(float)
+        time_s = frame[TIME_COLUMN].to_numpy(float)
         true_rise = frame[TRUTH].to_numpy(float)
         for name in study.models:
             model = current[name]
@@ -227,8 +228,8 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
             outcome.days.append({"retrain": retrain, **_day_row(study, day, model, residual,
                                                                  true_rise, detection)})
             outcome.series.append(pd.DataFrame({
-                "retrain": retrain, "model": name, "day": day.number, "time_s": time_s,
-                "true_drift_um": true_rise, "predicted_um": predicted,
+                "retrain": retrain, "model": name, "day": day.number, TIME_COLUMN: time_s,
+                TRUE_DRIFT_COLUMN: true_rise, "predicted_um": predicted,
                 "offset_um": offset, "residual_um": residual}))
     return outcome
 
@@ -254,7 +255,7 @@ def _summary(study: CompensationStudy, days: pd.DataFrame, series: pd.DataFrame)
         for name in [*study.models, "uncompensated"]:
             model = study.models[0] if name == "uncompensated" else name
             at = series[(series["model"] == model) & series["day"].isin(chosen_days)]
-            values = at["true_drift_um"] if name == "uncompensated" else at["residual_um"]
+            values = at[TRUE_DRIFT_COLUMN] if name == "uncompensated" else at["residual_um"]
             per_day = np.sqrt((values**2).groupby(at["day"]).mean())
             rows.append({"part": part, "model": name, "days": len(per_day),
                          "rms_um": float(np.sqrt(np.mean(values**2))),

@@ -16,26 +16,20 @@ import numpy as np
 
 from spindlebench.studies.family.family_file import (
     NO_FAULT,
-    Fault,
-    NoiseLevel,
-    Programme,
+    AxisValue,
     SweepStudy,
 )
 from spindlebench.studies.family.seeds import derive_seed
 from spindlebench.testbench.scenario import (
     AmbientModel,
     ConstantFeed,
-    ConstantSpeed,
-    Cooling,
     FeedWithSpindle,
     InitialState,
     Scenario,
     SeasonAmbient,
     SensorFault,
     SensorModel,
-    SpeedCycles,
-    SpeedStep,
-    SteppedSpeed,
+    at_speed,
 )
 
 
@@ -58,8 +52,8 @@ class Experiment:
 class Condition:
     """How the experiments are measured: a noise level and an optional fault."""
 
-    noise: NoiseLevel
-    fault: Fault | None
+    noise: AxisValue[SensorModel]
+    fault: AxisValue[SensorFault] | None
 
     @property
     def id(self) -> str:
@@ -129,29 +123,12 @@ def day_weather(study: SweepStudy, replica: int, experiment: Experiment) -> tupl
     return round(normal.low_C + shift, 3), round(normal.high_C + shift, 3)
 
 
-def _speed(programme: Programme, rpm: float):
-    if programme.kind == "constant":
-        return ConstantSpeed(rpm=rpm)
-    if programme.kind == "cycles":
-        return SpeedCycles(rpm=rpm, on_s=programme.on_s, off_s=programme.off_s)
-    return SteppedSpeed(steps=tuple(
-        SpeedStep(at_s=at, rpm=rpm * fraction)
-        for at, fraction in zip(programme.step_at_s, programme.step_fraction, strict=True)))
-
-
-def sensor_model(noise: NoiseLevel, fault: Fault | None) -> SensorModel:
-    """The testbench's sensor model for a noise level and an optional fault (to the end)."""
-    faults: tuple[SensorFault, ...] = ()
-    if fault is not None:
-        faults = (SensorFault(fault.sensor, fault.kind, fault.start_s, None,  # type: ignore[arg-type]
-                              fault.value_C, fault.offset_C),)
-    return SensorModel(noise_C=noise.noise_C, quantum_C=noise.quantum_C,
-                       probe_noise_um=noise.probe_noise_um,
-                       probe_quantum_um=noise.probe_quantum_um, faults=faults,
-                       noise_kind=noise.noise_kind,  # type: ignore[arg-type]
-                       noise_lag1=noise.noise_lag1,
-                       probe_drift_um_per_sqrt_h=noise.probe_drift_um_per_sqrt_h,
-                       probe_drift_rate_um_per_h=noise.probe_drift_rate_um_per_h)
+def sensor_model(noise: AxisValue[SensorModel],
+                 fault: AxisValue[SensorFault] | None) -> SensorModel:
+    """The testbench's sensor model of a noise level with an optional fault (to the end)."""
+    if fault is None:
+        return noise.value
+    return replace(noise.value, faults=(fault.value,))
 
 
 def ambient_for(study: SweepStudy, replica: int, experiment: Experiment) -> AmbientModel:
@@ -199,10 +176,10 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         step_s=study.step_s,
         sample_interval_s=study.sample_interval_s,
         seed=sensor_seed(study, replica, experiment),
-        speed=_speed(programme, experiment.speed_rpm),
+        speed=at_speed(programme.value, experiment.speed_rpm),
         feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
         ambient=ambient_for(study, replica, experiment),
-        cooling=Cooling(mode=cooling.mode, setpoint_C=cooling.setpoint_C),  # type: ignore[arg-type]
+        cooling=cooling.value,
         sensors=sensor_model(study.noise[0], None),
         initial=initial_for(study, experiment),
         parameters=dict(study.parameters),

@@ -16,13 +16,18 @@ Every problem becomes one line naming the study file and the dotted key.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.limits import (
+    MAX_FEED_MM_PER_MIN,
+    MAX_OFFSET_C,
+    MAX_RPM,
+    RPM_RANGE_UNIT,
+)
 from spindlebench.core.names import (
-    BUDGET_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
@@ -32,6 +37,7 @@ from spindlebench.core.names import (
 )
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.recording import FEED_X_COLUMN, FEED_Y_COLUMN, SPEED_COLUMN
 from spindlebench.formats.toml import (
     Table,
     in_range,
@@ -45,77 +51,74 @@ from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machin
 from spindlebench.studies.family.population import Population, read_population
 from spindlebench.studies.family.seasons import MONTHS, Climate, load_climate, resolve_climate_path
 from spindlebench.testbench.scenario import (
-    FOLLOW_AMBIENT_MAX_K,
-    MAX_FEED_MM_PER_MIN,
-    MAX_LAG1,
-    MAX_NOISE_C,
-    MAX_OFFSET_C,
-    MAX_PROBE_DRIFT_UM,
-    MAX_PROBE_NOISE_UM,
-    MAX_RPM,
     MAX_SOAK_DAYS,
-    NOISE_KINDS,
+    ConstantSpeed,
+    Cooling,
     IndoorAmbient,
     InitialState,
+    SensorFault,
+    SensorModel,
+    SpeedCycles,
+    SpeedProgramme,
+    SpeedStep,
+    SteppedSpeed,
     read_building,
+    read_cooling,
+    read_sensor_model,
     step_count_problem,
     temperature_problem,
 )
 
+V = TypeVar("V")
+
 #: Most replicas and clusters a study may ask for.
 MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
-BASELINES = ("top-k-correlated", "ridge")
+#: The sweep's baselines: the top-k-correlated selection method on the raw sensors then OLS,
+#: and ridge on all sensors; their names are the method's and the regressor's.
+TOP_K_BASELINE, RIDGE_BASELINE = "top-k-correlated", "ridge"
+BASELINES = (TOP_K_BASELINE, RIDGE_BASELINE)
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
-COOLING_MODES = ("off", "absolute", "follow_ambient")
 FAULT_KINDS = ("dropout", "stuck", "offset")
 NO_FAULT = "none"
 
 
 @dataclass(frozen=True)
-class Programme:
-    """A speed programme relative to the experiment's speed (the speed is an axis)."""
+class AxisValue(Generic[V]):
+    """One named value of a study axis: the testbench's own type (``Cooling``,
+    ``SensorModel``), read from the ``[AXIS.NAME]`` table by the scenario's reader of that key
+    path (``SCENARIO_AXES``), so the study mirrors no scenario type."""
 
     name: str
-    kind: str
-    on_s: float = 0.0
-    off_s: float = 0.0
-    step_at_s: tuple[float, ...] = ()
-    step_fraction: tuple[float, ...] = ()
+    value: V
 
 
-@dataclass(frozen=True)
-class CoolingMode:
-    name: str
-    mode: str
-    setpoint_C: float = 0.0  # noqa: N815
+#: The axes whose values are scenario tables: axis -> (the scenario key path its
+#: ``[AXIS.NAME]`` tables are, the scenario's reader of that table). A scenario key a study
+#: can vary is added here (one entry) once its reader exists in ``testbench.scenario``.
+SCENARIO_AXES: dict[str, tuple[str, Callable[..., Any]]] = {
+    "cooling": ("cooling", lambda t, study: read_cooling(t)),
+    "noise": ("sensors", lambda t, study: read_sensor_model(t, study["duration_s"],
+                                                              STUDY_SENSORS)),
+}
+#: A study's instruments unless its ``[noise.NAME]`` says otherwise (the scenario's
+#: ``SensorModel`` defaults, with a probe of 0.3 µm noise), and its ``default`` noise level.
+STUDY_SENSORS = SensorModel(probe_noise_um=0.3)
+#: The axis values a study may name without defining them.
+BUILT_IN_VALUES: dict[str, tuple[str, Any]] = {"cooling": ("off", Cooling()),
+                                               "noise": ("default", STUDY_SENSORS)}
 
 
-@dataclass(frozen=True)
-class NoiseLevel:
-    """Instrument model of a condition (maps onto the testbench's ``SensorModel``)."""
-
-    name: str
-    noise_C: float  # noqa: N815
-    quantum_C: float  # noqa: N815
-    probe_noise_um: float
-    probe_quantum_um: float
-    noise_kind: str = "white"
-    noise_lag1: float = 0.86
-    probe_drift_um_per_sqrt_h: float = 0.0
-    probe_drift_rate_um_per_h: float = 0.0
-
-
-@dataclass(frozen=True)
-class Fault:
-    """One sensor fault applied to every held-out experiment from ``start_s`` on."""
-
-    name: str
-    sensor: str
-    kind: str
-    start_s: float
-    value_C: float | None = None  # noqa: N815
-    offset_C: float | None = None  # noqa: N815
+#: A study's fault: the testbench's ``SensorFault`` (to the end of the run, ``end_s`` None)
+#: applied to every held-out experiment from ``start_s`` on, under its ``[faults.NAME]`` name.
+#: Its table is the family's own (``start_h``, hours into the run; a compensation study
+#: shifts it into each day), not a scenario's ``[[sensors.faults]]``.
+Fault = AxisValue
+#: A study's speed programme: the testbench's own speed type written at unit speed (1 = the
+#: experiment's speed, an axis; ``testbench.scenario.at_speed`` scales it), under its
+#: ``[programmes.NAME]`` name. Its table is the family's own (``on_min``/``off_min``,
+#: ``at_h``/``fraction`` of the axis speed), not a scenario's ``[speed]``.
+Programme = AxisValue
 
 
 @dataclass(frozen=True)
@@ -162,10 +165,10 @@ class SweepStudy:
     feed_y_mm_per_min: float
     months: tuple[str, ...]
     speeds_rpm: tuple[float, ...]
-    programmes: tuple[Programme, ...]
-    cooling: tuple[CoolingMode, ...]
-    noise: tuple[NoiseLevel, ...]
-    faults: tuple[Fault | None, ...]
+    programmes: tuple[AxisValue[SpeedProgramme], ...]
+    cooling: tuple[AxisValue[Cooling], ...]
+    noise: tuple[AxisValue[SensorModel], ...]
+    faults: tuple[AxisValue[SensorFault] | None, ...]
     training: Training
     methods: Methods
     parameters: dict[str, float] = field(default_factory=dict)
@@ -249,8 +252,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
                          check=in_range(0, 10, "K"))
     feed = exp.get("feed", str, default="constant",
                    check=lambda v: one_of(v, ("constant", "with_spindle")))
-    feed_x = exp.get("feed_x_mm_per_min", float, default=1500.0, check=_feed)
-    feed_y = exp.get("feed_y_mm_per_min", float, default=1500.0, check=_feed)
+    feed_x = exp.get(FEED_X_COLUMN, float, default=1500.0, check=_feed)
+    feed_y = exp.get(FEED_Y_COLUMN, float, default=1500.0, check=_feed)
     soak_days = _soak_days(exp)
     indoor = _indoor(exp)
     exp.finish()
@@ -266,7 +269,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     months = tuple(axes.get_list("months", str, check=lambda m: None if m in MONTHS
                                  else f"not a month (use {', '.join(MONTHS)})"))
     speeds = tuple(axes.get_list("speeds_rpm", float,
-                                 check=in_range(maximum=MAX_RPM, unit="rev/min", positive=True)))
+                                 check=in_range(maximum=MAX_RPM, unit=RPM_RANGE_UNIT,
+                                                positive=True)))
     programme_names = axes.get_list("programmes", str, default=["constant"])
     cooling_names = axes.get_list("cooling", str, default=["off"])
     noise_names = axes.get_list("noise", str, default=["default"])
@@ -278,7 +282,7 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     else:
         machine_axis = tuple(axes.get_list("machines", str, default=[]))
     if fmu_parameters is not None:
-        _check_input_axis(axes, "speeds_rpm", speeds, "spindle_speed_rpm", fmu)
+        _check_input_axis(axes, "speeds_rpm", speeds, SPEED_COLUMN, fmu)
     axes.finish()
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
@@ -292,8 +296,11 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
 
     programmes = tuple(_programme(definitions["programmes"], axes, n, duration_s)
                        for n in programme_names)
-    cooling = tuple(_cooling(definitions["cooling"], axes, n) for n in cooling_names)
-    noise = tuple(_noise(definitions["noise"], axes, n) for n in noise_names)
+    known = {"duration_s": duration_s}
+    cooling = tuple(_scenario_axis("cooling", definitions["cooling"], axes, n, known)
+                    for n in cooling_names)
+    noise = tuple(_scenario_axis("noise", definitions["noise"], axes, n, known)
+                  for n in noise_names)
     faults = tuple(_fault(definitions["faults"], axes, n, duration_s) for n in fault_names)
     for table in definitions.values():
         for defined in table.unused():
@@ -442,20 +449,22 @@ def _definition(table: Table, axes: Table, axis: str, name: str) -> Table:
     return table.table(name)
 
 
-def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Programme:
+def _programme(table: Table, axes: Table, name: str,
+               duration_s: float) -> AxisValue[SpeedProgramme]:
     if name == "constant" and not table.has(name):
-        return Programme(name, "constant")
+        return AxisValue(name, ConstantSpeed(rpm=1.0))
     t = _definition(table, axes, "programmes", name)
     kind = t.get("kind", str, check=lambda v: one_of(v, PROGRAMME_KINDS))
+    programme: SpeedProgramme
     if kind == "constant":
-        programme = Programme(name, kind)
+        programme = ConstantSpeed(rpm=1.0)
     elif kind == "cycles":
         on_s = t.get("on_min", float, check=positive) * 60.0
         off_s = t.get("off_min", float, check=positive) * 60.0
         if on_s + off_s > duration_s:
             raise t.error("on_min", f"one cycle ({(on_s + off_s) / 60:g} min) is longer than "
                                     f"the experiment ({duration_s / 60:g} min)")
-        programme = Programme(name, kind, on_s=on_s, off_s=off_s)
+        programme = SpeedCycles(rpm=1.0, on_s=on_s, off_s=off_s)
     else:
         at_h = t.get_list("at_h", float, check=non_negative)
         fractions = t.get_list("fraction", float,
@@ -464,57 +473,29 @@ def _programme(table: Table, axes: Table, name: str, duration_s: float) -> Progr
             raise t.error("fraction", f"has {len(fractions)} values but at_h has {len(at_h)}")
         if at_h != sorted(at_h) or at_h[-1] * 3600.0 >= duration_s:
             raise t.error("at_h", "must increase and stay within the experiment's duration")
-        programme = Programme(name, kind, step_at_s=tuple(h * 3600.0 for h in at_h),
-                              step_fraction=tuple(fractions))
+        programme = SteppedSpeed(steps=tuple(SpeedStep(at_s=h * 3600.0, rpm=fraction)
+                                             for h, fraction in zip(at_h, fractions,
+                                                                    strict=True)))
     t.finish()
-    return programme
+    return AxisValue(name, programme)
 
 
-def _cooling(table: Table, axes: Table, name: str) -> CoolingMode:
-    if name == "off" and not table.has(name):
-        return CoolingMode(name, "off")
-    t = _definition(table, axes, "cooling", name)
-    mode = t.get("mode", str, check=lambda v: one_of(v, COOLING_MODES))
-    setpoint = 0.0
-    if mode == "absolute":
-        setpoint = t.get("setpoint_C", float, check=temperature_problem)
-    elif mode == "follow_ambient":
-        setpoint = t.get("setpoint_C", float, default=0.0,
-                         check=in_range(-FOLLOW_AMBIENT_MAX_K, FOLLOW_AMBIENT_MAX_K,
-                                        "K from ambient"))
-    t.finish()
-    return CoolingMode(name, mode, setpoint)
+def _scenario_axis(axis: str, table: Table, axes: Table, name: str,
+                   study: Mapping[str, Any]) -> AxisValue:
+    """The value ``name`` of ``axis``: its ``[AXIS.NAME]`` table read by the scenario's reader
+    of the axis's key path (``SCENARIO_AXES``), or the built-in value of that name."""
+    built_in, value = BUILT_IN_VALUES.get(axis, (None, None))
+    if name == built_in and not table.has(name):
+        return AxisValue(name, value)
+    t = _definition(table, axes, axis, name)
+    if axis == "noise" and t.has("faults"):
+        raise t.error("faults", "a study's sensor faults are its [faults] axis")
+    _, read = SCENARIO_AXES[axis]
+    return AxisValue(name, read(t, study))
 
 
-def _noise(table: Table, axes: Table, name: str) -> NoiseLevel:
-    if name == "default" and not table.has(name):
-        return NoiseLevel(name, 0.05, 0.1, 0.3, 0.1)
-    t = _definition(table, axes, "noise", name)
-
-    level = NoiseLevel(
-        name,
-        noise_C=t.get("noise_C", float, check=in_range(0, MAX_NOISE_C)),
-        quantum_C=t.get("quantum_C", float, default=0.1, check=in_range(0, MAX_NOISE_C)),
-        probe_noise_um=t.get("probe_noise_um", float, default=0.3,
-                             check=in_range(0, MAX_PROBE_NOISE_UM)),
-        probe_quantum_um=t.get("probe_quantum_um", float, default=0.1,
-                               check=in_range(0, MAX_PROBE_NOISE_UM)),
-        noise_kind=t.get("noise_kind", str, default="white",
-                         check=lambda v: one_of(v, NOISE_KINDS)),
-        probe_drift_um_per_sqrt_h=t.get("probe_drift_um_per_sqrt_h", float, default=0.0,
-                                        check=in_range(0, MAX_PROBE_DRIFT_UM)),
-        probe_drift_rate_um_per_h=t.get("probe_drift_rate_um_per_h", float, default=0.0,
-                                        check=in_range(-MAX_PROBE_DRIFT_UM,
-                                                       MAX_PROBE_DRIFT_UM)),
-    )
-    if level.noise_kind == "ar1":  # the coefficient of the AR(1) process only
-        level = replace(level, noise_lag1=t.get("noise_lag1", float, default=level.noise_lag1,
-                                                check=in_range(0, MAX_LAG1)))
-    t.finish()
-    return level
-
-
-def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | None:
+def _fault(table: Table, axes: Table, name: str,
+           duration_s: float) -> AxisValue[SensorFault] | None:
     if name == NO_FAULT:
         if table.has(name):
             raise table.error(name, f"'{NO_FAULT}' is reserved for 'no fault'")
@@ -532,7 +513,7 @@ def _fault(table: Table, axes: Table, name: str, duration_s: float) -> Fault | N
         offset = t.get("offset_C", float, check=lambda v: "must be non-zero" if v == 0 else
                        range_problem(v, -MAX_OFFSET_C, MAX_OFFSET_C, "K"))
     t.finish()
-    return Fault(name, sensor, kind, start_s, value, offset)
+    return AxisValue(name, SensorFault(sensor, kind, start_s, None, value, offset))
 
 
 def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
@@ -572,8 +553,9 @@ def _methods(t: Table) -> Methods:
 
     seed = t.get("seed", int, default=DEFAULT_METHOD_SEED, check=method_seed_problem)
     t.finish()
+    from spindlebench.selection.method_registry import method_names
 
-    labels = list(BUDGET_METHODS) if labels == ["all"] else labels
+    labels = list(method_names(budget=True)) if labels == ["all"] else labels
     try:
         methods = check_labels(labels, "methods")
     except SpindlebenchError as exc:

@@ -64,7 +64,7 @@ from spindlebench.selection.registry import (
     select_with,
 )
 from spindlebench.selection.regressors import blocked_cv_alpha
-from spindlebench.studies.family.family_file import Methods
+from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE, Methods
 
 TARGET = DRIFT_COLUMN
 #: Column of each prepared frame holding the true drift rise (um), for ``rmse_true_um``.
@@ -75,7 +75,7 @@ GROUP_SENSORS = {ALL_RAW: SENSORS, SIX_RAW: PAPER_SIX, SIX_DIFF: PAPER_SIX}
 #: Between a group and a selection method in a method's name (``six_diff:kmeans+grey``).
 GROUP_SEPARATOR = ":"
 #: The ``top-k-correlated`` baseline is that selection method on the raw sensors, then OLS.
-TOP_K = parse_method("top-k-correlated")
+TOP_K = parse_method(TOP_K_BASELINE)
 T = TypeVar("T")
 
 
@@ -222,9 +222,9 @@ def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.Dat
         data = EvaluationData(train, tests)
     if spec.group is not None:
         return _paper_group(spec, data, similarity)
-    if spec.name == "top-k-correlated":
+    if spec.name == TOP_K_BASELINE:
         return _top_k_correlated(spec, data)
-    if spec.name == "ridge":
+    if spec.name == RIDGE_BASELINE:
         return _ridge(data)
     if spec.name == ORACLE:
         return _oracle(data)

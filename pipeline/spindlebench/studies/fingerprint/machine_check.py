@@ -27,8 +27,15 @@ from pathlib import Path
 
 import numpy as np
 
-from spindlebench.core.names import KELVIN_OFFSET, SENSORS
+from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DEFAULT_FMU, SCENARIOS_DIR
+from spindlebench.formats.recording import (
+    AMBIENT_COLUMN,
+    DRIFT_COLUMN,
+    SENSOR_OUTPUTS,
+    TIME_COLUMN,
+    node_output,
+)
 from spindlebench.machines.variants import (
     PAPER_RUNS,
     Machine,
@@ -44,7 +51,7 @@ from spindlebench.testbench.scenario import load_scenario
 
 PAPER_DIR = SCENARIOS_DIR / "paper"
 SAMPLE_S = 60.0
-ERROR = "drift_um"
+ERROR = DRIFT_COLUMN
 
 
 def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
@@ -65,12 +72,12 @@ def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
         "T_start": float(signals.ambient_C[0]) + KELVIN_OFFSET,
         "cooling_enabled": 0.0 if scenario.cooling.mode == "off" else 1.0,
     }
-    outputs = [f"{s}_C" for s in SENSORS] + [ERROR]
+    outputs = [*SENSOR_OUTPUTS, ERROR]
     result = simulate_fmu(str(fmu_path), start_values=start, input=inputs, stop_time=stop_s,
                           output_interval=SAMPLE_S, output=outputs, relative_tolerance=1e-6,
                           fmi_type="ModelExchange")  # CVode (FMPy would pick co-simulation)
     frame = {name: np.asarray(result[name], dtype=float) for name in outputs}
-    frame["time_s"] = np.asarray(result["time"], dtype=float)
+    frame[TIME_COLUMN] = np.asarray(result["time"], dtype=float)
     return frame
 
 
@@ -86,15 +93,15 @@ def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEF
     scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
     simulation = co_simulate(scenario, fmu_path, start=run_start(scenario, Path(fmu_path)))
     frame = {name: np.asarray(simulation.outputs[name], dtype=float)
-             for name in [f"{s}_C" for s in SENSORS] + [ERROR]}
-    frame["time_s"] = np.asarray(simulation.time_s, dtype=float)
+             for name in [*SENSOR_OUTPUTS, ERROR]}
+    frame[TIME_COLUMN] = np.asarray(simulation.time_s, dtype=float)
     return frame
 
 
 def run_fingerprint(frame: Mapping[str, np.ndarray]) -> dict[str, float]:
     """The fingerprint of one simulated run."""
-    temps = np.column_stack([frame[f"{s}_C"] for s in SENSORS])
-    return fingerprint(frame["time_s"], temps, frame[ERROR])
+    temps = np.column_stack([frame[o] for o in SENSOR_OUTPUTS])
+    return fingerprint(frame[TIME_COLUMN], temps, frame[ERROR])
 
 
 def paper_fingerprints(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
@@ -131,7 +138,7 @@ def ambient_step_response(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
     stop_s = max(hours) * 3600.0
     drift = []
     for ambient_C in (20.0, 20.0 + STEP_K):
-        start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, "ambient_C": ambient_C}
+        start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, AMBIENT_COLUMN: ambient_C}
         result = simulate_fmu(str(fmu_path), start_values=start, stop_time=stop_s,
                               output_interval=600.0, output=[ERROR], relative_tolerance=1e-8,
                               fmi_type="ModelExchange")
@@ -199,11 +206,11 @@ def levels(machine: Machine, fmu_path: str | Path = DEFAULT_FMU) -> dict[str, fl
         scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
         outputs = co_simulate(scenario, fmu_path, start=run_start(scenario, Path(fmu_path))).outputs
         rpm = run.rsplit("_", 1)[1]
-        for name, column in (("T1", "T1_C"), ("rings", "node_front_bearing_C")):
+        for name, column in (("T1", SENSOR_OUTPUTS[0]), ("rings", node_output("front_bearing"))):
             values = np.asarray(outputs[column], dtype=float)
             out[f"{name} rise at {rpm} rpm (K)"] = float(values[-1] - values[0])
-    columns = [f"node_column_{i}_C" for i in range(1, 13)]
-    start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, "ambient_C": 20.0 + STEP_K}
+    columns = [node_output(f"column_{i}") for i in range(1, 13)]
+    start = {**machine.parameters, "T_start": 20.0 + KELVIN_OFFSET, AMBIENT_COLUMN: 20.0 + STEP_K}
     result = simulate_fmu(str(fmu_path), start_values=start, stop_time=96 * 3600.0,
                           output_interval=120.0, output=columns, relative_tolerance=1e-8,
                           fmi_type="ModelExchange")

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN
+from spindlebench.formats.recording import DRIFT_COLUMN, SPEED_COLUMN, TIME_COLUMN
 from spindlebench.formats.toml import Table, load_toml
 from spindlebench.studies.iso230_3.evaluation import LINEAR, tilt_from_probes
 
@@ -75,8 +75,8 @@ def synthetic(frame) -> TestData:
         temperatures={label: frame[c].to_numpy(float)
                       for c, label in SYNTHETIC_TEMPERATURES.items() if c in frame},
         air=SYNTHETIC_TEMPERATURES["T10"],
-        speed_rpm=frame["spindle_speed_rpm"].to_numpy(float)
-        if "spindle_speed_rpm" in frame else None,
+        speed_rpm=frame[SPEED_COLUMN].to_numpy(float)
+        if SPEED_COLUMN in frame else None,
         sources={**SYNTHETIC_LINEAR, **SYNTHETIC_TILTS},
     )
 

@@ -192,7 +192,7 @@ def choose_six(frame: pd.DataFrame, sensors: Sequence[str], similarity: str) -> 
     varying = [name for name, fixed in zip(sensors, constant, strict=True) if not fixed]
     if len(varying) < 6:
         raise SpindlebenchError(f"six = auto needs 6 varying sensors, have {len(varying)}")
-    clusters = cluster_candidates(raw[varying].to_numpy(), 6, "closure", similarity)
+    clusters = cluster_candidates(raw[varying].to_numpy(), 6, DEFAULT_METHOD, similarity)
     ranges = (raw[varying].max() - raw[varying].min()).to_numpy()
     picks = {varying[int(members[np.argmax(ranges[members])])] for members in clusters}
     return tuple(name for name in sensors if name in picks)

@@ -42,7 +42,6 @@ from typing import Any
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import (
-    BUDGET_METHODS,
     DEFAULT_METHOD,
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
@@ -53,6 +52,7 @@ from spindlebench.core.names import (
 )
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN
 from spindlebench.formats.toml import Table, load_toml
+from spindlebench.selection.method_registry import method_names
 
 AUTO_SIX = "auto"
 #: A recordings folder's own study file (the CAIVIAC adapter writes one); ``spindlebench paper``
@@ -232,7 +232,7 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
         elif key == "methods":
             names = _names(table, key)
-            changes[key] = BUDGET_METHODS if names == (ALL_METHODS,) else names
+            changes[key] = method_names(budget=True) if names == (ALL_METHODS,) else names
         elif key == "seed":
             value = table.raw(key)
             if isinstance(value, str) and value.isdigit():

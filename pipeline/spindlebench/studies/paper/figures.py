@@ -14,6 +14,7 @@ from scipy.cluster.hierarchy import dendrogram
 
 from spindlebench.core import atomic
 from spindlebench.core.names import ALL_RAW, GROUP_LABELS, SIX_DIFF, SIX_RAW
+from spindlebench.formats.recording import TIME_COLUMN
 from spindlebench.selection import linkage_from_similarity
 from spindlebench.studies.paper.analysis import StudyResult
 
@@ -30,8 +31,8 @@ def _save(figure: Figure, path: Path) -> Path:
 
 def _hours(result: StudyResult, name: str) -> np.ndarray:
     frame = result.frames[name]
-    if "time_s" in frame.columns:
-        return frame["time_s"].to_numpy(dtype=float) / 3600.0
+    if TIME_COLUMN in frame.columns:
+        return frame[TIME_COLUMN].to_numpy(dtype=float) / 3600.0
     return np.arange(len(frame)) / 3600.0
 
 

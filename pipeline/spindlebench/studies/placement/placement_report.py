@@ -117,11 +117,12 @@ def readme(study: PlacementStudy, outcome: PlacementOutcome, figures: dict[str, 
            record: dict[str, Any], trains: list[Experiment], scored: list[int]) -> str:
     """The README.md of a placement study's results folder."""
     family = study.family
-    noise = family.noise[0]
+    level = family.noise[0]
+    noise = level.value
     n = len(study.nodes)
     table = outcome.table
     honest = study.test_replicas != (study.design_replica,)
-    instruments = (f"measured through the study's noise level `{noise.name}` (white noise "
+    instruments = (f"measured through the study's noise level `{level.name}` (white noise "
                    f"σ = {noise.noise_C:g} K, quantum {noise.quantum_C:g} K; probe σ = "
                    f"{noise.probe_noise_um:g} µm)" if study.measured else
                    "noise-free (true node temperatures)")

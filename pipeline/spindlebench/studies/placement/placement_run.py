@@ -192,7 +192,7 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
     store, study = work.store, work.study
     store.write_frame("placements.csv", outcome.table)
     store.write_frame("scores.csv", outcome.scores)
-    references = {"probe noise σ": study.family.noise[0].probe_noise_um}
+    references = {"probe noise σ": study.family.noise[0].value.probe_noise_um}
     figures = {"comparison": plots.comparison(
         outcome.table, store.path("comparison.png"), references,
         note=f"predicting no drift at all: {outcome.no_model_rmse_um:.1f} µm")}

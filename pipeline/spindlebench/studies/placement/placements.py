@@ -25,8 +25,8 @@ import pandas as pd
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import DEFAULT_REGRESSOR
 from spindlebench.selection import CandidateSet, SelectionWarning, pairs, rmse
-from spindlebench.selection.clustering import PAIRWISE_CLUSTERINGS
 from spindlebench.selection.evaluate import row_wise
+from spindlebench.selection.method_registry import METHOD_REGISTRY
 from spindlebench.selection.pairs import PairCandidates, check_candidates
 from spindlebench.selection.registry import (
     PAPER_METHOD,
@@ -124,7 +124,7 @@ class Design:
 
     def check_pairwise(self) -> None:
         """Methods that form an n x n matrix over the candidates (the fuzzy selection where
-        it cannot run row-wise, the ``clustering.PAIRWISE_CLUSTERINGS``) are refused, naming
+        it cannot run row-wise, the registry's ``pairwise`` methods) are refused, naming
         the key, above ``pairs.MAX_FORMED_CANDIDATES`` candidates, before any search: they
         would fail on memory (500 nodes with differences: 125 GB per matrix)."""
         n = self.n_candidates
@@ -140,7 +140,7 @@ class Design:
                 "abs-pearson selects row-wise over nodes and all their differences")
         for label in self.study.methods:
             if label not in ("fuzzy", "greedy", "exhaustive") and \
-                    parse_method(label).method in PAIRWISE_CLUSTERINGS:
+                    METHOD_REGISTRY[parse_method(label).method].pairwise:
                 raise SpindlebenchError(
                     f"{self.study.path}: key 'placement.methods': {label!r} forms an n x n "
                     f"matrix over {size}; drop it or set with_differences = false")

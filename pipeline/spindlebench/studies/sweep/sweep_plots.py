@@ -12,11 +12,12 @@ import pandas as pd
 
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.names import ALL_RAW, GROUPS, SIX_DIFF, SIX_RAW
+from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE
 from spindlebench.studies.family.seasons import MONTHS
 
-METHOD_ORDER = (*GROUPS, "top-k-correlated", "ridge", "oracle")
+METHOD_ORDER = (*GROUPS, TOP_K_BASELINE, RIDGE_BASELINE, "oracle")
 COLOURS = {ALL_RAW: "#8c8c8c", SIX_RAW: "#5b8fc9", SIX_DIFF: "#d9622b",
-           "top-k-correlated": "#6aa84f", "ridge": "#9b59b6", "oracle": "#f0c419",
+           TOP_K_BASELINE: "#6aa84f", RIDGE_BASELINE: "#9b59b6", "oracle": "#f0c419",
            "measured": "#4c72b0", "noise-free": "#d0d0d0"}
 #: Drawn over every box: black contrasts with each fill above (an orange median vanished on
 #: the orange six_diff boxes).
