@@ -8,12 +8,14 @@ The build itself is ``spindlebench.model.build.build_fmu``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 from pathlib import Path
 
 from fmpy import read_model_description
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, allow_shipped, check_output
 from spindlebench.core.provenance import sha256_file
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.model.build import build_fmu
@@ -73,8 +75,15 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
                                 f"{args.segments}")
     target = output_path(args.out, args.segments)
-    started = time.perf_counter()
-    path = build_fmu(args.models, target, segments=args.segments)
+    # 'spindlebench build' rebuilds the committed FMU from its own sources (same bytes);
+    # anything else (other segments, other models) must not replace it unasked, and the
+    # refusal comes now, not after minutes of building
+    own = (args.segments == DEFAULT_SEGMENTS
+           and Path(args.models).resolve() == MODELS_DIR.resolve())
+    with allow_shipped(DEFAULT_FMU) if own else contextlib.nullcontext():
+        check_output(target)
+        started = time.perf_counter()
+        path = build_fmu(args.models, target, segments=args.segments)
     elapsed = time.perf_counter() - started
     description = read_model_description(str(path))
     nodes = sum(v.name.startswith("node_") for v in description.modelVariables)

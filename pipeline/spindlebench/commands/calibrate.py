@@ -24,7 +24,7 @@ from spindlebench.calibration.series import check_roles, load_series
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import split_list_flag
-from spindlebench.core.paths import MODELS_DIR
+from spindlebench.core.paths import MODELS_DIR, check_output
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument, load_machine
@@ -94,6 +94,8 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != ".toml":
         raise SpindlebenchError(f"-o {out}: a machine file ends in .toml")
+    for target in (out, *report.report_paths(out)):  # now, not after minutes of fitting
+        check_output(target)
     if not 2 <= args.segments <= MAX_SEGMENTS:
         raise SpindlebenchError(f"--segments {args.segments}: must be in [2, {MAX_SEGMENTS}]")
     if args.step_s is not None and not args.step_s > 0:

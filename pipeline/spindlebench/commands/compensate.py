@@ -16,14 +16,18 @@ from dataclasses import replace
 import pandas as pd
 
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
-from spindlebench.core.errors import SpindlebenchError
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
 )
-from spindlebench.studies.compensation.compensation_report import summary_text, write_outputs
+from spindlebench.studies.compensation.compensation_report import (
+    OUTPUT_FILES,
+    summary_text,
+    write_outputs,
+)
 from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.studies.family.family_file import check_fmu
+from spindlebench.studies.running.store import ResultStore
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -51,15 +55,16 @@ def run(args: argparse.Namespace) -> int:
         study = replace(study, days=args.days)
     fmu = check_fmu(study.family)
     out = args.out if args.out is not None else default_results_folder(args.study, study.name)
-    if out.exists() and not out.is_dir():
-        raise SpindlebenchError(f"{out}: exists and is not a folder")
-    truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
-    outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
-    days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
-    series = pd.concat([part for o in outcomes.values() for part in o.series],
-                       ignore_index=True)
-    table = summary(study, days, series)
-    write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
+    # its own folder only (a sweep's README is not ours to replace), one process at a time
+    store = ResultStore(out, owned=lambda entry: entry.name in OUTPUT_FILES)
+    with store.locked():
+        truths = simulate_days(study, fmu, progress=lambda text: print(text, file=sys.stderr))
+        outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
+        days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
+        series = pd.concat([part for o in outcomes.values() for part in o.series],
+                           ignore_index=True)
+        table = summary(study, days, series)
+        write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
     print(summary_text(table))
-    print(f"wrote {out / 'README.md'} and 5 more files")
+    print(f"wrote {out / 'README.md'} and {len(OUTPUT_FILES) - 1} more files")
     return 0

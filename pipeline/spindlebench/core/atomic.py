@@ -14,6 +14,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from spindlebench.core.paths import check_output
+
 
 def _current_umask() -> int:
     """The process umask (read by setting and restoring it; there is no getter)."""
@@ -29,6 +31,7 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     Use it for writers that want a path (``DataFrame.to_csv``, ``savefig``, zip files).
     """
     target = Path(target)
+    check_output(target)  # never a shipped file, unless --overwrite-shipped says so
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_parts(target)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".part",

@@ -1,0 +1,172 @@
+"""Issue 28: a followed lock link, a hung sweep, shipped files overwritten, trusted caches.
+
+One test (at least) per item of the issue, each against the real code path that failed:
+data loss, hangs, silent wrong results, security and misleading messages. The hostile-input
+table (tests/test_hostile_inputs.py) holds the one-line refusals of the command line; this
+file holds what needs more than one command or a look at the bytes.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from conftest import REPO
+from spindlebench import cli
+from spindlebench.errors import SpindlebenchError
+from spindlebench.paths import DEFAULT_FMU, allow_shipped, check_output, shipped
+from spindlebench.studies.store import ResultStore
+
+TINY_COMPENSATE = REPO / "scenarios" / "studies" / "tiny_compensate.toml"
+DEFAULT_MACHINE = REPO / "scenarios" / "machines" / "default.toml"
+
+
+def sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def one_error_line(stderr: str) -> str:
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    assert lines[0].startswith("error: ") and "Traceback" not in stderr
+    return lines[0]
+
+
+# --------------------------------------------------------------------------- data loss
+
+
+def test_a_lock_that_is_a_symlink_is_refused_and_its_target_untouched(tmp_path):
+    victim = tmp_path / "precious.txt"
+    victim.write_text("keep me\n", encoding="utf-8")
+    root = tmp_path / "results"
+    root.mkdir()
+    (root / ".lock").symlink_to(victim)
+    with pytest.raises(SpindlebenchError, match="symbolic link"):
+        ResultStore(root).lock()
+    assert victim.read_text(encoding="utf-8") == "keep me\n"
+
+
+def test_a_lock_that_is_a_fifo_is_refused_without_blocking(tmp_path):
+    root = tmp_path / "results"
+    root.mkdir()
+    os.mkfifo(root / ".lock")
+    with pytest.raises(SpindlebenchError, match="not a regular file"):
+        ResultStore(root).lock()
+
+
+def test_a_symlinked_subfolder_of_a_results_folder_is_never_written_through(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    root = tmp_path / "results"
+    root.mkdir()
+    (root / "runs").symlink_to(elsewhere, target_is_directory=True)
+    store = ResultStore(root)
+    with pytest.raises(SpindlebenchError, match="symbolic link inside the results folder"):
+        store.write_json("runs/r000/x.json", {"a": 1})
+    assert not any(elsewhere.iterdir())
+
+
+def test_a_linked_results_root_is_still_allowed(tmp_path):
+    """Results on another disk through a link is a user's choice, not an attack."""
+    real = tmp_path / "disk"
+    real.mkdir()
+    (tmp_path / "results").symlink_to(real, target_is_directory=True)
+    store = ResultStore(tmp_path / "results")
+    store.write_json("a/b.json", {"x": 1})
+    assert (real / "a" / "b.json").is_file()
+
+
+@pytest.mark.parametrize("target", [
+    DEFAULT_MACHINE, DEFAULT_FMU, REPO / "scenarios" / "seasons" / "chongqing.toml",
+    REPO / "models" / "SpindleBench.mo", REPO / "pipeline" / "spindlebench" / "new.csv"])
+def test_shipped_files_are_never_an_output_unless_allowed(target):
+    assert shipped(target)
+    with pytest.raises(SpindlebenchError, match="--overwrite-shipped"):
+        check_output(target)
+    with allow_shipped():
+        check_output(target)  # --overwrite-shipped: allowed
+    with allow_shipped(target):
+        check_output(target)
+
+
+def test_a_new_file_beside_the_shipped_machines_is_not_shipped():
+    assert not shipped(REPO / "scenarios" / "machines" / "mine-not-there.toml")
+    assert not shipped(REPO / "fmus" / "SpindleBench_3seg.fmu")
+
+
+def test_calibrate_refuses_to_replace_the_default_machine_before_any_work(tmp_path, capsys):
+    before = sha(DEFAULT_MACHINE)
+    status = cli.main(["calibrate", str(tmp_path / "none.csv"), "--map",
+                       str(tmp_path / "none.toml"), "-o", str(DEFAULT_MACHINE)])
+    line = one_error_line(capsys.readouterr().err)
+    assert status == 2 and "default.toml" in line and "--overwrite-shipped" in line
+    assert sha(DEFAULT_MACHINE) == before
+    assert not list(DEFAULT_MACHINE.parent.glob("default.calibration*"))
+
+
+def test_build_with_other_segments_refuses_to_replace_the_committed_fmu_at_once(capsys):
+    before = sha(DEFAULT_FMU)
+    started = time.process_time()
+    status = cli.main(["build", "--segments", "3", "--out", str(DEFAULT_FMU)])
+    line = one_error_line(capsys.readouterr().err)
+    assert status == 2 and "SpindleBench.fmu" in line and "--overwrite-shipped" in line
+    assert time.process_time() - started < 5  # refused before the minutes of building
+    assert sha(DEFAULT_FMU) == before
+
+
+def test_every_command_has_the_overwrite_flag():
+    parser = cli.build_parser()
+    for name, sub in parser.commands.items():
+        assert any("--overwrite-shipped" in a.option_strings for a in sub._actions), name
+
+
+def test_compensate_refuses_a_sweeps_folder_and_leaves_its_readme(tmp_path, capsys):
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    (sweep / "state.json").write_text("{}\n", encoding="utf-8")
+    (sweep / "README.md").write_text("the sweep's\n", encoding="utf-8")
+    status = cli.main(["compensate", str(TINY_COMPENSATE), "-o", str(sweep)])
+    line = one_error_line(capsys.readouterr().err)
+    assert status == 2 and "state.json" in line
+    assert (sweep / "README.md").read_text(encoding="utf-8") == "the sweep's\n"
+    assert not (sweep / ".lock").exists()
+
+
+def test_compensate_holds_the_folder_lock(tmp_path, capsys):
+    out = tmp_path / "comp"
+    holder = ResultStore(out)
+    holder.lock()
+    child = subprocess.run([sys.executable, "-m", "spindlebench.cli", "compensate",
+                            str(TINY_COMPENSATE), "-o", str(out)], capture_output=True,
+                           text=True, timeout=300)
+    holder.unlock()
+    assert child.returncode == 2
+    assert "in use by process" in one_error_line(child.stderr)
+    assert not (out / "README.md").exists()
+
+
+def test_compensate_writes_its_completion_markers_last():
+    from spindlebench.compensation import command
+
+    assert set(command.COMPLETE_MARKERS) <= command.OUTPUT_FILES
+
+
+@pytest.mark.slow
+def test_compensate_twice_gives_the_same_bytes_and_reuses_its_own_folder(tmp_path):
+    first, second = tmp_path / "one", tmp_path / "two"
+    for out in (first, second, second):  # the third: a rerun into its own folder
+        assert cli.main(["compensate", str(TINY_COMPENSATE), "-o", str(out), "--days",
+                         "cold-starts"]) == 0
+        time.sleep(1.1)  # a gzip header with a time would differ now
+    for name in ("timeseries.csv.gz", "days.csv", "summary.csv"):
+        assert (first / name).read_bytes() == (second / name).read_bytes(), name
+    raw = (first / "timeseries.csv.gz").read_bytes()
+    assert raw[4:8] == bytes(4)  # gzip MTIME field
+    assert raw[3] & 0x08 == 0  # no FNAME field (a temporary file's random name)
+    assert b"residual_um" in gzip.decompress(raw).split(b"\n", 1)[0]
