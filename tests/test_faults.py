@@ -11,6 +11,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -170,3 +171,101 @@ def test_compensate_twice_gives_the_same_bytes_and_reuses_its_own_folder(tmp_pat
     assert raw[4:8] == bytes(4)  # gzip MTIME field
     assert raw[3] & 0x08 == 0  # no FNAME field (a temporary file's random name)
     assert b"residual_um" in gzip.decompress(raw).split(b"\n", 1)[0]
+
+
+# --------------------------------------------------------------------------- hangs
+
+
+def descendants(pid: int) -> list[int]:
+    """Every process below ``pid`` (from /proc: no dependency for a test)."""
+    parents: dict[int, int] = {}
+    for stat_file in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat_file.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        parents[int(stat_file.parent.name)] = int(fields[1])
+    found, frontier = [], [pid]
+    while frontier:
+        children = [c for c, p in parents.items() if p in frontier]
+        found += children
+        frontier = children
+    return found
+
+
+def workers_of(pid: int) -> list[int]:
+    """The pool's worker processes: the grandchildren (children of the forkserver)."""
+    children = [c for c in descendants(pid)
+                if int(Path(f"/proc/{c}/stat").read_text().rsplit(")", 1)[1].split()[1]) != pid]
+    return sorted(children)
+
+
+def nap(seconds: float) -> int:
+    """A task for the worker tests: sleep, return the worker's pid."""
+    time.sleep(seconds)
+    return os.getpid()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("which", [0, 1])
+def test_a_killed_local_worker_is_noticed_and_its_task_retried(which):
+    from spindlebench.studies.executor import Task, TaskRunner
+
+    killed: list[int] = []
+
+    def on_outcome(outcome):
+        if not killed:
+            victims = workers_of(os.getpid())
+            assert len(victims) >= 2, victims
+            killed.append(victims[which])
+            os.kill(victims[which], signal.SIGKILL)  # as the out-of-memory killer would
+
+    runner = TaskRunner(workers=2, progress=False)
+    tasks = [Task(f"nap {i}", nap, (1.0,)) for i in range(6)]
+    outcomes = []
+    stats = runner.run(tasks, lambda o: (outcomes.append(o), on_outcome(o))[1])
+    assert killed
+    assert stats.total() == 6 and sum(stats.done.values()) == 6, [o.error for o in outcomes]
+    assert sorted(o.task.key for o in outcomes) == sorted(t.key for t in tasks)
+    assert killed[0] not in {o.value for o in outcomes[1:]}  # the dead one did no more work
+
+
+def quick_sweep_child(out: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "spindlebench.cli", "sweep",
+                             str(REPO / "scenarios" / "studies" / "tiny_sweep.toml"), "-o",
+                             str(out), "--workers", "2", "--no-progress", *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_first_recording(child: subprocess.Popen, out: Path) -> None:
+    deadline = time.monotonic() + 300
+    while not list(out.glob("runs/*/*.csv")):
+        assert child.poll() is None and time.monotonic() < deadline, child.communicate()
+        time.sleep(0.02)
+
+
+@pytest.mark.slow
+def test_a_sweep_with_a_killed_worker_finishes_every_run(tmp_path):
+    out = tmp_path / "sweep"
+    child = quick_sweep_child(out)
+    wait_first_recording(child, out)
+    os.kill(workers_of(child.pid)[0], signal.SIGKILL)
+    _, stderr = child.communicate(timeout=300)
+    assert child.returncode == 0, stderr
+    assert (out / "README.md").is_file()
+    assert not list(out.rglob("*.error.json"))  # the killed worker's run was retried
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_after_a_killed_worker_still_ends_the_sweep(tmp_path, signum):
+    out = tmp_path / "sweep"
+    child = quick_sweep_child(out)
+    wait_first_recording(child, out)
+    os.kill(workers_of(child.pid)[0], signal.SIGKILL)
+    time.sleep(0.3)
+    if child.poll() is None:
+        child.send_signal(signum)
+    _, stderr = child.communicate(timeout=60)
+    assert child.returncode in (0, 130), stderr
+    assert not list(out.rglob("*.part"))

@@ -185,9 +185,12 @@ def _stop_workers(executor: cf.Executor) -> None:
     forever and the pool's shutdown with it (a study hung at exit). Workers hold nothing to
     save: results are written by this process, and the unpacked FMU folder of a killed worker
     is removed by the next process that unpacks (``runner.extracted_fmu``)."""
-    processes = getattr(executor, "_processes", None) or {}
-    for process in list(processes.values()):
-        if process.is_alive():
+    _kill(list((getattr(executor, "_processes", None) or {}).values()))
+
+
+def _kill(processes: list[Any]) -> None:
+    for process in processes:
+        if process.exitcode is None:
             process.kill()
 
 
@@ -319,6 +322,8 @@ class TaskRunner:
             executor = open_executor()
             running: dict[cf.Future[Any], Task] = {}
             victims: list[Task] = []
+            local = not isinstance(executor, InlineExecutor) and not self.dask_address
+            broken = False
             try:
                 while queue or running:
                     while queue and not victims and len(running) < self._max_in_flight():
@@ -331,12 +336,21 @@ class TaskRunner:
                         running[future] = task
                     if not running:
                         break
-                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                    done, _ = cf.wait(running, timeout=WATCH_S if local else None,
+                                      return_when=cf.FIRST_COMPLETED)
+                    if not done and local and _dead_worker(executor):
+                        # a worker killed from outside (the out-of-memory killer): the pool
+                        # may never say so, so its tasks are victims now
+                        broken = True
+                        victims.extend(running.values())
+                        running.clear()
+                        break
                     for future in done:
                         task = running.pop(future)
                         try:
                             value, error, detail, seconds, cpu_s = future.result()
                         except BrokenProcessPool:
+                            broken = True
                             victims.append(task)
                             continue
                         except Exception as exc:  # a Dask worker lost, an unpicklable result
@@ -344,28 +358,69 @@ class TaskRunner:
                             continue
                         finish(Outcome(task, value, error, detail, seconds, cpu_s))
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
-                if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    with interrupts.deferred():  # a second signal must not cut the stop short
-                        _stop_workers(executor)
+                broken = True
                 raise
             finally:
-                if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    # a signal inside shutdown() left its manager thread waiting on a worker
-                    # nobody stopped, and the study hung at exit: finish it, then raise
-                    with interrupts.deferred():
-                        executor.shutdown(wait=True, cancel_futures=True)
+                if local:
+                    with interrupts.deferred():  # a second signal must not cut the stop short
+                        _close_pool(executor, kill=broken or bool(victims))
             for task in victims:
                 finish(_run_quarantined(task))
 
 
+#: Seconds between two looks at the local workers while waiting for a result.
+WATCH_S = 0.5
+#: Longest wait for a local pool to shut down once its workers are stopped.
+SHUTDOWN_TIMEOUT_S = 30.0
+
+
+def _dead_worker(executor: cf.Executor) -> bool:
+    """Whether a worker process of a local pool has ended (a pool's workers live as long as
+    the pool: one that ended was killed or crashed)."""
+    processes = getattr(executor, "_processes", None) or {}
+    return any(process.exitcode is not None for process in list(processes.values()))
+
+
+def _close_pool(executor: cf.Executor, kill: bool) -> None:
+    """Shut a local pool down without ever waiting forever.
+
+    ``kill``: after a dead worker or a signal, stop every worker first (``_stop_workers``):
+    one that was killed while reading the task queue leaves its lock taken, one that is
+    sending a result nobody reads blocks, and a plain ``shutdown(wait=True)`` then waited
+    on them for ever, with Ctrl-C deferred (a sweep only ``kill -9`` ended). Then the pool's
+    manager thread gets ``SHUTDOWN_TIMEOUT_S`` to finish; if it does not, the workers are
+    stopped and the study goes on (the thread waits on pipes of dead processes only)."""
+    processes = list((getattr(executor, "_processes", None) or {}).values())
+    manager = getattr(executor, "_executor_manager_thread", None)  # before shutdown clears it
+    if kill:
+        _kill(processes)
+    executor.shutdown(wait=False, cancel_futures=True)
+    if manager is None:
+        return
+    manager.join(SHUTDOWN_TIMEOUT_S / 3 if kill else SHUTDOWN_TIMEOUT_S)
+    if manager.is_alive():
+        _kill(processes)
+        manager.join(SHUTDOWN_TIMEOUT_S)
+
+
 def _run_quarantined(task: Task) -> Outcome:
+    """Rerun ``task`` alone in a fresh one-worker pool: a crash is then its own, reported
+    on it; a worker killed from outside is retried here and the task succeeds."""
     pool = _local_pool(1)
+    future = pool.submit(call_isolated, task.fn, task.args)
+    died = Outcome(task, error="worker process died while running this task (killed, out of "
+                               "memory, or a crash in native code, e.g. the FMU?)")
     try:
-        value, error, detail, seconds, cpu_s = pool.submit(call_isolated, task.fn,
-                                                           task.args).result()
-    except BrokenProcessPool:
-        return Outcome(task, error="worker process died while running this task "
-                                   "(crash in native code, e.g. the FMU?)")
+        while True:
+            try:
+                value, error, detail, seconds, cpu_s = future.result(timeout=WATCH_S)
+                break
+            except cf.TimeoutError:
+                if _dead_worker(pool):
+                    return died
+            except BrokenProcessPool:
+                return died
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        with interrupts.deferred():
+            _close_pool(pool, kill=not future.done() or future.exception() is not None)
     return Outcome(task, value, error, detail, seconds, cpu_s)
