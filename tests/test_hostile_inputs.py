@@ -9,6 +9,7 @@ included: the temp dir points into it).
 
 from __future__ import annotations
 
+import os
 import tempfile
 import zipfile
 from collections.abc import Callable
@@ -540,6 +541,137 @@ def _(tmp):
     write(tmp, "models/SpindleBench.mo", b"package SpindleBench\n\xff\nend SpindleBench;\n")
     return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
             ["SpindleBench.mo:2"])
+
+
+# ------------------------------------------------- issue 28: more faults, same promise
+
+TINY_COMPENSATE = (REPO / "scenarios" / "studies" / "tiny_compensate.toml").read_text(
+    encoding="utf-8")
+SHIPPED_MACHINE = REPO / "scenarios" / "machines" / "default.toml"
+
+
+@case("study: more simulations than a study may run")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY.replace("replicas = 2", "replicas = 10000", 1)
+                  .replace("speeds_rpm = [2000, 4000]", "speeds_rpm = [" + ", ".join(
+                      str(1000 + 10 * i) for i in range(10)) + "]", 1))
+    return (["sweep", str(study), "--workers", "0", "--no-progress"],
+            [str(study), "axes.speeds_rpm", "200,000 simulations"])
+
+
+@case("study: two speeds name one experiment")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY.replace("speeds_rpm = [2000, 4000]",
+                                                  "speeds_rpm = [2000, 4000, 2000.0]", 1))
+    return (["sweep", str(study), "--workers", "0", "--no-progress"],
+            [str(study), "axes.speeds_rpm", "entries 1 and 3"])
+
+
+@case("study: the .lock is a symbolic link")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    victim = write(tmp, "victim.txt", "keep\n")
+    (tmp / "res").mkdir()
+    (tmp / "res" / ".lock").symlink_to(victim)
+    return (["sweep", str(study), "-o", str(tmp / "res"), "--workers", "0", "--no-progress"],
+            [".lock", "symbolic link"])
+
+
+@case("study: -o names a FIFO")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    os.mkfifo(tmp / "pipe")
+    return (["sweep", str(study), "-o", str(tmp / "pipe"), "--workers", "0", "--no-progress"],
+            ["pipe", "a FIFO"])
+
+
+@case("compensate: fault_from_day after the last day")
+def _(tmp):
+    study = write(tmp, "comp.toml", TINY_COMPENSATE.replace("fault_from_day = 3",
+                                                            "fault_from_day = 40", 1))
+    return ["compensate", str(study), "-o", "out"], [str(study), "fault_from_day", "last day"]
+
+
+@case("compensate: -o is a sweep's folder")
+def _(tmp):
+    study = write(tmp, "comp.toml", TINY_COMPENSATE)
+    write(tmp, "sweep/state.json", "{}\n")
+    write(tmp, "sweep/README.md", "a sweep's README\n")
+    return ["compensate", str(study), "-o", str(tmp / "sweep")], ["sweep", "state.json"]
+
+
+@case("calibrate: -o is the shipped default machine")
+def _(tmp):
+    rec = role_recording(tmp)
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    return (["calibrate", str(rec), "--map", str(mapping), "-o", str(SHIPPED_MACHINE)],
+            ["default.toml", "--overwrite-shipped"])
+
+
+@case("build: other segments into the committed FMU")
+def _(tmp):
+    return (["build", "--segments", "3", "--out", str(DEFAULT_FMU)],
+            ["SpindleBench.fmu", "--overwrite-shipped"])
+
+
+@case("simulate: -o inside the package source")
+def _(tmp):
+    scenario = write(tmp, "s.toml", QUICK)
+    return (["simulate", str(scenario), "-o", str(REPO / "pipeline" / "spindlebench" / "x.csv")],
+            ["x.csv", "--overwrite-shipped"])
+
+
+@case("build: brackets nested thousands deep")
+def _(tmp):
+    deep = "(" * 5000 + "1" + ")" * 5000
+    write(tmp, "models/SpindleBench.mo", f"package SpindleBench\n  constant Real c = {deep};\n"
+          "end SpindleBench;\n")
+    return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
+            ["SpindleBench.mo:2", "nested"])
+
+
+@case("build: classes nested hundreds deep")
+def _(tmp):
+    names = [f"P{i}" for i in range(300)]
+    text = "package SpindleBench\n" + "".join(f"package {n}\n" for n in names) + "".join(
+        f"end {n};\n" for n in reversed(names)) + "end SpindleBench;\n"
+    write(tmp, "models/SpindleBench.mo", text)
+    return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
+            ["SpindleBench.mo:21", "nested"])
+
+
+@case("plot: a 100 000-character title")
+def _(tmp):
+    rec = role_recording(tmp)
+    return (["plot", str(rec), "--target", "drift_um", "-o", "fig.png", "--title", "x" * 100_000],
+            ["--title", "100,000"])
+
+
+@case("evaluate: --target is the time column")
+def _(tmp):
+    return [*evaluate_case(tmp, recording_text())[:-4], "--target", "time_s", "--clusters",
+            "2"], ["train.csv", "'time_s'", "time column"]
+
+
+@case("evaluate: --differences on 5 000 sensors")
+def _(tmp):
+    header = ",".join(["time_s", "drift_um", *(f"S{i}" for i in range(5000))])
+    rows = [",".join([str(60 * r), str(0.1 * r), *(str(20 + 0.01 * r + 1e-4 * i)
+                                                    for i in range(5000))]) for r in range(6)]
+    argv = evaluate_case(tmp, header + "\n" + "\n".join(rows) + "\n", "--differences")
+    return argv, ["train.csv", "5000 sensors", "--differences"]
+
+
+AMBIENT_FILES_28 = {
+    "underscore in a number": ("time_s,ambient_C\n0,18\n300,1_8\n600,19\n", "line 3"),
+}
+for _label, (_text, _where) in AMBIENT_FILES_28.items():
+    def _build(tmp: Path, text: str = _text, where: str = _where):
+        write(tmp, "air.csv", text)
+        scenario = write(tmp, "s.toml", QUICK.replace(
+            'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+        return ["simulate", str(scenario), "-o", "out"], [where, "air.csv"]
+    case(f"ambient CSV: {_label}")(_build)
 
 
 # --------------------------------------------------------------------------- the test

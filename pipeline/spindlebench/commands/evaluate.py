@@ -99,6 +99,12 @@ def _read_used(path: Path, target: str, roles: ColumnRoles,
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
 
 
+#: Most candidate columns (sensors, with --differences their pairwise differences too):
+#: 200 sensors with --differences are 20 100; each candidate is a column of the recording's
+#: length in memory, so 5 000 sensors' 12.5 million would not finish.
+MAX_CANDIDATES = 50_000
+
+
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
     if args.clusters < 1:
@@ -112,6 +118,11 @@ def run(args: argparse.Namespace) -> int:
                          roles.allow_target_copy)
     sensors = taken.sensors
     n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
+    if n > MAX_CANDIDATES:  # 5 000 sensors with --differences: 12.5 million columns
+        raise SelectionError(f"recording {args.train}: {len(sensors)} sensors give {n:,} "
+                             f"candidates{' with --differences' if args.differences else ''}, "
+                             f"more than the {MAX_CANDIDATES:,} evaluate can score; choose "
+                             "fewer with --sensors or --exclude")
     if args.clusters > n:
         raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
                              f"({n}) of recording {args.train} (sensors, and their differences "

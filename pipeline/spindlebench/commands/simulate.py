@@ -13,7 +13,7 @@ from pathlib import Path
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.listflags import expand_folders
-from spindlebench.core.paths import DEFAULT_FMU
+from spindlebench.core.paths import DEFAULT_FMU, check_output
 from spindlebench.formats.recording import (
     write_recording,
 )
@@ -47,6 +47,7 @@ def _output_targets(files: list[Path], out: Path) -> list[Path]:
             if path.is_dir():
                 raise SpindlebenchError(f"{path}: is a directory; the recording needs it as "
                                         "a file name (choose another -o)")
+            check_output(path)  # not a shipped file: refused before any simulation
     return targets
 
 

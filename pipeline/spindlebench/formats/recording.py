@@ -61,6 +61,7 @@ import numpy as np
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
+from spindlebench.core.paths import check_output
 from spindlebench.core.provenance import sha256_file
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
@@ -638,6 +639,7 @@ def check_recording_targets(csv_path: str | os.PathLike[str]) -> tuple[Path, Pat
     for path in (csv_path, json_path):
         if path.is_dir():
             raise SpindlebenchError(f"{path}: is a directory, cannot write a recording there")
+        check_output(path)  # never a shipped file (the CSV named first)
     return csv_path, json_path
 
 

@@ -226,6 +226,9 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
                                 f"found (columns are: {', '.join(header)})")
     if time_column not in header:
         time_column = None
+    if target == time_column:
+        raise SpindlebenchError(f"recording {where}: the target {target!r} is the time column; "
+                                "give the thermal error column (e.g. --target drift_um)")
     for pattern in roles.exclude:
         if not any(matches(name, [pattern]) for name in header):
             raise SpindlebenchError(f"recording {where}: --exclude {pattern!r} matches no "

@@ -64,6 +64,9 @@ from spindlebench.testbench.scenario import (
 
 #: Most replicas and clusters a study may ask for.
 MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
+#: Most simulations one study may ask for: at ~1 s each on one core, 100 000 is more than a
+#: day on a workstation; 960 000 spent 5 min and 2 GB building tasks before the first run.
+MAX_SIMULATIONS = 100_000
 BASELINES = ("top-k-correlated", "ridge")
 TRAINING_RULES = ("one", "each-season")
 PROGRAMME_KINDS = ("constant", "cycles", "steps")
@@ -278,6 +281,13 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     else:
         machine_axis = tuple(axes.get_list("machines", str, default=[]))
     axes.finish()
+    machines = population.size if population is not None else max(1, len(machine_axis))
+    simulations = (replicas * machines * len(months) * len(speeds) * len(programme_names)
+                   * len(cooling_names))
+    if simulations > MAX_SIMULATIONS:  # refused now, not after minutes of building tasks
+        raise axes.error("speeds_rpm", f"the axes give {simulations:,} simulations (replicas × "
+                         "machines × months × speeds × programmes × cooling), more than the "
+                         f"{MAX_SIMULATIONS:,} a study may run; split it into several studies")
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
     for name in machine_axis:
@@ -310,6 +320,7 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         root.raw(table_name, default=None)
     root.finish()
 
+    _refuse_equal_ids(axes, months, speeds)
     n_experiments = len(months) * len(speeds) * len(programmes) * len(cooling)
     if n_experiments < 2:
         raise root.error("axes", "the axes give only one experiment; a sweep needs a training "
@@ -323,6 +334,20 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
         indoor=indoor, machine=machine_variant, machines=machine_axis, population=population,
     )
+
+
+def _refuse_equal_ids(axes: Table, months: Sequence[str], speeds: Sequence[float]) -> None:
+    """Two speeds (or months) that name one experiment would share its files: one run would
+    silently replace the other."""
+    from spindlebench.studies.family.experiments import speed_label
+
+    for key, values in (("months", list(months)), ("speeds_rpm", [speed_label(v) for v in speeds])):
+        seen: dict[str, int] = {}
+        for i, value in enumerate(values):
+            if value in seen:
+                raise axes.error(key, f"entries {seen[value] + 1} and {i + 1} both give "
+                                 f"{value!r}: each experiment needs its own value")
+            seen[value] = i
 
 
 def machine_runs(study: SweepStudy, machine: str | None,
