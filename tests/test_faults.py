@@ -269,3 +269,72 @@ def test_a_signal_after_a_killed_worker_still_ends_the_sweep(tmp_path, signum):
     _, stderr = child.communicate(timeout=60)
     assert child.returncode in (0, 130), stderr
     assert not list(out.rglob("*.part"))
+
+
+# --------------------------------------------------------------------------- silent wrong results
+
+
+@pytest.fixture
+def soak_cache(tmp_path, monkeypatch):
+    from spindlebench.testbench import soak
+
+    folder = tmp_path / "soak-cache"
+    monkeypatch.setenv(soak.CACHE_ENV, str(folder))
+    monkeypatch.setattr(soak, "_memory", {})
+    return folder
+
+
+def test_a_tampered_or_renamed_soak_cache_is_named_and_recomputed(tmp_path, soak_cache,
+                                                                  monkeypatch):
+    import json
+
+    from conftest import QUICK
+    from spindlebench.testbench import soak
+    from spindlebench.testbench.scenario import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text(QUICK + '\n[initial]\nkind = "soak"\ndays = 1\n', encoding="utf-8")
+    scenario = load_scenario(path)
+    states = soak.soak_state(scenario, DEFAULT_FMU)
+    (file,) = soak_cache.glob("*.json")
+    record = json.loads(file.read_text(encoding="utf-8"))
+    assert record["states_sha256"] == soak.states_sha256(states)
+    name = next(iter(record["states_K"]))
+    record["states_K"][name] = 250.0  # -23 °C, a plausible kelvin number, in an 18 °C room
+    file.write_text(json.dumps(record), encoding="utf-8")
+    monkeypatch.setattr(soak, "_memory", {})
+    with pytest.warns(soak.StaleCacheWarning, match="checksum"):
+        again = soak.soak_state(scenario, DEFAULT_FMU)
+    assert again == states
+    # a valid file of other inputs copied under this key's name is not these inputs' soak
+    other = json.loads(file.read_text(encoding="utf-8"))
+    other["soak_key"] = "0" * 64
+    file.write_text(json.dumps(other), encoding="utf-8")
+    monkeypatch.setattr(soak, "_memory", {})
+    with pytest.warns(soak.StaleCacheWarning, match="other inputs"):
+        assert soak.soak_state(scenario, DEFAULT_FMU) == states
+
+
+def test_speeds_that_differ_get_their_own_experiment_ids(tmp_path):
+    from spindlebench.studies.experiments import experiments, speed_label
+    from spindlebench.studies.study import load_study
+
+    assert speed_label(2000.0) == "2000" and speed_label(1500.5) == "1500.5"
+    assert speed_label(2000.0001) == "2000.0001"
+    text = (REPO / "scenarios" / "studies" / "tiny_sweep.toml").read_text(encoding="utf-8")
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace("speeds_rpm = [2000, 4000]",
+                                 "speeds_rpm = [2000, 2000.0001, 4000]"), encoding="utf-8")
+    ids = [e.id for e in experiments(load_study(path))]
+    assert len(set(ids)) == len(ids) == 6, ids
+
+
+def test_an_ambient_csv_with_a_bom_is_read_like_a_recording(tmp_path):
+    from conftest import QUICK
+    from spindlebench.testbench.scenario import load_scenario
+
+    (tmp_path / "air.csv").write_bytes(b"\xef\xbb\xbftime_s,ambient_C\n0,18\n300,18.5\n600,19\n")
+    path = tmp_path / "s.toml"
+    path.write_text(QUICK.replace('kind = "constant"\ntemperature_C = 18.0',
+                                  'kind = "csv"\nfile = "air.csv"'), encoding="utf-8")
+    assert list(load_scenario(path).ambient.values_C) == [18.0, 18.5, 19.0]

@@ -559,14 +559,6 @@ def _(tmp):
             [str(study), "axes.speeds_rpm", "200,000 simulations"])
 
 
-@case("study: two speeds name one experiment")
-def _(tmp):
-    study = write(tmp, "study.toml", TINY.replace("speeds_rpm = [2000, 4000]",
-                                                  "speeds_rpm = [2000, 4000, 2000.0]", 1))
-    return (["sweep", str(study), "--workers", "0", "--no-progress"],
-            [str(study), "axes.speeds_rpm", "entries 1 and 3"])
-
-
 @case("study: the .lock is a symbolic link")
 def _(tmp):
     study = write(tmp, "study.toml", TINY)
@@ -655,7 +647,7 @@ def _(tmp):
 
 @case("evaluate: --differences on 5 000 sensors")
 def _(tmp):
-    header = ",".join(["time_s", "drift_um", *(f"S{i}" for i in range(5000))])
+    header = ",".join(["time_s", "drift_um", *(f"T{i}" for i in range(5000))])
     rows = [",".join([str(60 * r), str(0.1 * r), *(str(20 + 0.01 * r + 1e-4 * i)
                                                     for i in range(5000))]) for r in range(6)]
     argv = evaluate_case(tmp, header + "\n" + "\n".join(rows) + "\n", "--differences")

@@ -114,8 +114,6 @@ def run(args: argparse.Namespace) -> int:
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)
-    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
-                         roles.allow_target_copy)
     sensors = taken.sensors
     n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
     if n > MAX_CANDIDATES:  # 5 000 sensors with --differences: 12.5 million columns
@@ -123,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
                              f"candidates{' with --differences' if args.differences else ''}, "
                              f"more than the {MAX_CANDIDATES:,} evaluate can score; choose "
                              "fewer with --sensors or --exclude")
+    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
+                         roles.allow_target_copy)
     if args.clusters > n:
         raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
                              f"({n}) of recording {args.train} (sensors, and their differences "

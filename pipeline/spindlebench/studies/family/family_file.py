@@ -320,7 +320,6 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         root.raw(table_name, default=None)
     root.finish()
 
-    _refuse_equal_ids(axes, months, speeds)
     n_experiments = len(months) * len(speeds) * len(programmes) * len(cooling)
     if n_experiments < 2:
         raise root.error("axes", "the axes give only one experiment; a sweep needs a training "
@@ -334,20 +333,6 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
         indoor=indoor, machine=machine_variant, machines=machine_axis, population=population,
     )
-
-
-def _refuse_equal_ids(axes: Table, months: Sequence[str], speeds: Sequence[float]) -> None:
-    """Two speeds (or months) that name one experiment would share its files: one run would
-    silently replace the other."""
-    from spindlebench.studies.family.experiments import speed_label
-
-    for key, values in (("months", list(months)), ("speeds_rpm", [speed_label(v) for v in speeds])):
-        seen: dict[str, int] = {}
-        for i, value in enumerate(values):
-            if value in seen:
-                raise axes.error(key, f"entries {seen[value] + 1} and {i + 1} both give "
-                                 f"{value!r}: each experiment needs its own value")
-            seen[value] = i
 
 
 def machine_runs(study: SweepStudy, machine: str | None,
@@ -548,7 +533,9 @@ def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
               programmes: list[str], cooling: list[str], climate: Climate) -> Training:
     rule = t.get("rule", str, default="one", check=lambda v: one_of(v, TRAINING_RULES))
     def of_the_study(values: Sequence[Any], what: str) -> Callable[[Any], str | None]:
-        shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+        from spindlebench.studies.family.experiments import speed_label
+
+        shown = ", ".join(speed_label(v) if isinstance(v, float) else str(v) for v in values)
         return lambda v: None if v in values else f"must be one of the study's {what} ({shown})"
 
     month = t.get("month", str, default=months[0], check=of_the_study(months, "months"))
