@@ -654,6 +654,95 @@ def _(tmp):
     return argv, ["train.csv", "5000 sensors", "--differences"]
 
 
+def fmu_with(tmp: Path, name: str, extra: dict[str, bytes] | None = None,
+             tweak: Callable[[zipfile.ZipInfo, bytes], tuple[zipfile.ZipInfo, bytes]]
+             | None = None) -> Path:
+    """The shipped FMU with members added (``extra``) or each (info, data) changed."""
+    target = tmp / name
+    with zipfile.ZipFile(DEFAULT_FMU) as source, zipfile.ZipFile(target, "w") as out:
+        for info in source.infolist():
+            data = source.read(info)
+            if tweak is not None:
+                info, data = tweak(info, data)
+            out.writestr(info, data)
+        for member, data in (extra or {}).items():
+            out.writestr(member, data)
+    return target
+
+
+def _so(info: zipfile.ZipInfo) -> bool:
+    return info.filename.startswith("binaries/") and info.filename.endswith(".so")
+
+
+def _declared_huge(tmp: Path) -> Path:
+    """A member whose central directory says it unpacks to 4 GB (a zip bomb's claim)."""
+    fmu = fmu_with(tmp, "bomb.fmu")
+    raw = bytearray(fmu.read_bytes())
+    at = raw.find(b"PK\x01\x02")
+    raw[at + 24:at + 28] = (0xF0000000).to_bytes(4, "little")
+    fmu.write_bytes(bytes(raw))
+    return fmu
+
+
+def _encrypted(tmp: Path) -> Path:
+    """A member flagged as encrypted in the central directory (general purpose bit 0)."""
+    fmu = fmu_with(tmp, "enc.fmu")
+    raw = bytearray(fmu.read_bytes())
+    at = raw.find(b"PK\x01\x02")
+    raw[at + 8] |= 0x01
+    fmu.write_bytes(bytes(raw))
+    return fmu
+
+
+def _lzma(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    if info.filename == "sources/SpindleBench.h":
+        info.compress_type = zipfile.ZIP_LZMA
+    return info, data
+
+
+def _not_elf(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    return info, (b"#!/bin/sh\necho hello\n" if _so(info) else data)
+
+
+def _executable(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    return info, (data[:16] + (2).to_bytes(2, "little") + data[18:] if _so(info) else data)
+
+
+def _other_token(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    if info.filename == "modelDescription.xml":
+        import re
+
+        data = re.sub(rb'instantiationToken="[^"]*"', b'instantiationToken="{0000}"', data)
+    return info, data
+
+
+FMU_ARCHIVES = {
+    "member climbs out with ..": (lambda t: fmu_with(t, "a.fmu", {"../evil.txt": b"x"}),
+                                  ["'..'"]),
+    "absolute member name": (lambda t: fmu_with(t, "a.fmu", {"/tmp/evil.txt": b"x"}),
+                             ["absolute"]),
+    "backslash in a member name": (lambda t: fmu_with(t, "a.fmu", {"..\\evil.txt": b"x"}),
+                                   ["backslash"]),
+    "drive colon in a member name": (lambda t: fmu_with(t, "a.fmu", {"C:evil.txt": b"x"}),
+                                     ["colon"]),
+    "encrypted member": (_encrypted, ["encrypted"]),
+    "LZMA member": (lambda t: fmu_with(t, "a.fmu", tweak=_lzma), ["compression method 14"]),
+    "declared 4 GB": (_declared_huge, ["zip bomb"]),
+    "binary not ELF": (lambda t: fmu_with(t, "a.fmu", tweak=_not_elf), ["not an ELF"]),
+    "binary an executable, not a library": (lambda t: fmu_with(t, "a.fmu", tweak=_executable),
+                                            ["not a shared object"]),
+    "token of another build": (lambda t: fmu_with(t, "a.fmu", tweak=_other_token),
+                               ["instantiationToken"]),
+}
+for _label, (_make, _expect) in FMU_ARCHIVES.items():
+    def _build(tmp: Path, make=_make, expect=_expect):
+        fmu = make(tmp)
+        scenario = write(tmp, "s.toml", QUICK)
+        return (["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)],
+                [fmu.name, *expect])
+    case(f"FMU: {_label}")(_build)
+
+
 AMBIENT_FILES_28 = {
     "underscore in a number": ("time_s,ambient_C\n0,18\n300,1_8\n600,19\n", "line 3"),
 }

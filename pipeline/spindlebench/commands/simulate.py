@@ -103,7 +103,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT",
                         help="output .csv for one scenario, else an output directory")
     parser.add_argument("--fmu", type=Path, default=None,
-                        help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/)")
+                        help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/). Loading "
+                        "an FMU runs its native code: give only FMUs you built or trust (its zip "
+                        "is checked first: names, sizes, binary, instantiation token)")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed of the sensor model (default: the scenario's)")
     add_machine_argument(parser, "machine variant for every scenario",
