@@ -338,3 +338,38 @@ def test_an_ambient_csv_with_a_bom_is_read_like_a_recording(tmp_path):
     path.write_text(QUICK.replace('kind = "constant"\ntemperature_C = 18.0',
                                   'kind = "csv"\nfile = "air.csv"'), encoding="utf-8")
     assert list(load_scenario(path).ambient.values_C) == [18.0, 18.5, 19.0]
+
+
+# --------------------------------------------------------------------------- security
+
+PASSWORD_FILE = ("root:x:0:0:root:/root:/bin/bash\n"
+                 "daemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n"
+                 "secretuser:x:1000:1000:Secret Person,,,:/home/secret:/bin/bash\n")
+
+
+@pytest.mark.parametrize("argv", [
+    ["evaluate", "--train", "{f}", "--test", "{f}", "--target", "drift_um", "--clusters", "2"],
+    ["fingerprint", "{f}"],
+    ["fingerprint", "{f}", "--target", "drift_um"],
+    ["fingerprint", "{f}", "--sensors", "T1", "--target", "drift_um"],
+    ["plot", "{f}", "-o", "x.png"],
+    ["plot", "{f}", "-o", "x.png", "--time-column", "t"],
+])
+def test_an_error_never_echoes_a_files_first_line(tmp_path, monkeypatch, capsys, argv):
+    monkeypatch.chdir(tmp_path)
+    secret = tmp_path / "recording.csv"
+    secret.write_text(PASSWORD_FILE, encoding="utf-8")
+    assert cli.main([a.replace("{f}", str(secret)) for a in argv]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert "recording.csv" in line
+    for leaked in ("x:0:0", "/bin/bash", "nologin", "Secret Person"):
+        assert leaked not in line, line
+
+
+def test_a_close_column_name_is_still_suggested(tmp_path, capsys):
+    rec = tmp_path / "r.csv"
+    rec.write_text("time_s,drift_um,T1,T2\n0,0,20,20\n60,1,21,21.5\n120,2,22,23\n",
+                   encoding="utf-8")
+    assert cli.main(["fingerprint", str(rec), "--target", "drift_mu"]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert "closest: 'drift_um'" in line and "4 column(s)" in line

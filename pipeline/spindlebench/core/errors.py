@@ -19,11 +19,13 @@ def columns_hint(header: list[str] | tuple[str, ...], wanted: str) -> str:
     password file say, would otherwise be echoed into the terminal and logs)."""
     import difflib
 
-    def quoted(name: str) -> str:
-        return repr(name if len(name) <= _QUOTED_CHARS else name[:_QUOTED_CHARS - 1] + "…")
-
     close = difflib.get_close_matches(wanted, list(header), n=_CLOSE_MATCHES, cutoff=0.6)
     count = f"the file has {len(header)} column(s)"
     if not close:
         return f"{count}, none named like it"
-    return f"{count}; closest: {', '.join(quoted(name) for name in close)}"
+    return f"{count}; closest: {', '.join(quoted_name(name) for name in close)}"
+
+
+def quoted_name(name: str) -> str:
+    """A column name as a message quotes it: in quotes, cut to a few words."""
+    return repr(name if len(name) <= _QUOTED_CHARS else name[:_QUOTED_CHARS - 1] + "…")

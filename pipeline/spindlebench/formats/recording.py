@@ -59,7 +59,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from spindlebench.core.atomic import atomic_path
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_name
 from spindlebench.core.names import SENSORS
 from spindlebench.core.paths import check_output
 from spindlebench.core.provenance import sha256_file
@@ -577,7 +577,7 @@ def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool
     elif np.isinf(values.iloc[row]):
         what = f"infinite value {cell!r}"
     else:
-        what = f"non-numeric value {cell!r}"
+        what = f"non-numeric value {quoted_name(str(cell))}"
     raise error(
         f"recording {path}, line {row + 2}, column '{name}': {what} "
         f"({bad.size} bad cell(s) in this column)"
@@ -598,8 +598,8 @@ def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> N
     if missing:
         raise SpindlebenchError(
             f"recording {recording_name(frame)}: {what} column(s) not found: "
-            f"{', '.join(missing)} (columns are: "
-            f"{', '.join(map(str, frame.attrs.get('header', frame.columns)))})"
+            f"{', '.join(missing)} ("
+            f"{columns_hint(list(map(str, frame.attrs.get('header', frame.columns))), missing[0])})"
         )
 
 
