@@ -373,3 +373,46 @@ def test_a_close_column_name_is_still_suggested(tmp_path, capsys):
     assert cli.main(["fingerprint", str(rec), "--target", "drift_mu"]) == 2
     line = one_error_line(capsys.readouterr().err)
     assert "closest: 'drift_um'" in line and "4 column(s)" in line
+
+
+def serve_once(reply: bytes | None) -> tuple[str, "threading.Thread"]:
+    """A TCP server on a free local port that sends ``reply`` (None: nothing) to one client."""
+    import socket
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def answer():
+        with server:
+            conn, _ = server.accept()
+            with conn:
+                if reply is not None:
+                    conn.sendall(reply)
+                time.sleep(3)
+
+    thread = threading.Thread(target=answer, daemon=True)
+    thread.start()
+    return f"tcp://127.0.0.1:{port}", thread
+
+
+@pytest.mark.parametrize(("reply", "expected"), [
+    (b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", "not a Dask scheduler"),
+    (None, "no Dask handshake within 1 s"),
+    ((40).to_bytes(8, "little") + b"x" * 40, "not a Dask handshake"),
+])
+def test_a_dask_address_that_is_not_a_scheduler_is_one_line(reply, expected):
+    from spindlebench.studies.executor import Task, TaskRunner
+
+    address, _ = serve_once(reply)
+    runner = TaskRunner(dask_address=address, progress=False, connect_timeout_s=1)
+    with pytest.raises(SpindlebenchError, match=expected):
+        runner.run([Task("nap", nap, (0.0,))])
+
+
+def test_a_real_dask_scheduler_passes_the_handshake_check():
+    distributed = pytest.importorskip("distributed")
+    from spindlebench.studies.executor import check_dask_scheduler
+
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
+        check_dask_scheduler(c.scheduler_address, 5.0)

@@ -16,10 +16,13 @@ never idle between the phases of a study.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import errno
 import multiprocessing
 import os
 import re
 import select
+import socket
+import struct
 import threading
 import time
 import traceback
@@ -194,13 +197,65 @@ def _kill(processes: list[Any]) -> None:
             process.kill()
 
 
+#: Longest first message a Dask scheduler sends (its handshake is a few hundred bytes).
+MAX_HANDSHAKE_BYTES = 1 << 20
+_TCP_ADDRESS = re.compile(r"^tcp://(\[[^\]]+\]|[^\s/:]+):(\d+)/?$")
+
+
+def check_dask_scheduler(address: str, timeout_s: float) -> None:
+    """Refuse, in one line, a ``tcp://`` address where no Dask scheduler answers.
+
+    A Dask scheduler writes its handshake first: an 8-byte length, then a short msgpack
+    message naming its compression and pickle protocol. Something else on the port (a web
+    server's reply read as that length) made the client try to allocate 3 EiB; a port that
+    accepts and says nothing made it wait. So the first message is read here, with a
+    timeout, and must be short and look like a handshake. Other protocols (tls, ucx, ...)
+    are left to the client's own timeout."""
+    match = _TCP_ADDRESS.match(address)
+    if match is None:
+        return
+    host, port = match.group(1).strip("[]"), int(match.group(2))
+    where = f"--dask-address {address}"
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s) as sock:
+            sock.settimeout(timeout_s)
+            size = struct.unpack("<Q", _receive(sock, 8))[0]
+            if not 0 < size <= MAX_HANDSHAKE_BYTES:
+                raise SpindlebenchError(f"{where}: not a Dask scheduler (its first message "
+                                        f"claims {size:,} bytes, a handshake has a few "
+                                        "hundred)")
+            body = _receive(sock, size)
+    except TimeoutError:
+        raise SpindlebenchError(f"{where}: no Dask handshake within {timeout_s:g} s (is a Dask "
+                                "scheduler listening there?)") from None
+    except OSError as exc:
+        raise SpindlebenchError(f"{where}: cannot connect to a Dask scheduler "
+                                f"({exc.strerror or exc})") from None
+    if b"pickle-protocol" not in body or b"compression" not in body:
+        raise SpindlebenchError(f"{where}: not a Dask scheduler (its first message is not a "
+                                "Dask handshake)")
+
+
+def _receive(sock: socket.socket, size: int) -> bytes:
+    chunks, left = [], size
+    while left:
+        chunk = sock.recv(min(left, 1 << 16))
+        if not chunk:
+            raise ConnectionError(errno.ECONNRESET, "closed before its handshake")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
 @contextmanager
 def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor]:
-    """The executor of a Dask client connected to the scheduler at ``address``."""
+    """The executor of a Dask client connected to the scheduler at ``address`` (checked to
+    be one first, :func:`check_dask_scheduler`)."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - distributed is a pinned requirement
         raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
+    check_dask_scheduler(address, timeout_s)
     try:
         client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
