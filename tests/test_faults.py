@@ -14,6 +14,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -375,10 +376,9 @@ def test_a_close_column_name_is_still_suggested(tmp_path, capsys):
     assert "closest: 'drift_um'" in line and "4 column(s)" in line
 
 
-def serve_once(reply: bytes | None) -> tuple[str, "threading.Thread"]:
+def serve_once(reply: bytes | None) -> tuple[str, threading.Thread]:
     """A TCP server on a free local port that sends ``reply`` (None: nothing) to one client."""
     import socket
-    import threading
 
     server = socket.create_server(("127.0.0.1", 0))
     port = server.getsockname()[1]
@@ -416,3 +416,77 @@ def test_a_real_dask_scheduler_passes_the_handshake_check():
 
     with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
         check_dask_scheduler(c.scheduler_address, 5.0)
+
+
+# --------------------------------------------------------------------------- misleading
+
+
+def test_a_target_name_near_the_limit_gets_a_short_part_name(tmp_path):
+    from spindlebench.atomic import atomic_path, remove_stale_parts, write_text
+
+    target = tmp_path / ("r" * 240 + ".json")  # 245 characters: the file system takes 255
+    write_text(target, "{}\n")
+    assert target.read_text(encoding="utf-8") == "{}\n"
+    with atomic_path(target) as tmp:
+        assert len(tmp.name) < 160
+        stale = tmp.with_name(tmp.name.replace(f".{os.getpid()}.", ".999999999.", 1))
+        stale.write_text("left by a killed writer", encoding="utf-8")
+    assert remove_stale_parts(target) == [stale]
+
+
+def test_evaluate_writes_a_json_with_a_245_character_name(tmp_path, capsys):
+    from selection_data import synthetic_experiment
+
+    train, test = tmp_path / "train.csv", tmp_path / "test.csv"
+    synthetic_experiment(0).to_csv(train, index=False)
+    synthetic_experiment(1).to_csv(test, index=False)
+    out = tmp_path / ("e" * 240 + ".json")
+    assert cli.main(["evaluate", "--train", str(train), "--test", str(test), "--target",
+                     "drift_um", "--clusters", "2", "--json", str(out)]) == 0
+    assert out.is_file()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("pause_s", [0.0, 0.3, 0.8])
+def test_sigterm_then_sigint_a_millisecond_later_leaves_no_part_file(tmp_path, pause_s):
+    out = tmp_path / "sweep"
+    child = quick_sweep_child(out)
+    wait_first_recording(child, out)
+    time.sleep(pause_s)
+    child.send_signal(signal.SIGTERM)
+    time.sleep(0.001)
+    child.send_signal(signal.SIGINT)
+    _, stderr = child.communicate(timeout=120)
+    assert child.returncode == 130, stderr
+    assert "interrupted by SIGTERM" in one_error_line(stderr)
+    assert not list(out.rglob("*.part"))
+
+
+def test_a_second_signal_while_unwinding_is_recorded_and_a_third_raises():
+    from spindlebench import interrupts
+
+    interrupts.install()
+    try:
+        with pytest.raises(interrupts.Interrupted):
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(1)
+            finally:  # unwinding: one more signal must not cut this block short
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                cleaned = True
+        assert cleaned
+        with pytest.raises(interrupts.Interrupted):
+            try:
+                raise interrupts.Interrupted(signal.SIGTERM)
+            finally:
+                interrupts._pending.clear()
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                os.kill(os.getpid(), signal.SIGINT)  # the third: the user insists
+                time.sleep(0.05)
+                pytest.fail("the third signal did not raise")
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        interrupts._pending.clear()

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
@@ -46,7 +47,22 @@ def _in_main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
+def _unwinding() -> bool:
+    """Whether this thread is unwinding from an interruption (in an ``except`` or
+    ``finally`` block that an :class:`Interrupted` or Ctrl-C's ``KeyboardInterrupt`` runs)."""
+    return isinstance(sys.exc_info()[1], KeyboardInterrupt)
+
+
 def _raise(signum: int, frame: FrameType | None) -> None:
+    """Raise the signal as :class:`Interrupted`; while the run is unwinding from one, a
+    second signal is only recorded (SIGTERM then SIGINT 1 ms later raised again inside the
+    ``finally`` that was removing a part file, and left it) and a third raises (the user
+    insists)."""
+    if _unwinding():
+        _pending.append(signum)
+        if len(_pending) < 2:
+            return
+    _pending.clear()
     raise Interrupted(signum)
 
 
@@ -57,6 +73,7 @@ def _record(signum: int, frame: FrameType | None) -> None:
 def install() -> None:
     """SIGINT and SIGTERM raise :class:`Interrupted` (main thread only; elsewhere a no-op)."""
     if _in_main_thread():
+        _pending.clear()  # a signal left from an earlier run in this process is not this one's
         for signum in SIGNALS:
             signal.signal(signum, _raise)
 
@@ -94,8 +111,9 @@ def deferring(function: Callable[_P, _R]) -> Callable[_P, _R]:
 
 
 def check() -> None:
-    """Raise :class:`Interrupted` if a signal arrived since the last check."""
-    if _pending:
+    """Raise :class:`Interrupted` if a signal arrived since the last check (while unwinding
+    from an interruption, only if two did: one more changes nothing, see ``_raise``)."""
+    if _pending and not (_unwinding() and len(_pending) < 2):
         signum = _pending[0]
         _pending.clear()
         raise Interrupted(signum)
