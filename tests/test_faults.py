@@ -514,3 +514,22 @@ def test_a_test_recording_with_its_columns_reordered_is_evaluated_the_same(tmp_p
         record.pop("provenance")
         results.append(json.dumps(record, sort_keys=True).replace("shuffled", "test"))
     assert '"rmse_um"' in results[0] and results[0] == results[1]
+
+
+@pytest.mark.parametrize("make", ["file", "fifo", "under a file"])
+def test_demo_refuses_a_bad_out_before_building_the_fmu(tmp_path, monkeypatch, capsys, make):
+    from spindlebench import demo
+
+    def no_build(argv):
+        raise AssertionError(f"a stage ran: {argv}")
+
+    monkeypatch.setattr(demo, "_step", no_build)
+    target = tmp_path / "out"
+    if make == "fifo":
+        os.mkfifo(target)
+    else:
+        target.write_text("a file\n", encoding="utf-8")
+    out = target / "sub" if make == "under a file" else target
+    assert cli.main(["demo", "--out", str(out)]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert "--out" in line and ("a FIFO" if make == "fifo" else "a file") in line
