@@ -533,3 +533,40 @@ def test_demo_refuses_a_bad_out_before_building_the_fmu(tmp_path, monkeypatch, c
     assert cli.main(["demo", "--out", str(out)]) == 2
     line = one_error_line(capsys.readouterr().err)
     assert "--out" in line and ("a FIFO" if make == "fifo" else "a file") in line
+
+
+CALIBRATION_MAP = """[inputs]
+spindle_speed_rpm = "spindle_speed_rpm"
+feed_x_mm_per_min = 0.0
+feed_y_mm_per_min = 0.0
+ambient_C = "{ambient}"
+[error]
+column = "drift_um"
+[temperatures]
+T1 = "T1"
+T6 = "T6"
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("edit", "ambient", "expected"), [
+    ("kelvin", "ambient_K", "ambient_C from column 'ambient_K' is 291.15 °C"),
+    ("constant error", "unknown", "error column 'drift_um' is constant"),
+])
+def test_calibrate_says_what_is_wrong_instead_of_did_not_converge(tmp_path, capsys, edit,
+                                                                   ambient, expected):
+    from selection_data import synthetic_experiment
+
+    frame = synthetic_experiment(0)
+    frame["ambient_K"] = 291.15
+    if edit == "constant error":
+        frame["drift_um"] = 3.0
+    rec = tmp_path / "rec.csv"
+    frame.to_csv(rec, index=False)
+    mapping = tmp_path / "map.toml"
+    mapping.write_text(CALIBRATION_MAP.format(ambient=ambient), encoding="utf-8")
+    assert cli.main(["calibrate", str(rec), "--map", str(mapping), "-o",
+                     str(tmp_path / "m.toml")]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert expected in line and "rec.csv" in line and "converge" not in line
+    assert not (tmp_path / "m.toml").exists()

@@ -125,6 +125,22 @@ def check_roles(path: Path, roles: ColumnRoles) -> tuple[str, str, str]:
     return delimiter, decimal, time_column
 
 
+#: The recording map's ambient input: checked to be °C like the scenario's ambient.
+AMBIENT_INPUT = "ambient_C"
+
+
+def _refuse_implausible_ambient(values: np.ndarray, source: object, path: Path) -> None:
+    """A kelvin ambient (291 °C) made the fit fail as "did not converge"; say what it is."""
+    from spindlebench.testbench.scenario import COLDEST_AMBIENT_C, KELVIN_SUSPECT_C
+
+    bad = np.flatnonzero((values > KELVIN_SUSPECT_C) | (values < COLDEST_AMBIENT_C))
+    if bad.size:
+        where = f"column {source!r}" if isinstance(source, str) else "the map's value"
+        raise SpindlebenchError(f"recording {path}: ambient_C from {where} is "
+                                f"{values[bad[0]]:g} °C, outside [{COLDEST_AMBIENT_C:g}, "
+                                f"{KELVIN_SUSPECT_C:g}] °C (kelvin?); give °C")
+
+
 def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None,
                 roles: ColumnRoles | None = None) -> Series:
     """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given.
@@ -175,6 +191,8 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
             inputs[i] = column
         else:
             inputs[i] = source
+        if name == AMBIENT_INPUT and source != UNKNOWN:
+            _refuse_implausible_ambient(inputs[i], source, path)
     channels = []
     for column, output in recording_map.temperatures.items():
         values = measured[column]
@@ -182,6 +200,12 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
         channels.append(Channel(column, output, "temperature", values, noise))
     if recording_map.error_column:
         values = recording_map.error_sign * frame[recording_map.error_column].to_numpy(float)
+        finite = values[np.isfinite(values)]
+        if finite.size and np.ptp(finite) == 0.0:  # the fit would "not converge" on it
+            raise SpindlebenchError(f"recording {path}: error column "
+                                    f"{recording_map.error_column!r} is constant "
+                                    f"({finite[0]:g}) over the recording; nothing to fit the "
+                                    "error to (a disconnected probe? another column?)")
         noise = recording_map.noise.get(recording_map.error_column) or noise_estimate(
             values, "error")
         channels.append(Channel(recording_map.error_column, DRIFT_OUTPUT, "error", values, noise))
