@@ -743,6 +743,48 @@ for _label, (_make, _expect) in FMU_ARCHIVES.items():
     case(f"FMU: {_label}")(_build)
 
 
+@case("evaluate: train recording is a FIFO")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    os.mkfifo(tmp / "pipe.csv")
+    argv[argv.index("--train") + 1] = str(tmp / "pipe.csv")
+    return argv, ["pipe.csv", "is a FIFO, not a file"]
+
+
+@case("scenario: a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "pipe.toml")
+    return ["simulate", str(tmp / "pipe.toml"), "-o", "out"], ["pipe.toml", "a FIFO"]
+
+
+@case("ambient CSV: a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "air.csv")
+    scenario = write(tmp, "s.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+    return ["simulate", str(scenario), "-o", "out"], ["air.csv", "a FIFO"]
+
+
+@case("paper: recordings folder is a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "recs")
+    return ["paper", "--recordings", str(tmp / "recs")], ["recs", "a FIFO"]
+
+
+@case("fingerprint: a password file named as a recording")
+def _(tmp):
+    write(tmp, "rec.csv", "root:x:0:0:root:/root:/bin/bash\nbin:x:2:2:bin:/bin:/sbin/nologin\n")
+    return ["fingerprint", str(tmp / "rec.csv"), "--target", "drift_um"], ["rec.csv", "1 column"]
+
+
+@case("ambient CSV: header without the value column names none of the others")
+def _(tmp):
+    write(tmp, "air.csv", "time_s,secret_token_abc\n0,18\n600,19\n")
+    scenario = write(tmp, "s.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+    return ["simulate", str(scenario), "-o", "out"], ["air.csv", "2 column(s)"]
+
+
 AMBIENT_FILES_28 = {
     "underscore in a number": ("time_s,ambient_C\n0,18\n300,1_8\n600,19\n", "line 3"),
 }

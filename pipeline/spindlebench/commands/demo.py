@@ -16,13 +16,19 @@ from pathlib import Path
 from spindlebench.adapters import caiviac
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, check_output, shown
+from spindlebench.core.paths import (
+    DEFAULT_FMU,
+    MODELS_DIR,
+    SCENARIOS_DIR,
+    check_output,
+    file_kind,
+    shown,
+)
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import read_recording
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.model import FMU_NAME
 from spindlebench.model.frontend import model_source
-from spindlebench.studies.running.store import file_kind
 from spindlebench.testbench.batch import plan_batch
 from spindlebench.testbench.overview import plot_recording
 

@@ -91,6 +91,19 @@ def check_output(path: str | os.PathLike[str]) -> None:
                             f"{OVERWRITE_SHIPPED_FLAG} to replace it")
 
 
+def file_kind(path: str | os.PathLike[str]) -> str:
+    """What ``path`` is, for a message: 'a file', 'a folder', 'a FIFO', 'a socket', ..."""
+    import stat
+
+    mode = Path(path).stat().st_mode
+    for test, name in ((stat.S_ISREG, "a file"), (stat.S_ISDIR, "a folder"),
+                       (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
 def shared_recordings_dir() -> Path:
     """Real recordings: ``../shared/recordings`` beside the checkout (never copied into it);
     installed, beside the current folder."""

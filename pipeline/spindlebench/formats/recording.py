@@ -61,7 +61,7 @@ import numpy as np
 from spindlebench.core.atomic import atomic_path
 from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_name
 from spindlebench.core.names import SENSORS
-from spindlebench.core.paths import check_output
+from spindlebench.core.paths import check_output, file_kind
 from spindlebench.core.provenance import sha256_file
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
@@ -280,7 +280,7 @@ def read_table(
     if not path.exists():
         raise SpindlebenchError(f"recording {path}: file not found")
     if not path.is_file():
-        raise SpindlebenchError(f"recording {path}: not a file")
+        raise SpindlebenchError(f"recording {path}: is {file_kind(path)}, not a file")
     dialect = _Dialect(delimiter, decimal)
     header = _read_header(path, dialect)
     keep = header if columns is None else _kept(header, columns)
@@ -493,8 +493,8 @@ def read_header(path: str | os.PathLike[str], delimiter: str = ",") -> list[str]
     """A recording's column names (stripped), checked like ``read_recording`` checks them."""
     path = Path(path)
     if not path.is_file():
-        raise SpindlebenchError(f"recording {path}: "
-                                f"{'not a file' if path.exists() else 'file not found'}")
+        raise SpindlebenchError(f"recording {path}: " + (
+            f"is {file_kind(path)}, not a file" if path.exists() else "file not found"))
     return _read_header(path, _Dialect(delimiter))
 
 

@@ -167,6 +167,8 @@ def detect_dialect(path: Path, delimiter: str | None = None,
     data line into as many; a decimal comma is assumed when the delimiter is not a comma and
     the data line has numbers like ``21,5``.
     """
+    if not Path(path).is_file():  # a FIFO would block the open; the reader names it
+        return delimiter or ",", decimal or "."
     try:
         with open(path, encoding="utf-8-sig", newline="") as handle:
             lines = [handle.readline() for _ in range(2)]

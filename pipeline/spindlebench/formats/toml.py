@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import file_kind
 
 T = TypeVar("T")
 
@@ -36,6 +37,8 @@ def load_toml(path: str | Path, what: str = "") -> dict[str, Any]:
     """
     path = Path(path)
     kind = f"{what} file" if what else "file"
+    if path.exists() and not path.is_file() and not path.is_dir():  # reading a FIFO blocks
+        raise SpindlebenchError(f"{path}: is {file_kind(path)}, expected a {kind} (.toml)")
     try:
         text = path.read_bytes().decode("utf-8")
     except FileNotFoundError:

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from spindlebench.core.errors import SpindlebenchError, columns_hint
 from spindlebench.core.names import SENSORS
+from spindlebench.core.paths import file_kind
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
 
@@ -547,7 +548,8 @@ def _read_ambient_csv(
     Lines starting with ``#`` are comments (a place for the series' origin and units).
     """
     if not file.is_file():
-        raise t.error("file", f"no such file: {file}")
+        raise t.error("file", f"{file} is {file_kind(file)}, not a file" if file.exists()
+                      else f"no such file: {file}")
     times: list[float] = []
     values: list[float] = []
     header: list[str] | None = None

@@ -37,6 +37,7 @@ import pandas as pd
 
 from spindlebench.core.atomic import atomic_path, write_text
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import file_kind
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.table_csv import write_table
 
@@ -103,17 +104,6 @@ def differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
             if was != now:
                 out.append(f"{section} key '{key}': {_short(was)} → {_short(now)}")
     return out
-
-
-def file_kind(path: Path) -> str:
-    """What ``path`` is, for a refusal: 'a file', 'a FIFO', 'a socket', 'a device', ..."""
-    mode = path.stat().st_mode
-    for test, name in ((stat.S_ISREG, "a file"), (stat.S_ISFIFO, "a FIFO"),
-                       (stat.S_ISSOCK, "a socket"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device")):
-        if test(mode):
-            return name
-    return "not a regular file"
 
 
 class DamagedResultWarning(UserWarning):
