@@ -16,6 +16,7 @@ never idle between the phases of a study.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import errno
 import multiprocessing
 import os
@@ -427,6 +428,8 @@ class TaskRunner:
 WATCH_S = 0.5
 #: Longest wait for a local pool to shut down once its workers are stopped.
 SHUTDOWN_TIMEOUT_S = 30.0
+#: How long a pool whose workers were killed may take to notice before it is unblocked.
+UNBLOCK_AFTER_S = 1.0
 
 
 def _dead_worker(executor: cf.Executor) -> bool:
@@ -439,23 +442,55 @@ def _dead_worker(executor: cf.Executor) -> bool:
 def _close_pool(executor: cf.Executor, kill: bool) -> None:
     """Shut a local pool down without ever waiting forever.
 
-    ``kill``: after a dead worker or a signal, stop every worker first (``_stop_workers``):
-    one that was killed while reading the task queue leaves its lock taken, one that is
-    sending a result nobody reads blocks, and a plain ``shutdown(wait=True)`` then waited
-    on them for ever, with Ctrl-C deferred (a sweep only ``kill -9`` ended). Then the pool's
-    manager thread gets ``SHUTDOWN_TIMEOUT_S`` to finish; if it does not, the workers are
-    stopped and the study goes on (the thread waits on pipes of dead processes only)."""
+    ``kill``: after a dead worker or a signal, every worker is stopped first: one killed
+    while sending its result leaves half a message in the result pipe, and the pool's
+    manager thread then waits in ``recv`` for the rest for ever; it never looks at its
+    workers again, so the pool never breaks and ``shutdown(wait=True)`` (with Ctrl-C
+    deferred) waited with it: a sweep only ``kill -9`` ended. So the manager gets a moment,
+    then is unblocked (:func:`_unblock`) and joined with a timeout."""
+    # what shutdown() drops its references to
     processes = list((getattr(executor, "_processes", None) or {}).values())
-    manager = getattr(executor, "_executor_manager_thread", None)  # before shutdown clears it
+    manager = getattr(executor, "_executor_manager_thread", None)
+    queues = (getattr(executor, "_call_queue", None), getattr(executor, "_result_queue", None))
     if kill:
         _kill(processes)
     executor.shutdown(wait=False, cancel_futures=True)
     if manager is None:
         return
-    manager.join(SHUTDOWN_TIMEOUT_S / 3 if kill else SHUTDOWN_TIMEOUT_S)
+    manager.join(UNBLOCK_AFTER_S if kill else SHUTDOWN_TIMEOUT_S)
     if manager.is_alive():
         _kill(processes)
+        _unblock(*queues, manager)
         manager.join(SHUTDOWN_TIMEOUT_S)
+
+
+def _unblock(calls: Any, results: Any, manager: threading.Thread) -> None:
+    """Free a pool's manager thread stuck on pipes of dead workers.
+
+    The result pipe: it waits for the rest of a message a killed worker never finished, so
+    bytes are written until that message is complete (its unpickling then fails and the
+    thread ends the pool as broken). The task pipe: a feeder thread writing a task to a dead
+    worker blocks; closing this process's reading end makes its write fail (Python 3.12's
+    pool does the same)."""
+    with contextlib.suppress(Exception):
+        calls._reader.close()
+    writer = getattr(results, "_writer", None)
+    if writer is None:
+        return
+    try:
+        fd = writer.fileno()
+        os.set_blocking(fd, False)
+    except (OSError, ValueError):
+        return
+    block = bytes(1 << 20)
+    deadline = time.monotonic() + SHUTDOWN_TIMEOUT_S
+    while manager.is_alive() and time.monotonic() < deadline:
+        try:
+            os.write(fd, block)
+        except BlockingIOError:
+            manager.join(0.01)  # the pipe is full: let the manager read
+        except OSError:
+            return
 
 
 def _run_quarantined(task: Task) -> Outcome:
