@@ -103,6 +103,18 @@ def test_a_new_file_beside_the_shipped_machines_is_not_shipped():
     assert not shipped(REPO / "fmus" / "SpindleBench_3seg.fmu")
 
 
+@pytest.mark.skipif(not (REPO / ".git").exists(), reason="needs the git checkout")
+def test_a_users_own_machine_file_there_may_be_written_again():
+    """README's `calibrate ... -o scenarios/machines/mine.toml`, run twice."""
+    mine = REPO / "scenarios" / "machines" / f"zz-untracked-{os.getpid()}.toml"
+    mine.write_text("# a user's machine\n", encoding="utf-8")
+    try:
+        assert not shipped(mine)
+        check_output(mine)
+    finally:
+        mine.unlink()
+
+
 def test_calibrate_refuses_to_replace_the_default_machine_before_any_work(tmp_path, capsys):
     before = sha(DEFAULT_MACHINE)
     status = cli.main(["calibrate", str(tmp_path / "none.csv"), "--map",

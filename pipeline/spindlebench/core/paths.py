@@ -61,7 +61,24 @@ def shipped(path: str | os.PathLike[str]) -> bool:
     if resolved.is_relative_to(_PACKAGE) or resolved == DEFAULT_FMU.resolve():
         return True
     return resolved.is_file() and any(resolved.is_relative_to(d.resolve())
-                                      for d in SHIPPED_DIRS)
+                                      for d in SHIPPED_DIRS) and _committed(resolved)
+
+
+def _committed(resolved: Path) -> bool:
+    """Whether a file of the checkout is one the repository ships (tracked by git), so a
+    user's own ``scenarios/machines/mine.toml`` can be calibrated again; without git (or
+    outside a checkout) every existing file there counts as shipped."""
+    if REPO_ROOT is None or not (REPO_ROOT / ".git").exists():
+        return True
+    import subprocess
+
+    try:
+        found = subprocess.run(["git", "-C", str(REPO_ROOT), "ls-files", "--error-unmatch",
+                                "--", str(resolved.relative_to(REPO_ROOT.resolve()))],
+                               capture_output=True, timeout=10, check=False)
+    except (OSError, ValueError, subprocess.TimeoutExpired):
+        return True
+    return found.returncode == 0
 
 
 @contextlib.contextmanager
