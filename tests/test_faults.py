@@ -125,10 +125,13 @@ def test_calibrate_refuses_to_replace_the_default_machine_before_any_work(tmp_pa
     assert not list(DEFAULT_MACHINE.parent.glob("default.calibration*"))
 
 
-def test_build_with_other_segments_refuses_to_replace_the_committed_fmu_at_once(capsys):
+def test_build_with_other_segments_refuses_to_replace_the_committed_fmu_at_once(tmp_path,
+                                                                               capsys):
     before = sha(DEFAULT_FMU)
     started = time.process_time()
-    status = cli.main(["build", "--segments", "3", "--out", str(DEFAULT_FMU)])
+    (tmp_path / "models").mkdir()  # no source: code without the check fails, writes nothing
+    status = cli.main(["build", "--segments", "3", "--models", str(tmp_path / "models"),
+                       "--out", str(DEFAULT_FMU)])
     line = one_error_line(capsys.readouterr().err)
     assert status == 2 and "SpindleBench.fmu" in line and "--overwrite-shipped" in line
     assert time.process_time() - started < 5  # refused before the minutes of building
