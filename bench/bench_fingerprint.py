@@ -8,8 +8,8 @@ resident memory (``getrusage`` maxrss of that child, from ``os.wait4``) is its o
 - ``CLI``: the whole command (start-up, imports, reading the CSV, the statistics) on a
   synthetic recording of ``rows`` samples x ``sensors`` sensors, written once to a temporary
   folder;
-- ``function``: ``spindlebench.fingerprint.fingerprint`` alone on arrays of that size (the
-  arrays' own 8 x rows x (sensors + 2) bytes included).
+- ``function``: ``spindlebench.studies.fingerprint.statistics.fingerprint`` alone on arrays
+  of that size (the arrays' own 8 x rows x (sensors + 2) bytes included).
 
 Goal (issue 28): 10^6 rows x 20 sensors in <= 1 GB.
 
@@ -33,7 +33,7 @@ GOAL_MB = 1024.0
 
 FUNCTION_CHILD = """
 import sys, numpy as np
-from spindlebench.fingerprint import fingerprint
+from spindlebench.studies.fingerprint.statistics import fingerprint
 rows, sensors = int(sys.argv[1]), int(sys.argv[2])
 rng = np.random.default_rng(0)
 t = np.arange(rows, dtype=float)
@@ -77,7 +77,7 @@ def main(sizes: list[int]) -> None:
         for rows in sizes:
             path = recording(Path(scratch), rows, SENSORS)
             for what, argv in (
-                    ("CLI", [sys.executable, "-m", "spindlebench.cli", "fingerprint", str(path),
+                    ("CLI", [sys.executable, "-m", "spindlebench", "fingerprint", str(path),
                              "--target", "drift_um"]),
                     ("function", [sys.executable, "-c", FUNCTION_CHILD, str(rows),
                                   str(SENSORS)])):

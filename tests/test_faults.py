@@ -21,10 +21,10 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO
-from spindlebench import cli
-from spindlebench.errors import SpindlebenchError
-from spindlebench.paths import DEFAULT_FMU, allow_shipped, check_output, shipped
-from spindlebench.studies.store import ResultStore
+from spindlebench.commands import main as cli
+from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU, allow_shipped, check_output, shipped
+from spindlebench.studies.running.store import ResultStore
 
 TINY_COMPENSATE = REPO / "scenarios" / "studies" / "tiny_compensate.toml"
 DEFAULT_MACHINE = REPO / "scenarios" / "machines" / "default.toml"
@@ -160,7 +160,7 @@ def test_compensate_holds_the_folder_lock(tmp_path, capsys):
     out = tmp_path / "comp"
     holder = ResultStore(out)
     holder.lock()
-    child = subprocess.run([sys.executable, "-m", "spindlebench.cli", "compensate",
+    child = subprocess.run([sys.executable, "-m", "spindlebench", "compensate",
                             str(TINY_COMPENSATE), "-o", str(out)], capture_output=True,
                            text=True, timeout=300)
     holder.unlock()
@@ -170,7 +170,7 @@ def test_compensate_holds_the_folder_lock(tmp_path, capsys):
 
 
 def test_compensate_writes_its_completion_markers_last():
-    from spindlebench.compensation import command
+    from spindlebench.studies.compensation import compensation_report as command
 
     assert set(command.COMPLETE_MARKERS) <= command.OUTPUT_FILES
 
@@ -226,7 +226,7 @@ def nap(seconds: float) -> int:
 @pytest.mark.slow
 @pytest.mark.parametrize("which", [0, 1])
 def test_a_killed_local_worker_is_noticed_and_its_task_retried(which):
-    from spindlebench.studies.executor import Task, TaskRunner
+    from spindlebench.studies.running.executor import Task, TaskRunner
 
     killed: list[int] = []
 
@@ -265,7 +265,7 @@ HALF_SENT = """
 import sys
 sys.path.insert(0, {tests!r})
 from test_faults import die_mid_send, nap
-from spindlebench.studies.executor import Task, TaskRunner
+from spindlebench.studies.running.executor import Task, TaskRunner
 if __name__ == "__main__":
     tasks = [Task("n0", nap, (0.5,)), Task("half", die_mid_send),
              *[Task(f"n{{i}}", nap, (0.2,)) for i in range(1, 5)]]
@@ -290,7 +290,7 @@ def test_a_worker_killed_while_sending_its_result_does_not_hang_the_run(tmp_path
 
 
 def quick_sweep_child(out: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "spindlebench.cli", "sweep",
+    return subprocess.Popen([sys.executable, "-m", "spindlebench", "sweep",
                              str(REPO / "scenarios" / "studies" / "tiny_sweep.toml"), "-o",
                              str(out), "--workers", "2", "--no-progress", *extra],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -375,8 +375,8 @@ def test_a_tampered_or_renamed_soak_cache_is_named_and_recomputed(tmp_path, soak
 
 
 def test_speeds_that_differ_get_their_own_experiment_ids(tmp_path):
-    from spindlebench.studies.experiments import experiments, speed_label
-    from spindlebench.studies.study import load_study
+    from spindlebench.studies.family.experiments import experiments, speed_label
+    from spindlebench.studies.family.family_file import load_study
 
     assert speed_label(2000.0) == "2000" and speed_label(1500.5) == "1500.5"
     assert speed_label(2000.0001) == "2000.0001"
@@ -460,7 +460,7 @@ def serve_once(reply: bytes | None) -> tuple[str, threading.Thread]:
     ((40).to_bytes(8, "little") + b"x" * 40, "not a Dask handshake"),
 ])
 def test_a_dask_address_that_is_not_a_scheduler_is_one_line(reply, expected):
-    from spindlebench.studies.executor import Task, TaskRunner
+    from spindlebench.studies.running.executor import Task, TaskRunner
 
     address, _ = serve_once(reply)
     runner = TaskRunner(dask_address=address, progress=False, connect_timeout_s=1)
@@ -470,7 +470,7 @@ def test_a_dask_address_that_is_not_a_scheduler_is_one_line(reply, expected):
 
 def test_a_real_dask_scheduler_passes_the_handshake_check():
     distributed = pytest.importorskip("distributed")
-    from spindlebench.studies.executor import check_dask_scheduler
+    from spindlebench.studies.running.executor import check_dask_scheduler
 
     with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
         check_dask_scheduler(c.scheduler_address, 5.0)
@@ -480,7 +480,7 @@ def test_a_real_dask_scheduler_passes_the_handshake_check():
 
 
 def test_a_target_name_near_the_limit_gets_a_short_part_name(tmp_path):
-    from spindlebench.atomic import atomic_path, remove_stale_parts, write_text
+    from spindlebench.core.atomic import atomic_path, remove_stale_parts, write_text
 
     target = tmp_path / ("r" * 240 + ".json")  # 245 characters: the file system takes 255
     write_text(target, "{}\n")
@@ -523,7 +523,7 @@ def test_sigterm_then_sigint_a_millisecond_later_leaves_no_part_file(tmp_path, p
 
 
 def test_a_second_signal_while_unwinding_is_recorded_and_a_third_raises():
-    from spindlebench import interrupts
+    from spindlebench.core import interrupts
 
     interrupts.install()
     try:
@@ -575,7 +575,7 @@ def test_a_test_recording_with_its_columns_reordered_is_evaluated_the_same(tmp_p
 
 @pytest.mark.parametrize("make", ["file", "fifo", "under a file"])
 def test_demo_refuses_a_bad_out_before_building_the_fmu(tmp_path, monkeypatch, capsys, make):
-    from spindlebench import demo
+    from spindlebench.commands import demo
 
     def no_build(argv):
         raise AssertionError(f"a stage ran: {argv}")
