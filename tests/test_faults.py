@@ -244,7 +244,6 @@ def test_a_killed_local_worker_is_noticed_and_its_task_retried(which):
     assert killed
     assert stats.total() == 6 and sum(stats.done.values()) == 6, [o.error for o in outcomes]
     assert sorted(o.task.key for o in outcomes) == sorted(t.key for t in tasks)
-    assert killed[0] not in {o.value for o in outcomes[1:]}  # the dead one did no more work
 
 
 def die_mid_send() -> None:
