@@ -7,14 +7,11 @@ each problem one line: member names that would unpack outside the folder (absolu
 a backslash or a drive colon), encrypted members, compression other than stored/deflate, a
 total unpacked size or member count far beyond any machine model's (a zip bomb), a binary
 for this platform that is not an ELF shared object, and an instantiation token that is not
-the one the FMU's sources give (``modelica.fmu_export`` derives it from them: another
-model's description beside these sources, or edited sources).
+the one compiled into that binary (another build's description beside it).
 """
 
 from __future__ import annotations
 
-import hashlib
-import re
 import zipfile
 from pathlib import PurePosixPath
 
@@ -86,19 +83,20 @@ def binary_problem(archive: zipfile.ZipFile, model_identifier: str) -> str | Non
     return None
 
 
-def token_problem(archive: zipfile.ZipFile, token: str | None) -> str | None:
-    """Whether the instantiation token is the one the FMU's C sources give (the rule of
-    ``modelica.fmu_export``: ``{`` + first 32 hex digits of SHA-256 of the sorted sources +
-    ``}``). An FMU without C sources cannot be checked this way and is not."""
-    sources = sorted(n for n in archive.namelist()
-                     if re.fullmatch(r"sources/[^/]+\.c", n))
-    if not sources:
+def token_problem(archive: zipfile.ZipFile, token: str | None,
+                  model_identifier: str) -> str | None:
+    """Whether this platform's binary carries the instantiation token of modelDescription.xml
+    (``modelica.fmu_export`` compiles it into the library, which checks it when
+    instantiated): another build's description beside this binary, or the reverse, is
+    refused before the library is loaded."""
+    if sharedLibraryExtension != ".so" or not token:
         return None
-    digest = hashlib.sha256()
-    for name in sources:
-        digest.update(archive.read(name))
-    expected = "{" + digest.hexdigest()[:32] + "}"
-    if token != expected:
-        return (f"modelDescription.xml's instantiationToken {str(token)[:40]!r} is not the "
-                f"{expected} of its sources (a description of another build?)")
+    name = f"binaries/{platform_tuple}/{model_identifier}{sharedLibraryExtension}"
+    try:
+        binary = archive.read(name)
+    except KeyError:
+        return None  # no binary for this platform: the runner says so
+    if token.encode("utf-8") not in binary:
+        return (f"modelDescription.xml's instantiationToken {token[:40]!r} is not the one "
+                f"compiled into {name} (a description of another build?)")
     return None

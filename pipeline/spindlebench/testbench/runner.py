@@ -133,7 +133,8 @@ def _read_and_check(fmu_path: Path) -> FmuInterface:
     with zipfile.ZipFile(fmu_path) as archive:  # before anything is unpacked or loaded
         problem = fmu_archive.binary_problem(archive, md.modelExchange.modelIdentifier)
         if problem is None and str(md.generationTool or "").startswith("spindlebench"):
-            problem = fmu_archive.token_problem(archive, md.guid)
+            problem = fmu_archive.token_problem(archive, md.guid,
+                                                 md.modelExchange.modelIdentifier)
     if problem:
         raise SpindlebenchError(f"{fmu_path}: unsafe or mismatched FMU: {problem}")
     by_name = {v.name: v for v in md.modelVariables}
