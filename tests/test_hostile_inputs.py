@@ -9,6 +9,7 @@ included: the temp dir points into it).
 
 from __future__ import annotations
 
+import os
 import tempfile
 import zipfile
 from collections.abc import Callable
@@ -867,6 +868,263 @@ def _(tmp):
     study = write(tmp, "study.toml", TINY)
     return (["sweep", str(study), "-o", "out", "--dask-address", "inproc://x"],
             ["--dask-address", "inproc://x", "tcp://HOST:PORT"])
+
+
+# ------------------------------------------------- issue 28: more faults, same promise
+
+TINY_COMPENSATE = (REPO / "scenarios" / "studies" / "tiny_compensate.toml").read_text(
+    encoding="utf-8")
+SHIPPED_MACHINE = REPO / "scenarios" / "machines" / "default.toml"
+
+
+@case("study: more simulations than a study may run")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY.replace("replicas = 2", "replicas = 10000", 1)
+                  .replace("speeds_rpm = [2000, 4000]", "speeds_rpm = [" + ", ".join(
+                      str(1000 + 10 * i) for i in range(10)) + "]", 1))
+    return (["sweep", str(study), "--workers", "0", "--no-progress"],
+            [str(study), "axes.speeds_rpm", "200,000 simulations"])
+
+
+@case("study: the .lock is a symbolic link")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    victim = write(tmp, "victim.txt", "keep\n")
+    (tmp / "res").mkdir()
+    (tmp / "res" / ".lock").symlink_to(victim)
+    return (["sweep", str(study), "-o", str(tmp / "res"), "--workers", "0", "--no-progress"],
+            [".lock", "symbolic link"])
+
+
+@case("study: -o names a FIFO")
+def _(tmp):
+    study = write(tmp, "study.toml", TINY)
+    os.mkfifo(tmp / "pipe")
+    return (["sweep", str(study), "-o", str(tmp / "pipe"), "--workers", "0", "--no-progress"],
+            ["pipe", "a FIFO"])
+
+
+@case("compensate: fault_from_day after the last day")
+def _(tmp):
+    study = write(tmp, "comp.toml", TINY_COMPENSATE.replace("fault_from_day = 3",
+                                                            "fault_from_day = 40", 1))
+    return ["compensate", str(study), "-o", "out"], [str(study), "fault_from_day", "last day"]
+
+
+@case("compensate: -o is a sweep's folder")
+def _(tmp):
+    study = write(tmp, "comp.toml", TINY_COMPENSATE)
+    write(tmp, "sweep/state.json", "{}\n")
+    write(tmp, "sweep/README.md", "a sweep's README\n")
+    return ["compensate", str(study), "-o", str(tmp / "sweep")], ["sweep", "state.json"]
+
+
+@case("calibrate: -o is the shipped default machine")
+def _(tmp):
+    # a recording calibrate refuses anyway: code that lost the check fails here, not by
+    # replacing the shipped file (so are the other shipped-file cases)
+    rec = role_recording(tmp, role_frame(None))
+    mapping = write(tmp, "map.toml", CALIBRATION_MAP)
+    return (["calibrate", str(rec), "--map", str(mapping), "-o", str(SHIPPED_MACHINE)],
+            ["default.toml", "--overwrite-shipped"])
+
+
+@case("build: other segments into the committed FMU")
+def _(tmp):
+    (tmp / "models").mkdir()  # no source: a build that lost the check fails, writes nothing
+    return (["build", "--segments", "3", "--models", str(tmp / "models"), "--out",
+             str(DEFAULT_FMU)], ["SpindleBench.fmu", "--overwrite-shipped"])
+
+
+@case("simulate: -o inside the package source")
+def _(tmp):
+    scenario = write(tmp, "s.toml", QUICK.replace("seed = 2", "sed = 2"))  # refused anyway
+    return (["simulate", str(scenario), "-o", str(REPO / "pipeline" / "spindlebench" / "x.csv")],
+            ["x.csv", "--overwrite-shipped"])
+
+
+@case("build: brackets nested thousands deep")
+def _(tmp):
+    deep = "(" * 5000 + "1" + ")" * 5000
+    write(tmp, "models/SpindleBench.mo", f"package SpindleBench\n  constant Real c = {deep};\n"
+          "end SpindleBench;\n")
+    return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
+            ["SpindleBench.mo:2", "nested"])
+
+
+@case("build: classes nested hundreds deep")
+def _(tmp):
+    names = [f"P{i}" for i in range(300)]
+    text = "package SpindleBench\n" + "".join(f"package {n}\n" for n in names) + "".join(
+        f"end {n};\n" for n in reversed(names)) + "end SpindleBench;\n"
+    write(tmp, "models/SpindleBench.mo", text)
+    return (["build", "--models", str(tmp / "models"), "--out", str(tmp / "o.fmu")],
+            ["SpindleBench.mo:21", "nested"])
+
+
+@case("plot: a 100 000-character title")
+def _(tmp):
+    rec = role_recording(tmp)
+    return (["plot", str(rec), "--target", "drift_um", "-o", "fig.png", "--title", "x" * 100_000],
+            ["--title", "100,000"])
+
+
+@case("evaluate: --target is the time column")
+def _(tmp):
+    return [*evaluate_case(tmp, recording_text())[:-4], "--target", "time_s", "--clusters",
+            "2"], ["train.csv", "'time_s'", "time column"]
+
+
+@case("evaluate: --differences on 5 000 sensors")
+def _(tmp):
+    header = ",".join(["time_s", "drift_um", *(f"T{i}" for i in range(5000))])
+    rows = [",".join([str(60 * r), str(0.1 * r), *(str(20 + 0.01 * r + 1e-4 * i)
+                                                    for i in range(5000))]) for r in range(6)]
+    argv = evaluate_case(tmp, header + "\n" + "\n".join(rows) + "\n", "--differences")
+    return argv, ["train.csv", "5000 sensors", "--differences"]
+
+
+def fmu_with(tmp: Path, name: str, extra: dict[str, bytes] | None = None,
+             tweak: Callable[[zipfile.ZipInfo, bytes], tuple[zipfile.ZipInfo, bytes]]
+             | None = None) -> Path:
+    """The shipped FMU with members added (``extra``) or each (info, data) changed."""
+    target = tmp / name
+    with zipfile.ZipFile(DEFAULT_FMU) as source, zipfile.ZipFile(target, "w") as out:
+        for info in source.infolist():
+            data = source.read(info)
+            if tweak is not None:
+                info, data = tweak(info, data)
+            out.writestr(info, data)
+        for member, data in (extra or {}).items():
+            out.writestr(member, data)
+    return target
+
+
+def _so(info: zipfile.ZipInfo) -> bool:
+    return info.filename.startswith("binaries/") and info.filename.endswith(".so")
+
+
+def _declared_huge(tmp: Path) -> Path:
+    """A member whose central directory says it unpacks to 4 GB (a zip bomb's claim)."""
+    fmu = fmu_with(tmp, "bomb.fmu")
+    raw = bytearray(fmu.read_bytes())
+    at = raw.find(b"PK\x01\x02")
+    raw[at + 24:at + 28] = (0xF0000000).to_bytes(4, "little")
+    fmu.write_bytes(bytes(raw))
+    return fmu
+
+
+def _encrypted(tmp: Path) -> Path:
+    """A member flagged as encrypted in the central directory (general purpose bit 0)."""
+    fmu = fmu_with(tmp, "enc.fmu")
+    raw = bytearray(fmu.read_bytes())
+    at = raw.find(b"PK\x01\x02")
+    raw[at + 8] |= 0x01
+    fmu.write_bytes(bytes(raw))
+    return fmu
+
+
+def _lzma(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    if info.filename == "sources/SpindleBench.h":
+        info.compress_type = zipfile.ZIP_LZMA
+    return info, data
+
+
+def _not_elf(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    return info, (b"#!/bin/sh\necho hello\n" if _so(info) else data)
+
+
+def _executable(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    return info, (data[:16] + (2).to_bytes(2, "little") + data[18:] if _so(info) else data)
+
+
+def _other_token(info: zipfile.ZipInfo, data: bytes) -> tuple[zipfile.ZipInfo, bytes]:
+    if info.filename == "modelDescription.xml":
+        import re
+
+        data = re.sub(rb'instantiationToken="[^"]*"', b'instantiationToken="{0000}"', data)
+    return info, data
+
+
+FMU_ARCHIVES = {
+    "member climbs out with ..": (lambda t: fmu_with(t, "a.fmu", {"../evil.txt": b"x"}),
+                                  ["'..'"]),
+    "absolute member name": (lambda t: fmu_with(t, "a.fmu", {"/tmp/evil.txt": b"x"}),
+                             ["absolute"]),
+    "backslash in a member name": (lambda t: fmu_with(t, "a.fmu", {"..\\evil.txt": b"x"}),
+                                   ["backslash"]),
+    "drive colon in a member name": (lambda t: fmu_with(t, "a.fmu", {"C:evil.txt": b"x"}),
+                                     ["colon"]),
+    "encrypted member": (_encrypted, ["encrypted"]),
+    "LZMA member": (lambda t: fmu_with(t, "a.fmu", tweak=_lzma), ["compression method 14"]),
+    "declared 4 GB": (_declared_huge, ["zip bomb"]),
+    "binary not ELF": (lambda t: fmu_with(t, "a.fmu", tweak=_not_elf), ["not an ELF"]),
+    "binary an executable, not a library": (lambda t: fmu_with(t, "a.fmu", tweak=_executable),
+                                            ["not a shared object"]),
+    "token of another build": (lambda t: fmu_with(t, "a.fmu", tweak=_other_token),
+                               ["instantiationToken"]),
+}
+for _label, (_make, _expect) in FMU_ARCHIVES.items():
+    def _build(tmp: Path, make=_make, expect=_expect):
+        fmu = make(tmp)
+        scenario = write(tmp, "s.toml", QUICK)
+        return (["simulate", str(scenario), "-o", "out", "--fmu", str(fmu)],
+                [fmu.name, *expect])
+    case(f"FMU: {_label}")(_build)
+
+
+@case("evaluate: train recording is a FIFO")
+def _(tmp):
+    argv = evaluate_case(tmp, recording_text())
+    os.mkfifo(tmp / "pipe.csv")
+    argv[argv.index("--train") + 1] = str(tmp / "pipe.csv")
+    return argv, ["pipe.csv", "is a FIFO"]
+
+
+@case("scenario: a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "pipe.toml")
+    return ["simulate", str(tmp / "pipe.toml"), "-o", "out"], ["pipe.toml", "a FIFO"]
+
+
+@case("ambient CSV: a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "air.csv")
+    scenario = write(tmp, "s.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+    return ["simulate", str(scenario), "-o", "out"], ["air.csv", "a FIFO"]
+
+
+@case("paper: recordings folder is a FIFO")
+def _(tmp):
+    os.mkfifo(tmp / "recs")
+    return ["paper", "--recordings", str(tmp / "recs")], ["recs", "a FIFO"]
+
+
+@case("fingerprint: a password file named as a recording")
+def _(tmp):
+    write(tmp, "rec.csv", "root:x:0:0:root:/root:/bin/bash\nbin:x:2:2:bin:/bin:/sbin/nologin\n")
+    return ["fingerprint", str(tmp / "rec.csv"), "--target", "drift_um"], ["rec.csv", "1 column"]
+
+
+@case("ambient CSV: header without the value column names none of the others")
+def _(tmp):
+    write(tmp, "air.csv", "time_s,secret_token_abc\n0,18\n600,19\n")
+    scenario = write(tmp, "s.toml", QUICK.replace(
+        'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+    return ["simulate", str(scenario), "-o", "out"], ["air.csv", "2 column(s)"]
+
+
+AMBIENT_FILES_28 = {
+    "underscore in a number": ("time_s,ambient_C\n0,18\n300,1_8\n600,19\n", "line 3"),
+}
+for _label, (_text, _where) in AMBIENT_FILES_28.items():
+    def _build(tmp: Path, text: str = _text, where: str = _where):
+        write(tmp, "air.csv", text)
+        scenario = write(tmp, "s.toml", QUICK.replace(
+            'kind = "constant"\ntemperature_C = 18.0', 'kind = "csv"\nfile = "air.csv"'))
+        return ["simulate", str(scenario), "-o", "out"], [where, "air.csv"]
+    case(f"ambient CSV: {_label}")(_build)
 
 
 # --------------------------------------------------------------------------- the test

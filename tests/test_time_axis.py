@@ -124,7 +124,7 @@ def test_calibration_refuses_rises_and_converts_minutes(tmp_path):
     mapping.write_text(MAP, encoding="utf-8")
     recording_map = read_map(mapping, OUTPUTS)
     rises = recording(tmp_path / "rises.csv", "time_s", MINUTES * 60, start_C=0.0)
-    with pytest.raises(SpindlebenchError, match=r"starts at 0 °C .*rises, not temperatures"):
+    with pytest.raises(SpindlebenchError, match=r"starts within ±2 of 0 .*rises, not °C"):
         load_series(rises, recording_map, None)
     minutes = recording(tmp_path / "min.csv", "t_min", MINUTES)
     series = load_series(minutes, recording_map, None, ColumnRoles(time_column="t_min"))

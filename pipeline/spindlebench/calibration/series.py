@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -23,7 +22,7 @@ from spindlebench.calibration.mapping import (
 )
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.provenance import sha256_file
-from spindlebench.formats.recording import TIME_COLUMN, read_header, read_recording
+from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN, read_header, read_recording
 from spindlebench.formats.roles import (
     ColumnRoles,
     as_time_s,
@@ -114,22 +113,6 @@ def noise_estimate(values: np.ndarray, kind: str) -> float:
     return float(max(mad, MIN_NOISE[kind]))
 
 
-#: |°C| within which every mapped temperature starting means "rises from zero", not °C.
-RISE_START_C = 0.5
-
-
-def refuse_rises(frame: Any, columns: list[str], path: Path) -> None:
-    """The model is integrated from absolute temperatures (°C): a recording whose every
-    temperature column starts at 0 (rises, not temperatures) fitted a machine at 0 °C
-    without a word."""
-    starts = [float(frame[c].to_numpy(dtype=float)[0]) for c in columns]
-    if starts and all(abs(v) <= RISE_START_C for v in starts):
-        raise SpindlebenchError(
-            f"recording {path}: every mapped temperature column starts at 0 °C "
-            f"({', '.join(columns[:3])}{', …' if len(columns) > 3 else ''}): rises, not "
-            "temperatures; the calibration needs absolute °C (add the start temperature)")
-
-
 def check_roles(path: Path, roles: ColumnRoles) -> tuple[str, str, str]:
     """The delimiter, decimal mark and time column of a recording, from its header alone:
     ``calibrate`` checks them before the slow model translation."""
@@ -140,6 +123,22 @@ def check_roles(path: Path, roles: ColumnRoles) -> tuple[str, str, str]:
                                 "calibration integrates the model over time and needs one: "
                                 "name it with --time-column")
     return delimiter, decimal, time_column
+
+
+#: The recording map's ambient input: checked to be °C like the scenario's ambient.
+AMBIENT_INPUT = AMBIENT_COLUMN
+
+
+def _refuse_implausible_ambient(values: np.ndarray, source: object, path: Path) -> None:
+    """A kelvin ambient (291 °C) made the fit fail as "did not converge"; say what it is."""
+    from spindlebench.testbench.scenario import COLDEST_AMBIENT_C, KELVIN_SUSPECT_C
+
+    bad = np.flatnonzero((values > KELVIN_SUSPECT_C) | (values < COLDEST_AMBIENT_C))
+    if bad.size:
+        where = f"column {source!r}" if isinstance(source, str) else "the map's value"
+        raise SpindlebenchError(f"recording {path}: ambient_C from {where} is "
+                                f"{values[bad[0]]:g} °C, outside [{COLDEST_AMBIENT_C:g}, "
+                                f"{KELVIN_SUSPECT_C:g}] °C (kelvin?); give °C")
 
 
 def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None,
@@ -192,7 +191,8 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
             inputs[i] = column
         else:
             inputs[i] = source
-    refuse_rises(frame, list(recording_map.temperatures), path)
+        if name == AMBIENT_INPUT and source != UNKNOWN:
+            _refuse_implausible_ambient(inputs[i], source, path)
     channels = []
     for column, output in recording_map.temperatures.items():
         values = measured[column]
@@ -200,6 +200,12 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
         channels.append(Channel(column, output, "temperature", values, noise))
     if recording_map.error_column:
         values = recording_map.error_sign * frame[recording_map.error_column].to_numpy(float)
+        finite = values[np.isfinite(values)]
+        if finite.size and np.ptp(finite) == 0.0:  # the fit would "not converge" on it
+            raise SpindlebenchError(f"recording {path}: error column "
+                                    f"{recording_map.error_column!r} is constant "
+                                    f"({finite[0]:g}) over the recording; nothing to fit the "
+                                    "error to (a disconnected probe? another column?)")
         noise = recording_map.noise.get(recording_map.error_column) or noise_estimate(
             values, "error")
         channels.append(Channel(recording_map.error_column, DRIFT_OUTPUT, "error", values, noise))

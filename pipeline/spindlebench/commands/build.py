@@ -8,11 +8,13 @@ The build itself is ``spindlebench.model.build.build_fmu``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 from pathlib import Path
 
 from fmpy import read_model_description
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, allow_shipped, refuse_shipped
 from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import NODE_PREFIX
@@ -76,8 +78,15 @@ def run(args: argparse.Namespace) -> int:
         raise SpindlebenchError(f"--segments: must be from 2 to {MAX_SEGMENTS}, got "
                                 f"{args.segments}")
     target = output_path(args.out, args.segments)
+    # 'spindlebench build' rebuilds the committed FMU from its own sources (same bytes);
+    # anything else (other segments, other models) must not replace it unasked, and the
+    # refusal comes now, not after minutes of building
+    own = (args.segments == DEFAULT_SEGMENTS
+           and Path(args.models).resolve() == MODELS_DIR.resolve())
     stages = Stages("build", enabled=for_terminal(args.quiet))
-    path = build_fmu(args.models, target, segments=args.segments, say=stages)
+    with allow_shipped(DEFAULT_FMU) if own else contextlib.nullcontext():
+        refuse_shipped(target)
+        path = build_fmu(args.models, target, segments=args.segments, say=stages)
     elapsed = stages.seconds
     description = read_model_description(str(path))
     nodes = sum(v.name.startswith(NODE_PREFIX) for v in description.modelVariables)

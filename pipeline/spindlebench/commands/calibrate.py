@@ -25,7 +25,7 @@ from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
 from spindlebench.core.listflags import split_list_flag
-from spindlebench.core.paths import MODELS_DIR
+from spindlebench.core.paths import MODELS_DIR, refuse_shipped
 from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
@@ -103,6 +103,7 @@ def _run(args: argparse.Namespace) -> int:
     report_path, figure_path = report.report_paths(out)
     for written in (out, report_path, figure_path):
         check_output(written, "-o", [*args.recordings, args.map_file])
+        refuse_shipped(written)  # now, not after minutes of fitting
     if not 2 <= args.segments <= MAX_SEGMENTS:
         raise SpindlebenchError(f"--segments {args.segments}: must be in [2, {MAX_SEGMENTS}]")
     if args.step_s is not None and not args.step_s > 0:

@@ -22,9 +22,14 @@ from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
 )
-from spindlebench.studies.compensation.compensation_report import summary_text, write_outputs
+from spindlebench.studies.compensation.compensation_report import (
+    OUTPUT_FILES,
+    summary_text,
+    write_outputs,
+)
 from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.studies.family.family_file import check_fmu
+from spindlebench.studies.running.store import ResultStore
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -60,15 +65,19 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
     stages = Stages("compensate", enabled=for_terminal(getattr(args, "quiet", False)))
-    truths = simulate_days(study, fmu, progress=stages)
-    stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
-    outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
-    days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
-    series = pd.concat([part for o in outcomes.values() for part in o.series],
-                       ignore_index=True)
-    table = summary(study, days, series)
-    stages(f"writing tables, figure and README into {out}")
-    write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
+    # its own folder only (a sweep's README is not ours to replace), one process at a time
+    store = ResultStore(out, owned=lambda entry: entry.name in OUTPUT_FILES)
+    with store.locked():
+        truths = simulate_days(study, fmu, progress=stages)
+        stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
+        outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
+        days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
+        series = pd.concat([part for o in outcomes.values() for part in o.series],
+                           ignore_index=True)
+        table = summary(study, days, series)
+        stages(f"writing tables, figure and README into {out}")
+        write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
     print(summary_text(table))
-    print(f"wrote {out / 'README.md'} and 5 more files; {stages.seconds:.1f} s in all")
+    print(f"wrote {out / 'README.md'} and {len(OUTPUT_FILES) - 1} more files; "
+          f"{stages.seconds:.1f} s in all")
     return 0

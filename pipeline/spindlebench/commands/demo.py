@@ -9,13 +9,21 @@ printed command lines are a recipe a reader can repeat one by one.
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 from pathlib import Path
 
 from spindlebench.adapters import caiviac
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, shown
+from spindlebench.core.paths import (
+    DEFAULT_FMU,
+    MODELS_DIR,
+    SCENARIOS_DIR,
+    file_kind,
+    refuse_shipped,
+    shown,
+)
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import read_recording
 from spindlebench.machines.variants import add_machine_argument
@@ -78,12 +86,29 @@ def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path,
     plan_batch(files, [synthetic / f"{file.stem}.csv" for file in files], machine)
 
 
+def check_out(out: Path) -> None:
+    """Refuse an ``--out`` the stages could not write, before the build: a file, a FIFO or
+    another non-folder there (or on the way), a folder that cannot be written, or a place
+    inside the package's shipped files."""
+    at = out
+    while not at.exists() and at != at.parent:
+        at = at.parent
+    if at.exists() and not at.is_dir():
+        what = file_kind(at)
+        raise SpindlebenchError(f"--out {out}: {at} is {what}, not a folder; give a folder")
+    if not os.access(at, os.W_OK | os.X_OK):
+        raise SpindlebenchError(f"--out {out}: {at} is not writable; give a folder you can "
+                                "write")
+    refuse_shipped(out / "README.md")
+
+
 def run(args: argparse.Namespace) -> int:
     """All stages; the results folder gets a README that links what each stage wrote."""
     out = Path(args.out)
     fmu = out / "fmu" / f"{FMU_NAME}.fmu"
     synthetic = out / "paper"
     machine = getattr(args, "machine", None)
+    check_out(out)  # before the ~25 s build, not after it
     check_inputs(args.models, args.scenarios, synthetic, machine)
     _step(["build", "--models", args.models, "--out", str(fmu)])
     same = COMMITTED_FMU.exists() and sha256_file(fmu) == sha256_file(COMMITTED_FMU)

@@ -100,6 +100,12 @@ def _read_used(path: Path, target: str, roles: ColumnRoles,
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
 
 
+#: Most candidate columns (sensors, with --differences their pairwise differences too):
+#: 200 sensors with --differences are 20 100; each candidate is a column of the recording's
+#: length in memory, so 5 000 sensors' 12.5 million would not finish.
+MAX_CANDIDATES = 50_000
+
+
 def run(args: argparse.Namespace) -> int:
     """Evaluate, print the summary, write JSON if asked."""
     if args.clusters < 1:
@@ -111,10 +117,15 @@ def run(args: argparse.Namespace) -> int:
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
     train, taken = _read_used(args.train, args.target, roles, args.missing)
-    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
-                         roles.allow_target_copy)
     sensors = taken.sensors
     n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
+    if n > MAX_CANDIDATES:  # 5 000 sensors with --differences: 12.5 million columns
+        raise SelectionError(f"recording {args.train}: {len(sensors)} sensors give {n:,} "
+                             f"candidates{' with --differences' if args.differences else ''}, "
+                             f"more than the {MAX_CANDIDATES:,} evaluate can score; choose "
+                             "fewer with --sensors or --exclude")
+    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
+                         roles.allow_target_copy)
     if args.clusters > n:
         raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
                              f"({n}) of recording {args.train} (sensors, and their differences "

@@ -20,6 +20,7 @@ from spindlebench import __version__
 from spindlebench.core import interrupts
 from spindlebench.core.console import one_line, print_warning
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import OVERWRITE_SHIPPED_FLAG, allow_shipped
 
 #: Each sub-command and the module that registers it. ``spindlebench CMD ...`` imports only
 #: CMD's module: importing all of them (SciPy, scikit-learn, matplotlib, CasADi, dask ...)
@@ -67,6 +68,10 @@ def build_parser(command: str | None = None) -> _OneLineErrorParser:
     for module_name in modules:
         importlib.import_module(module_name).register(subparsers)
     parser.commands = dict(subparsers.choices)
+    for subparser in parser.commands.values():  # one flag, the same on every sub-command
+        subparser.add_argument(OVERWRITE_SHIPPED_FLAG, action="store_true",
+                               help="allow this command to replace a file shipped with "
+                               "spindlebench (the committed FMU, models/, scenarios/)")
     return parser
 
 
@@ -109,6 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _interrupted(exc: KeyboardInterrupt) -> int:
+    interrupts.ending()
     name = exc.args[0] if isinstance(exc, interrupts.Interrupted) else "SIGINT"
     print(f"error: interrupted by {name}; the unfinished output was not written",
           file=sys.stderr)
@@ -117,6 +123,9 @@ def _interrupted(exc: KeyboardInterrupt) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     try:
+        if getattr(args, "overwrite_shipped", False):
+            with allow_shipped():
+                return int(args.func(args) or 0)
         return int(args.func(args) or 0)
     except SpindlebenchError as exc:
         print(f"error: {one_line(str(exc))}", file=sys.stderr)

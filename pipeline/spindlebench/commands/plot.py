@@ -43,6 +43,10 @@ def default_output(recordings: list[Path]) -> Path:
     return recordings[0].with_suffix(".png")
 
 
+#: Longest ``--title``: matplotlib lays out a 100 000-character title for minutes.
+MAX_TITLE = 300
+
+
 def run(args: argparse.Namespace) -> int:
     """Read every recording (refusing bad ones in one line), draw, write atomically."""
     recordings = [Path(p) for p in args.recordings]
@@ -52,6 +56,9 @@ def run(args: argparse.Namespace) -> int:
     if out.is_dir():
         raise SpindlebenchError(f"-o {out}: is a directory; give a file name FIG.png")
     check_output(out, "-o", recordings)
+    if args.title is not None and len(args.title) > MAX_TITLE:
+        raise SpindlebenchError(f"--title: {len(args.title):,} characters; a figure title has "
+                                f"at most {MAX_TITLE}")
     roles = ColumnRoles.from_args(args)
     frames, sensors = [], []
     for path in recordings:

@@ -14,7 +14,7 @@ from pathlib import Path
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
 from spindlebench.core.listflags import expand_folders
-from spindlebench.core.paths import DEFAULT_FMU
+from spindlebench.core.paths import DEFAULT_FMU, refuse_shipped
 from spindlebench.formats.recording import (
     write_recording,
 )
@@ -49,6 +49,7 @@ def _output_targets(files: list[Path], out: Path) -> list[Path]:
             if path.is_dir():
                 raise SpindlebenchError(f"{path}: is a directory; the recording needs it as "
                                         "a file name (choose another -o)")
+            refuse_shipped(path)  # not a shipped file: refused before any simulation
     return targets
 
 
@@ -115,7 +116,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT",
                         help="output .csv for one scenario, else an output directory")
     parser.add_argument("--fmu", type=Path, default=None,
-                        help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/)")
+                        help=f"FMU to simulate (default: {DEFAULT_FMU.name} in fmus/). Loading "
+                        "an FMU runs its native code: give only FMUs you built or trust (its zip "
+                        "is checked first: names, sizes, binary, instantiation token)")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed of the sensor model (default: the scenario's)")
     add_machine_argument(parser, "machine variant for every scenario",

@@ -1,6 +1,7 @@
 """Atomic file output: a reader never sees a half-written file, a crash leaves the old one.
 
-The temporary file beside the target is named ``.<target>.<pid>.<random>.part``: a process
+The temporary file beside the target is named ``.<target>.<pid>.<random>.part`` (a long target
+name shortened to its start and a hash, so the part name stays within 255 bytes): a process
 killed with SIGKILL cannot remove it, so the next write of the same target removes every
 part file of that target whose writer process no longer exists.
 """
@@ -9,10 +10,13 @@ from __future__ import annotations
 
 import contextlib
 import glob
+import hashlib
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from spindlebench.core.paths import refuse_shipped
 
 
 def _current_umask() -> int:
@@ -29,10 +33,11 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     Use it for writers that want a path (``DataFrame.to_csv``, ``savefig``, zip files).
     """
     target = Path(target)
+    refuse_shipped(target)  # never a shipped file, unless --overwrite-shipped says so
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_parts(target)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".part",
-                                    dir=target.parent)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{_part_stem(target.name)}.{os.getpid()}.",
+                                    suffix=".part", dir=target.parent)
     os.close(fd)
     tmp = Path(tmp_name)
     # mkstemp makes the file private (0600); give it the mode a plain open() would.
@@ -47,6 +52,20 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+#: Longest target name kept whole in a part file's name: a name near the file system's 255
+#: bytes (a 245-character --json) plus the pid and random suffix was refused as too long.
+_PART_NAME_CHARS = 100
+
+
+def _part_stem(name: str) -> str:
+    """The target's name as its part files carry it: whole when short, else its start and a
+    hash of the whole (so two long names sharing a start do not share part files)."""
+    if len(name.encode("utf-8")) <= _PART_NAME_CHARS:
+        return name
+    digest = hashlib.sha256(name.encode("utf-8")).hexdigest()[:12]
+    return f"{name.encode('utf-8')[:40].decode('utf-8', 'ignore')}~{digest}"
 
 
 def write_text(target: str | os.PathLike[str], text: str) -> None:
@@ -78,8 +97,9 @@ def remove_stale_parts(target: str | os.PathLike[str]) -> list[Path]:
     """
     target = Path(target)
     removed = []
-    for part in target.parent.glob(f".{glob.escape(target.name)}.*.part"):
-        pid_text = part.name[len(target.name) + 2:].split(".", 1)[0]
+    stem = _part_stem(target.name)
+    for part in target.parent.glob(f".{glob.escape(stem)}.*.part"):
+        pid_text = part.name[len(stem) + 2:].split(".", 1)[0]
         if pid_text.isdigit() and not _process_exists(int(pid_text)):
             with contextlib.suppress(FileNotFoundError):
                 part.unlink()

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
@@ -31,6 +32,9 @@ SIGNALS = (signal.SIGINT, signal.SIGTERM)
 EXIT_STATUS = 130
 
 _pending: list[int] = []
+#: Set once the run has reported its interruption and is only returning: a signal then is
+#: recorded, never raised (it landed in a ``with`` block's exit, after the report).
+_ending = [False]
 
 
 class Interrupted(KeyboardInterrupt):
@@ -46,8 +50,33 @@ def _in_main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
+def _unwinding() -> bool:
+    """Whether this thread is unwinding from an interruption (in an ``except`` or
+    ``finally`` block that an :class:`Interrupted` or Ctrl-C's ``KeyboardInterrupt`` runs)."""
+    return isinstance(sys.exc_info()[1], KeyboardInterrupt)
+
+
 def _raise(signum: int, frame: FrameType | None) -> None:
+    """Raise the signal as :class:`Interrupted`; while the run is unwinding from one, a
+    second signal is only recorded (SIGTERM then SIGINT 1 ms later raised again inside the
+    ``finally`` that was removing a part file, and left it) and a third raises (the user
+    insists)."""
+    if _ending[0]:
+        _pending.append(signum)
+        return
+    if _unwinding():
+        _pending.append(signum)
+        if len(_pending) < 2:
+            return
+    _pending.clear()
     raise Interrupted(signum)
+
+
+def ending() -> None:
+    """The run has reported its interruption and only returns now: a further signal is
+    recorded, not raised (a SIGINT 1 ms after SIGTERM raised in ``warnings.catch_warnings``'
+    exit after the one-line report, a traceback and status 1 instead of 130)."""
+    _ending[0] = True
 
 
 def _record(signum: int, frame: FrameType | None) -> None:
@@ -57,6 +86,8 @@ def _record(signum: int, frame: FrameType | None) -> None:
 def install() -> None:
     """SIGINT and SIGTERM raise :class:`Interrupted` (main thread only; elsewhere a no-op)."""
     if _in_main_thread():
+        _pending.clear()  # a signal left from an earlier run in this process is not this one's
+        _ending[0] = False
         for signum in SIGNALS:
             signal.signal(signum, _raise)
 
@@ -94,8 +125,9 @@ def deferring(function: Callable[_P, _R]) -> Callable[_P, _R]:
 
 
 def check() -> None:
-    """Raise :class:`Interrupted` if a signal arrived since the last check."""
-    if _pending:
+    """Raise :class:`Interrupted` if a signal arrived since the last check (while unwinding
+    from an interruption, only if two did: one more changes nothing, see ``_raise``)."""
+    if _pending and not (_unwinding() and len(_pending) < 2):
         signum = _pending[0]
         _pending.clear()
         raise Interrupted(signum)

@@ -8,7 +8,10 @@ package also works outside the checkout. Every module asks here; none counts ``p
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 from spindlebench.core.names import FMU_NAME
@@ -57,6 +60,81 @@ def user_cache_dir() -> Path:
         return Path(os.environ[CACHE_ENV])
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(base) / "spindlebench"
+#: The folders whose existing files are shipped with the package (with the committed FMU): a
+#: command writing there would replace the default machine, a climate or the model.
+SHIPPED_DIRS: tuple[Path, ...] = (MODELS_DIR, SCENARIOS_DIR)
+#: The flag that lets one command replace a shipped file.
+OVERWRITE_SHIPPED_FLAG = "--overwrite-shipped"
+_shipped_allowed: contextvars.ContextVar[frozenset[Path] | bool] = contextvars.ContextVar(
+    "shipped_allowed", default=frozenset())
+
+
+def shipped(path: str | os.PathLike[str]) -> bool:
+    """Whether writing ``path`` would change what the package ships: an existing file in
+    ``models/`` or ``scenarios/``, the committed FMU, or anything inside the package's source
+    tree (links resolved, so ``./x/../scenarios/...`` or a link to it counts too)."""
+    resolved = Path(path).resolve()
+    if resolved.is_relative_to(_PACKAGE) or resolved == DEFAULT_FMU.resolve():
+        return True
+    return resolved.is_file() and any(resolved.is_relative_to(d.resolve())
+                                      for d in SHIPPED_DIRS) and _committed(resolved)
+
+
+def _committed(resolved: Path) -> bool:
+    """Whether a file of the checkout is one the repository ships (tracked by git), so a
+    user's own ``scenarios/machines/mine.toml`` can be calibrated again; without git (or
+    outside a checkout) every existing file there counts as shipped."""
+    if REPO_ROOT is None or not (REPO_ROOT / ".git").exists():
+        return True
+    import subprocess
+
+    try:
+        found = subprocess.run(["git", "-C", str(REPO_ROOT), "ls-files", "--error-unmatch",
+                                "--", str(resolved.relative_to(REPO_ROOT.resolve()))],
+                               capture_output=True, timeout=10, check=False)
+    except (OSError, ValueError, subprocess.TimeoutExpired):
+        return True
+    return found.returncode == 0
+
+
+@contextlib.contextmanager
+def allow_shipped(*paths: str | os.PathLike[str]) -> Iterator[None]:
+    """Within the block, writing these shipped paths (none given: every one) is allowed:
+    ``--overwrite-shipped``, or ``build`` rebuilding the committed FMU from its own sources."""
+    allowed: frozenset[Path] | bool = (
+        True if not paths else frozenset(Path(p).resolve() for p in paths))
+    token = _shipped_allowed.set(allowed)
+    try:
+        yield
+    finally:
+        _shipped_allowed.reset(token)
+
+
+def refuse_shipped(path: str | os.PathLike[str]) -> None:
+    """Refuse, in one line naming the flag, an output that would replace a shipped file."""
+    allowed = _shipped_allowed.get()
+    if allowed is True or not shipped(path):
+        return
+    if Path(path).resolve() in allowed:  # type: ignore[operator]
+        return
+    from spindlebench.core.errors import SpindlebenchError
+
+    raise SpindlebenchError(f"{path}: is shipped with spindlebench (the committed FMU, models/, "
+                            f"scenarios/ or the package source); write elsewhere, or give "
+                            f"{OVERWRITE_SHIPPED_FLAG} to replace it")
+
+
+def file_kind(path: str | os.PathLike[str]) -> str:
+    """What ``path`` is, for a message: 'a file', 'a folder', 'a FIFO', 'a socket', ..."""
+    import stat
+
+    mode = Path(path).stat().st_mode
+    for test, name in ((stat.S_ISREG, "a file"), (stat.S_ISDIR, "a folder"),
+                       (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return name
+    return "not a regular file"
 
 
 def shared_recordings_dir() -> Path:

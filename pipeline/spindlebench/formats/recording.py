@@ -59,9 +59,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from spindlebench.core.atomic import atomic_path
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_name
 from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
+from spindlebench.core.paths import file_kind, refuse_shipped
 from spindlebench.core.provenance import sha256_file
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
@@ -296,7 +297,7 @@ def read_table(
         raise SpindlebenchError(f"recording {path}: file not found")
     check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
-        raise SpindlebenchError(f"recording {path}: not a file")
+        raise SpindlebenchError(f"recording {path}: is {file_kind(path)}, not a file")
     dialect = _Dialect(delimiter, decimal, check_encoding(encoding))
     header = _read_header(path, dialect)
     keep = header if columns is None else _kept(header, columns)
@@ -513,8 +514,8 @@ def read_header(path: str | os.PathLike[str], delimiter: str = ",",
     path = Path(path)
     check_input(path, "recording", max_bytes=MAX_RECORDING_BYTES)
     if not path.is_file():
-        raise SpindlebenchError(f"recording {path}: "
-                                f"{'not a file' if path.exists() else 'file not found'}")
+        raise SpindlebenchError(f"recording {path}: " + (
+            f"is {file_kind(path)}, not a file" if path.exists() else "file not found"))
     return _read_header(path, _Dialect(delimiter, encoding=check_encoding(encoding)))
 
 
@@ -619,7 +620,7 @@ def _numeric_column(path: Path, name: str, cells: pd.Series, allow_missing: bool
     elif np.isinf(values.iloc[row]):
         what = f"infinite value {cell!r}"
     else:
-        what = f"non-numeric value {cell!r}"
+        what = f"non-numeric value {quoted_name(str(cell))}"
     raise error(
         f"recording {path}, line {row + 2}, column '{name}': {what} "
         f"({bad.size} bad cell(s) in this column)"
@@ -640,8 +641,8 @@ def require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> N
     if missing:
         raise SpindlebenchError(
             f"recording {recording_name(frame)}: {what} column(s) not found: "
-            f"{', '.join(missing)} (columns are: "
-            f"{', '.join(map(str, frame.attrs.get('header', frame.columns)))})"
+            f"{', '.join(missing)} ("
+            f"{columns_hint(list(map(str, frame.attrs.get('header', frame.columns))), missing[0])})"
         )
 
 
@@ -681,6 +682,7 @@ def check_recording_targets(csv_path: str | os.PathLike[str]) -> tuple[Path, Pat
     for path in (csv_path, json_path):
         if path.is_dir():
             raise SpindlebenchError(f"{path}: is a directory, cannot write a recording there")
+        refuse_shipped(path)  # never a shipped file (the CSV named first)
     return csv_path, json_path
 
 

@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_name
 from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import KELVIN_OFFSET
@@ -264,11 +264,11 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
     header = [str(name) for name in header]
     if target not in header:
         raise SpindlebenchError(f"recording {where}: target column {target!r} not found "
-                                f"(columns are: {', '.join(header)})")
+                                f"({columns_hint(header, target)})")
     time_column = roles.time_column or TIME_COLUMN
     if roles.time_column is not None and roles.time_column not in header:
         raise SpindlebenchError(f"recording {where}: --time-column {roles.time_column!r} not "
-                                f"found (columns are: {', '.join(header)})")
+                                f"found ({columns_hint(header, roles.time_column)})")
     if time_column not in header:
         time_column = None
     if time_column is not None and time_column == target:
@@ -277,7 +277,7 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
     for pattern in roles.exclude:
         if not any(matches(name, [pattern]) for name in header):
             raise SpindlebenchError(f"recording {where}: --exclude {pattern!r} matches no "
-                                    f"column (columns are: {', '.join(header)})")
+                                    f"column ({columns_hint(header, pattern)})")
     skipped: list[tuple[str, str]] = []
     if roles.sensors is not None:
         sensors: list[str] = []
@@ -291,8 +291,8 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
             if not matched:
                 what = ("sensor pattern matches no column" if any(c in pattern for c in "*?")
                         else "sensor column(s) not found")
-                raise SpindlebenchError(f"recording {where}: {what}: {pattern} (columns are: "
-                                        f"{', '.join(header)})")
+                raise SpindlebenchError(f"recording {where}: {what}: {pattern} "
+                                        f"({columns_hint(header, pattern)})")
             sensors += found
         for name in list(sensors):
             if name == target:
@@ -327,9 +327,10 @@ def choose(header: Sequence[str], target: str, roles: ColumnRoles,
                     skipped.append((name, reason or "does not look like a temperature; "
                                     "name it in --sensors to use it"))
     if not sensors:
-        raise SpindlebenchError(f"recording {where}: no sensor columns ("
-                                + "; ".join(f"{n}: {why}" for n, why in skipped)
-                                + "); pass --sensors")
+        shown = "; ".join(f"{quoted_name(n)}: {why}" for n, why in skipped[:3])
+        more = f"; and {len(skipped) - 3} more" if len(skipped) > 3 else ""
+        raise SpindlebenchError(f"recording {where}: no sensor columns ({shown}{more}); "
+                                "pass --sensors")
     return RoleChoice(time_column, sensors, skipped, by_rule)
 
 

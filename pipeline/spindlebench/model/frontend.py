@@ -62,7 +62,42 @@ def model_source(model_dir: str | Path) -> Path:
         line = path.read_bytes()[: exc.start].count(b"\n") + 1
         raise SpindlebenchError(f"{path}:{line}: Modelica source is not UTF-8 text (byte "
                                 f"{exc.start}); save it as UTF-8") from None
+    check_nesting(path)
     return path
+
+
+#: Deepest nesting of brackets, and of classes (``package``/``model``/... ``end``), a model
+#: source may have: models/SpindleBench.mo needs 4 and 4; both front ends recurse per level, a
+#: source nested thousands deep ran out of stack or for minutes.
+MAX_BRACKET_DEPTH, MAX_CLASS_DEPTH = 100, 20
+_CLASS_START = re.compile(r"^\s*(?:(?:partial|encapsulated|expandable|operator|pure|impure|"
+                          r"replaceable|redeclare|final|inner|outer)\s+)*(?:package|model|block|"
+                          r"connector|record|function|class|type)\s+\w+\b(?!\s*=)")
+_CLASS_END = re.compile(r"^\s*end\s+(?!(?:for|if|when|while)\b)\w+\s*;")
+
+
+def check_nesting(path: Path) -> None:
+    """Refuse, naming the line, a source nested deeper than any machine model needs."""
+    text = path.read_text(encoding="utf-8")
+    text = re.sub(r'"(?:[^"\\]|\\.)*"', '""', text)  # strings may hold any bracket
+    text = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    depth = classes = 0
+    for number, line in enumerate(text.splitlines(), start=1):
+        code = line.split("//", 1)[0]
+        if _CLASS_START.match(code):
+            classes += 1
+        if _CLASS_END.match(code):
+            classes -= 1
+        if classes > MAX_CLASS_DEPTH:
+            raise SpindlebenchError(f"{path}:{number}: classes nested more than "
+                                    f"{MAX_CLASS_DEPTH} deep; no machine model needs that")
+        for char in code:
+            depth += char in "([{"
+            depth -= char in ")]}"
+            if depth > MAX_BRACKET_DEPTH:
+                raise SpindlebenchError(f"{path}:{number}: brackets nested more than "
+                                        f"{MAX_BRACKET_DEPTH} deep; no machine model needs "
+                                        "that")
 
 
 def _syntax_error_line(message: str) -> int | None:

@@ -576,8 +576,9 @@ def resolve_sensors(
 
 def check_same_sensors(name: str, theirs: Sequence[str], chosen: Sequence[str],
                        train_name: str) -> None:
-    """A held-out recording must offer the training file's sensors, found by the same rule."""
-    if list(theirs) != list(chosen):
+    """A held-out recording must offer the training file's sensors, found by the same rule
+    (in any order: they are read by name)."""
+    if set(theirs) != set(chosen):
         missing = [s for s in chosen if s not in theirs]
         extra = [s for s in theirs if s not in chosen]
         raise SelectionError(

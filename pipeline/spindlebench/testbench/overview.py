@@ -33,7 +33,7 @@ from matplotlib.lines import Line2D
 from matplotlib.transforms import offset_copy
 
 from spindlebench.core.atomic import atomic_path
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint
 from spindlebench.formats.recording import (
     AMBIENT_COLUMN,
     DRIFT_COLUMN,
@@ -121,7 +121,8 @@ def recordings_figure(frames: Sequence[pd.DataFrame], titles: Sequence[str] | No
         if target not in frame.columns:
             raise SpindlebenchError(
                 f"recording {recording_name(frame)}: no thermal-error column {target!r} "
-                f"(columns are: {', '.join(map(str, frame.columns))}; choose one with --target)")
+                f"({columns_hint(list(map(str, frame.columns)), target)}; choose one with "
+                "--target)")
     titles = list(titles) if titles is not None else [recording_name(f) for f in frames]
     panels = _temperature_panels(frames, target, sensors)
     has_inputs = any(SPEED in f or any(c in f for c in FEEDS) for f in frames)

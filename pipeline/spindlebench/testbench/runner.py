@@ -61,6 +61,7 @@ from spindlebench.formats.recording import (
     is_probe_output,
 )
 from spindlebench.machines.variants import Machine
+from spindlebench.testbench import fmu_archive
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
 
@@ -120,6 +121,13 @@ def inspect_fmu(fmu_path: str | Path) -> FmuInterface:
 
 
 def _read_and_check(fmu_path: Path) -> FmuInterface:
+    try:  # names, encryption, compression and sizes, before a byte is decompressed
+        with zipfile.ZipFile(fmu_path) as archive:
+            unsafe = fmu_archive.member_problem(archive)
+    except (zipfile.BadZipFile, OSError):
+        unsafe = None  # not a zip, unreadable: said below
+    if unsafe:
+        raise SpindlebenchError(f"{fmu_path}: unsafe FMU: {unsafe}; not unpacked")
     damaged = _damaged_member(fmu_path)
     if damaged:
         raise SpindlebenchError(f"{fmu_path}: damaged FMU: {damaged} (rebuild it with "
@@ -135,6 +143,13 @@ def _read_and_check(fmu_path: Path) -> FmuInterface:
     if not md.fmiVersion.startswith("3.") or md.modelExchange is None:
         raise SpindlebenchError(f"{fmu_path}: need an FMI 3.0 model-exchange FMU, got FMI "
                                 f"{md.fmiVersion}{'' if md.modelExchange else ' without ME'}")
+    with zipfile.ZipFile(fmu_path) as archive:  # before anything is unpacked or loaded
+        problem = fmu_archive.binary_problem(archive, md.modelExchange.modelIdentifier)
+        if problem is None and str(md.generationTool or "").startswith("spindlebench"):
+            problem = fmu_archive.token_problem(archive, md.guid,
+                                                 md.modelExchange.modelIdentifier)
+    if problem:
+        raise SpindlebenchError(f"{fmu_path}: unsafe or mismatched FMU: {problem}")
     by_name = {v.name: v for v in md.modelVariables}
     inputs = []
     for name in INPUT_NAMES:

@@ -11,12 +11,13 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint
 from spindlebench.core.files import check_input
 from spindlebench.core.limits import (
     COLDEST_AMBIENT_C,
@@ -32,6 +33,7 @@ from spindlebench.core.limits import (
     RPM_RANGE_UNIT,
 )
 from spindlebench.core.names import SENSORS
+from spindlebench.core.paths import file_kind
 from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
 from spindlebench.formats.toml import REQUIRED, Table, load_toml, range_problem
 from spindlebench.machines.variants import DEFAULT_MACHINE, Machine, load_machine
@@ -543,6 +545,20 @@ def _read_ambient(top: Table, scenario_dir: Path, duration_s: float,
     return model
 
 
+#: A number as a CSV cell writes it: Python's float() also takes ``1_8`` (as 18), which no
+#: data logger writes; a cell like that is a typo, not eighteen degrees.
+_CSV_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf)",
+                         re.IGNORECASE)
+
+
+def csv_number(cell: str) -> float:
+    """The number in a CSV cell, or ValueError (``1_8``, ``0x12``, ``١٢`` are not numbers)."""
+    text = cell.strip()
+    if not _CSV_NUMBER.fullmatch(text):
+        raise ValueError(cell)
+    return float(text)
+
+
 def _read_ambient_csv(
     t: Table, file: Path, time_column: str, value_column: str
 ) -> tuple[list[float], list[float]]:
@@ -555,12 +571,13 @@ def _read_ambient_csv(
     except SpindlebenchError as exc:
         raise t.error("file", str(exc)) from None
     if not file.is_file():
-        raise t.error("file", f"no such file: {file}")
+        raise t.error("file", f"{file} is {file_kind(file)}, not a file" if file.exists()
+                      else f"no such file: {file}")
     times: list[float] = []
     values: list[float] = []
     header: list[str] | None = None
     try:
-        text = file.read_text(encoding="utf-8")
+        text = file.read_text(encoding="utf-8-sig")  # a BOM, as recordings accept it
     except UnicodeDecodeError as exc:
         raise t.error("file", f"{file} is not UTF-8 text (byte {exc.start})") from None
     with io.StringIO(text, newline="") as handle:
@@ -577,7 +594,7 @@ def _read_ambient_csv(
                 for column, key in ((time_column, "time_column"), (value_column, "value_column")):
                     if column not in header:
                         raise t.error(key, f"column {column!r} not in {file} "
-                                     f"(it has {', '.join(header)})")
+                                     f"({columns_hint(header, column)})")
                 i_time, i_value = header.index(time_column), header.index(value_column)
                 continue
             where = f"{file}: line {line_no}"
@@ -589,8 +606,8 @@ def _read_ambient_csv(
                     # float() reads full-width or Arabic-Indic digits: not what a logger writes
                     raise SpindlebenchError(f"{where}: {cells[i_time]!r}, {cells[i_value]!r}: "
                                             "numbers must be plain ASCII digits")
-                time_s = float(cells[i_time])
-                value = float(cells[i_value])
+                time_s = csv_number(cells[i_time])
+                value = csv_number(cells[i_value])
             except (IndexError, ValueError):
                 raise SpindlebenchError(
                     f"{where}: expected numbers in columns {time_column} and {value_column}"

@@ -24,6 +24,9 @@ stale entry cannot be hit. Beside each JSON file, ``<key>.fmustate`` holds the F
 state at the soak's end (``fmi3SerializeFMUState``), for an FMU that saves states: the runner
 restores it into every run of the same soak (``soak_start``), one warm state forked into many
 scenarios.
+A JSON file carries its key and the SHA-256 of its states (and of its ``.fmustate``) and is
+used only when they match: an edited, copied or damaged entry is named in a warning and
+recomputed.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import contextlib
 import hashlib
 import json
 import os
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -138,12 +142,12 @@ def soak_state(scenario: Scenario, fmu_path: str | Path) -> dict[str, float]:
     if key in _memory:
         return dict(_memory[key])
     file = cache_dir() / f"{key}.json"
-    states = _read_cached(file)
+    states = _read_cached(file, key)
     if states is None:
         states = dict(co_simulate(history, fmu_path).end_state_K)
         record = {"soak_key": key, "days": scenario.initial.days,
                   "ambient": history.to_dict()["ambient"], "fmu": str(fmu_path),
-                  "states_K": states}
+                  "states_K": states, "states_sha256": states_sha256(states)}
         with contextlib.suppress(OSError):  # an unwritable cache costs time, not correctness
             atomic.write_text(file, json.dumps(record, indent=1, sort_keys=True) + "\n")
     _memory[key] = dict(states)
@@ -164,14 +168,21 @@ def soak_start(scenario: Scenario, fmu_path: str | Path) -> tuple[dict[str, floa
         return dict(_memory[key]), _memory_fmu_state[key]
     file = cache_dir() / f"{key}.json"
     state_file = file.with_suffix(".fmustate")
-    states, saved = _read_cached(file), _read_state(state_file)
+    states, saved = _read_cached(file, key), _read_state(state_file)
+    if saved is not None and states is not None:
+        recorded = _recorded_state_sha256(file)
+        if recorded != hashlib.sha256(saved).hexdigest():
+            if recorded is not None:
+                _stale(state_file, "FMU state does not match its checksum (edited or damaged)")
+            saved = None
     if states is None or saved is None:
         simulation = co_simulate(history, fmu_path, save_end_state=True)
         states, saved = dict(simulation.end_state_K), simulation.end_fmu_state
         assert saved is not None
         record = {"soak_key": key, "days": scenario.initial.days,
                   "ambient": history.to_dict()["ambient"], "fmu": str(fmu_path),
-                  "states_K": states}
+                  "states_K": states, "states_sha256": states_sha256(states),
+                  "fmu_state_sha256": hashlib.sha256(saved).hexdigest()}
         with contextlib.suppress(OSError):
             atomic.write_bytes(state_file, saved)
             atomic.write_text(file, json.dumps(record, indent=1, sort_keys=True) + "\n")
@@ -188,13 +199,51 @@ def _read_state(file: Path) -> bytes | None:
     return data if data.startswith(FMU_STATE_MAGIC) else None
 
 
-def _read_cached(file: Path) -> dict[str, float] | None:
-    """A cache file's states, or None when it is missing or damaged (then it is redone)."""
+def _recorded_state_sha256(file: Path) -> str | None:
+    """The SHA-256 of the FMU state file that the JSON entry ``file`` records, if any."""
     try:
-        states = json.loads(file.read_text(encoding="utf-8"))["states_K"]
-    except (OSError, ValueError, KeyError, TypeError):
+        value = json.loads(file.read_text(encoding="utf-8")).get("fmu_state_sha256")
+    except (OSError, ValueError, AttributeError):
         return None
+    return value if isinstance(value, str) else None
+
+
+def states_sha256(states: dict[str, float]) -> str:
+    """SHA-256 of a soak's end state (sorted names, each value's shortest repr)."""
+    text = json.dumps({str(k): float(v) for k, v in states.items()}, sort_keys=True,
+                      separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class StaleCacheWarning(UserWarning):
+    """A cache file does not match its inputs or its own checksum; it is recomputed."""
+
+
+def _read_cached(file: Path, key: str) -> dict[str, float] | None:
+    """A cache file's states, or None when it is missing or damaged (then it is redone).
+
+    The file must carry the key of the inputs it was computed from (its name can be copied
+    or renamed) and the checksum of its states: a hand-edited state (a machine started at
+    -23 °C in a 5-12 °C room) is named in a warning and recomputed, not used."""
+    try:
+        record = json.loads(file.read_text(encoding="utf-8"))
+        states = record["states_K"]
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return _stale(file, "unreadable")
     if not isinstance(states, dict) or not all(
             isinstance(v, float) and 200.0 <= v <= 600.0 for v in states.values()):
+        return _stale(file, "its states are not temperatures in kelvin")
+    if "states_sha256" not in record:  # written before files had checksums: recompute
         return None
+    if record.get("soak_key") != key:
+        return _stale(file, "computed from other inputs (its soak_key differs)")
+    if record.get("states_sha256") != states_sha256(states):
+        return _stale(file, "its states do not match their checksum (edited or damaged)")
     return {str(k): float(v) for k, v in states.items()}
+
+
+def _stale(file: Path, why: str) -> None:
+    warnings.warn(f"{file}: soak cache {why}; recomputing it", StaleCacheWarning, stacklevel=3)
+    return None

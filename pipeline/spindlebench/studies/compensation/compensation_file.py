@@ -40,6 +40,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import DEFAULT_METHOD_SEED, GROUPS
 from spindlebench.formats.toml import Table, in_range, load_toml, non_negative, one_of
 from spindlebench.studies.compensation.controller import ControllerSettings, FaultMonitor
+from spindlebench.studies.family.experiments import experiments
 from spindlebench.studies.family.family_file import Fault, SweepStudy, load_study
 
 RETRAIN_RULES = ("never", "weekly", "after-fault")
@@ -110,7 +111,12 @@ def load_compensation(path) -> CompensationStudy:
             raise t.error("fault", f"no fault {fault_name!r} in [faults] / axes.faults "
                           f"(have: {', '.join(known) or 'none'})")
         fault = known[fault_name]
+    last_day = family.replicas * len(experiments(family))  # compensation.loop.plan_days
     from_day = t.get("fault_from_day", int, default=2, check=in_range(2, None))
+    if from_day > last_day and (fault is not None or t.has("fault_from_day")):
+        raise t.error("fault_from_day", f"day {from_day} is after the study's last day "
+                      f"({last_day}: {family.replicas} replica(s) × {last_day // family.replicas}"
+                      " experiment(s)); the fault would never happen")
     if isinstance(t.raw("retrain", None), list):
         retrain = tuple(t.get_list("retrain", str, check=lambda v: one_of(v, RETRAIN_RULES)))
         if len(set(retrain)) != len(retrain):

@@ -5,6 +5,7 @@ is ``commands.compensate``).
 
 from __future__ import annotations
 
+import gzip
 import json
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from spindlebench.core import atomic, provenance
+from spindlebench.core import atomic, interrupts, provenance
 from spindlebench.core.names import SIX_DIFF
 from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN
 from spindlebench.studies.compensation.compensation_file import (
@@ -24,18 +25,41 @@ FIGURE_DPI = 110
 
 #: Every sample of the first retraining rule (gzip: a month at 10 s is ~10^6 rows).
 TIMESERIES = "timeseries.csv.gz"
+#: Every file ``compensate`` writes: its folder holds these (and its lock) or nothing.
+OUTPUT_FILES = frozenset({"README.md", "days.csv", "summary.csv", TIMESERIES,
+                          "compensation.png", "provenance.json"})
+#: Written last: a folder without them is an unfinished output.
+COMPLETE_MARKERS = ("provenance.json", "README.md")
 
 
 def _csv(path: Path, frame: pd.DataFrame) -> None:
+    """A CSV, gzipped for ``.gz`` with neither a time nor a file name in the gzip header
+    (pandas' gzip writes both: the bytes changed from run to run)."""
     with atomic.atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, float_format="%.6g",
-                      compression="gzip" if path.suffix == ".gz" else None)
+        if path.suffix != ".gz":
+            frame.to_csv(tmp, index=False, float_format="%.6g")
+            return
+        with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw,
+                                                   mtime=0) as packed:
+            packed.write(frame.to_csv(index=False, float_format="%.6g").encode("utf-8"))
 
 
 def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
                   days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
                   outcomes: dict) -> None:
-    out.mkdir(parents=True, exist_ok=True)
+    """Every output file; a signal waits until they are all written, and the two files that
+    say the folder is complete (README, provenance) go first and come back last, so even a
+    ``kill -9`` leaves no old README over new tables."""
+    with interrupts.deferred():
+        out.mkdir(parents=True, exist_ok=True)
+        for marker in COMPLETE_MARKERS:
+            (out / marker).unlink(missing_ok=True)
+        _write_outputs(study, study_path, fmu, out, days, series, table, outcomes)
+
+
+def _write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
+                   days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
+                   outcomes: dict) -> None:
     _csv(out / "days.csv", days)
     _csv(out / "summary.csv", table)
     rule = study.retrain[0]
@@ -59,8 +83,8 @@ def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Pa
         fault=None if study.fault is None else study.fault.name,
         fault_from_day=study.fault_from_day, days=study.days,
         off_h=study.off_h if study.days == "continuous" else None)
-    atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
     atomic.write_text(out / "README.md", readme(study, study_path, days, table))
+    atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
 
 
 def best_model(table: pd.DataFrame) -> str:

@@ -45,7 +45,14 @@ class Experiment:
 
     @property
     def id(self) -> str:
-        return f"{self.month}-{self.speed_rpm:g}rpm-{self.programme}-{self.cooling}"
+        return f"{self.month}-{speed_label(self.speed_rpm)}rpm-{self.programme}-{self.cooling}"
+
+
+def speed_label(rpm: float) -> str:
+    """A speed as it names an experiment: ``2000``, ``1500.5``; as many digits as it takes
+    to be the speed (``2000.0001``, where ``:g`` gave ``2000`` for it and for 2000)."""
+    short = f"{rpm:g}"
+    return short if float(short) == rpm else repr(float(rpm))
 
 
 @dataclass(frozen=True)

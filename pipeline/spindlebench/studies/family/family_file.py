@@ -73,6 +73,9 @@ V = TypeVar("V")
 
 #: Most replicas and clusters a study may ask for.
 MAX_REPLICAS, MAX_CLUSTERS = 10_000, 6
+#: Most simulations one study may ask for: at ~1 s each on one core, 100 000 is more than a
+#: day on a workstation; 960 000 spent 5 min and 2 GB building tasks before the first run.
+MAX_SIMULATIONS = 100_000
 #: The sweep's baselines: the top-k-correlated selection method on the raw sensors then OLS,
 #: and ridge on all sensors; their names are the method's and the regressor's.
 TOP_K_BASELINE, RIDGE_BASELINE = "top-k-correlated", "ridge"
@@ -284,6 +287,13 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     if fmu_parameters is not None:
         _check_input_axis(axes, "speeds_rpm", speeds, SPEED_COLUMN, fmu)
     axes.finish()
+    machines = population.size if population is not None else max(1, len(machine_axis))
+    simulations = (replicas * machines * len(months) * len(speeds) * len(programme_names)
+                   * len(cooling_names))
+    if simulations > MAX_SIMULATIONS:  # refused now, not after minutes of building tasks
+        raise axes.error("speeds_rpm", f"the axes give {simulations:,} simulations (replicas × "
+                         "machines × months × speeds × programmes × cooling), more than the "
+                         f"{MAX_SIMULATIONS:,} a study may run; split it into several studies")
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
     for name in machine_axis:
@@ -520,7 +530,9 @@ def _training(t: Table, months: tuple[str, ...], speeds: tuple[float, ...],
               programmes: list[str], cooling: list[str], climate: Climate) -> Training:
     rule = t.get("rule", str, default="one", check=lambda v: one_of(v, TRAINING_RULES))
     def of_the_study(values: Sequence[Any], what: str) -> Callable[[Any], str | None]:
-        shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+        from spindlebench.studies.family.experiments import speed_label
+
+        shown = ", ".join(speed_label(v) if isinstance(v, float) else str(v) for v in values)
         return lambda v: None if v in values else f"must be one of the study's {what} ({shown})"
 
     month = t.get("month", str, default=months[0], check=of_the_study(months, "months"))

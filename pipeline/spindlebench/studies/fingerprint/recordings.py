@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.errors import SpindlebenchError, columns_hint
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN, read_header, sidecar_path
 from spindlebench.formats.roles import (
     SPEED_COLUMN,
@@ -118,7 +118,7 @@ def _default_target(path: Path, header: list[str]) -> str:
         return named
     raise SpindlebenchError(
         f"recording {path}: no --target given, no '{DEFAULT_TARGET}' column and no "
-        f"axial_target in {sidecar_path(path).name} (columns are: {', '.join(header)})")
+        f"axial_target in {sidecar_path(path).name} ({columns_hint(header, DEFAULT_TARGET)})")
 
 
 def _sidecar_target(path: Path) -> str | None:

@@ -81,17 +81,13 @@ def _correlations(columns: np.ndarray, target: np.ndarray) -> np.ndarray:
     return np.where(denominator > 0, r, 0.0)
 
 
-def _best_pair_r2(rises: np.ndarray, e: np.ndarray) -> float:
-    """Largest R² of ``e ~ 1 + dT_i + dT_j`` over all pairs (closed form on centred data)."""
-    a = rises - rises.mean(axis=0)
-    b = e - e.mean()
-    total = float(b @ b)
+def _best_pair_r2(gram: np.ndarray, cross: np.ndarray, total: float) -> float:
+    """Largest R² of ``e ~ 1 + dT_i + dT_j`` over all pairs (closed form on centred data:
+    ``gram`` = AᵀA and ``cross`` = Aᵀb of the centred rises A and error b, ``total`` = bᵀb)."""
     if total == 0.0:
         return math.nan
-    gram = a.T @ a
-    cross = a.T @ b
     best = 0.0
-    m = rises.shape[1]
+    m = gram.shape[0]
     for i in range(m):
         for j in range(i + 1, m):
             g = gram[np.ix_([i, j], [i, j])]
@@ -99,6 +95,25 @@ def _best_pair_r2(rises: np.ndarray, e: np.ndarray) -> float:
             coef, *_ = np.linalg.lstsq(g, c, rcond=None)
             best = max(best, float(coef @ c) / total)
     return min(best, 1.0)
+
+
+def _best_diff_psi(gram: np.ndarray, cross: np.ndarray, total: float) -> float:
+    """Largest ``|r(dT_i - dT_j, e)|`` over pairs ``i < j``, from the m x m Gram matrix.
+
+    On centred data, cov(a_i - a_j, b) = c_i - c_j and var(a_i - a_j) = G_ii + G_jj - 2 G_ij,
+    so no n x m(m-1)/2 matrix of differences is formed (it took ~5 KB per sample for 20
+    sensors: 5 GB for 10^6 samples). A difference without variance of its own (two equal
+    sensors, up to rounding) has r = 0, as a constant column has."""
+    if total == 0.0:
+        return 0.0
+    diagonal = np.diag(gram)
+    upper = np.triu_indices(gram.shape[0], 1)
+    variance = (diagonal[:, None] + diagonal[None, :] - 2.0 * gram)[upper]
+    scale = (diagonal[:, None] + diagonal[None, :])[upper]
+    numerator = np.abs(cross[:, None] - cross[None, :])[upper]
+    usable = variance > 1e-12 * scale
+    r = numerator[usable] / np.sqrt(variance[usable] * total)
+    return min(float(r.max()), 1.0) if r.size else 0.0
 
 
 def fingerprint(time_s: np.ndarray, temps_2d: np.ndarray, error: np.ndarray) -> dict[str, float]:
@@ -139,11 +154,13 @@ def fingerprint(time_s: np.ndarray, temps_2d: np.ndarray, error: np.ndarray) -> 
         raise SpindlebenchError("fingerprint: no temperature column rises (all constant)")
     raw = _correlations(rises, e)
     best_raw = float(raw.max())
-    pairs = [(i, j) for i in range(m) for j in range(i + 1, m)]
-    if pairs:
-        differences = np.column_stack([rises[:, i] - rises[:, j] for i, j in pairs])
-        best_diff = float(_correlations(differences, e).max())
-        best_pair = _best_pair_r2(rises, e)
+    if m > 1:
+        centred = rises - rises.mean(axis=0)
+        b = e - e.mean()
+        gram, cross, total = centred.T @ centred, centred.T @ b, float(b @ b)
+        del centred
+        best_diff = _best_diff_psi(gram, cross, total)
+        best_pair = _best_pair_r2(gram, cross, total)
     else:
         best_diff = best_pair = math.nan
     elapsed = time_s - time_s[0]  # a ratio of t63s is one of durations, wherever the clock began

@@ -24,6 +24,7 @@ import pandas as pd
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import ALL_RAW, DEFAULT_METHOD, GROUPS, SIX_DIFF
+from spindlebench.core.paths import file_kind
 from spindlebench.formats.recording import TIME_COLUMN, MissingValueError, read_header
 from spindlebench.formats.roles import (
     ColumnRoles,
@@ -132,7 +133,9 @@ def load_experiments(directory: str | Path, config: StudyConfig) -> tuple[dict, 
     (target, ``sensors_all``, ``time_s``) are read and checked, others are ignored."""
     directory = Path(directory)
     if not directory.is_dir():
-        raise SpindlebenchError(f"{directory}: recordings folder not found")
+        raise SpindlebenchError(f"{directory}: " + (
+            f"is {file_kind(directory)}, not a recordings folder" if directory.exists()
+            else "recordings folder not found"))
     frames: dict[str, pd.DataFrame] = {}
     paths: dict[str, Path] = {}
     needed = [config.target, *config.sensors_all]

@@ -16,10 +16,14 @@ never idle between the phases of a study.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
+import errno
 import multiprocessing
 import os
 import re
 import select
+import socket
+import struct
 import threading
 import time
 import traceback
@@ -185,19 +189,74 @@ def _stop_workers(executor: cf.Executor) -> None:
     forever and the pool's shutdown with it (a study hung at exit). Workers hold nothing to
     save: results are written by this process, and the unpacked FMU folder of a killed worker
     is removed by the next process that unpacks (``runner.extracted_fmu``)."""
-    processes = getattr(executor, "_processes", None) or {}
-    for process in list(processes.values()):
-        if process.is_alive():
+    _kill(list((getattr(executor, "_processes", None) or {}).values()))
+
+
+def _kill(processes: list[Any]) -> None:
+    for process in processes:
+        if process.exitcode is None:
             process.kill()
+
+
+#: Longest first message a Dask scheduler sends (its handshake is a few hundred bytes).
+MAX_HANDSHAKE_BYTES = 1 << 20
+_TCP_ADDRESS = re.compile(r"^tcp://(\[[^\]]+\]|[^\s/:]+):(\d+)/?$")
+
+
+def check_dask_scheduler(address: str, timeout_s: float) -> None:
+    """Refuse, in one line, a ``tcp://`` address where no Dask scheduler answers.
+
+    A Dask scheduler writes its handshake first: an 8-byte length, then a short msgpack
+    message naming its compression and pickle protocol. Something else on the port (a web
+    server's reply read as that length) made the client try to allocate 3 EiB; a port that
+    accepts and says nothing made it wait. So the first message is read here, with a
+    timeout, and must be short and look like a handshake. Other protocols (tls, ucx, ...)
+    are left to the client's own timeout."""
+    match = _TCP_ADDRESS.match(address)
+    if match is None:
+        return
+    host, port = match.group(1).strip("[]"), int(match.group(2))
+    where = f"--dask-address {address}"
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s) as sock:
+            sock.settimeout(timeout_s)
+            size = struct.unpack("<Q", _receive(sock, 8))[0]
+            if not 0 < size <= MAX_HANDSHAKE_BYTES:
+                raise SpindlebenchError(f"{where}: not a Dask scheduler (its first message "
+                                        f"claims {size:,} bytes, a handshake has a few "
+                                        "hundred)")
+            body = _receive(sock, size)
+    except TimeoutError:
+        raise SpindlebenchError(f"{where}: no Dask handshake within {timeout_s:g} s (is a Dask "
+                                "scheduler listening there?)") from None
+    except OSError as exc:
+        raise SpindlebenchError(f"{where}: cannot connect to a Dask scheduler "
+                                f"({exc.strerror or exc})") from None
+    if b"pickle-protocol" not in body or b"compression" not in body:
+        raise SpindlebenchError(f"{where}: not a Dask scheduler (its first message is not a "
+                                "Dask handshake)")
+
+
+def _receive(sock: socket.socket, size: int) -> bytes:
+    chunks, left = [], size
+    while left:
+        chunk = sock.recv(min(left, 1 << 16))
+        if not chunk:
+            raise ConnectionError(errno.ECONNRESET, "closed before its handshake")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
 
 
 @contextmanager
 def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor]:
-    """The executor of a Dask client connected to the scheduler at ``address``."""
+    """The executor of a Dask client connected to the scheduler at ``address`` (checked to
+    be one first, :func:`check_dask_scheduler`)."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - distributed is a pinned requirement
         raise SpindlebenchError("--dask-address needs the 'distributed' package") from None
+    check_dask_scheduler(address, timeout_s)
     try:
         client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
     except Exception as exc:  # OSError, TimeoutError, a non-Dask peer's protocol error ...
@@ -323,6 +382,8 @@ class TaskRunner:
             executor = open_executor()
             running: dict[cf.Future[Any], Task] = {}
             victims: list[Task] = []
+            local = not isinstance(executor, InlineExecutor) and not self.dask_address
+            broken = False
             try:
                 while queue or running:
                     while queue and not victims and len(running) < self._max_in_flight():
@@ -335,12 +396,21 @@ class TaskRunner:
                         running[future] = task
                     if not running:
                         break
-                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                    done, _ = cf.wait(running, timeout=WATCH_S if local else None,
+                                      return_when=cf.FIRST_COMPLETED)
+                    if not done and local and _dead_worker(executor):
+                        # a worker killed from outside (the out-of-memory killer): the pool
+                        # may never say so, so its tasks are victims now
+                        broken = True
+                        victims.extend(running.values())
+                        running.clear()
+                        break
                     for future in done:
                         task = running.pop(future)
                         try:
                             value, error, detail, seconds, cpu_s = future.result()
                         except BrokenProcessPool:
+                            broken = True
                             victims.append(task)
                             continue
                         except Exception as exc:  # a Dask worker lost, an unpicklable result
@@ -348,28 +418,103 @@ class TaskRunner:
                             continue
                         finish(Outcome(task, value, error, detail, seconds, cpu_s))
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
-                if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    with interrupts.deferred():  # a second signal must not cut the stop short
-                        _stop_workers(executor)
+                broken = True
                 raise
             finally:
-                if not isinstance(executor, InlineExecutor) and not self.dask_address:
-                    # a signal inside shutdown() left its manager thread waiting on a worker
-                    # nobody stopped, and the study hung at exit: finish it, then raise
-                    with interrupts.deferred():
-                        executor.shutdown(wait=True, cancel_futures=True)
+                if local:
+                    with interrupts.deferred():  # a second signal must not cut the stop short
+                        _close_pool(executor, kill=broken or bool(victims))
             for task in victims:
                 finish(_run_quarantined(task))
 
 
-def _run_quarantined(task: Task) -> Outcome:
-    pool = _local_pool(1)
+#: Seconds between two looks at the local workers while waiting for a result.
+WATCH_S = 0.5
+#: Longest wait for a local pool to shut down once its workers are stopped.
+SHUTDOWN_TIMEOUT_S = 30.0
+#: How long a pool whose workers were killed may take to notice before it is unblocked.
+UNBLOCK_AFTER_S = 1.0
+
+
+def _dead_worker(executor: cf.Executor) -> bool:
+    """Whether a worker process of a local pool has ended (a pool's workers live as long as
+    the pool: one that ended was killed or crashed)."""
+    processes = getattr(executor, "_processes", None) or {}
+    return any(process.exitcode is not None for process in list(processes.values()))
+
+
+def _close_pool(executor: cf.Executor, kill: bool) -> None:
+    """Shut a local pool down without ever waiting forever.
+
+    ``kill``: after a dead worker or a signal, every worker is stopped first: one killed
+    while sending its result leaves half a message in the result pipe, and the pool's
+    manager thread then waits in ``recv`` for the rest for ever; it never looks at its
+    workers again, so the pool never breaks and ``shutdown(wait=True)`` (with Ctrl-C
+    deferred) waited with it: a sweep only ``kill -9`` ended. So the manager gets a moment,
+    then is unblocked (:func:`_unblock`) and joined with a timeout."""
+    # what shutdown() drops its references to
+    processes = list((getattr(executor, "_processes", None) or {}).values())
+    manager = getattr(executor, "_executor_manager_thread", None)
+    queues = (getattr(executor, "_call_queue", None), getattr(executor, "_result_queue", None))
+    if kill:
+        _kill(processes)
+    executor.shutdown(wait=False, cancel_futures=True)
+    if manager is None:
+        return
+    manager.join(UNBLOCK_AFTER_S if kill else SHUTDOWN_TIMEOUT_S)
+    if manager.is_alive():
+        _kill(processes)
+        _unblock(*queues, manager)
+        manager.join(SHUTDOWN_TIMEOUT_S)
+
+
+def _unblock(calls: Any, results: Any, manager: threading.Thread) -> None:
+    """Free a pool's manager thread stuck on pipes of dead workers.
+
+    The result pipe: it waits for the rest of a message a killed worker never finished, so
+    bytes are written until that message is complete (its unpickling then fails and the
+    thread ends the pool as broken). The task pipe: a feeder thread writing a task to a dead
+    worker blocks; closing this process's reading end makes its write fail (Python 3.12's
+    pool does the same)."""
+    with contextlib.suppress(Exception):
+        calls._reader.close()
+    writer = getattr(results, "_writer", None)
+    if writer is None:
+        return
     try:
-        value, error, detail, seconds, cpu_s = pool.submit(call_isolated, task.fn,
-                                                           task.args).result()
-    except BrokenProcessPool:
-        return Outcome(task, error="worker process died while running this task "
-                                   "(crash in native code, e.g. the FMU?)")
+        fd = writer.fileno()
+        os.set_blocking(fd, False)
+    except (OSError, ValueError):
+        return
+    block = bytes(1 << 20)
+    deadline = time.monotonic() + SHUTDOWN_TIMEOUT_S
+    while manager.is_alive() and time.monotonic() < deadline:
+        try:
+            os.write(fd, block)
+        except BlockingIOError:
+            manager.join(0.01)  # the pipe is full: let the manager read
+        except OSError:
+            return
+
+
+def _run_quarantined(task: Task) -> Outcome:
+    """Rerun ``task`` alone in a fresh one-worker pool: a crash is then its own, reported
+    on it; a worker killed from outside is retried here and the task succeeds."""
+    pool = _local_pool(1)
+    future = pool.submit(call_isolated, task.fn, task.args)
+    died = Outcome(task, error="worker process died while running this task (killed, out of "
+                               "memory, or a crash in native code, e.g. the FMU?)")
+    try:
+        while True:
+            try:
+                value, error, detail, seconds, cpu_s = future.result(timeout=WATCH_S)
+                break
+            except cf.TimeoutError:
+                if _dead_worker(pool):
+                    return died
+            except BrokenProcessPool:
+                return died
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        with interrupts.deferred():
+            _close_pool(pool, kill=not future.done() or future.exception() is not None)
     return Outcome(task, value, error, detail, seconds, cpu_s)

@@ -20,14 +20,16 @@ second process is refused with one line naming the process that holds it.
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import hashlib
 import json
 import os
 import socket
+import stat
 import sys
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +37,7 @@ import pandas as pd
 
 from spindlebench.core.atomic import atomic_path, write_text
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.paths import file_kind
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import write_recording
 from spindlebench.formats.table_csv import write_table
@@ -111,14 +114,32 @@ class DamagedResultWarning(UserWarning):
 class ResultStore:
     """Files under ``root``, addressed by relative paths, each checked to be intact."""
 
-    def __init__(self, root: str | Path) -> None:
+    def __init__(self, root: str | Path,
+                 owned: Callable[[Path], bool] | None = None) -> None:
+        """``owned``: whether an existing folder's entry belongs to this kind of output (a
+        command that is not a study, ``compensate``); by default a folder is ours when it
+        holds a study's ``state.json``."""
         self.root = Path(root)
+        self._owned = owned
         self._manifest: dict[str, str] | None = None
         self._verified: dict[str, bool] = {}
         self._lock: int | None = None
 
     def path(self, relative: str | Path) -> Path:
-        return self.root / relative
+        """``root / relative``, refused in one line if a link inside the folder is on the way:
+        a linked ``runs/`` or piece would make the study write (or read) another folder's
+        files. The root itself may be a link (results on another disk)."""
+        parts = Path(relative).parts
+        if Path(relative).is_absolute() or ".." in parts:
+            raise ValueError(f"{relative}: not a path inside the results folder")
+        at = self.root
+        for part in parts:
+            at = at / part
+            if at.is_symlink():
+                raise SpindlebenchError(f"{at}: is a symbolic link inside the results folder "
+                                        f"{self.root}; a study never writes through one "
+                                        "(remove it, or use a new output folder)")
+        return at
 
     def exists(self, relative: str | Path) -> bool:
         """Whether the piece is there and intact; a damaged one is named and counts as
@@ -236,8 +257,18 @@ class ResultStore:
             return
         self._refuse_foreign_folder()  # no lock file in a folder that is not ours
         self.root.mkdir(parents=True, exist_ok=True)
-        path = self.path(LOCK_FILE)
-        handle = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        path = self.root / LOCK_FILE
+        try:  # never through a link (its target would be truncated), nor a FIFO or device
+            handle = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK
+                             | os.O_CLOEXEC, 0o666)
+        except OSError as exc:
+            if exc.errno != errno.ELOOP:
+                raise
+            raise SpindlebenchError(f"{path}: the lock file is a symbolic link; a study never "
+                                    "writes through one (remove it)") from None
+        if not stat.S_ISREG(os.fstat(handle).st_mode):
+            os.close(handle)
+            raise SpindlebenchError(f"{path}: the lock file is not a regular file (remove it)")
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -269,6 +300,18 @@ class ResultStore:
             self.unlock()
 
     def _refuse_foreign_folder(self) -> None:
+        if self.root.exists() and not self.root.is_dir():
+            raise SpindlebenchError(f"{self.root}: exists and is not a folder (it is "
+                                    f"{file_kind(self.root)}); choose a new or empty folder")
+        if self._owned is not None:
+            foreign = sorted(p.name for p in self.root.iterdir() if p.name != LOCK_FILE
+                             and not p.name.endswith(".part") and not self._owned(p)) \
+                if self.root.exists() else []
+            if foreign:
+                raise SpindlebenchError(f"{self.root}: holds files this command does not write "
+                                        f"({', '.join(foreign[:3])}); choose an empty or new "
+                                        "folder")
+            return
         if not self.path(STATE_FILE).is_file() and self.root.exists() and any(
                 p.name != LOCK_FILE for p in self.root.iterdir()):
             raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
