@@ -19,12 +19,15 @@ from spindlebench.formats.recording import NODE_PREFIX
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
 from spindlebench.model.build import build_fmu
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "build the FMU from the Modelica model (models/ -> fmus/)"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``build`` sub-command."""
     parser = subparsers.add_parser(
         "build",
-        help="build the FMU from the Modelica model (models/ -> fmus/)",
+        help=HELP,
         description="Translate models/SpindleBench.mo with pymoca, causalise it, export an "
         "FMI 3.0 model-exchange FMU with CasADi and compile it with gcc (or $CC).",
     )

@@ -34,13 +34,16 @@ from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument
 from spindlebench.model import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
 from spindlebench.model.equations import explicit_ode
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "fit the model to recordings of a real machine; write a machine file"
+
 #: Correlations at least this strong are reported as "cannot be separated by these data".
 STRONG_CORRELATION = 0.8
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "calibrate", help="fit the model to recordings of a real machine; write a machine file",
+        "calibrate", help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",

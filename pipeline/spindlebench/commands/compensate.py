@@ -26,11 +26,14 @@ from spindlebench.studies.compensation.compensation_report import summary_text, 
 from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.studies.family.family_file import check_fmu
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "run the trained model in a simulated controller over many days"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``compensate`` sub-command."""
     parser = subparsers.add_parser(
-        "compensate", help="run the trained model in a simulated controller over many days",
+        "compensate", help=HELP,
         description="Train each model of the study's [compensate] table on day 1, then "
         "simulate every other day of the study family with the model in the controller "
         "(update interval, rate limit, dead band); report the residual (true drift minus "

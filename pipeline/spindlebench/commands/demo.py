@@ -24,6 +24,9 @@ from spindlebench.model.frontend import model_source
 from spindlebench.testbench.batch import plan_batch
 from spindlebench.testbench.overview import plot_recording
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "main job: build the FMU, simulate the paper's experiments, run the comparisons"
+
 #: The FMU the repository (or the installed package) ships, shown as a user would type it.
 COMMITTED_FMU = Path(shown(DEFAULT_FMU))
 #: The scenarios the paper stage needs: it trains on exp1 and predicts exp2 … exp5.
@@ -34,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``demo`` sub-command."""
     parser = subparsers.add_parser(
         "demo",
-        help="main job: build the FMU, simulate the paper's experiments, run the comparisons",
+        help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("--out", default="results", help="results folder (default: results)")

@@ -51,6 +51,9 @@ from spindlebench.studies.fingerprint.reference import (
 )
 from spindlebench.studies.fingerprint.statistics import KEYS
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "shape statistics of recordings (does this testbench look like my machine?)"
+
 # --------------------------------------------------------------------------- table
 
 
@@ -74,7 +77,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``fingerprint`` sub-command."""
     parser = subparsers.add_parser(
         "fingerprint",
-        help="shape statistics of recordings (does this testbench look like my machine?)",
+        help=HELP,
         description="The fingerprint statistics (best raw/difference psi, best single/pair "
         "R2, t63 ratio, overshoot, early fraction; defined in the "
         "spindlebench.studies.fingerprint.statistics docstring, explained in README) of each "

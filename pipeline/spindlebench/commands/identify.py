@@ -38,12 +38,15 @@ from spindlebench.identification.model import (
     select_order,
 )
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "identify a low-order thermal model (and observer) from recordings"
+
 AUTO = "auto"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "identify", help="identify a low-order thermal model (and observer) from recordings",
+        "identify", help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",

@@ -38,6 +38,9 @@ from spindlebench.studies.iso230_3.channels import TestData, from_map, load_map,
 from spindlebench.studies.iso230_3.compensation import LinearModel, load_model
 from spindlebench.studies.iso230_3.figure import draw
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "run an ISO 230-3 thermal test and write its report"
+
 ISO_SCENARIOS = SCENARIOS_DIR / "iso230-3"
 #: The axis test's two targets near the ends of the X stroke (m from the fixed bearing).
 AXIS_TARGETS_M = (0.05, 0.80)
@@ -208,7 +211,7 @@ def _summary(test: str, numbers: dict[str, Any]) -> str:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "iso230-3", help="run an ISO 230-3 thermal test and write its report",
+        "iso230-3", help=HELP,
         description="Run an ISO 230-3 thermal test (etve, spindle, spectrum, axis) on a "
         "machine variant, or evaluate a real recording through a MAP.toml, and write the "
         "report: figure, JSON and CSV with provenance.")

@@ -14,12 +14,15 @@ from spindlebench.studies.paper import config as study_config
 from spindlebench.studies.paper.analysis import run_study
 from spindlebench.studies.paper.paper_report import check_out_dir, write_outputs
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "rerun the paper's comparison (3 sensor groups x 2/3/4 clusters) on recordings"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``paper`` sub-command."""
     parser = subparsers.add_parser(
         "paper",
-        help="rerun the paper's comparison (3 sensor groups x 2/3/4 clusters) on recordings",
+        help=HELP,
         description="Train on one experiment, predict the others, for all raw sensors, six raw "
         "sensors and those six plus their differences, at each number of clusters; write the "
         "analogues of the paper's Tables 4-6 and Figures 3-6 plus dendrograms. Defaults are "

@@ -18,12 +18,15 @@ from spindlebench.studies.placement.placement_file import (
 )
 from spindlebench.studies.placement.placement_run import report_best, run_placement, search_times
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "virtual sensor placement: choose m of the model's nodes per method"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``place`` sub-command."""
     register_study_command(
         subparsers, "place",
-        help="virtual sensor placement: choose m of the model's nodes per method",
+        help=HELP,
         description="Run (or resume) a virtual sensor-placement study: simulate the study's "
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "

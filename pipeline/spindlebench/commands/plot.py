@@ -31,6 +31,9 @@ from spindlebench.testbench.overview import (
     save_figure,
 )
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "draw recording(s): temperatures by machine part, thermal error, inputs"
+
 #: Columns drawn besides the sensors and the error when a recording has them.
 INPUT_COLUMNS = (SPEED, *FEEDS, AMBIENT_DRIVER, true_column(DRIFT_COLUMN))
 
@@ -73,7 +76,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``plot`` sub-command."""
     parser = subparsers.add_parser(
         "plot",
-        help="draw recording(s): temperatures by machine part, thermal error, inputs",
+        help=HELP,
         description="Draw one or more recordings side by side: the sensor temperatures "
         "grouped by machine part (one colour family per part, each line named at its end), "
         "the thermal error and the inputs (spindle speed, feeds, ambient), over hours.",

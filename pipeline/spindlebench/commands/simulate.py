@@ -23,6 +23,9 @@ from spindlebench.testbench.batch import check_batch, plan_batch
 from spindlebench.testbench.scenario import MeasuredAmbient
 from spindlebench.testbench.simulate import record_run
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "co-simulate scenario(s) with the FMU into recording(s)"
+
 
 def _scenario_files(arguments: list[str]) -> list[Path]:
     return expand_folders(arguments, ".toml", "scenario")
@@ -105,7 +108,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``simulate`` sub-command."""
     parser = subparsers.add_parser(
         "simulate",
-        help="co-simulate scenario(s) with the FMU into recording(s)",
+        help=HELP,
         description="Co-simulate scenario TOML files with the SpindleBench FMU and write "
         "recordings: a CSV (measured T1..T20, drift_um, drivers, noise-free truth) and a "
         "JSON sidecar with provenance and the end state.",

@@ -15,12 +15,15 @@ from spindlebench.studies.family.family_file import load_study
 from spindlebench.studies.sweep.population_report import sweep_population_report
 from spindlebench.studies.sweep.sweep_run import run_sweep
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "season stress test: run a study of experiments and score the methods"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``sweep`` sub-command."""
     register_study_command(
         subparsers, "sweep",
-        help="season stress test: run a study of experiments and score the methods",
+        help=HELP,
         description="Run (or resume) a season sweep: simulate every experiment of STUDY.toml "
         "on every replica, train each selection method on the training experiment(s), score "
         "it on the others, and write results.csv, a summary, box plots and README.md.",
