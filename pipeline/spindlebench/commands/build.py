@@ -9,18 +9,24 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-
-from fmpy import read_model_description
+from typing import Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import NODE_PREFIX
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
-from spindlebench.model.build import build_fmu
 
 #: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
 HELP = "build the FMU from the Modelica model (models/ -> fmus/)"
+
+
+def build_fmu(model_dir: str | Path, out_path: Path, **options: Any) -> Path:
+    """``model.build.build_fmu``, imported on the first build (pymoca, CasADi and SciPy: not
+    for ``build --help``)."""
+    from spindlebench.model.build import build_fmu as build
+
+    return build(model_dir, out_path, **options)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -82,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
     stages = Stages("build", enabled=for_terminal(args.quiet))
     path = build_fmu(args.models, target, segments=args.segments, say=stages)
     elapsed = stages.seconds
+    from fmpy import read_model_description
+
     description = read_model_description(str(path))
     nodes = sum(v.name.startswith(NODE_PREFIX) for v in description.modelVariables)
     print(

@@ -12,17 +12,12 @@ import argparse
 import shlex
 from pathlib import Path
 
-from spindlebench.adapters import caiviac
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, SCENARIOS_DIR, shown
 from spindlebench.core.provenance import sha256_file
-from spindlebench.formats.recording import read_recording
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.model import FMU_NAME
-from spindlebench.model.frontend import model_source
-from spindlebench.testbench.batch import plan_batch
-from spindlebench.testbench.overview import plot_recording
 
 #: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
 HELP = "main job: build the FMU, simulate the paper's experiments, run the comparisons"
@@ -67,6 +62,9 @@ def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path,
     The scenarios are loaded and planned as ``simulate`` will, so a missing experiment or a
     typo in exp5.toml is one line naming that file, not an error about an output file later.
     """
+    from spindlebench.model.frontend import model_source
+    from spindlebench.testbench.batch import plan_batch
+
     model_source(models)
     folder = Path(scenarios)
     if not folder.is_dir():
@@ -83,6 +81,11 @@ def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path,
 
 def run(args: argparse.Namespace) -> int:
     """All stages; the results folder gets a README that links what each stage wrote."""
+    # pandas and matplotlib only here: ``demo --help`` stays cheap
+    from spindlebench.adapters import caiviac
+    from spindlebench.formats.recording import read_recording
+    from spindlebench.testbench.overview import plot_recording
+
     out = Path(args.out)
     fmu = out / "fmu" / f"{FMU_NAME}.fmu"
     synthetic = out / "paper"

@@ -25,7 +25,7 @@ import argparse
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from spindlebench.core import atomic, provenance
 from spindlebench.core.errors import SpindlebenchError
@@ -43,13 +43,10 @@ from spindlebench.studies.fingerprint.recordings import (
     json_stats,
     median_stats,
 )
-from spindlebench.studies.fingerprint.reference import (
-    REFERENCE_TARGET,
-    Reference,
-    cached_reference,
-    explicit_reference,
-)
 from spindlebench.studies.fingerprint.statistics import KEYS
+
+if TYPE_CHECKING:
+    from spindlebench.studies.fingerprint.reference import Reference
 
 #: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
 HELP = "shape statistics of recordings (does this testbench look like my machine?)"
@@ -119,6 +116,13 @@ def reference_label(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Fingerprint every recording, print the table, write JSON and figure if asked."""
+    # the reference simulates (FMPy, pandas, SciPy): only here, not for ``fingerprint --help``
+    from spindlebench.studies.fingerprint.reference import (
+        REFERENCE_TARGET,
+        cached_reference,
+        explicit_reference,
+    )
+
     roles = ColumnRoles.from_args(args)
     for out, suffix in ((args.json, ".json"), (args.figure, ".png")):
         if out is not None and out.suffix.lower() != suffix:

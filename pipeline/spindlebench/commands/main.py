@@ -108,9 +108,15 @@ def _top_level_parser() -> tuple[_OneLineErrorParser, argparse._SubParsersAction
     return parser, subparsers
 
 
+def _first_word(argv: list[str]) -> str | None:
+    """The first word that is not an option: the sub-command's place (the top level has no
+    option that takes a value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
 def _refuse_unknown_command(parser: _OneLineErrorParser, argv: list[str]) -> None:
     """A first word that is no sub-command: one ``error:`` line with the closest name."""
-    first = next((word for word in argv if not word.startswith("-")), None)
+    first = _first_word(argv)
     if first is not None and first not in COMMANDS:
         from spindlebench.formats.toml import did_you_mean
 
@@ -146,7 +152,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if command is None:  # --help, --version, a mistyped name: no command module
             parser = static_parser()
             _refuse_unknown_command(parser, argv)
-            command = parse_args(parser, argv).command  # e.g. '--flag CMD': CMD's parser says
+            command = _first_word(argv)  # '--flag CMD ...': CMD's parser tells what is wrong
+            if command is None:
+                parse_args(parser, argv)  # prints the help or the version, or a usage error
         args = parse_args(build_parser(command), argv)  # imports commands: Ctrl-C can land here
     except KeyboardInterrupt as exc:
         status = _interrupted(exc)
