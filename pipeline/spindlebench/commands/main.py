@@ -12,6 +12,7 @@ import argparse
 import importlib
 import os
 import sys
+import time
 import warnings
 from collections.abc import Sequence
 from typing import NoReturn
@@ -143,6 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: run a sub-command; user errors become one ``error:`` line and status 2,
     warnings one ``warning:`` line each."""
     own_process = argv is None  # the console script, not a caller in its own process
+    started = time.perf_counter()  # a command's summary reports its wall time from here
     interrupts.install()
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
@@ -156,6 +158,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if command is None:
                 parse_args(parser, argv)  # prints the help or the version, or a usage error
         args = parse_args(build_parser(command), argv)  # imports commands: Ctrl-C can land here
+        args.started_s = started
     except KeyboardInterrupt as exc:
         status = _interrupted(exc)
     else:

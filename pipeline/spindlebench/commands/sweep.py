@@ -51,7 +51,10 @@ def _population_report(out: Path, population: Population, members: list[Member],
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     from spindlebench.studies.sweep.sweep_run import run_sweep
 
-    started = time.perf_counter()
+    # "in all": from the command's start (set by commands.main, before the imports and the
+    # study's checks) to the last file written, the wait the user sees
+    started = getattr(args, "started_s", None)
+    started = time.perf_counter() if started is None else started
     outcome = run_sweep(args.study, out, workers=args.workers,
                         dask_address=args.dask_address, progress=not args.no_progress,
                         machine=machine)
