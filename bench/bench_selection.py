@@ -39,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
+from results import record
+
 SIZES = [  # (raw sensors, samples, clusters, time today's matrix way too?, goal s, goal MB)
     (100, 1440, 4, True, 1.0, 300),
     (200, 1440, 4, False, 5.0, 500),
@@ -178,6 +180,7 @@ def closure_rows() -> None:
 
 
 def main() -> None:
+    rows: list[dict] = []
     print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
     print("selection, sensors + all pairwise differences (row-wise vs the matrix way)")
     print(f"{'sensors':>7} {'candidates':>10} {'row-wise':>9} {'(cpu)':>8} {'peak':>8} "
@@ -195,6 +198,8 @@ def main() -> None:
         goal = f"<= {goal_s:g} s, {goal_mb} MB"
         print(f"{n_sensors:>7} {n:>10} {result['row_s']:8.2f}s {result['row_cpu_s']:7.2f}s "
               f"{result['row_peak_MB']:6.0f}MB {goal:>16} {old}", flush=True)
+        rows.append({"row": "selection", "sensors": n_sensors, "candidates": n,
+                     "goal_s": goal_s, "goal_MB": goal_mb, **result})
     for n_sensors, goal_s, goal_mb in CLI_GOALS:
         runs = cli_run(n_sensors)
         wall, cpu, peak = ([run[i] for run in runs] for i in range(3))
@@ -203,7 +208,12 @@ def main() -> None:
               f"{min(wall):.2f} s wall min, {statistics.median(wall):.2f} median "
               f"({min(cpu):.2f} / {statistics.median(cpu):.2f} s CPU), {max(peak):.0f} MB peak "
               f"(goal <= {goal_s:g} s, <= {goal_mb} MB)", flush=True)
+        rows.append({"row": "cli", "sensors": n_sensors, "runs": len(runs),
+                     "wall_s_min": min(wall), "wall_s_median": statistics.median(wall),
+                     "cpu_s_min": min(cpu), "cpu_s_median": statistics.median(cpu),
+                     "peak_MB": max(peak), "goal_s": goal_s, "goal_MB": goal_mb})
     closure_rows()
+    print(f"wrote {record('bench_selection', rows)}")
 
 
 if __name__ == "__main__":

@@ -35,6 +35,8 @@ from spindlebench.studies.family.family_file import load_study
 from spindlebench.studies.running.executor import TaskRunner
 from spindlebench.studies.sweep.sweep_run import Sweep, write_outputs
 
+from results import record
+
 STUDY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "season_sweep.toml"
 KEYS = ["replica", "data", "noise", "fault", "train_experiment", "method", "k", "test_experiment"]
 
@@ -71,15 +73,17 @@ def run(study_path: Path, workers: int) -> tuple[float, object, pd.DataFrame]:
 def main() -> int:
     flags = {arg for arg in sys.argv[1:] if arg.startswith("--")}
     given = [arg for arg in sys.argv[1:] if not arg.startswith("--")]
+    rows: list[dict] = []
     with tempfile.TemporaryDirectory(prefix="bench-sweep-study-") as folder:
         if "--runs-only" not in flags:
-            measure(Path(given[0]) if given else bench_study(Path(folder)))
+            rows += measure(Path(given[0]) if given else bench_study(Path(folder)))
         if "--no-runs" not in flags and not given:
-            goal_row(bench_study(Path(folder), GOAL_REPLICAS, one_training_run=False))
+            rows.append(goal_row(bench_study(Path(folder), GOAL_REPLICAS, one_training_run=False)))
+    print(f"wrote {record('bench_sweep', rows, {'goal_row_wall_s': GOAL_S})}")
     return 0
 
 
-def goal_row(study_path: Path) -> None:
+def goal_row(study_path: Path) -> dict:
     """The 1 008-experiment season sweep on 2 worker processes, wall and CPU seconds."""
     study = load_study(study_path)
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
@@ -111,14 +115,20 @@ def goal_row(study_path: Path) -> None:
     print(f"on 2 cores of our own that is >= {max(here, total / 2):.0f} s of wall time "
           f"(CPU seconds / 2, or this process's serial part if larger): the goal "
           f"{'holds' if max(here, total / 2) <= GOAL_S else 'is NOT met'} on an idle machine")
+    return {"row": "goal", "experiments": runs, "workers": 2, "wall_s": wall,
+            "run_wall_s": run_s, "outputs_wall_s": wall - run_s, "cpu_s": total,
+            "simulation_cpu_s": sim_cpu, "evaluation_cpu_s": eval_cpu,
+            "coordinator_cpu_s": here, "outputs_cpu_s": here - run_cpu,
+            "evaluations": outcome.evaluated, "goal_wall_s": GOAL_S}
 
 
-def measure(study_path: Path) -> int:
+def measure(study_path: Path) -> list[dict]:
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
     print(f"season sweep benchmark: {study_path} on {os.cpu_count()} core(s), "
           f"load average before the run {load} (other work on the machine skews the ratio)")
     print(f"{'executor':<22}{'wall s':>9}{'exp/s':>9}{'sim ms':>9}{'eval s':>9}")
     walls: dict[int, float] = {}
+    rows: list[dict] = []
     reference = None
     for workers, label in ((0, "in-process (baseline)"), (1, "1 worker process"),
                            (2, "2 worker processes")):
@@ -128,6 +138,9 @@ def measure(study_path: Path) -> int:
         per_sim_ms = 1000 * stats.busy_s.get("simulation", 0.0) / max(1, n_sim)
         per_eval_s = stats.busy_s.get("evaluation", 0.0) / max(1, stats.total("evaluation"))
         print(f"{label:<22}{wall:9.2f}{n_sim / wall:9.2f}{per_sim_ms:9.1f}{per_eval_s:9.2f}")
+        rows.append({"row": "executor", "executor": label, "workers": workers, "wall_s": wall,
+                     "simulations": n_sim, "experiments_per_s": n_sim / wall,
+                     "ms_per_simulation": per_sim_ms, "s_per_evaluation_job": per_eval_s})
         if reference is None:
             reference = results
         else:
@@ -136,7 +149,7 @@ def measure(study_path: Path) -> int:
           f"(ideal 2.00x on 2 free cores); 1 worker / in-process: "
           f"{walls[0] / walls[1]:.2f}x")
     print("results identical across executors: yes")
-    return 0
+    return rows
 
 
 if __name__ == "__main__":

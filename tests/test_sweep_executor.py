@@ -137,3 +137,26 @@ def test_an_unreachable_scheduler_fails_before_the_results_folder_is_made(tmp_pa
     assert len(err) == 1 and err[0].startswith("error: --dask-address tcp://127.0.0.1:9: "
                                                "cannot connect to a Dask scheduler")
     assert not out.exists()
+
+
+def test_dask_workers_get_one_blas_thread_like_the_local_pool():
+    """``dask_executor`` registers ``OneBlasThread``: in a real worker process the BLAS
+    variables are 1 and every loaded BLAS/OpenMP library runs one thread, also where the
+    nanny does not set the variables (Dask's ``pre-spawn-environ`` emptied here, as for a
+    worker started without a nanny; with it, a worker here runs OpenBLAS on 2 threads)."""
+    import dask
+    import threadpoolctl
+    from spindlebench.studies.running.executor import dask_executor
+
+    with (dask.config.set({"distributed.nanny.pre-spawn-environ": {}}),
+          distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                   protocol="tcp://", dashboard_address=None) as cluster,
+          dask_executor(cluster.scheduler_address) as executor):
+        variables = {name: executor.submit(os.getenv, name).result()
+                     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+        pools = executor.submit(threadpoolctl.threadpool_info).result()
+        worker_pid = executor.submit(os.getpid).result()
+    assert worker_pid != os.getpid()
+    assert variables == dict.fromkeys(variables, "1")
+    blas = [pool for pool in pools if pool["user_api"] == "blas"]
+    assert blas and all(pool["num_threads"] == 1 for pool in pools)

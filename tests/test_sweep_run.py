@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -285,6 +286,10 @@ def test_command_line(tmp_path, capsys, reference):
     printed = capsys.readouterr().out
     assert "resumed: ran 0 simulation(s) and 0 evaluation(s)" in printed
     assert "skipped 8 done simulation(s), 6 done evaluation(s)" in printed
+    # "in all" is the whole command's wall time, so it holds the runner's own seconds
+    wall = re.search(r"evaluation\(s\) in (\d+\.\d) s \(skipped.* (\d+\.\d) s in all",
+                     printed)
+    assert wall and float(wall[2]) >= float(wall[1])
     bad = tmp_path / "bad.toml"
     bad.write_text(TINY.read_text().replace("replicas = 2", "replicas = -1"))
     assert cli.main(["sweep", str(bad), "-o", str(tmp_path / "x"), "--no-progress"]) == 2

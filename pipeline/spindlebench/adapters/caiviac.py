@@ -33,10 +33,9 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
@@ -49,6 +48,9 @@ from spindlebench.formats.recording import (
     check_recording_targets,
     write_recording,
 )
+
+if TYPE_CHECKING:  # pandas is imported where a recording is read: ``adapt --help`` is cheap
+    import pandas as pd
 
 DATASET = "caiviac-fl-thermal"
 TEMPERATURES = tuple(f"t{i}_C" for i in range(1, 17))
@@ -137,6 +139,8 @@ class Schedule:
 
 def read_source(path: str | Path) -> pd.DataFrame:
     """Read and check the source CSV; every problem is one line naming the file."""
+    import pandas as pd
+
     path = Path(path)
     if not path.is_file():
         raise SpindlebenchError(f"{path}: caiviac source file not found")
@@ -203,6 +207,8 @@ def find_schedule(spindle_rpm: np.ndarray) -> Schedule:
 
 def canonical_run(source: pd.DataFrame, run: Run, phase: Phase) -> tuple[pd.DataFrame, dict]:
     """The canonical table of one run and the zero offsets subtracted from the channels."""
+    import pandas as pd
+
     rows = source.iloc[run.rows(phase).start : run.rows(phase).stop]
     table = pd.DataFrame({TIME_COLUMN: rows[TIME_COLUMN].to_numpy() - rows[TIME_COLUMN].iloc[0]})
     table[SPEED_COLUMN] = rows["spindle_rpm"].to_numpy()

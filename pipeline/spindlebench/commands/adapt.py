@@ -6,11 +6,14 @@ import argparse
 
 from spindlebench.adapters import caiviac
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "convert a real data set into canonical recordings (one per run)"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``adapt`` with one sub-command per data set."""
     parser = subparsers.add_parser(
-        "adapt", help="convert a real data set into canonical recordings (one per run)"
+        "adapt", help=HELP
     )
     datasets = parser.add_subparsers(dest="dataset", required=True, metavar="DATASET")
     cai = datasets.add_parser(

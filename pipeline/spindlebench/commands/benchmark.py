@@ -17,11 +17,14 @@ from pathlib import Path
 from spindlebench.formats.recording import DRIFT_COLUMN
 from spindlebench.studies.benchmark.benchmark_run import DEFAULT_OUT
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "score methods on a fixed, versioned task suite; write a leaderboard"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``benchmark`` sub-command."""
     parser = subparsers.add_parser(
-        "benchmark", help="score methods on a fixed, versioned task suite; write a leaderboard",
+        "benchmark", help=HELP,
         description="Every method of the suite (and --method ones: built-in labels or your "
         "own scikit-learn selector/regressor/pipeline by import path) plus three baselines "
         "(constant training mean, replay of the training run's error, OLS on all sensors) on "

@@ -10,8 +10,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 from pathlib import Path
-
-from fmpy import read_model_description
+from typing import Any
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import DEFAULT_FMU, MODELS_DIR, allow_shipped, refuse_shipped
@@ -19,14 +18,24 @@ from spindlebench.core.progress import Stages, for_terminal
 from spindlebench.core.provenance import sha256_file
 from spindlebench.formats.recording import NODE_PREFIX
 from spindlebench.model import DEFAULT_SEGMENTS, FMU_NAME, MAX_SEGMENTS
-from spindlebench.model.build import build_fmu
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "build the FMU from the Modelica model (models/ -> fmus/)"
+
+
+def build_fmu(model_dir: str | Path, out_path: Path, **options: Any) -> Path:
+    """``model.build.build_fmu``, imported on the first build (pymoca, CasADi and SciPy: not
+    for ``build --help``)."""
+    from spindlebench.model.build import build_fmu as build
+
+    return build(model_dir, out_path, **options)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``build`` sub-command."""
     parser = subparsers.add_parser(
         "build",
-        help="build the FMU from the Modelica model (models/ -> fmus/)",
+        help=HELP,
         description="Translate models/SpindleBench.mo with pymoca, causalise it, export an "
         "FMI 3.0 model-exchange FMU with CasADi and compile it with gcc (or $CC).",
     )
@@ -88,6 +97,8 @@ def run(args: argparse.Namespace) -> int:
         refuse_shipped(target)
         path = build_fmu(args.models, target, segments=args.segments, say=stages)
     elapsed = stages.seconds
+    from fmpy import read_model_description
+
     description = read_model_description(str(path))
     nodes = sum(v.name.startswith(NODE_PREFIX) for v in description.modelVariables)
     print(

@@ -15,12 +15,9 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from spindlebench.calibration import fit_report as report
 from spindlebench.calibration.fitset import DEFAULT_FIT, check_fit_names
-from spindlebench.calibration.mapping import read_map
-from spindlebench.calibration.problem import Discretisation, Fit, calibrate
-from spindlebench.calibration.series import check_roles, load_series
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
@@ -32,7 +29,12 @@ from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.formats.toml import load_toml
 from spindlebench.machines.variants import DEFAULT_MACHINE, add_machine_argument, load_machine
 from spindlebench.model import DEFAULT_SEGMENTS, MAX_SEGMENTS, MODEL_FILE
-from spindlebench.model.equations import explicit_ode
+
+if TYPE_CHECKING:
+    from spindlebench.calibration.problem import Fit
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "fit the model to recordings of a real machine; write a machine file"
 
 #: Correlations at least this strong are reported as "cannot be separated by these data".
 STRONG_CORRELATION = 0.8
@@ -40,7 +42,7 @@ STRONG_CORRELATION = 0.8
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "calibrate", help="fit the model to recordings of a real machine; write a machine file",
+        "calibrate", help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
@@ -97,6 +99,13 @@ def summary_lines(fit: Fit) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # CasADi, SciPy, matplotlib and pymoca only here: ``calibrate --help`` stays cheap
+    from spindlebench.calibration import fit_report as report
+    from spindlebench.calibration.mapping import read_map
+    from spindlebench.calibration.problem import Discretisation, calibrate
+    from spindlebench.calibration.series import check_roles, load_series
+    from spindlebench.model.equations import explicit_ode
+
     out = Path(args.out)
     if out.suffix != ".toml":
         raise SpindlebenchError(f"-o {out}: a machine file ends in .toml")

@@ -12,8 +12,6 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-import pandas as pd
-
 from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
@@ -22,20 +20,17 @@ from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
 )
-from spindlebench.studies.compensation.compensation_report import (
-    OUTPUT_FILES,
-    summary_text,
-    write_outputs,
-)
-from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
 from spindlebench.studies.family.family_file import check_fmu
 from spindlebench.studies.running.store import ResultStore
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "run the trained model in a simulated controller over many days"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``compensate`` sub-command."""
     parser = subparsers.add_parser(
-        "compensate", help="run the trained model in a simulated controller over many days",
+        "compensate", help=HELP,
         description="Train each model of the study's [compensate] table on day 1, then "
         "simulate every other day of the study family with the model in the controller "
         "(update interval, rate limit, dead band); report the residual (true drift minus "
@@ -54,6 +49,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load, simulate, write."""
+    # pandas, the runner and the models only here: ``compensate --help`` stays cheap
+    import pandas as pd
+
+    from spindlebench.studies.compensation.compensation_report import (
+        OUTPUT_FILES,
+        summary_text,
+        write_outputs,
+    )
+    from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
+
     if args.out is not None:  # before the study is read: a device or / is never a folder
         check_output(args.out, "-o", [args.study], folder=True)
     study = load_compensation(args.study)

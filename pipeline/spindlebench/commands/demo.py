@@ -13,7 +13,6 @@ import os
 import shlex
 from pathlib import Path
 
-from spindlebench.adapters import caiviac
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import (
@@ -25,12 +24,11 @@ from spindlebench.core.paths import (
     shown,
 )
 from spindlebench.core.provenance import sha256_file
-from spindlebench.formats.recording import read_recording
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.model import FMU_NAME
-from spindlebench.model.frontend import model_source
-from spindlebench.testbench.batch import plan_batch
-from spindlebench.testbench.overview import plot_recording
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "main job: build the FMU, simulate the paper's experiments, run the comparisons"
 
 #: The FMU the repository (or the installed package) ships, shown as a user would type it.
 COMMITTED_FMU = Path(shown(DEFAULT_FMU))
@@ -42,7 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``demo`` sub-command."""
     parser = subparsers.add_parser(
         "demo",
-        help="main job: build the FMU, simulate the paper's experiments, run the comparisons",
+        help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("--out", default="results", help="results folder (default: results)")
@@ -72,6 +70,9 @@ def check_inputs(models: str | Path, scenarios: str | Path, synthetic: Path,
     The scenarios are loaded and planned as ``simulate`` will, so a missing experiment or a
     typo in exp5.toml is one line naming that file, not an error about an output file later.
     """
+    from spindlebench.model.frontend import model_source
+    from spindlebench.testbench.batch import plan_batch
+
     model_source(models)
     folder = Path(scenarios)
     if not folder.is_dir():
@@ -104,6 +105,11 @@ def check_out(out: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """All stages; the results folder gets a README that links what each stage wrote."""
+    # pandas and matplotlib only here: ``demo --help`` stays cheap
+    from spindlebench.adapters import caiviac
+    from spindlebench.formats.recording import read_recording
+    from spindlebench.testbench.overview import plot_recording
+
     out = Path(args.out)
     fmu = out / "fmu" / f"{FMU_NAME}.fmu"
     synthetic = out / "paper"

@@ -43,6 +43,9 @@ if TYPE_CHECKING:
 from spindlebench.selection.registry import add_method_arguments, choice_from_args
 from spindlebench.selection.similarity import SIMILARITIES
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "select temperature-sensitive points on one recording and predict others"
+
 #: The same hint ``evaluate`` gives when it reads a file itself.
 DROP_HINT = "--missing drop-rows drops incomplete samples"
 
@@ -51,7 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``evaluate`` sub-command."""
     parser = subparsers.add_parser(
         "evaluate",
-        help="select temperature-sensitive points on one recording and predict others",
+        help=HELP,
         description="Xu et al. (2023): fuzzy-cluster the candidates of the training recording, "
         "keep per cluster the one most correlated with the target, fit OLS on rises, and "
         "report the RMSE on every test recording. Without --sensors, the columns that look "

@@ -7,12 +7,15 @@ import argparse
 
 from spindlebench.testbench.ssp import export_ssp
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "write an SSP file: the FMU, a machine's parameter set and a scenario's inputs"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``export-ssp`` sub-command."""
     parser = subparsers.add_parser(
         "export-ssp",
-        help="write an SSP file: the FMU, a machine's parameter set and a scenario's inputs",
+        help=HELP,
         description="Write an SSP 1.0 archive (SystemStructure.ssd, the FMU, the machine's "
         "parameters as an SSV, and with --scenario its parameters, start state and inputs) "
         "for SSP tools.",

@@ -25,7 +25,7 @@ import argparse
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from spindlebench.core import atomic, provenance
 from spindlebench.core.errors import SpindlebenchError
@@ -43,13 +43,13 @@ from spindlebench.studies.fingerprint.recordings import (
     json_stats,
     median_stats,
 )
-from spindlebench.studies.fingerprint.reference import (
-    REFERENCE_TARGET,
-    Reference,
-    cached_reference,
-    explicit_reference,
-)
 from spindlebench.studies.fingerprint.statistics import KEYS
+
+if TYPE_CHECKING:
+    from spindlebench.studies.fingerprint.reference import Reference
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "shape statistics of recordings (does this testbench look like my machine?)"
 
 # --------------------------------------------------------------------------- table
 
@@ -74,7 +74,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``fingerprint`` sub-command."""
     parser = subparsers.add_parser(
         "fingerprint",
-        help="shape statistics of recordings (does this testbench look like my machine?)",
+        help=HELP,
         description="The fingerprint statistics (best raw/difference psi, best single/pair "
         "R2, t63 ratio, overshoot, early fraction; defined in the "
         "spindlebench.studies.fingerprint.statistics docstring, explained in README) of each "
@@ -116,6 +116,13 @@ def reference_label(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Fingerprint every recording, print the table, write JSON and figure if asked."""
+    # the reference simulates (FMPy, pandas, SciPy): only here, not for ``fingerprint --help``
+    from spindlebench.studies.fingerprint.reference import (
+        REFERENCE_TARGET,
+        cached_reference,
+        explicit_reference,
+    )
+
     roles = ColumnRoles.from_args(args)
     for out, suffix in ((args.json, ".json"), (args.figure, ".png")):
         if out is not None and out.suffix.lower() != suffix:

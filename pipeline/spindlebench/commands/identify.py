@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,20 +31,19 @@ from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import AMBIENT_COLUMN, NODE_PREFIX, SPEED_COLUMN, node_output
 from spindlebench.formats.roles import ColumnRoles, add_role_arguments
 from spindlebench.formats.toml import load_toml
-from spindlebench.identification.model import (
-    Inputs,
-    Structure,
-    fit,
-    rezeroed_rmse,
-    select_order,
-)
+
+if TYPE_CHECKING:  # SciPy with the model: imported where it is used, not for ``--help``
+    from spindlebench.identification.model import Inputs
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "identify a low-order thermal model (and observer) from recordings"
 
 AUTO = "auto"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "identify", help="identify a low-order thermal model (and observer) from recordings",
+        "identify", help=HELP,
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     parser.add_argument("recordings", nargs="+", metavar="RECORDING",
@@ -94,6 +94,8 @@ def _map(path: str):
 
 def _parts(series: Series, ambient: bool) -> tuple[Inputs, np.ndarray, np.ndarray, list[str]]:
     """Inputs, the error and the temperature columns of one recording."""
+    from spindlebench.identification.model import Inputs
+
     error = next(c for c in series.channels if c.kind == "error")
     temperatures = [c for c in series.channels if c.kind == "temperature"]
     inputs = Inputs(series.time_s, series.inputs[0],
@@ -106,6 +108,8 @@ def _parts(series: Series, ambient: bool) -> tuple[Inputs, np.ndarray, np.ndarra
 def _mlr_rmse(train: list[tuple[np.ndarray, np.ndarray]], T: np.ndarray, y: np.ndarray
               ) -> float:
     """OLS of the error on the rises (each recording from its first sample)."""
+    from spindlebench.identification.model import rezeroed_rmse
+
     A = np.vstack([np.column_stack([Tr - Tr[0], np.ones(len(Tr))]) for Tr, _ in train])
     b = np.concatenate([yr - yr[0] for _, yr in train])
     ok = np.all(np.isfinite(A), axis=1) & np.isfinite(b)
@@ -114,6 +118,8 @@ def _mlr_rmse(train: list[tuple[np.ndarray, np.ndarray]], T: np.ndarray, y: np.n
 
 
 def _run(args: argparse.Namespace) -> int:
+    from spindlebench.identification.model import Structure, fit, select_order
+
     out = Path(args.out)
     if out.suffix != ".json":
         raise SpindlebenchError(f"-o {out}: the model file ends in .json")
@@ -172,6 +178,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _observer(args, recording_map, inputs, parts, content):
     from spindlebench.identification.estimators import ObserverRegressor
+    from spindlebench.identification.model import rezeroed_rmse
 
     if len(parts) != 1:
         raise SpindlebenchError("--observer: identify on one recording (the filter runs "
@@ -192,6 +199,8 @@ def _observer(args, recording_map, inputs, parts, content):
 
 
 def _test(args, recording_map, result, observer_model, parts, roles, ambient, content):
+    from spindlebench.identification.model import rezeroed_rmse
+
     rows = []
     train = [(T, y) for _, y, T, _ in parts]
     for path in args.test:

@@ -21,10 +21,9 @@ import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from spindlebench.core import atomic
 from spindlebench.core.errors import SpindlebenchError
@@ -37,6 +36,12 @@ from spindlebench.studies.iso230_3 import evaluation
 from spindlebench.studies.iso230_3.channels import TestData, from_map, load_map, synthetic
 from spindlebench.studies.iso230_3.compensation import LinearModel, load_model
 from spindlebench.studies.iso230_3.figure import draw
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "run an ISO 230-3 thermal test and write its report"
 
 ISO_SCENARIOS = SCENARIOS_DIR / "iso230-3"
 #: The axis test's two targets near the ends of the X stroke (m from the fixed bearing).
@@ -172,6 +177,8 @@ def write_report(test: str, data: TestData, numbers: dict[str, Any], source: dic
     if data.speed_rpm is not None:
         columns[SPEED_COLUMN] = data.speed_rpm
     series = out_dir / f"{test}_series.csv"
+    import pandas as pd  # here only: ``iso230-3 --help`` does not pay for pandas
+
     with atomic.atomic_path(series) as tmp:
         write_table(tmp, pd.DataFrame(columns))
     report = {
@@ -208,7 +215,7 @@ def _summary(test: str, numbers: dict[str, Any]) -> str:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "iso230-3", help="run an ISO 230-3 thermal test and write its report",
+        "iso230-3", help=HELP,
         description="Run an ISO 230-3 thermal test (etve, spindle, spectrum, axis) on a "
         "machine variant, or evaluate a real recording through a MAP.toml, and write the "
         "report: figure, JSON and CSV with provenance.")

@@ -10,11 +10,14 @@ import argparse
 
 from spindlebench.selection.registry import listing
 
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "list the selection methods, choices inside clusters and regressors"
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``methods`` sub-command."""
     parser = subparsers.add_parser(
-        "methods", help="list the selection methods, choices inside clusters and regressors",
+        "methods", help=HELP,
         description="Every method name evaluate --method, paper_study.toml and sweep study "
         "files accept, with one line each.")
     parser.set_defaults(func=run)

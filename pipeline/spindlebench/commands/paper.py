@@ -11,15 +11,16 @@ from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import GROUP_LABELS, SIMILARITIES
 from spindlebench.formats.roles import add_role_arguments
 from spindlebench.studies.paper import config as study_config
-from spindlebench.studies.paper.analysis import run_study
-from spindlebench.studies.paper.paper_report import check_out_dir, write_outputs
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "rerun the paper's comparison (3 sensor groups x 2/3/4 clusters) on recordings"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``paper`` sub-command."""
     parser = subparsers.add_parser(
         "paper",
-        help="rerun the paper's comparison (3 sensor groups x 2/3/4 clusters) on recordings",
+        help=HELP,
         description="Train on one experiment, predict the others, for all raw sensors, six raw "
         "sensors and those six plus their differences, at each number of clusters; write the "
         "analogues of the paper's Tables 4-6 and Figures 3-6 plus dendrograms. Defaults are "
@@ -72,6 +73,10 @@ def _joined(flag: str, values: list[str] | None) -> str | None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # pandas, matplotlib and the selection methods only here: ``paper --help`` stays cheap
+    from spindlebench.studies.paper.analysis import run_study
+    from spindlebench.studies.paper.paper_report import check_out_dir, write_outputs
+
     lists = {key: _joined("--" + key.replace("_", "-"), getattr(args, key))
              for key in ("tests", "sensors_all", "six", "clusters", "methods")}
     lists["exclude"] = _joined("--exclude", args.exclude)

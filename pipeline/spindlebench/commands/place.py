@@ -10,20 +10,22 @@ from __future__ import annotations
 import argparse
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from spindlebench.commands.arguments import register_study_command
-from spindlebench.studies.family.family_file import SweepStudy
-from spindlebench.studies.placement.placement_file import (
-    load_placement_study,
-)
-from spindlebench.studies.placement.placement_run import report_best, run_placement, search_times
+
+if TYPE_CHECKING:
+    from spindlebench.studies.family.family_file import SweepStudy
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "virtual sensor placement: choose m of the model's nodes per method"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``place`` sub-command."""
     register_study_command(
         subparsers, "place",
-        help="virtual sensor placement: choose m of the model's nodes per method",
+        help=HELP,
         description="Run (or resume) a virtual sensor-placement study: simulate the study's "
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
@@ -31,11 +33,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         example="scenarios/studies/placement.toml", load_family=_family, run_one=_run_one)
 
 
+# The study's modules (the runner, pandas, scikit-learn) are imported when the command runs,
+# not when it is registered: ``place --help`` stays cheap.
 def _family(path: Path) -> SweepStudy:
+    from spindlebench.studies.placement.placement_file import load_placement_study
+
     return load_placement_study(path).family
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    from spindlebench.studies.placement.placement_run import (
+        report_best,
+        run_placement,
+        search_times,
+    )
+
     started = time.perf_counter()
     outcome = run_placement(args.study, out, workers=args.workers,
                             dask_address=args.dask_address, progress=not args.no_progress,

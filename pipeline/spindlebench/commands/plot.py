@@ -23,16 +23,16 @@ from spindlebench.formats.roles import (
     read_with_roles,
     require_time,
 )
-from spindlebench.testbench.overview import (
-    AMBIENT_DRIVER,
-    FEEDS,
-    SPEED,
-    recordings_figure,
-    save_figure,
-)
 
-#: Columns drawn besides the sensors and the error when a recording has them.
-INPUT_COLUMNS = (SPEED, *FEEDS, AMBIENT_DRIVER, true_column(DRIFT_COLUMN))
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "draw recording(s): temperatures by machine part, thermal error, inputs"
+
+
+def input_columns() -> tuple[str, ...]:
+    """Columns drawn besides the sensors and the error when a recording has them."""
+    from spindlebench.testbench.overview import AMBIENT_DRIVER, FEEDS, SPEED
+
+    return (SPEED, *FEEDS, AMBIENT_DRIVER, true_column(DRIFT_COLUMN))
 
 
 def default_output(recordings: list[Path]) -> Path:
@@ -49,6 +49,9 @@ MAX_TITLE = 300
 
 def run(args: argparse.Namespace) -> int:
     """Read every recording (refusing bad ones in one line), draw, write atomically."""
+    # matplotlib only here: ``plot --help`` stays cheap
+    from spindlebench.testbench.overview import recordings_figure, save_figure
+
     recordings = [Path(p) for p in args.recordings]
     out = Path(args.output) if args.output else default_output(recordings)
     if out.suffix.lower() != ".png":
@@ -63,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     frames, sensors = [], []
     for path in recordings:
         frame, choice = read_with_roles(path, args.target, roles, allow_missing=True,
-                                        extra=INPUT_COLUMNS)
+                                        extra=input_columns())
         require_time(choice, str(path), "a plot over time")
         if choice.by_rule:
             print(choice.report(str(path)))
@@ -80,7 +83,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``plot`` sub-command."""
     parser = subparsers.add_parser(
         "plot",
-        help="draw recording(s): temperatures by machine part, thermal error, inputs",
+        help=HELP,
         description="Draw one or more recordings side by side: the sensor temperatures "
         "grouped by machine part (one colour family per part, each line named at its end), "
         "the thermal error and the inputs (spindle speed, feeds, ambient), over hours.",

@@ -19,9 +19,10 @@ from spindlebench.formats.recording import (
     write_recording,
 )
 from spindlebench.machines.variants import add_machine_argument
-from spindlebench.testbench.batch import check_batch, plan_batch
 from spindlebench.testbench.scenario import MeasuredAmbient
-from spindlebench.testbench.simulate import record_run
+
+#: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
+HELP = "co-simulate scenario(s) with the FMU into recording(s)"
 
 
 def _scenario_files(arguments: list[str]) -> list[Path]:
@@ -55,6 +56,10 @@ def _output_targets(files: list[Path], out: Path) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate every scenario given; one file → ``-o`` is the CSV, several → a directory."""
+    # the runner (FMPy, pandas, SciPy) only here: ``simulate --help`` stays cheap
+    from spindlebench.testbench.batch import check_batch, plan_batch
+    from spindlebench.testbench.simulate import record_run
+
     if args.seed is not None and args.seed < 0:
         raise SpindlebenchError(f"--seed: must be >= 0, got {args.seed}")
     files = _scenario_files(args.scenarios)
@@ -106,7 +111,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``simulate`` sub-command."""
     parser = subparsers.add_parser(
         "simulate",
-        help="co-simulate scenario(s) with the FMU into recording(s)",
+        help=HELP,
         description="Co-simulate scenario TOML files with the SpindleBench FMU and write "
         "recordings: a CSV (measured T1..T20, drift_um, drivers, noise-free truth) and a "
         "JSON sidecar with provenance and the end state.",

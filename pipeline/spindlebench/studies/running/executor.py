@@ -264,9 +264,32 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
             f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
         ) from None
     try:
+        # every worker, also one that joins later, single-threaded in BLAS like the local pool
+        from spindlebench.studies.running.dask_plugin import OneBlasThread
+
+        client.register_plugin(OneBlasThread(), name=OneBlasThread.name)
         yield client.get_executor()
     finally:
         client.close()
+
+
+#: The variables that fix the BLAS/OpenMP libraries' thread counts (read when they load).
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def one_blas_thread() -> dict[str, Any]:
+    """Make this process single-threaded in BLAS (as ``single_threaded_worker`` does for the
+    local pool): the variables for libraries loaded later and for child processes, and
+    ``threadpoolctl`` for those already loaded (a Dask worker has NumPy loaded before any
+    task). Returns what ``threadpoolctl`` then reports, one dict per library."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    for variable in BLAS_THREAD_VARIABLES:
+        os.environ[variable] = "1"
+    threadpool_limits(limits=1)
+    return {"variables": {v: os.environ[v] for v in BLAS_THREAD_VARIABLES},
+            "libraries": [{"api": i.get("user_api"), "num_threads": i.get("num_threads")}
+                          for i in threadpool_info()]}
 
 
 class TaskRunner:

@@ -1,0 +1,73 @@
+"""Machine-readable bench results: ``record(script, rows, goals)`` writes
+``bench/results/<script>.json``.
+
+Every bench script prints its table for a reader and, at the end of its ``main``, hands the
+same numbers to ``record`` so that docs and the lead can quote a figure with the machine, the
+load and the date it was measured on (a number in CPU seconds without its load and machine is
+not comparable across runs on this shared machine). The file is written atomically
+(``spindlebench.core.atomic``): a benchmark interrupted half-way leaves the previous result.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import subprocess
+from pathlib import Path
+from typing import Any
+
+from spindlebench.core import atomic
+
+#: Where the results go: ``bench/results/<script>.json`` beside the scripts.
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+
+
+def cpu_model() -> str:
+    """The CPU's model name from ``/proc/cpuinfo`` (``"unknown"`` where there is none)."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines():
+            if line.lower().startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown"
+
+
+def git_commit() -> str | None:
+    """The checkout's commit (with ``+dirty`` when files differ from it), or None."""
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"],
+                                capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain",
+                                "--untracked-files=no"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return commit + ("+dirty" if dirty else "")
+
+
+def machine() -> dict[str, Any]:
+    """What the numbers were measured on: cores and CPU model."""
+    return {"nproc": os.cpu_count(), "cpu_model": cpu_model()}
+
+
+def record(script: str, rows: list[dict], goals: dict | None = None,
+           folder: Path = RESULTS_DIR) -> Path:
+    """Write ``<folder>/<script>.json`` with the machine, load average, UTC date, git commit,
+    the goals and the rows; return its path. ``script`` is the bench script's stem
+    (``bench_startup``)."""
+    document = {
+        "script": script,
+        "date_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "machine": machine(),
+        "load_average": list(os.getloadavg()),
+        "git_commit": git_commit(),
+        "goals": goals or {},
+        "rows": rows,
+    }
+    path = folder / f"{script}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(path, json.dumps(document, indent=2, sort_keys=True, default=float) + "\n")
+    return path

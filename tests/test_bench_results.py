@@ -1,0 +1,32 @@
+"""``bench/results.record``: the machine-readable file every bench script writes."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+
+from conftest import REPO
+
+
+def _results_module():
+    spec = importlib.util.spec_from_file_location("bench_results", REPO / "bench" / "results.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_record_writes_the_rows_with_machine_load_date_and_commit(tmp_path):
+    results = _results_module()
+    rows = [{"command": "spindlebench --help", "cpu_s_min": 0.04}]
+    path = results.record("bench_example", rows, {"help_cpu_s": 0.5}, folder=tmp_path)
+    assert path == tmp_path / "bench_example.json"
+    document = json.loads(path.read_text(encoding="utf-8"))
+    assert document["script"] == "bench_example"
+    assert document["rows"] == rows and document["goals"] == {"help_cpu_s": 0.5}
+    assert document["machine"]["nproc"] == os.cpu_count()
+    assert document["machine"]["cpu_model"]
+    assert len(document["load_average"]) == 3
+    assert document["date_utc"].endswith("+00:00")
+    assert document["git_commit"] is None or len(document["git_commit"].split("+")[0]) == 40
+    assert [p.name for p in tmp_path.iterdir()] == ["bench_example.json"]  # no temporary left
