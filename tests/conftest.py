@@ -52,12 +52,15 @@ def repo() -> Path:
 #: start at once on different workers instead of being the last, lone, tail of the run.
 SLOW_FIRST = ("test_fmu_build.py", "test_notebooks.py", "test_install.py")
 
-#: Module-scoped fixtures that cost seconds (a simulated study, a fitted twin, a docs build):
-#: every test that uses one is ``slow``, also a quick assertion on it, because running it
-#: alone pays for the fixture (``-m "not slow"`` would otherwise still build them).
+#: Module-scoped fixtures (``file::fixture``) that cost seconds (a simulated study, a fitted
+#: twin, a docs build, an FMU build): every test that uses one is ``slow``, also a quick
+#: assertion on it, since running it alone pays for the fixture.
 SLOW_FIXTURES = frozenset({
-    "twin", "site", "generated", "caiviac_runs", "tiny_run", "tiny_sweep", "reference",
-    "ode", "rebuilt", "coarse", "installed", "executed",
+    "test_calibration.py::twin", "test_docs.py::site", "test_model_physics.py::ode",
+    "test_paper_study.py::generated", "test_paper_study.py::caiviac_runs",
+    "test_placement_study.py::tiny_run", "test_reliability.py::tiny_sweep",
+    "test_sweep_run.py::reference", "test_fmu_build.py::rebuilt", "test_fmu_build.py::coarse",
+    "test_install.py::installed", "test_notebooks.py::executed",
 })
 
 #: Tests (``file::function``, every parametrisation) of modules other people edit that take
@@ -120,8 +123,10 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Mark the tests of ``SLOW_TESTS`` and the users of ``SLOW_FIXTURES`` ``slow``; run the
     modules of ``SLOW_FIRST`` first (in that order), every other in its order."""
     for item in items:
-        name = f"{item.path.name}::{getattr(item, 'originalname', item.name)}"
-        if name in SLOW_TESTS or SLOW_FIXTURES.intersection(getattr(item, "fixturenames", ())):
+        module = item.path.name
+        fixtures = {f"{module}::{name}" for name in getattr(item, "fixturenames", ())}
+        if (f"{module}::{getattr(item, 'originalname', item.name)}" in SLOW_TESTS
+                or fixtures & SLOW_FIXTURES):
             item.add_marker(pytest.mark.slow)
 
     def rank(item: pytest.Item) -> int:
