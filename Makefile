@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench compile notebooks docs clean-venv
+.PHONY: run test test-quick lint bench compile notebooks docs clean-venv
 
 ## The package is installed editable, so Python compiles its modules from source on every
 ## start unless their bytecode is cached; with PYTHONDONTWRITEBYTECODE set (as on this
@@ -39,6 +39,11 @@ run: $(STAMP)
 test: $(STAMP)
 	$(VENV)/bin/ruff check pipeline tests bench
 	$(PY) -m pytest -n auto --dist loadfile --no-loadscope-reorder
+
+## The short loop: every test but the `slow` ones (marked in the test files and, for modules
+## others edit, in tests/conftest.py), on every core. `make test` still runs everything.
+test-quick: $(STAMP)
+	$(PY) -m pytest -m "not slow" -n auto
 
 ## The course: execute every notebook in notebooks/ and write it as HTML with its outputs.
 notebooks: $(STAMP)

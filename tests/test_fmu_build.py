@@ -39,6 +39,8 @@ def archive_text(fmu, name):
         return archive.read(name).decode()
 
 
+@pytest.mark.slow
+@pytest.mark.fmu_build
 @pytest.mark.parametrize(
     "member",
     ["modelDescription.xml", "sources/SpindleBench.c", "sources/SpindleBench_wrap.c"],
@@ -49,6 +51,8 @@ def test_rebuild_has_the_committed_description_and_sources(rebuilt, member):
     )
 
 
+@pytest.mark.slow
+@pytest.mark.fmu_build
 def test_rebuild_gives_the_committed_outputs(rebuilt):
     ours = cold_start(rebuilt, speed_rpm=4000.0, hours=2.0, ambient_C=10.0, output_interval_s=300.0)
     committed = cold_start(
@@ -58,6 +62,8 @@ def test_rebuild_gives_the_committed_outputs(rebuilt):
     np.testing.assert_allclose(ours.to_numpy(), committed.to_numpy(), rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow
+@pytest.mark.fmu_build
 def test_coarse_and_default_builds_agree_on_drift(coarse):
     fine = cold_start(
         COMMITTED, speed_rpm=4000.0, hours=3.0, ambient_C=10.0, output_interval_s=300.0
@@ -72,6 +78,7 @@ def test_coarse_and_default_builds_agree_on_drift(coarse):
         )
 
 
+@pytest.mark.slow  # a Modelica translation
 def test_explicit_ode_is_what_the_fmu_computes():
     ode = explicit_ode(MODELS)
     rng = np.random.default_rng(7)
@@ -177,6 +184,8 @@ def test_only_the_default_segment_count_is_written_as_spindlebench_fmu(out, segm
     assert output_path(out, segments) == Path(written)
 
 
+@pytest.mark.slow
+@pytest.mark.fmu_build
 def test_build_with_other_segments_keeps_the_default_fmu(coarse, tmp_path, monkeypatch, capsys):
     """`spindlebench build --segments 6` (no --out) next to fmus/SpindleBench.fmu leaves it be.
 

@@ -32,6 +32,7 @@ def test_the_course_has_its_seven_notebooks():
     assert [p.name[:2] for p in NOTEBOOK_FILES] == [f"{i:02d}" for i in range(1, 8)], NOTEBOOKS
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOK_FILES, ids=[p.stem for p in NOTEBOOK_FILES])
 def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, executed):
     notebook = executed[path.stem]
@@ -45,6 +46,7 @@ def test_notebook_executes_and_shows_figures_and_ends_with_exercises(path, execu
     assert notebook.cells[0].cell_type == "markdown"  # plain words first
 
 
+@pytest.mark.slow  # a kernel start
 def test_render_writes_each_notebook_as_html_with_its_figures_and_an_index(tmp_path):
     """``make notebooks`` (``spindlebench.commands.course.render``) on a one-cell course."""
     from spindlebench.commands.course import render

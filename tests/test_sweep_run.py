@@ -12,7 +12,6 @@ import re
 import shutil
 from pathlib import Path
 
-import distributed
 import numpy as np
 import pandas as pd
 import pytest
@@ -26,6 +25,9 @@ from spindlebench.studies.running.executor import TaskRunner
 from spindlebench.studies.running.jobs import measured_frame
 from spindlebench.studies.running.simulations import failure_path, recording_path
 from spindlebench.studies.sweep.sweep_run import RESULT_COLUMNS, Sweep, run_sweep, write_outputs
+
+#: Every test here runs the tiny sweep or reuses the module's run of it.
+pytestmark = pytest.mark.slow
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 NUMBERS = ["rmse_um", "rmse_true_um"]
@@ -222,6 +224,8 @@ def test_a_failed_evaluation_is_reported_and_retried(tmp_path, reference):
 
 
 def test_dask_local_cluster_gives_the_same_numbers(tmp_path, reference):
+    import distributed  # here, not at collection: only this test needs it
+
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   protocol="tcp://", dashboard_address=None) as cluster:
         outcome = run_sweep(TINY, tmp_path / "dask", dask_address=cluster.scheduler_address,
