@@ -57,11 +57,11 @@ def test_fmpy_co_simulation_of_the_cs_folder_matches_the_reference(folders):
 def test_build_option_writes_the_folders_after_building(tmp_path, monkeypatch, capsys):
     """``build --cross-check DIR`` builds as usual, then writes the layout for the new FMU."""
     calls = []
-    monkeypatch.setattr(build, "build_fmu", lambda models, target, segments: FMU)
+    monkeypatch.setattr(build, "build_fmu", lambda models, target, segments, **_: FMU)
     monkeypatch.setattr("spindlebench.testbench.cross_check.write_cross_check",
                         lambda fmu, out, scenario: calls.append((fmu, out, scenario)) or [])
     args = argparse.Namespace(models="models", segments=12, out=str(tmp_path),
-                              cross_check=str(tmp_path / "xc"))
+                              cross_check=str(tmp_path / "xc"), quiet=True)
     assert build.run(args) == 0
     assert calls == [(FMU, str(tmp_path / "xc"), calls[0][2])]
     assert calls[0][2].name == "exp1.toml"
