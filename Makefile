@@ -33,12 +33,14 @@ compile: $(STAMP)
 run: $(STAMP)
 	$(VENV)/bin/spindlebench demo --out results
 
-## The suite on every core (pytest-xdist). `--dist loadfile` keeps each test module on one
+## The suite on every core (pytest-xdist), in a temporary folder of its own (--basetemp): the
+## shared /tmp/pytest-of-USER numbering is cleaned by every pytest run on the machine, and a
+## worker's folder vanished under a notebook test once (pytest-dev/pytest#5456, #5524). `--dist loadfile` keeps each test module on one
 ## worker, so a module-scoped fixture (an FMU build, a simulated study) is made once; the
 ## slowest modules are collected first (tests/conftest.py: SLOW_FIRST) and start at once.
 test: $(STAMP)
 	$(VENV)/bin/ruff check pipeline tests bench
-	$(PY) -m pytest -n auto --dist loadfile --no-loadscope-reorder
+	$(PY) -m pytest -n auto --dist loadfile --no-loadscope-reorder --basetemp="$$(mktemp -d -t spindlebench-tests-XXXXXX)"
 
 ## The short loop: every test but the `slow` ones (marked in the test files and, for modules
 ## others edit, in tests/conftest.py), on every core. `make test` still runs everything.
