@@ -125,16 +125,18 @@ def refuse_shipped(path: str | os.PathLike[str]) -> None:
 
 
 def file_kind(path: str | os.PathLike[str]) -> str:
-    """What ``path`` is, for a message: 'a file', 'a folder', 'a FIFO', 'a socket', ..."""
+    """What ``path`` is, for a message: 'a file', 'a folder', or the special kind
+    ``core.files.special_kind`` names ('a FIFO (named pipe)', 'a socket', ...)."""
     import stat
 
+    from spindlebench.core.files import special_kind
+
     mode = Path(path).stat().st_mode
-    for test, name in ((stat.S_ISREG, "a file"), (stat.S_ISDIR, "a folder"),
-                       (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
-                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")):
-        if test(mode):
-            return name
-    return "not a regular file"
+    if stat.S_ISREG(mode):
+        return "a file"
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    return special_kind(mode) or "not a regular file"
 
 
 def shared_recordings_dir() -> Path:
