@@ -77,8 +77,9 @@ def top_correlated(T: np.ndarray, y: np.ndarray, runs, train, k: int) -> list[in
     return sorted(np.argsort(r)[::-1][:k].tolist())
 
 
-def run_split(frame, schedule, train_numbers) -> dict:
-    """Every model on one split: per held-out run RMSE (um) and the fit times (s)."""
+def _split(frame, schedule, train_numbers):
+    """One split's arrays: time, speed, error, the temperatures, the runs, the training and
+    held-out runs, and the training rows' weight (1 on training runs, 0 elsewhere)."""
     t = frame[TIME_COLUMN].to_numpy(float)
     n = frame["spindle_rpm"].to_numpy(float)
     y = frame[TARGET].to_numpy(float)
@@ -89,6 +90,12 @@ def run_split(frame, schedule, train_numbers) -> dict:
     weight = np.zeros(len(t))
     for run in train:
         weight[run.start:run.stop] = 1.0
+    return t, n, y, T, runs, train, tests, weight
+
+
+def run_split(frame, schedule, train_numbers) -> dict:
+    """Every model on one split: per held-out run RMSE (um) and the fit times (s)."""
+    t, n, y, T, runs, train, tests, weight = _split(frame, schedule, train_numbers)
     chosen = top_correlated(T, y, runs, train, OBSERVER_SENSORS)
     predictions, seconds, notes = {}, {}, {}
     predictions["zero"] = np.zeros(len(t))
@@ -128,16 +135,7 @@ def room_proxy_split(frame, schedule, train_numbers) -> dict:
     """The speed-only network against the same network given a room proxy: the sensor that
     moves least over the training runs (the smallest range; chosen without the error) as the
     ambient column. How much of the gap to MLR an ambient channel would close."""
-    t = frame[TIME_COLUMN].to_numpy(float)
-    n = frame["spindle_rpm"].to_numpy(float)
-    y = frame[TARGET].to_numpy(float)
-    T = frame[list(caiviac.TEMPERATURES)].to_numpy(float)
-    runs = schedule.runs
-    train = [runs[i - 1] for i in train_numbers]
-    tests = [r for r in runs if r not in train]
-    weight = np.zeros(len(t))
-    for run in train:
-        weight[run.start:run.stop] = 1.0
+    t, n, y, T, runs, train, tests, weight = _split(frame, schedule, train_numbers)
     rows = weight > 0
     proxy = int(np.argmin(np.ptp(T[rows], axis=0)))
     predictions = {"MLR, 16 sensors": _mlr(T, y, runs, train)}
