@@ -95,8 +95,14 @@ def run_study_command(args: argparse.Namespace, *, load_family: Callable[[Path],
                       population_report: PopulationReport | None = None) -> int:
     """A study command: its results folder, then one run per machine (``machine_runs``, or
     every kept machine of the study's population)."""
-    out = results_folder(args, lambda study: load_family(study).name)
-    study = load_family(args.study)
+    loaded: list[SweepStudy] = []  # the study is read (and its FMU inspected) once
+
+    def study_name(path: Path) -> str:
+        loaded.append(load_family(path))
+        return loaded[0].name
+
+    out = results_folder(args, study_name)
+    study = loaded[0] if loaded else load_family(args.study)
     members: list[Member] | None = None
     if args.machine is None and study.population is not None:
         print(f"population: {study.population.describe()}")
