@@ -16,16 +16,22 @@ NOTEBOOK_FILES = notebook_files()
 
 @pytest.fixture(scope="module")
 def executed(tmp_path_factory):
-    """name → the executed notebook, or the exception its execution raised."""
+    """name → the executed notebook, or the exception its execution raised.
+
+    The working folders are made here, before the threads start: pytest's
+    ``tmp_path_factory`` is not thread-safe (two threads' first ``mktemp`` both create the
+    worker's base folder, and the second fails with FileExistsError, as one CI run did).
+    """
+    folders = {p.stem: tmp_path_factory.mktemp(p.stem) for p in NOTEBOOK_FILES}
+
     def run(path):
         try:
-            return execute(path, tmp_path_factory.mktemp(path.stem))
+            return execute(path, folders[path.stem])
         except Exception as exc:  # reported by the notebook's own test
             return exc
 
     with ThreadPoolExecutor(max_workers=2) as pool:
-        return dict(zip((p.stem for p in NOTEBOOK_FILES), pool.map(run, NOTEBOOK_FILES),
-                        strict=True))
+        return dict(zip(folders, pool.map(run, NOTEBOOK_FILES), strict=True))
 
 
 def test_the_course_has_its_seven_notebooks():
