@@ -38,17 +38,25 @@ def special_kind(mode: int) -> str | None:
     return None
 
 
+def _stat(path: Path) -> tuple[os.stat_result | None, str | None]:
+    """The path's status and its special kind (both None for a path that does not exist:
+    its reader or writer says so in its own words)."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None, None
+    return info, special_kind(info.st_mode)
+
+
 def check_input(path: str | Path, what: str = "file",
                 max_bytes: int | None = MAX_TEXT_BYTES) -> Path:
     """``path`` as an input the reader can take: a regular file (one line otherwise, before
     anything opens it: opening a FIFO blocks), not larger than ``max_bytes``. A missing
     path or a folder is left to the reader's own message."""
     path = Path(path)
-    try:
-        info = os.stat(path)
-    except OSError:
+    info, kind = _stat(path)
+    if info is None:
         return path
-    kind = special_kind(info.st_mode)
     if kind is not None:
         raise SpindlebenchError(f"{path}: is {kind}, not a regular file; give the {what} as "
                                 "a file (reading this could block or never end)")
@@ -78,11 +86,9 @@ def check_output(path: str | Path, flag: str, inputs: Iterable[str | Path] = (),
             raise SpindlebenchError(f"{flag} {path}: is one of this command's inputs "
                                     f"({source}); writing it would replace the input: give "
                                     "another path")
-    try:
-        info = os.stat(path)
-    except OSError:
+    info, kind = _stat(path)
+    if info is None:
         return path
-    kind = special_kind(info.st_mode)
     if kind is not None:
         raise SpindlebenchError(f"{flag} {path}: is {kind}, not a file to write; give a "
                                 "file path")
