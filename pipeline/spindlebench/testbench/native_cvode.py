@@ -144,6 +144,19 @@ class NativeCVode:
                  max_step: float, max_num_steps: int,
                  table: tuple[int, np.ndarray, float] | None = None, jacobian: bool = False):
         self.fmu, self.nx, self.component = fmu, nx, fmu.component
+        self.context = self.x = self.abstol = self.mem = self.matrix = None
+        self.linear_solver = None
+        self.error = "CVode failed"
+        try:
+            self._start(start_time, relative_tolerance, max_step, max_num_steps, table, jacobian)
+        except BaseException:
+            self.free()  # what was allocated before the failure
+            raise
+
+    def _start(self, start_time: float, relative_tolerance: float, max_step: float,
+               max_num_steps: int, table: tuple[int, np.ndarray, float] | None,
+               jacobian: bool) -> None:
+        fmu, nx = self.fmu, self.nx
         dll = fmu.dll
         self._stop = _bind(dll, "sb_cvode_stop", [_P, realtype, _P, _VRS, ctypes.c_size_t,
                                                   _P, _VRS, ctypes.c_size_t, _P])
@@ -159,13 +172,11 @@ class NativeCVode:
                 raise RuntimeError("sb_cvode_table refused the input table")
         else:
             set_table(self.component, 0, None, 0, 1.0)
-        self.error = "CVode failed"
         self.context = SUNContext()
         self._check(SUNContext_Create(SUN_COMM_NULL, ctypes.byref(self.context)),
                     "SUNContext_Create")
         self.x = N_VNew_Serial(nx, self.context)
         self.abstol = N_VNew_Serial(nx, self.context)
-        self.mem = self.matrix = self.linear_solver = None
         fmu.getContinuousStates(NV_DATA_S(self.x), nx)
         fmu.getNominalsOfContinuousStates(NV_DATA_S(self.abstol), nx)
         np.ctypeslib.as_array(NV_DATA_S(self.abstol), (nx,))[:] *= relative_tolerance
