@@ -2,7 +2,7 @@
 
 The C path (``testbench.native_cvode``) must give the same bytes as FMPy's ``CVodeSolver``
 with Python callbacks (kept as the fallback for an FMU without the C callbacks), for both
-input modes and across input jumps; its Jacobian callback must agree within the solver's
+input modes and across input jumps; its Jacobian callbacks must agree within the solver's
 tolerance; a Ctrl-C arriving while the C loop runs must end the run at the next chunk.
 """
 
@@ -66,18 +66,20 @@ def test_the_saved_end_state_is_the_same_bytes_on_both_paths():
     assert c_path.end_fmu_state == python.end_fmu_state
 
 
-def test_the_jacobian_callback_agrees_with_difference_quotients(monkeypatch):
+@pytest.mark.parametrize("jacobian", ["forward", "differences"])
+def test_the_jacobian_callbacks_agree_with_cvodes_difference_quotients(monkeypatch, jacobian):
     """``sb_cvode_jac`` (coloured forward derivatives, a difference where one is not finite)
-    steers CVode to the same solution within its tolerance, across the jumps where the
-    spindle stops (the case where the FMU's directional derivatives hold NaN)."""
+    and ``sb_cvode_jac_dq`` (coloured difference quotients) steer CVode to the same solution
+    within its tolerance, across the jumps where the spindle stops (where the FMU's
+    directional derivatives hold NaN)."""
     scenario = CASES["start_stop-continuous"]
     own = co_simulate(scenario, DEFAULT_FMU)
-    monkeypatch.setattr(runner, "NATIVE_JACOBIAN", True)
-    analytic = co_simulate(scenario, DEFAULT_FMU)
-    assert any(own.outputs[n].tobytes() != analytic.outputs[n].tobytes() for n in own.outputs)
+    monkeypatch.setattr(runner, "NATIVE_JACOBIAN", jacobian)
+    other = co_simulate(scenario, DEFAULT_FMU)
+    assert any(own.outputs[n].tobytes() != other.outputs[n].tobytes() for n in own.outputs)
     for name, values in own.outputs.items():
         tolerance = 1e-4 if name.endswith(("_C", "_um")) else 1e-4 * max(np.ptp(values), 1.0)
-        assert np.max(np.abs(analytic.outputs[name] - values)) <= tolerance, name
+        assert np.max(np.abs(other.outputs[name] - values)) <= tolerance, name
 
 
 def test_the_colouring_never_puts_two_columns_sharing_a_row_in_one_colour():

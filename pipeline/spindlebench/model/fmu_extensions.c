@@ -625,6 +625,47 @@ SB_EXPORT int sb_cvode_jac(double t, void* y, void* fy, void* jac, void* user_da
   return 0;
 }
 
+/* CVLsJacFn like sb_cvode_jac, from difference quotients on fy: all columns of one colour
+ * perturbed at once, each by sqrt(eps) * max(|y_j|, 1) (the rows a column reaches are reached by
+ * no other column of its colour), one right-hand side per colour instead of one per column.
+ * 0 OK, 1 the model evaluation failed, -1 not set up or a mismatched table. */
+SB_EXPORT int sb_cvode_jac_dq(double t, void* y, void* fy, void* jac, void* user_data,
+                              void* tmp1, void* tmp2, void* tmp3) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)user_data;
+  const double *x, *f0;
+  double *J, *xp, *inc;
+  size_t i, j, e;
+  int c;
+  if (!m || !m->sb_host || !m->sb_host->data_of || !m->sb_host->matrix_data) return -1;
+  for (j = 0; j < N_X; ++j)
+    if (sb_jac_state_vr[j] != x_vr[j]) return -1;
+  x = m->sb_host->data_of(y);
+  f0 = m->sb_host->data_of(fy);
+  xp = m->sb_host->data_of(tmp1);
+  inc = m->sb_host->data_of(tmp2);
+  (void)tmp3;
+  J = m->sb_host->matrix_data(jac);
+  for (e = 0; e < (size_t)N_X * N_X; ++e) J[e] = 0.0;
+  for (j = 0; j < N_X; ++j) inc[j] = 1.4901161193847656e-08 * fmax(1.0, fabs(x[j]));
+  for (c = 0; c < SB_JAC_COLORS; ++c) {
+    for (j = 0; j < N_X; ++j) xp[j] = sb_jac_color[j] == c ? x[j] + inc[j] : x[j];
+    sb_at_time(m, t);
+    if (fmi3SetContinuousStates(m, xp, N_X) != fmi3OK) return -1;
+    if (evaluate(m)) return 1;
+    for (j = 0; j < N_X; ++j) {
+      double h;
+      if (sb_jac_color[j] != c) continue;
+      h = xp[j] - x[j]; /* the increment as represented */
+      for (e = sb_jac_colstart[j]; e < sb_jac_colstart[j + 1]; ++e) {
+        i = sb_jac_row[e];
+        J[j * N_X + i] = (m->xdot[i] - f0[i]) / h;
+      }
+    }
+  }
+  m->up_to_date = 0;
+  return 0;
+}
+
 /* The loop between output points, in C: for stops first .. first+count-1, CVode to
  * stop[s] * step_s without passing end[s] * step_s, then sb_cvode_stop with the input row
  * stop[s] (rows of n_in values, the input value references in_vr) and, where stop[s] is a

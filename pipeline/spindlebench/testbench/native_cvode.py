@@ -53,8 +53,11 @@ from fmpy.sundials import (
 from fmpy.sundials.libraries import sundials_core, sundials_cvode, sundials_sunmatrixdense
 
 #: The C callbacks an FMU must export for this solver (``model/fmu_extensions.c``).
-SYMBOLS = ("sb_cvode_setup", "sb_cvode_table", "sb_cvode_rhs", "sb_cvode_jac", "sb_cvode_stop",
-           "sb_cvode_run")
+SYMBOLS = ("sb_cvode_setup", "sb_cvode_table", "sb_cvode_rhs", "sb_cvode_stop", "sb_cvode_run")
+#: CVode's Jacobian: its own difference quotients (one right-hand side per state: the same bytes
+#: as FMPy's solver), the FMU's coloured forward derivatives, or coloured difference quotients
+#: (one right-hand side per colour).
+JACOBIANS = {"cvode": None, "forward": "sb_cvode_jac", "differences": "sb_cvode_jac_dq"}
 
 
 def _bind(library: Any, name: str, argtypes: list, restype: Any = ctypes.c_int) -> Any:
@@ -142,7 +145,7 @@ class NativeCVode:
 
     def __init__(self, fmu: FMU3Model, nx: int, *, start_time: float, relative_tolerance: float,
                  max_step: float, max_num_steps: int,
-                 table: tuple[int, np.ndarray, float] | None = None, jacobian: bool = False):
+                 table: tuple[int, np.ndarray, float] | None = None, jacobian: str = "cvode"):
         self.fmu, self.nx, self.component = fmu, nx, fmu.component
         self.context = self.x = self.abstol = self.mem = self.matrix = None
         self.linear_solver = None
@@ -155,7 +158,7 @@ class NativeCVode:
 
     def _start(self, start_time: float, relative_tolerance: float, max_step: float,
                max_num_steps: int, table: tuple[int, np.ndarray, float] | None,
-               jacobian: bool) -> None:
+               jacobian: str) -> None:
         fmu, nx = self.fmu, self.nx
         dll = fmu.dll
         self._stop = _bind(dll, "sb_cvode_stop", [_P, realtype, _P, _VRS, ctypes.c_size_t,
@@ -192,8 +195,12 @@ class NativeCVode:
         self.linear_solver = SUNLinSol_Dense(self.x, self.matrix, self.context)
         self._check(CVodeSetLinearSolver(self.mem, self.linear_solver, self.matrix),
                     "CVodeSetLinearSolver")
-        if jacobian:
-            self._check(_set_jacobian(self.mem, _address(dll.sb_cvode_jac)), "CVodeSetJacFn")
+        if JACOBIANS[jacobian] is not None:
+            if not hasattr(dll, JACOBIANS[jacobian]):
+                raise RuntimeError(f"the FMU's binary has no {JACOBIANS[jacobian]} (jacobian "
+                                   f"{jacobian!r}); rebuild it with `spindlebench build`")
+            self._check(_set_jacobian(self.mem, _address(getattr(dll, JACOBIANS[jacobian]))),
+                        "CVodeSetJacFn")
         self._check(CVodeSetMaxStep(self.mem, max_step), "CVodeSetMaxStep")
         self._check(CVodeSetMaxNumSteps(self.mem, max_num_steps), "CVodeSetMaxNumSteps")
         self._check(SUNContext_PushErrHandler(self.context, self._errors, None),

@@ -731,9 +731,10 @@ def _integrate(stepper: Any, info: FmuInterface, scenario: Scenario, stops: np.n
             bar.update(round(t_next) - bar.n)
 
 
-#: Whether CVode takes its Jacobian from the FMU's coloured forward derivatives
-#: (``sb_cvode_jac``) instead of its own difference quotients on the C right-hand side.
-NATIVE_JACOBIAN = False
+#: CVode's Jacobian on the C path (``native_cvode.JACOBIANS``): its own difference quotients
+#: on the C right-hand side ("cvode", the same bytes as FMPy's solver), the FMU's coloured
+#: forward derivatives ("forward") or coloured difference quotients ("differences").
+NATIVE_JACOBIAN = "cvode"
 #: Stops per call of the FMU's C loop: Python runs between calls (a Ctrl-C is acted on, the
 #: progress bar moves) about every millisecond of solver work.
 NATIVE_CHUNK = 32
