@@ -6,7 +6,9 @@ FMPy's ``CVodeSolver`` gives CVode no Jacobian (SUNDIALS then forms it from nx e
 right-hand-side calls, each a Python callback into the FMU). This bench-only variant of it
 sets ``CVodeSetJacFn`` to a callback that fills each column of CVode's dense matrix with one
 directional-derivative call, and is patched into ``fmpy.sundials`` for the runs it times, so
-the runner itself is unchanged. Used by ``bench/bench_simulation.py``.
+the runner itself is unchanged. Both variants run on FMPy's Python callbacks
+(``native_rhs=False``): the runner's default, CVode on the FMU's C right-hand side, and its
+C Jacobian are compared in ``bench/bench_runner.py``. Used by ``bench/bench_simulation.py``.
 """
 
 from __future__ import annotations
@@ -139,7 +141,7 @@ def run(scenario: Scenario, fmu: Path, directional: bool, repeat: int = 3) -> Ru
         with _patched(_solver_class(info, directional, counts)):
             started = time.process_time()
             try:
-                simulation = co_simulate(scenario, fmu)
+                simulation = co_simulate(scenario, fmu, native_rhs=False)
             except SpindlebenchError as exc:
                 error = str(exc).split(": ")[-1][:120]
                 simulation = None

@@ -17,6 +17,9 @@ CasADi's FMU exporter is experimental. What we repair after ``export_fmu``:
 - co-simulation (``fmi3InstantiateCoSimulation``, ``fmi3DoStep``) and saved states
   (``fmi3Get/SetFMUState``, serialisation) from ``fmu_extensions.c``, spliced into the
   wrapper; the model description gets ``<CoSimulation>`` and the capability flags;
+- CVode callbacks in C (``sb_cvode_setup/table/rhs/stop``, extra exported symbols, which FMI
+  allows; nothing in the model description) from the same file, so the runner's CVode calls
+  the model without a Python callback (``testbench.native_cvode``);
 - the archive is reproducible: no generation timestamp, an instantiation token derived from
   the sources, fixed zip dates and sorted entries.
 """
@@ -370,6 +373,59 @@ EXTENSION_BODIES = {
 }
 
 
+#: Replaced by ``jacobian_structure`` (C tables) in the extensions' CVode Jacobian.
+JACOBIAN_PLACEHOLDER = "@SB_JACOBIAN_STRUCTURE@"
+
+
+def jacobian_structure(xml_text: str) -> str:
+    """C tables of d xdot / d x's structure and a colouring of its columns, from the model
+    description's ``<ContinuousStateDerivative dependencies>`` (CasADi's sparsity, checked
+    by ``build --cross-check``): per state (in the order of the derivatives, which is the
+    wrapper's ``x_vr``, checked in C through ``sb_jac_state_vr``) its colour and the rows
+    (derivatives) it reaches. Greedy colouring in column order: a column takes the first
+    colour none of whose columns shares a row with it, so one forward derivative per colour
+    gives every column of that colour."""
+    root = ET.fromstring(xml_text)
+    structure, variables = root.find("ModelStructure"), root.find("ModelVariables")
+    if structure is None or variables is None:
+        raise SpindlebenchError("CasADi wrote a modelDescription.xml without a model structure")
+    by_vr = {v.get("valueReference"): v for v in variables}
+    derivatives = structure.findall("ContinuousStateDerivative")
+    state_vrs = [int(by_vr[d.get("valueReference")].get("derivative")) for d in derivatives]
+    column = {vr: j for j, vr in enumerate(state_vrs)}
+    rows: list[list[int]] = [[] for _ in state_vrs]
+    for i, derivative in enumerate(derivatives):
+        listed = derivative.get("dependencies")
+        depends = (state_vrs if listed is None  # omitted: depends on everything
+                   else [int(vr) for vr in listed.split() if int(vr) in column])
+        for vr in depends:
+            rows[column[vr]].append(i)
+    colours: list[int] = []
+    used: list[set[int]] = []  # rows reached per colour
+    for reached in rows:
+        colour = next((c for c, taken in enumerate(used) if taken.isdisjoint(reached)),
+                      len(used))
+        if colour == len(used):
+            used.append(set())
+        used[colour].update(reached)
+        colours.append(colour)
+    starts = [0]
+    for reached in rows:
+        starts.append(starts[-1] + len(reached))
+
+    def table(kind: str, name: str, values: list[int]) -> str:
+        return (f"static const {kind} {name}[{max(1, len(values))}] = "
+                f"{{{', '.join(map(str, values or [0]))}}};")
+
+    return "\n".join([
+        f"#define SB_JAC_COLORS {len(used)}",
+        table("fmi3ValueReference", "sb_jac_state_vr", state_vrs),
+        table("int", "sb_jac_color", colours),
+        table("size_t", "sb_jac_colstart", starts),
+        table("size_t", "sb_jac_row", [i for reached in rows for i in reached]),
+    ])
+
+
 def _replace_body(source: str, signature: str, body: str) -> str:
     """Replace the body of the exported C function that starts with ``signature``."""
     start = source.find(f"FMI3_Export {signature}(")
@@ -392,10 +448,11 @@ def patch_extensions(source: str) -> str:
         "  int state_set[N_X];\n",
         "  int state_set[N_X];\n"
         f"  // spindlebench extensions {PATCH_NOTE}: value reference -> state index (-1: none),\n"
-        "  // co-simulation integrator memory and work arrays, the importer's logger\n"
+        "  // co-simulation integrator memory and work arrays, the importer's logger, what the\n"
+        "  // CVode callbacks in C need from the importer\n"
         "  int sb_state_of_vr[N_VAR];\n  int sb_is_cs;\n  sb_integrator sb_cs;\n"
         "  sb_work* sb_work;\n  fmi3LogMessageCallback sb_log;\n"
-        "  fmi3InstanceEnvironment sb_env;\n",
+        "  fmi3InstanceEnvironment sb_env;\n  sb_host* sb_host;\n",
         "extension memory",
     )
     source = _replace_once(
@@ -414,6 +471,9 @@ def patch_extensions(source: str) -> str:
     source = _replace_once(source, "    // Free memory structure\n    free(instance);\n",
                            "    // Free memory structure\n"
                            "    free(((casadi_fmi_memory*)instance)->sb_work);\n"
+                           "    if (((casadi_fmi_memory*)instance)->sb_host)\n"
+                           "      free(((casadi_fmi_memory*)instance)->sb_host->table);\n"
+                           "    free(((casadi_fmi_memory*)instance)->sb_host);\n"
                            "    free(instance);\n", "fmi3FreeInstance")
     source = _replace_in_function(
         source, "fmi3EnterInitializationMode", "  m->t = startTime;\n",
@@ -512,7 +572,8 @@ def export_fmu(ode: ExplicitOde, out_path: str | Path) -> Path:
             if START_PARAMETER in ode.parameters
             else None
         )
-        wrapper.write_text(patch_wrapper(wrapper.read_text(), start_vr))
+        wrapper.write_text(patch_wrapper(wrapper.read_text(), start_vr).replace(
+            JACOBIAN_PLACEHOLDER, jacobian_structure(description.read_text())))
         c_sources = sorted(sources_dir.glob("*.c"))
         digest = hashlib.sha256()
         for source in c_sources:

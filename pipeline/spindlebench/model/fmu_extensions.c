@@ -7,7 +7,11 @@
  *     Wanner, Solving ODEs II, table IV.6.5, "SDIRK4") with its embedded order-3 solution for
  *     error control, simplified Newton iterations on the CasADi forward-derivative Jacobian;
  *   - saved states: fmi3Get/Set/FreeFMUState and (de)serialisation, versioned;
- *   - a value-reference -> state-index table (no per-value scan of all states).
+ *   - a value-reference -> state-index table (no per-value scan of all states);
+ *   - CVode callbacks in C (sb_cvode_*): an importer that drives SUNDIALS CVode itself (the
+ *     spindlebench runner) gives CVode these functions instead of callbacks in its own
+ *     language, hands over one input as a table on a uniform time grid (interpolated here at
+ *     the solver's time) and ends each output point with one call (sb_cvode_stop).
  * Everything is sized by the generated macros (N_X, N_VAR, SZ_MEM, ...): nothing here
  * knows the model. The text between the two SB_SPLIT markers goes before CasADi's memory
  * struct (types), the rest before fmi3Reset (functions).
@@ -38,6 +42,27 @@ typedef struct {
   double x0[N_X], x1[N_X], f0[N_X], rhs[N_X], X[N_X], fx[N_X], dx[N_X], err[N_X];
   double K[SB_STAGES][N_X];
 } sb_work;
+
+/* What the CVode callbacks need from the importer (sb_cvode_setup, sb_cvode_table): functions
+ * of its SUNDIALS (this file needs no SUNDIALS header or library: its vectors, matrices and
+ * solver memory are only passed on to them), and one input as a table of values on the grid
+ * t = k / rate. */
+typedef double* (*sb_array_of)(void*);
+typedef int (*sb_cvode_fn)(void* cvode_mem, double tout, void* yout, double* tret, int task);
+typedef int (*sb_stop_time_fn)(void* cvode_mem, double tstop);
+typedef int (*sb_reinit_fn)(void* cvode_mem, double t0, void* y0);
+typedef struct {
+  sb_array_of data_of;        /* N_VGetArrayPointer */
+  sb_array_of matrix_data;    /* SUNDenseMatrix_Data (column-major) */
+  sb_cvode_fn cvode;          /* CVode */
+  sb_stop_time_fn stop_time;  /* CVodeSetStopTime */
+  sb_reinit_fn reinit;        /* CVodeReInit */
+  double* table;              /* the input at t = k / rate, k = 0 .. n-1 (n >= 2), or 0: none */
+  size_t n;
+  double rate;                /* 1 / the grid's step (1/s) */
+  size_t offset;              /* where the input lives in the variable memory */
+  int varying;                /* 0: every value equal (the loop's own setting is the value) */
+} sb_host;
 
 /* SB_SPLIT */
 
@@ -77,6 +102,7 @@ static void sb_init_extensions(casadi_fmi_memory* m) {
     if (x_vr[i] < N_VAR) m->sb_state_of_vr[x_vr[i]] = (int)i;
   m->sb_is_cs = 0;
   m->sb_work = 0;
+  m->sb_host = 0;
   memset(&m->sb_cs, 0, sizeof(m->sb_cs));
   m->sb_cs.tol = 1e-6;
 }
@@ -421,4 +447,261 @@ static fmi3Status sb_deserialize(casadi_fmi_memory* m, const fmi3Byte* in, size_
     *state = s;
   }
   return fmi3OK;
+}
+
+
+/* ---------------------------------------------------------------- CVode callbacks in C
+ * The right-hand side an importer gives CVode (CVodeInit) with the instance as user data
+ * (CVodeSetUserData): the same work as its own callback doing fmi3SetTime, setting the table's
+ * input, fmi3SetContinuousStates and fmi3GetContinuousStateDerivatives, in the same floating
+ * point operations, so the results are the same bytes, without a call into the importer's
+ * language per evaluation (CVode's difference-quotient Jacobian calls it N_X times too). */
+
+#if defined(__GNUC__)
+#define SB_EXPORT __attribute__((visibility("default")))
+#else
+#define SB_EXPORT
+#endif
+
+/* Give the instance the importer's SUNDIALS functions (N_VGetArrayPointer, SUNDenseMatrix_Data,
+ * CVode, CVodeSetStopTime, CVodeReInit; only the first is needed by sb_cvode_rhs and
+ * sb_cvode_stop). 0 OK, 1 no N_VGetArrayPointer or no memory. */
+SB_EXPORT int sb_cvode_setup(fmi3Instance instance, void* n_v_get_array_pointer,
+                             void* dense_matrix_data, void* cvode, void* set_stop_time,
+                             void* reinit) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)instance;
+  sb_host* h;
+  if (!m || !n_v_get_array_pointer) return 1;
+  if (!m->sb_host) m->sb_host = (sb_host*)calloc(1, sizeof(sb_host));
+  if (!m->sb_host) return 1;
+  h = m->sb_host;
+  h->data_of = (sb_array_of)n_v_get_array_pointer;
+  h->matrix_data = (sb_array_of)dense_matrix_data;
+  h->cvode = (sb_cvode_fn)cvode;
+  h->stop_time = (sb_stop_time_fn)set_stop_time;
+  h->reinit = (sb_reinit_fn)reinit;
+  return 0;
+}
+
+/* One input (value reference vr) as n >= 2 values on the grid t = k * step_s, copied; between
+ * grid points the right-hand side interpolates linearly. n = 0 removes the table. 0 OK, 1 bad
+ * arguments (no sb_cvode_setup, not a Float64 scalar, n = 1, step <= 0), 2 no memory. */
+SB_EXPORT int sb_cvode_table(fmi3Instance instance, fmi3ValueReference vr,
+                             const double* values, size_t n, double step_s) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)instance;
+  sb_host* h = m ? m->sb_host : 0;
+  size_t i;
+  if (!h) return 1;
+  free(h->table);
+  h->table = 0;
+  h->n = 0;
+  if (n == 0) return 0;
+  if (n < 2 || !values || !(step_s > 0) || vr >= N_VAR ||
+      var_offset[vr + 1] - var_offset[vr] != 1)
+    return 1;
+  h->table = (double*)malloc(n * sizeof(double));
+  if (!h->table) return 2;
+  memcpy(h->table, values, n * sizeof(double));
+  h->n = n;
+  h->rate = 1.0 / step_s;
+  h->offset = var_offset[vr];
+  h->varying = 0;
+  for (i = 1; i < n; ++i)
+    if (values[i] != values[0]) h->varying = 1;
+  return 0;
+}
+
+/* The instance at time t: the time, and the table's input interpolated there. */
+static void sb_at_time(casadi_fmi_memory* m, double t) {
+  const sb_host* h = m->sb_host;
+  m->t = t;
+  if (h->table && h->varying) {
+    double x = t * h->rate;
+    size_t last = h->n - 2, k = x > 0 ? (size_t)x : 0; /* (size_t)x truncates like int(x) */
+    const double* a = h->table;
+    if (k > last) k = last;
+    m->v[h->offset] = a[k] + (x - (double)k) * (a[k + 1] - a[k]);
+  }
+  m->up_to_date = 0;
+}
+
+/* CVRhsFn: ydot = f(t, y), user_data = the instance. 0 OK, 1 the model evaluation failed
+ * (CVode retries with a smaller step, then gives up), -1 not set up. */
+SB_EXPORT int sb_cvode_rhs(double t, void* y, void* ydot, void* user_data) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)user_data;
+  const double* x;
+  double* xdot;
+  size_t i;
+  if (!m || !m->sb_host || !m->sb_host->data_of) return -1;
+  x = m->sb_host->data_of(y);
+  xdot = m->sb_host->data_of(ydot);
+  sb_at_time(m, t);
+  if (fmi3SetContinuousStates(m, x, N_X) != fmi3OK) return -1;
+  if (evaluate(m)) return 1;
+  m->up_to_date = 1;
+  for (i = 0; i < N_X; ++i) xdot[i] = m->xdot[i];
+  return 0;
+}
+
+/* The end of one solver segment at time t: the states CVode returned (y), the inputs valid
+ * from t on (n_in values for the value references in_vr) and, with out non-null, the n_out
+ * outputs (value references out_vr) evaluated there, once. The same calls an importer makes
+ * (fmi3SetContinuousStates, fmi3SetTime, fmi3SetFloat64, fmi3GetFloat64), in one.
+ * Returns an fmi3Status. */
+SB_EXPORT int sb_cvode_stop(fmi3Instance instance, double t, void* y,
+                            const fmi3ValueReference in_vr[], size_t n_in, const double u[],
+                            const fmi3ValueReference out_vr[], size_t n_out, double out[]) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)instance;
+  fmi3Status status;
+  if (!m || !m->sb_host || !m->sb_host->data_of) return fmi3Error;
+  status = fmi3SetContinuousStates(m, m->sb_host->data_of(y), N_X);
+  if (status != fmi3OK) return status;
+  m->t = t;
+  status = fmi3SetFloat64(m, in_vr, n_in, u, n_in);
+  if (status != fmi3OK || !out) return status;
+  return fmi3GetFloat64(m, out_vr, n_out, out, n_out);
+}
+
+/* The structure of d xdot / d x (SB_JAC_*: generated by spindlebench.model.fmu_export from the
+ * model description's dependencies, CasADi's sparsity) and a colouring of its columns: no two
+ * columns of one colour share a row, so one forward derivative per colour gives them all. */
+@SB_JACOBIAN_STRUCTURE@
+
+/* CVLsJacFn: the dense Jacobian J = d f / d y at (t, y), fy = f(t, y), user_data = the
+ * instance. One CasADi forward derivative per colour; a column with a non-finite entry
+ * (automatic differentiation of |dT|^(1/4)*dT at dT = 0 gives inf*0) is a forward difference
+ * on fy instead. 0 OK, 1 the model evaluation failed, -1 not set up or a mismatched table. */
+SB_EXPORT int sb_cvode_jac(double t, void* y, void* fy, void* jac, void* user_data, void* tmp1,
+                           void* tmp2, void* tmp3) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)user_data;
+  const double *x, *f0;
+  double *J, *xp, *fp;
+  size_t i, j, e;
+  int c;
+  if (!m || !m->sb_host || !m->sb_host->data_of || !m->sb_host->matrix_data) return -1;
+  for (j = 0; j < N_X; ++j)
+    if (sb_jac_state_vr[j] != x_vr[j]) return -1;
+  x = m->sb_host->data_of(y);
+  f0 = m->sb_host->data_of(fy);
+  xp = m->sb_host->data_of(tmp1);
+  fp = m->sb_host->data_of(tmp2);
+  (void)tmp3;
+  J = m->sb_host->matrix_data(jac);
+  for (e = 0; e < (size_t)N_X * N_X; ++e) J[e] = 0.0;
+  sb_at_time(m, t);
+  if (fmi3SetContinuousStates(m, x, N_X) != fmi3OK) return -1;
+  if (evaluate(m)) return 1;
+  m->up_to_date = 1;
+  for (c = 0; c < SB_JAC_COLORS; ++c) {
+    for (j = 0; j < N_X; ++j)
+      if (sb_jac_color[j] == c) m->d[var_offset[x_vr[j]]] = 1.0;
+    if (evaluate_forward(m)) return 1;
+    for (j = 0; j < N_X; ++j) {
+      if (sb_jac_color[j] != c) continue;
+      m->d[var_offset[x_vr[j]]] = 0.0;
+      for (e = sb_jac_colstart[j]; e < sb_jac_colstart[j + 1]; ++e) {
+        i = sb_jac_row[e];
+        J[j * N_X + i] = m->d[var_offset[xdot_vr[i]]];
+      }
+    }
+    for (i = 0; i < N_X; ++i) m->d[var_offset[xdot_vr[i]]] = 0.0;
+    for (i = 0; i < N_Y; ++i) m->d[var_offset[y_vr[i]]] = 0.0;
+  }
+  for (j = 0; j < N_X; ++j) {
+    int finite = 1;
+    double delta;
+    for (i = 0; i < N_X; ++i)
+      if (!isfinite(J[j * N_X + i])) finite = 0;
+    if (finite) continue;
+    delta = 1.4901161193847656e-08 * fmax(1.0, fabs(x[j]));
+    for (i = 0; i < N_X; ++i) xp[i] = x[i];
+    xp[j] += delta;
+    if (fmi3SetContinuousStates(m, xp, N_X) != fmi3OK) return -1;
+    m->up_to_date = 0;
+    if (evaluate(m)) return 1;
+    for (i = 0; i < N_X; ++i) fp[i] = m->xdot[i];
+    for (i = 0; i < N_X; ++i) J[j * N_X + i] = (fp[i] - f0[i]) / delta;
+  }
+  return 0;
+}
+
+/* CVLsJacFn like sb_cvode_jac, from difference quotients on fy: all columns of one colour
+ * perturbed at once, each by sqrt(eps) * max(|y_j|, 1) (the rows a column reaches are reached by
+ * no other column of its colour), one right-hand side per colour instead of one per column.
+ * 0 OK, 1 the model evaluation failed, -1 not set up or a mismatched table. */
+SB_EXPORT int sb_cvode_jac_dq(double t, void* y, void* fy, void* jac, void* user_data,
+                              void* tmp1, void* tmp2, void* tmp3) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)user_data;
+  const double *x, *f0;
+  double *J, *xp, *inc;
+  size_t i, j, e;
+  int c;
+  if (!m || !m->sb_host || !m->sb_host->data_of || !m->sb_host->matrix_data) return -1;
+  for (j = 0; j < N_X; ++j)
+    if (sb_jac_state_vr[j] != x_vr[j]) return -1;
+  x = m->sb_host->data_of(y);
+  f0 = m->sb_host->data_of(fy);
+  xp = m->sb_host->data_of(tmp1);
+  inc = m->sb_host->data_of(tmp2);
+  (void)tmp3;
+  J = m->sb_host->matrix_data(jac);
+  for (e = 0; e < (size_t)N_X * N_X; ++e) J[e] = 0.0;
+  for (j = 0; j < N_X; ++j) inc[j] = 1.4901161193847656e-08 * fmax(1.0, fabs(x[j]));
+  for (c = 0; c < SB_JAC_COLORS; ++c) {
+    for (j = 0; j < N_X; ++j) xp[j] = sb_jac_color[j] == c ? x[j] + inc[j] : x[j];
+    sb_at_time(m, t);
+    if (fmi3SetContinuousStates(m, xp, N_X) != fmi3OK) return -1;
+    if (evaluate(m)) return 1;
+    for (j = 0; j < N_X; ++j) {
+      double h;
+      if (sb_jac_color[j] != c) continue;
+      h = xp[j] - x[j]; /* the increment as represented */
+      for (e = sb_jac_colstart[j]; e < sb_jac_colstart[j + 1]; ++e) {
+        i = sb_jac_row[e];
+        J[j * N_X + i] = (m->xdot[i] - f0[i]) / h;
+      }
+    }
+  }
+  m->up_to_date = 0;
+  return 0;
+}
+
+/* The loop between output points, in C: for stops first .. first+count-1, CVode to
+ * stop[s] * step_s without passing end[s] * step_s, then sb_cvode_stop with the input row
+ * stop[s] (rows of n_in values, the input value references in_vr) and, where stop[s] is a
+ * multiple of every, the outputs into row stop[s] / every of samples; CVodeReInit where
+ * jump[stop[s]]. Needs sb_cvode_setup's CVode functions. Returns 0, or where it failed:
+ * 1 CVode (its flag in *flag), 2 CVode stopped elsewhere (*t_reached), 3 the FMU (the FMI
+ * status in *flag), 4 CVodeReInit (*flag), -1 not set up. *done: the stops completed. */
+SB_EXPORT int sb_cvode_run(fmi3Instance instance, void* cvode_mem, void* y,
+                           const long long* stop, const long long* end,
+                           const unsigned char* jump, size_t first, size_t count, double step_s,
+                           long long every, const fmi3ValueReference in_vr[], size_t n_in,
+                           const double* inputs, const fmi3ValueReference out_vr[],
+                           size_t n_out, double* samples, size_t* done, int* flag,
+                           double* t_reached) {
+  casadi_fmi_memory* m = (casadi_fmi_memory*)instance;
+  const sb_host* h = m ? m->sb_host : 0;
+  size_t s;
+  *done = 0;
+  if (!h || !h->cvode || !h->stop_time || !h->reinit) return -1;
+  for (s = first; s < first + count; ++s) {
+    long long k = stop[s];
+    double t_next = (double)k * step_s, t = 0.0;
+    *flag = h->stop_time(cvode_mem, (double)end[s] * step_s);
+    if (*flag < 0) return 1;
+    *flag = h->cvode(cvode_mem, t_next, y, &t, 1 /* CV_NORMAL */);
+    *t_reached = t;
+    if (*flag < 0) return 1;
+    if (fabs(t - t_next) > 1e-9 * fmax(1.0, t_next)) return 2;
+    *flag = sb_cvode_stop(m, t_next, y, in_vr, n_in, inputs + (size_t)k * n_in, out_vr, n_out,
+                          k % every == 0 ? samples + (size_t)(k / every) * n_out : 0);
+    if (*flag != fmi3OK) return 3;
+    if (jump[k]) {
+      *flag = h->reinit(cvode_mem, t_next, y);
+      if (*flag < 0) return 4;
+    }
+    *done = s - first + 1;
+  }
+  return 0;
 }

@@ -61,7 +61,7 @@ from spindlebench.formats.recording import (
     is_probe_output,
 )
 from spindlebench.machines.variants import Machine
-from spindlebench.testbench import fmu_archive
+from spindlebench.testbench import fmu_archive, native_cvode
 from spindlebench.testbench.drivers import INPUT_NAMES, DriverSignals, drive
 from spindlebench.testbench.scenario import Scenario, step_count_problem
 
@@ -542,7 +542,7 @@ def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
 def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                 progress: bool = False, start: Start = None,
                 start_fmu_state: bytes | None = None, save_end_state: bool = False,
-                ) -> Simulation:
+                native_rhs: bool = True) -> Simulation:
     """Run a scenario through the FMU and return the noise-free sampled outputs.
 
     A ``continue`` scenario needs ``start``, the parsed end state of the run it continues
@@ -554,10 +554,11 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     state forked into many runs) instead of setting ``start``'s temperatures by name; the
     bytes are the same (tests/test_fmu_cosim.py), and the check that the FMU starts from
     ``start`` still applies. ``save_end_state`` keeps the FMU's serialised end state in
-    ``Simulation.end_fmu_state``."""
-    from fmpy.sundials import CVodeSolver
+    ``Simulation.end_fmu_state``.
 
-    set_stop_time = _cvode_set_stop_time()
+    CVode calls the FMU's own C right-hand side when its binary exports one
+    (``testbench.native_cvode``: the same bytes, no Python inside the solver); ``native_rhs =
+    False``, or an FMU without it, runs FMPy's ``CVodeSolver`` with Python callbacks."""
     fmu_info = inspect_fmu(DEFAULT_FMU if fmu_path is None else fmu_path)
     md = fmu_info.model_description
     problem = step_count_problem(scenario.duration_s, scenario.step_s)
@@ -603,20 +604,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         if warm is None:
             fmu.setFloat64(list(fmu_info.state_vrs), [x0[n] for n in fmu_info.state_names])
         fmu.enterInitializationMode(startTime=0.0, stopTime=scenario.duration_s)
-        input_vrs = (fmi3ValueReference * len(fmu_info.input_vrs))(*fmu_info.input_vrs)
-        output_vrs = (fmi3ValueReference * n_out)(*fmu_info.output_vrs)
-        n_in = len(fmu_info.input_vrs)
-        component = fmu.component
-        set_inputs = fmu.fmi3SetFloat64
-        get_outputs = fmu.fmi3GetFloat64
-        # fixed ctypes buffers: a row is copied in/out with one memmove, no per-step objects
-        u_buffer = (fmi3Float64 * n_in)()
-        y_buffer = (fmi3Float64 * n_out)()
-        y_view = np.ctypeslib.as_array(y_buffer)
-        row_bytes, inputs_address = inputs.strides[0], inputs.ctypes.data
-        memmove = ctypes.memmove
-        memmove(u_buffer, inputs_address, row_bytes)
-        set_inputs(component, input_vrs, n_in, u_buffer, n_in)
+        fmu.setFloat64(list(fmu_info.input_vrs), inputs[0].tolist())
         fmu.exitInitializationMode()
         need_update = True
         while need_update:
@@ -625,56 +613,14 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
                 raise SpindlebenchError(f"{fmu_info.path}: model asked to terminate at start")
         fmu.enterContinuousTimeMode()
         _check_initial_state(fmu, fmu_info, x0)
-
-        step_s = scenario.step_s
-        stops, segment_ends = solver_stops(jumps, every, n_steps, scenario.inputs)
-        if scenario.inputs == "hold":
-            hooks = _HeldInputs(fmu, input_vrs, inputs, step_s)
-            set_time, max_step = fmu.setTime, step_s
-        else:
-            hooks = _ContinuousInputs(fmu, fmu_info.input_vrs[INPUT_NAMES.index(AMBIENT_COLUMN)],
-                                      inputs[:, INPUT_NAMES.index(AMBIENT_COLUMN)], step_s)
-            set_time, max_step = hooks.set_time, float("inf")
-        solver = CVodeSolver(
-            nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,
-            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
-            get_dx=fmu.getContinuousStateDerivatives, get_z=fmu.getEventIndicators,
-            get_nominals=fmu.getNominalsOfContinuousStates, set_time=set_time,
-            input=hooks, startTime=0.0, maxStep=max_step,
-            relativeTolerance=RELATIVE_TOLERANCE[scenario.inputs], maxNumSteps=MAX_SOLVER_STEPS,
-        )
-        completed_step = md.modelExchange.needsCompletedIntegratorStep
-        get_outputs(component, output_vrs, n_out, y_buffer, n_out)
-        samples[0] = y_view
-        t = 0.0
-        report_every = max(1, len(stops) // 200)
-        # One solver segment per stop: a stop is an output point or an input jump (every
-        # communication point with inputs = "hold"); CVode never steps past the segment's
-        # end (the next jump). Between segments Python runs, so a pending signal is seen.
-        for number, (k, end) in enumerate(zip(stops.tolist(), segment_ends.tolist(),
-                                              strict=True)):
-            t_next = k * step_s
-            set_stop_time(solver.cvode_mem, end * step_s)
-            _, _, t = solver.step(t, t_next)
-            interrupts.check()  # a Ctrl-C that arrived during the step ends the run here
-            if abs(t - t_next) > 1e-9 * max(1.0, t_next):
-                raise SpindlebenchError(f"{fmu_info.path}: CVode stopped at t={t:g} s "
-                                        f"instead of {t_next:g} s")
-            t = t_next
-            fmu.setTime(t)
-            memmove(u_buffer, inputs_address + k * row_bytes, row_bytes)
-            set_inputs(component, input_vrs, n_in, u_buffer, n_in)
-            if completed_step:
-                _, terminate = fmu.completedIntegratorStep()
-                if terminate:
-                    raise SpindlebenchError(f"{fmu_info.path}: model terminated at t={t:g} s")
-            if jumps[k]:
-                solver.reset(t)
-            if k % every == 0:
-                get_outputs(component, output_vrs, n_out, y_buffer, n_out)
-                samples[k // every] = y_view
-            if bar is not None and (number + 1) % report_every == 0:
-                bar.update(round(t) - bar.n)
+        stepper = _stepper(fmu, fmu_info, scenario, inputs, native_rhs)
+        integrator = stepper.name
+        try:
+            stepper.outputs_at_start(samples[0])
+            stops, segment_ends = solver_stops(jumps, every, n_steps, scenario.inputs)
+            _integrate(stepper, fmu_info, scenario, stops, segment_ends, jumps, samples, bar)
+        finally:
+            stepper.free()
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
         end_fmu_state = save_state(fmu) if save_end_state else None
         fmu.terminate()
@@ -701,7 +647,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         end_state_K=dict(zip(fmu_info.state_names, end_values, strict=True)),
         parameters=params,
         solver={
-            "integrator": "FMPy CVodeSolver (SUNDIALS CVODE, BDF)",
+            "integrator": integrator,
             "relative_tolerance": RELATIVE_TOLERANCE[scenario.inputs],
             "communication_step_s": scenario.step_s,
             "inputs": scenario.inputs,
@@ -757,6 +703,165 @@ def solver_stops(jumps: np.ndarray, every: int, n_steps: int,
     stops = np.union1d(np.arange(every, n_steps + 1, every), np.flatnonzero(jumps[1:]) + 1)
     ends = np.append(np.flatnonzero(jumps[1:]) + 1, n_steps)
     return stops, ends[np.searchsorted(ends, stops, side="left")]
+
+
+def _integrate(stepper: Any, info: FmuInterface, scenario: Scenario, stops: np.ndarray,
+               segment_ends: np.ndarray, jumps: np.ndarray, samples: np.ndarray,
+               bar: Any) -> None:
+    """One solver segment per stop: a stop is an output point or an input jump (every
+    communication point with inputs = "hold"); CVode never steps past the segment's end (the
+    next jump). Between segments (between chunks of them in the FMU's C loop) Python runs, so
+    a pending signal is seen."""
+    if isinstance(stepper, _NativeStepper):
+        stepper.integrate(stops, segment_ends, jumps, samples, bar)
+        return
+    step_s, every = scenario.step_s, scenario.steps_per_sample
+    report_every = max(1, len(stops) // 200)
+    for number, (k, end) in enumerate(zip(stops.tolist(), segment_ends.tolist(), strict=True)):
+        t_next = k * step_s
+        t = stepper.advance(t_next, end * step_s)
+        interrupts.check()  # a Ctrl-C that arrived during the step ends the run here
+        if abs(t - t_next) > 1e-9 * max(1.0, t_next):
+            raise SpindlebenchError(f"{info.path}: CVode stopped at t={t:g} s "
+                                    f"instead of {t_next:g} s")
+        stepper.stop(t_next, k, samples[k // every] if k % every == 0 else None)
+        if jumps[k]:
+            stepper.reset(t_next)
+        if bar is not None and (number + 1) % report_every == 0:
+            bar.update(round(t_next) - bar.n)
+
+
+#: CVode's Jacobian on the C path (``native_cvode.JACOBIANS``): its own difference quotients
+#: on the C right-hand side ("cvode", the same bytes as FMPy's solver), the FMU's coloured
+#: forward derivatives ("forward") or coloured difference quotients ("differences").
+NATIVE_JACOBIAN = "cvode"
+#: Stops per call of the FMU's C loop: Python runs between calls (a Ctrl-C is acted on, the
+#: progress bar moves) about every millisecond of solver work.
+NATIVE_CHUNK = 32
+
+
+def _stepper(fmu: FMU3Model, info: FmuInterface, scenario: Scenario, inputs: np.ndarray,
+             native_rhs: bool) -> Any:
+    """CVode for this run: on the FMU's C callbacks where it has them, else FMPy's."""
+    md = info.model_description
+    if native_rhs and not md.modelExchange.needsCompletedIntegratorStep \
+            and native_cvode.available(fmu, md.numberOfEventIndicators):
+        return _NativeStepper(fmu, info, scenario, inputs)
+    return _FmpyStepper(fmu, info, scenario, inputs)
+
+
+class _NativeStepper:
+    """CVode on the FMU's C right-hand side, its loop between output points in C
+    (``testbench.native_cvode``)."""
+
+    name = "SUNDIALS CVODE (BDF) of FMPy on the FMU's C right-hand side"
+
+    def __init__(self, fmu: FMU3Model, info: FmuInterface, scenario: Scenario,
+                 inputs: np.ndarray):
+        self.info, self.scenario, self.inputs, self.fmu = info, scenario, inputs, fmu
+        continuous = scenario.inputs == "continuous"
+        ambient = INPUT_NAMES.index(AMBIENT_COLUMN)
+        self.solver = native_cvode.NativeCVode(
+            fmu, info.model_description.numberOfContinuousStates, start_time=0.0,
+            relative_tolerance=RELATIVE_TOLERANCE[scenario.inputs],
+            max_step=float("inf") if continuous else scenario.step_s,
+            max_num_steps=MAX_SOLVER_STEPS,
+            table=(info.input_vrs[ambient], inputs[:, ambient], scenario.step_s)
+            if continuous else None, jacobian=NATIVE_JACOBIAN)
+
+    def outputs_at_start(self, row: np.ndarray) -> None:
+        row[:] = self.fmu.getFloat64(list(self.info.output_vrs))
+
+    def integrate(self, stops: np.ndarray, segment_ends: np.ndarray, jumps: np.ndarray,
+                  samples: np.ndarray, bar: Any) -> None:
+        plan = native_cvode.Plan(stops, segment_ends, jumps, self.scenario.step_s,
+                                 self.scenario.steps_per_sample, self.inputs, samples,
+                                 input_vr_list=self.info.input_vrs,
+                                 output_vr_list=self.info.output_vrs)
+        step_s = self.scenario.step_s
+        for first in range(0, stops.size, NATIVE_CHUNK):
+            count = min(NATIVE_CHUNK, stops.size - first)
+            try:
+                self.solver.run(plan, first, count)
+            finally:
+                interrupts.check()  # a Ctrl-C that arrived in the C loop ends the run here
+            if bar is not None:
+                bar.update(round(int(stops[first + count - 1]) * step_s) - bar.n)
+
+    def free(self) -> None:
+        self.solver.free()
+
+
+class _FmpyStepper:
+    """FMPy's ``CVodeSolver`` with Python callbacks: for an FMU without the C callbacks."""
+
+    name = "FMPy CVodeSolver (SUNDIALS CVODE, BDF)"
+
+    def __init__(self, fmu: FMU3Model, info: FmuInterface, scenario: Scenario,
+                 inputs: np.ndarray):
+        from fmpy.sundials import CVodeSolver
+
+        md = info.model_description
+        self.fmu, self.info, self.inputs = fmu, info, inputs
+        self.set_stop_time = _cvode_set_stop_time()
+        self.n_in, self.n_out = len(info.input_vrs), len(info.output_vrs)
+        self.input_vrs = (fmi3ValueReference * self.n_in)(*info.input_vrs)
+        self.output_vrs = (fmi3ValueReference * self.n_out)(*info.output_vrs)
+        # fixed ctypes buffers: a row is copied in/out with one memmove, no per-step objects
+        self.u_buffer = (fmi3Float64 * self.n_in)()
+        self.y_buffer = (fmi3Float64 * self.n_out)()
+        self.y_view = np.ctypeslib.as_array(self.y_buffer)
+        self.row_bytes, self.inputs_address = inputs.strides[0], inputs.ctypes.data
+        self.completed_step = md.modelExchange.needsCompletedIntegratorStep
+        step_s = scenario.step_s
+        if scenario.inputs == "hold":
+            hooks: Any = _HeldInputs(fmu, self.input_vrs, inputs, step_s)
+            set_time, max_step = fmu.setTime, step_s
+        else:
+            hooks = _ContinuousInputs(fmu, info.input_vrs[INPUT_NAMES.index(AMBIENT_COLUMN)],
+                                      inputs[:, INPUT_NAMES.index(AMBIENT_COLUMN)], step_s)
+            set_time, max_step = hooks.set_time, float("inf")
+        self.solver = CVodeSolver(
+            nx=md.numberOfContinuousStates, nz=md.numberOfEventIndicators,
+            get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
+            get_dx=fmu.getContinuousStateDerivatives, get_z=fmu.getEventIndicators,
+            get_nominals=fmu.getNominalsOfContinuousStates, set_time=set_time,
+            input=hooks, startTime=0.0, maxStep=max_step,
+            relativeTolerance=RELATIVE_TOLERANCE[scenario.inputs], maxNumSteps=MAX_SOLVER_STEPS,
+        )
+        self.t = 0.0
+
+    def outputs_at_start(self, row: np.ndarray) -> None:
+        self._outputs(row)
+
+    def _outputs(self, row: np.ndarray) -> None:
+        self.fmu.fmi3GetFloat64(self.fmu.component, self.output_vrs, self.n_out, self.y_buffer,
+                                self.n_out)
+        row[:] = self.y_view
+
+    def advance(self, t_next: float, stop_time: float) -> float:
+        self.set_stop_time(self.solver.cvode_mem, stop_time)
+        _, _, t = self.solver.step(self.t, t_next)
+        return t
+
+    def stop(self, t: float, k: int, row: np.ndarray | None) -> None:
+        fmu = self.fmu
+        self.t = t
+        fmu.setTime(t)
+        ctypes.memmove(self.u_buffer, self.inputs_address + k * self.row_bytes, self.row_bytes)
+        fmu.fmi3SetFloat64(fmu.component, self.input_vrs, self.n_in, self.u_buffer, self.n_in)
+        if self.completed_step:
+            _, terminate = fmu.completedIntegratorStep()
+            if terminate:
+                raise SpindlebenchError(f"{self.info.path}: model terminated at t={t:g} s")
+        if row is not None:
+            self._outputs(row)
+
+    def reset(self, t: float) -> None:
+        self.solver.reset(t)
+
+    def free(self) -> None:
+        """FMPy's solver frees its CVode memory when it is collected."""
 
 
 def _cvode_set_stop_time() -> Any:
