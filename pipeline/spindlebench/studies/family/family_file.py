@@ -567,7 +567,7 @@ def _methods(t: Table) -> Methods:
     t.finish()
     from spindlebench.selection.method_registry import method_names
 
-    labels = list(method_names(budget=True)) if labels == ["all"] else labels
+    labels = list(method_names(budget=True, multi_output=False)) if labels == ["all"] else labels
     try:
         methods = check_labels(labels, "methods")
     except SpindlebenchError as exc:

@@ -232,7 +232,8 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
         elif key == "methods":
             names = _names(table, key)
-            changes[key] = method_names(budget=True) if names == (ALL_METHODS,) else names
+            changes[key] = (method_names(budget=True, multi_output=False)
+                            if names == (ALL_METHODS,) else names)
         elif key == "seed":
             value = table.raw(key)
             if isinstance(value, str) and value.isdigit():
