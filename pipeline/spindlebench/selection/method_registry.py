@@ -38,6 +38,7 @@ from spindlebench.core.names import (
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
     DEFAULT_WITHIN,
+    JOINT_UNION,
 )
 
 #: ``factory(k, *, within, similarity, random_state)`` -> an unfitted selector keeping ``k``
@@ -204,6 +205,12 @@ def method_names(*, clustered: bool | None = None, seeded: bool | None = None,
                  and (seeded is None or m.seeded == seeded)
                  and (pairwise is None or m.pairwise == pairwise)
                  and (budget is None or m.budget == budget))
+
+
+def joint_names() -> tuple[str, ...]:
+    """The joint selections of several targets (``multi_target.evaluate_targets``): the union
+    of the per-target selections, then every multi-output method."""
+    return (JOINT_UNION, *method_names(multi_output=True))
 
 
 def descriptions(*, clustered: bool | None = None) -> dict[str, str]:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from spindlebench.core.names import DEFAULT_SIMILARITY
+from spindlebench.core.names import DEFAULT_SIMILARITY, JOINT_UNION
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import (
     CandidateSet,
@@ -34,17 +34,9 @@ from spindlebench.selection.evaluate import (
     _finite,
     evaluate_checked,
 )
-from spindlebench.selection.method_registry import METHOD_REGISTRY, method_names
+from spindlebench.selection.method_registry import METHOD_REGISTRY, joint_names
 from spindlebench.selection.registry import MethodChoice
 from spindlebench.selection.similarity import constant_columns
-
-#: The joint selection that is the union of the per-target selections.
-JOINT_UNION = "union"
-
-
-def joint_names() -> tuple[str, ...]:
-    """Every joint selection: the union, then the registry's multi-output methods."""
-    return (JOINT_UNION, *method_names(multi_output=True))
 
 
 def check_targets(targets: Sequence[str], where: str = "--target") -> list[str]:
@@ -126,9 +118,9 @@ class MultiEvaluation:
             parts.append(f"=== joint selection {name}: {', '.join(joint.selected)} "
                          f"({len(joint.sensors)} sensors: {', '.join(joint.sensors)})")
             for target, result in joint.per_target.items():
-                rmse = ", ".join(f"{n} {v:.3f}" for n, v in result.rmse_um.items())
-                parts.append(f"  {target}: R2 {result.fit.r2:.4f}; RMSE {rmse}; "
-                             f"mean {result.mean_rmse_um:.3f}")
+                rmse = ", ".join(f"{v:.3f}" for v in result.rmse_um.values())
+                parts.append(f"  {target}: training R2 {result.fit.r2:.4f}; RMSE per test "
+                             f"recording {rmse}; mean {result.mean_rmse_um:.3f}")
             parts.append("")
         parts.append(self.comparison())
         return "\n".join(parts)
