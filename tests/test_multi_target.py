@@ -132,3 +132,18 @@ def test_targets_of_refuses_an_unknown_joint_name():
 
     with pytest.raises(SpindlebenchError, match="not a joint selection"):
         targets_of(argparse.Namespace(target=["a", "b"], joint=["lasso"]))
+
+
+def test_cli_fingerprint_reports_each_target(files, capsys):
+    from spindlebench.commands import main as cli
+    from spindlebench.studies.fingerprint.recordings import fingerprint_recording
+
+    assert cli.main(["fingerprint", str(files[0]), str(files[1]), "--target", "drift_um",
+                     "tilt_a_urad", "--sensors", *SIX]) == 0
+    printed = capsys.readouterr().out
+    assert f"{files[0]} [tilt_a_urad]" in printed and "median [drift_um]" in printed
+    from spindlebench.formats.roles import ColumnRoles
+
+    tilt = fingerprint_recording(files[0], "tilt_a_urad", ColumnRoles(sensors=tuple(SIX)))[0]
+    line = next(row for row in printed.splitlines() if row.startswith(f"{files[0]} [tilt"))
+    assert f"{tilt.stats['best_raw_psi']:.3f}" in line
