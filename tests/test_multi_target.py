@@ -147,3 +147,32 @@ def test_cli_fingerprint_reports_each_target(files, capsys):
     tilt = fingerprint_recording(files[0], "tilt_a_urad", ColumnRoles(sensors=tuple(SIX)))[0]
     line = next(row for row in printed.splitlines() if row.startswith(f"{files[0]} [tilt"))
     assert f"{tilt.stats['best_raw_psi']:.3f}" in line
+
+
+@pytest.mark.slow
+def test_cli_paper_several_targets_each_folder_as_alone_and_the_joint_table(tmp_path, capsys):
+    from spindlebench.commands import main as cli
+    from spindlebench.selection import evaluate
+
+    folder = tmp_path / "recordings"
+    folder.mkdir()
+    for seed in range(3):
+        five_probe_experiment(seed, 0.5 + 0.4 * seed).to_csv(folder / f"exp{seed + 1}.csv",
+                                                             index=False)
+    base = ["paper", "--recordings", str(folder), "--sensors-all", *SIX, "--six", *SIX,
+            "--clusters", "2", "--train", "exp1", "--tests", "exp2", "exp3"]
+    several, alone = tmp_path / "several", tmp_path / "alone"
+    assert cli.main([*base, "--out", str(several), "--target", "drift_um", "drift_y_um",
+                     "--joint", "union", "mtlasso"]) == 0
+    assert cli.main([*base, "--out", str(alone), "--target", "drift_y_um"]) == 0
+    capsys.readouterr()
+    for name in sorted(p.name for p in alone.iterdir() if p.suffix == ".csv"):
+        assert (several / "drift_y_um" / name).read_bytes() == (alone / name).read_bytes()
+    record = json.loads((several / "joint.json").read_text())
+    rows = {(r["group"], r["selection"]): r for r in record["rows"] if r["k"] == 2}
+    tests = [folder / "exp2.csv", folder / "exp3.csv"]
+    for target in ("drift_um", "drift_y_um"):
+        own = evaluate(folder / "exp1.csv", tests, target, sensors=SIX, k=2)
+        assert rows[("all_raw", "per-target")][target] == pytest.approx(own.mean_rmse_um)
+    assert rows[("all_raw", "mtlasso")]["n_sensors"] <= 2
+    assert "| all raw | 2 | union |" in (several / "README.md").read_text()
