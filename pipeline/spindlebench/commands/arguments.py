@@ -1,6 +1,7 @@
 """Argument helpers shared by several sub-commands: the study-file options and results folder
 of every study command (``sweep``, ``place``, ``compensate``), and the study command itself
-(``register_study_command``): one results folder, then one run per machine.
+(``register_study_command``): one results folder, then one run per machine; the target
+columns (``--target A [B ...]``, ``--joint``) of the commands that select or fingerprint.
 """
 
 from __future__ import annotations
@@ -16,6 +17,65 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.machines.variants import add_machine_argument
 from spindlebench.studies.family.family_file import SweepStudy, machine_runs
 from spindlebench.studies.family.population import Member, Population, draw_population_of
+
+#: What ``--target`` says about several targets (each command adds what its one target is).
+SEVERAL_TARGETS = ("; several (e.g. --target drift_um drift_y_um tilt_a_urad): each is "
+                   "reported on its own")
+
+
+def add_target_argument(parser: argparse.ArgumentParser, help: str, *,
+                        required: bool = False, joint: bool = False) -> None:
+    """``--target COLUMN [COLUMN ...]``: one target keeps its old meaning and output; several
+    are reported per target (``targets_of``). ``joint``: also ``--joint``, the joint
+    selections (one sensor set for every target) of a command that selects."""
+    parser.add_argument("--target", nargs="+", required=required, default=None,
+                        metavar="COLUMN", help=help + SEVERAL_TARGETS
+                        + (", and with the joint selections of --joint" if joint else ""))
+    if joint:
+        from spindlebench.selection.method_registry import joint_names
+
+        names = joint_names()
+        parser.add_argument("--joint", nargs="+", default=None, metavar="NAME",
+                            help="with several --target: one sensor set for all of them, "
+                            f"each scored per target: {names[0]} (the union of the "
+                            "per-target selections) or a multi-output method (k for all "
+                            f"targets): {', '.join(names[1:])} (default: {', '.join(names)})")
+
+
+def targets_of(args: argparse.Namespace) -> list[str] | None:
+    """The ``--target`` columns (None: not given), refused if one is given twice; ``--joint``
+    only with several targets, and only known names."""
+    targets = getattr(args, "target", None)
+    joint = getattr(args, "joint", None)
+    if targets is None:
+        if joint is not None:
+            raise SpindlebenchError("--joint: needs several --target columns")
+        return None
+    targets = list(targets)
+    twice = sorted({t for t in targets if targets.count(t) > 1})
+    if twice:
+        raise SpindlebenchError(f"--target: {', '.join(twice)} given twice")
+    if joint is not None:
+        from spindlebench.selection.method_registry import joint_names
+
+        names = joint_names()
+        if len(targets) < 2:
+            raise SpindlebenchError("--joint: needs several --target columns (one target's "
+                                    "selection is already one sensor set)")
+        unknown = [name for name in joint if name not in names]
+        if unknown:
+            raise SpindlebenchError(f"--joint: {', '.join(unknown)} is not a joint selection "
+                                    f"(choose from {', '.join(names)})")
+    return targets
+
+
+def joint_of(args: argparse.Namespace) -> tuple[str, ...]:
+    """The joint selections asked for (default: the union and every multi-output method)."""
+    from spindlebench.selection.method_registry import joint_names
+
+    joint = getattr(args, "joint", None)
+    return tuple(dict.fromkeys(joint)) if joint else joint_names()
+
 
 #: A study name that may serve as the default results folder ``results/<name>``.
 FOLDER_NAME = re.compile(r"[A-Za-z0-9._-]+")

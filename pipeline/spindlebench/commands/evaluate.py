@@ -17,6 +17,7 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from spindlebench.commands.arguments import add_target_argument, joint_of, targets_of
 from spindlebench.core import atomic, provenance
 from spindlebench.core.files import check_output
 from spindlebench.core.names import DEFAULT_SIMILARITY, MISSING_MODES
@@ -39,7 +40,10 @@ from spindlebench.selection.evaluate import (
 )
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from spindlebench.selection.evaluate import RecordingLike
+    from spindlebench.selection.registry import MethodChoice
 from spindlebench.selection.registry import add_method_arguments, choice_from_args
 from spindlebench.selection.similarity import SIMILARITIES
 
@@ -66,7 +70,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--test", required=True, nargs="+", type=Path, help="recording(s) to predict (CSV)"
     )
-    parser.add_argument("--target", required=True, help="thermal-error column, e.g. drift_um")
+    add_target_argument(parser, "thermal-error column, e.g. drift_um", required=True,
+                        joint=True)
     add_role_arguments(parser)
     parser.add_argument(
         "--clusters", required=True, type=int, metavar="K",
@@ -93,14 +98,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _read_used(path: Path, target: str, roles: ColumnRoles,
-               missing: str) -> tuple[RecordingTable, RoleChoice]:
-    """One recording with only the target, time and sensor columns read and checked: a gap
-    or a note in a column nobody uses must not reject the file. As arrays: the command
-    never imports pandas (half a second of its start-up) unless a file needs its parser."""
+               missing: str, others: Sequence[str] = ()) -> tuple[RecordingTable, RoleChoice]:
+    """One recording with only the target (and the ``others`` of several targets), time and
+    sensor columns read and checked: a gap or a note in a column nobody uses must not reject
+    the file. As arrays: the command never imports pandas (half a second of its start-up)
+    unless a file needs its parser."""
+    if others:  # each target must be in the file and none may be a sensor or the time axis
+        header = read_header(path, detect_dialect(path, roles.delimiter, roles.decimal,
+                                                  roles.encoding)[0], roles.encoding)
+        for other in others:
+            choose(header, other, roles, str(path))
     try:
-        return read_table_with_roles(path, target, roles, allow_missing=missing == "drop-rows")
+        table, taken = read_table_with_roles(path, target, roles,
+                                             allow_missing=missing == "drop-rows",
+                                             extra=others)
     except MissingValueError as exc:
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
+    overlap = [other for other in others if other in taken.sensors]
+    if overlap:
+        raise SelectionError(f"recording {path}: target {overlap[0]!r} is also a sensor")
+    return table, taken
 
 
 #: Most candidate columns (sensors, with --differences their pairwise differences too):
@@ -117,9 +134,12 @@ def run(args: argparse.Namespace) -> int:
         raise SelectionError(f"--json {args.json}: is a directory; give a file OUT.json")
     if args.json is not None:
         check_output(args.json, "--json", [args.train, *args.test])
+    targets = targets_of(args)
+    joint = joint_of(args)
+    args.target, others = targets[0], targets[1:]  # one target: as before, to the byte
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
-    train, taken = _read_used(args.train, args.target, roles, args.missing)
+    train, taken = _read_used(args.train, args.target, roles, args.missing, others)
     sensors = taken.sensors
     n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
     if n > MAX_CANDIDATES:  # 5 000 sensors with --differences: 12.5 million columns
@@ -127,8 +147,9 @@ def run(args: argparse.Namespace) -> int:
                              f"candidates{' with --differences' if args.differences else ''}, "
                              f"more than the {MAX_CANDIDATES:,} evaluate can score; choose "
                              "fewer with --sensors or --exclude")
-    refuse_target_copies(train, args.target, taken.sensors, str(args.train),
-                         roles.allow_target_copy)
+    for target in targets:
+        refuse_target_copies(train, target, taken.sensors, str(args.train),
+                             roles.allow_target_copy)
     if args.clusters > n:
         raise SelectionError(f"--clusters {args.clusters}: larger than the number of candidates "
                              f"({n}) of recording {args.train} (sensors, and their differences "
@@ -140,7 +161,9 @@ def run(args: argparse.Namespace) -> int:
             theirs = choose(read_header(path, detect_dialect(path, roles.delimiter)[0]),
                             args.target, roles, str(path)).sensors
             check_same_sensors(str(path), theirs, sensors, str(args.train))
-        tests.append(_read_used(path, args.target, same, args.missing)[0])
+        tests.append(_read_used(path, args.target, same, args.missing, others)[0])
+    if others:
+        return _run_targets(args, targets, joint, train, tests, taken, sensors, choice)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = evaluate(
@@ -168,6 +191,53 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_targets(args: argparse.Namespace, targets: list[str], joint: Sequence[str],
+                 train: RecordingTable, tests: list[RecordingLike], taken: RoleChoice,
+                 sensors: list[str], choice: MethodChoice) -> int:
+    """Several targets: each on its own, then the joint selections; the comparison table."""
+    from spindlebench.selection.evaluate import load_recordings
+    from spindlebench.selection.multi_target import evaluate_targets
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        train_recording, test_recordings = load_recordings(train, tests, args.missing)
+        result = evaluate_targets(train_recording, test_recordings, targets, sensors=sensors,
+                                  k=args.clusters, differences=args.differences,
+                                  similarity=args.similarity, closure=args.closure,
+                                  missing=args.missing, method=choice, seed=args.seed,
+                                  joint=joint)
+    messages = list(dict.fromkeys(str(item.message) for item in caught))
+    text = None
+    if args.json is not None:
+        record = result.to_dict()
+        record["provenance"] = provenance.provenance(
+            command="evaluate", train=provenance.file_entry(args.train),
+            tests=[provenance.file_entry(path) for path in args.test], targets=targets,
+            joint=list(result.joint), sensors=sensors, clusters=args.clusters,
+            differences=args.differences, similarity=args.similarity, closure=args.closure,
+            missing=args.missing, method=choice.to_dict(), seed=args.seed, warnings=messages)
+        text = _dumps(record, args)
+    for message in messages:
+        print(f"warning: {message}", file=sys.stderr)
+    print(taken.report())
+    print(result.summary())
+    if text is not None:
+        atomic.write_text(args.json, text)
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _dumps(record: dict, args: argparse.Namespace) -> str:
+    """``record`` as JSON; a value JSON cannot hold is one error line."""
+    try:
+        return json.dumps(record, indent=2, allow_nan=False) + "\n"
+    except ValueError as exc:
+        raise SelectionError(
+            f"--json {args.json}: the result holds a value JSON cannot store ({exc}); "
+            f"the input values are probably too large"
+        ) from exc
+
+
 def _json_text(result: Evaluation, args: argparse.Namespace, messages: list[str]) -> str:
     """The --json document, made before anything is printed so that a value JSON cannot
     hold (inf, NaN) is one error line, not a traceback after the summary."""
@@ -187,10 +257,4 @@ def _json_text(result: Evaluation, args: argparse.Namespace, messages: list[str]
         seed=args.seed,
         warnings=messages,
     )
-    try:
-        return json.dumps(record, indent=2, allow_nan=False) + "\n"
-    except ValueError as exc:
-        raise SelectionError(
-            f"--json {args.json}: the result holds a value JSON cannot store ({exc}); "
-            f"the input values are probably too large"
-        ) from exc
+    return _dumps(record, args)

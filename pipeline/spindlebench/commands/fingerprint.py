@@ -27,6 +27,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from spindlebench.commands.arguments import add_target_argument, targets_of
 from spindlebench.core import atomic, provenance
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
@@ -83,7 +84,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING",
                         help="recording CSV(s), or folders of them (every *.csv inside)")
-    parser.add_argument("--target", help=f"error column (default: {DEFAULT_TARGET}, else the "
+    add_target_argument(parser, f"error column (default: {DEFAULT_TARGET}, else the "
                         "axial_target of the recording's JSON sidecar)")
     add_role_arguments(parser)
     parser.add_argument("--json", type=Path, metavar="OUT.json", help="write the result here")
@@ -123,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
         explicit_reference,
     )
 
+    targets = targets_of(args)
+    args.target = targets[0] if targets else None  # one target: as before, to the byte
+    args.targets = targets
     roles = ColumnRoles.from_args(args)
     for out, suffix in ((args.json, ".json"), (args.figure, ".png")):
         if out is not None and out.suffix.lower() != suffix:
@@ -135,8 +139,9 @@ def run(args: argparse.Namespace) -> int:
             check_output(out, flag, args.recordings)
     results = []
     for path in args.recordings:
-        result, choice = fingerprint_recording(path, args.target, roles)
-        results.append(result)
+        for target in targets or [None]:
+            result, choice = fingerprint_recording(path, target, roles)
+            results.append(result)
         if choice.by_rule:
             print(choice.report(str(path)))
     figure = args.figure or (args.json.with_suffix(".png") if args.json else None)
@@ -151,9 +156,17 @@ def run(args: argparse.Namespace) -> int:
                      else cached_reference(machine=args.machine))
         ref_results = [fingerprint_recording(path, REFERENCE_TARGET)[0]
                        for path in reference.recordings]
-    median = median_stats([item.stats for item in results])
-    rows = [(str(item.path), item.stats) for item in results]
-    rows.append(("median", median))
+    several = targets is not None and len(targets) > 1
+    if several:  # a row per recording and target, a median per target
+        medians = {t: median_stats([r.stats for r in results if r.target == t])
+                   for t in targets}
+        rows = [(f"{item.path} [{item.target}]", item.stats) for item in results]
+        rows += [(f"median [{t}]", medians[t]) for t in targets]
+        median: Any = medians
+    else:
+        median = median_stats([item.stats for item in results])
+        rows = [(str(item.path), item.stats) for item in results]
+        rows.append(("median", median))
     ref_median = None
     if ref_results:
         ref_median = median_stats([item.stats for item in ref_results])
@@ -179,9 +192,12 @@ def _json_text(results: list[Fingerprinted], median: dict[str, float],
                reference: Reference | None, ref_results: list[Fingerprinted],
                ref_median: dict[str, float] | None, figure: Path | None,
                args: argparse.Namespace, roles: ColumnRoles) -> str:
+    several = args.targets is not None and len(args.targets) > 1
     record: dict[str, Any] = {
+        **({"targets": args.targets} if several else {}),
         "recordings": [item.row() for item in results],
-        "median": json_stats(median),
+        "median": ({t: json_stats(m) for t, m in median.items()} if several
+                   else json_stats(median)),
     }
     if reference is not None and ref_median is not None:
         record["reference"] = {
@@ -193,7 +209,7 @@ def _json_text(results: list[Fingerprinted], median: dict[str, float],
     record["provenance"] = provenance.provenance(
         command="fingerprint",
         recordings=[provenance.file_entry(path) for path in args.recordings],
-        target=args.target,
+        target=args.targets if several else args.target,
         time_column=roles.time_column or TIME_COLUMN,
         sensors=None if roles.sensors is None else list(roles.sensors),
         exclude=list(roles.exclude),

@@ -7,6 +7,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from spindlebench.commands.arguments import add_target_argument, joint_of, targets_of
 from spindlebench.core.listflags import split_list_flag
 from spindlebench.core.names import GROUP_LABELS, SIMILARITIES
 from spindlebench.formats.roles import add_role_arguments
@@ -37,7 +38,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="study TOML (see spindlebench.studies.paper.config); default: "
                         f"<recordings>/{study_config.CONFIG_NAME} when the folder has one (the "
                         "CAIVIAC adapter writes it; said on stderr), else the paper's set-up")
-    parser.add_argument("--target", default=None, help="thermal-error column (default drift_um)")
+    add_target_argument(parser, "thermal-error column (default drift_um)", joint=True)
     parser.add_argument("--train", default=None, help="training experiment (default exp1)")
     parser.add_argument("--tests", default=None, nargs="+", metavar="NAME",
                         help="predicted experiments, space- or comma-separated "
@@ -80,8 +81,11 @@ def _run(args: argparse.Namespace) -> int:
     lists = {key: _joined("--" + key.replace("_", "-"), getattr(args, key))
              for key in ("tests", "sensors_all", "six", "clusters", "methods")}
     lists["exclude"] = _joined("--exclude", args.exclude)
+    targets = targets_of(args)
+    args.target = targets[0] if targets and len(targets) == 1 else None  # one: as before
     overrides = {
-        "target": args.target, "train": args.train, "similarity": args.similarity,
+        "target": args.target, "targets": targets if targets and len(targets) > 1 else None,
+        "train": args.train, "similarity": args.similarity,
         "missing": args.missing, "seed": args.seed, "time_column": args.time_column,
         "delimiter": args.delimiter, "decimal": args.decimal,
         "allow_target_copy": True if args.allow_target_copy else None, **lists,
@@ -98,7 +102,9 @@ def _run(args: argparse.Namespace) -> int:
         f"{flag} {shlex.quote(str(value))}"
         for flag, value in (
             ("--recordings", args.recordings), ("--out", str(out_dir)),
-            ("--config", config_path), ("--target", args.target), ("--train", args.train),
+            ("--config", config_path),
+            ("--target", args.target),
+            ("--train", args.train),
             ("--tests", lists["tests"]), ("--sensors-all", lists["sensors_all"]),
             ("--six", lists["six"]), ("--clusters", lists["clusters"]),
             ("--similarity", args.similarity), ("--missing", args.missing),
@@ -107,8 +113,13 @@ def _run(args: argparse.Namespace) -> int:
             ("--delimiter", args.delimiter), ("--decimal", args.decimal),
         )
         if value is not None
-    ) + (" --allow-target-copy" if args.allow_target_copy else "")
+    ) + (" --allow-target-copy" if args.allow_target_copy else "") + (
+        " --target " + " ".join(map(shlex.quote, targets))
+        if targets and len(targets) > 1 else "") + (
+        " --joint " + " ".join(args.joint) if getattr(args, "joint", None) else "")
     check_out_dir(out_dir)  # before the study's minutes, not after
+    if len(config.targets) > 1:
+        return _several(args, config, out_dir, command)
     result = run_study(args.recordings, config)
     paths = write_outputs(result, out_dir, command)
     print(f"paper comparison: train {config.train}, predict {', '.join(config.tests)}; "
@@ -119,4 +130,25 @@ def _run(args: argparse.Namespace) -> int:
               + " ".join(f"{cell.rmse_um[t]:>12.2f}" for t in config.tests)
               + f" {cell.mean_rmse_um:>8.2f}")
     print(f"wrote {paths['readme']} and {len(paths) - 1} more files in {out_dir}")
+    return 0
+
+
+def _several(args: argparse.Namespace, config: study_config.StudyConfig, out_dir: Path,
+             command: str) -> int:
+    """Each target's comparison into ``out_dir/<target>``, then the joint selections."""
+    import dataclasses
+
+    from spindlebench.studies.paper.analysis import run_study
+    from spindlebench.studies.paper.joint import write_joint
+    from spindlebench.studies.paper.paper_report import check_out_dir, write_outputs
+
+    results = {}
+    for target in config.targets:
+        own = dataclasses.replace(config, target=target, targets=())
+        check_out_dir(out_dir / target)
+        results[target] = run_study(args.recordings, own)
+        paths = write_outputs(results[target], out_dir / target, command)
+        print(f"target {target}: wrote {paths['readme']} and {len(paths) - 1} more files")
+    readme = write_joint(results, out_dir, command, joint_of(args))
+    print(f"joint selections of {', '.join(config.targets)}: {readme}")
     return 0

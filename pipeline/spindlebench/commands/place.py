@@ -59,5 +59,7 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
           f"skipped); {len(outcome.failures)} failed simulation(s); "
           f"{time.perf_counter() - started:.1f} s in all")
     print(search_times(outcome.placements))
+    if outcome.out_dir != out:  # several targets: the first one's best, then the joint sets
+        print(f"target {outcome.target} (each target's study is in {out}/<target>/):")
     print(report_best(outcome.table))
-    print(f"results: {outcome.out_dir / 'README.md'}")
+    print(f"results: {out / 'README.md'}")

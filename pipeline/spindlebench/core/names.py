@@ -58,6 +58,10 @@ KELVIN_OFFSET = 273.15
 DEFAULT_METHOD = "closure"
 #: The method that keeps every candidate (k does not apply).
 ALL_CANDIDATES = "all-candidates"
+#: The joint selection of several targets that is the union of their own selections
+#: (``selection.multi_target``; the other joint selections are the registry's multi-output
+#: methods).
+JOINT_UNION = "union"
 #: The choice of one candidate inside a cluster.
 WITHIN: dict[str, str] = {
     "psi": "largest |psi|, the Pearson correlation with the error (the paper's eq. 4)",

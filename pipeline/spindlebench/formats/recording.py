@@ -98,6 +98,11 @@ PROBE_OUTPUTS: tuple[str, ...] = (
     "probe_X1_um", "probe_X2_um", "probe_Y1_um", "probe_Y2_um", "probe_Z_um",
     "drift_x_um", "drift_y_um", "tilt_a_urad", "tilt_b_urad",
 )
+#: The thermal-error columns a recording can carry, each a study's possible target
+#: (``[study] targets``): the axial drift, then the measured five-probe channels (``probe_Z_um``
+#: is ``drift_um``), the latter with ``[outputs] probes = true`` only.
+ERROR_COLUMNS: tuple[str, ...] = (DRIFT_COLUMN, *(name for name in PROBE_OUTPUTS
+                                                  if name != "probe_Z_um"))
 #: Field nodes of the five-probe model (the '+' halves of the column's and the headstock's
 #: sections), recorded with the probe outputs only.
 PROBE_NODES: tuple[str, ...] = ("column_front", "column_right", "housing_front", "housing_right")

@@ -634,6 +634,31 @@ def evaluate(
                             missing=missing, method=choice, seed=seed)
 
 
+def given_selection(matrix: np.ndarray | PairCandidates, y: np.ndarray, names: Sequence[str],
+                    support: Sequence[str], where: str) -> Selection:
+    """The ``Selection`` of candidates chosen elsewhere (``support``, by name): each its own
+    cluster, psi against this ``y``, no similarity or cut."""
+    from spindlebench.selection.similarity import correlation_with
+
+    position = {name: i for i, name in enumerate(names)}
+    unknown = [name for name in support if name not in position]
+    if unknown:
+        raise SelectionError(f"recording {where}: the given selection names candidate(s) "
+                             f"{column_list(range(len(unknown)), unknown)} that it does not have")
+    if not support:
+        raise SelectionError(f"recording {where}: the given selection is empty")
+    if isinstance(matrix, PairCandidates):
+        matrix = matrix.columns(np.arange(matrix.n_candidates))
+    selected = np.asarray([position[name] for name in support], dtype=np.intp)
+    flat = constant_columns(matrix[:, selected])
+    psi = np.full(matrix.shape[1], np.nan)
+    psi[selected[~flat]] = correlation_with(matrix[:, selected[~flat]], y)
+    empty = np.empty((0, 0))
+    return Selection(kept=np.arange(matrix.shape[1]), dropped=np.arange(0), eta=float("nan"),
+                     similarity_source=empty, closure_source=empty,
+                     clusters=[np.array([i]) for i in selected], psi=psi, selected=selected)
+
+
 def load_recordings(
     train: RecordingLike,
     tests: RecordingLike | Sequence[RecordingLike] | Mapping[str, RecordingLike],
@@ -671,10 +696,15 @@ def evaluate_checked(
     missing: str = "error",
     method: MethodChoice | None = None,
     seed: int = 0,
+    support: Sequence[str] | None = None,
 ) -> Evaluation:
     """``evaluate`` on recordings from ``load_recordings``: the same result, messages and
     warnings, but each column of each recording is converted and checked once however many
-    methods, k and sensor groups are evaluated on them (a study's one pass)."""
+    methods, k and sensor groups are evaluated on them (a study's one pass).
+
+    ``support`` (candidate names) is a selection made elsewhere: no selection then, the model
+    of ``method``'s regressor is fitted on those candidates (a joint selection of several
+    targets, ``multi_target.evaluate_targets``, is scored per target this way)."""
     _check_missing_mode(missing)
     if not tests:
         raise SelectionError("at least one test recording is needed")
@@ -707,7 +737,8 @@ def evaluate_checked(
                 _finite(candidates.matrix(train_frame, range(len(chosen))), chosen))
         else:
             matrix = _finite(candidates.matrix(train_frame), names)
-        selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure)
+        selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure) \
+            if support is None else given_selection(matrix, y_train, names, support, train_name)
         selected_names = [names[i] for i in selection.selected]
         fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
                        names=selected_names, random_state=seed)

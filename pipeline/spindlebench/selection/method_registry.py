@@ -38,6 +38,7 @@ from spindlebench.core.names import (
     DEFAULT_METHOD_SEED,
     DEFAULT_SIMILARITY,
     DEFAULT_WITHIN,
+    JOINT_UNION,
 )
 
 #: ``factory(k, *, within, similarity, random_state)`` -> an unfitted selector keeping ``k``
@@ -53,7 +54,10 @@ class Method:
     applies); ``seeded``: its result depends on the seed; ``pairwise``: it forms an n x n
     matrix over the n candidates (the placement study refuses it above
     ``pairs.MAX_FORMED_CANDIDATES``); ``budget``: it keeps k candidates (what a study file's
-    ``methods = ["all"]`` lists); ``factory``: builds its selector.
+    ``methods = ["all"]`` lists); ``multi_output``: its selector also takes several
+    targets (a samples x components ``y``) and keeps one set for all of them, so it is a
+    joint selection of ``multi_target.evaluate_targets`` (``--joint``); ``factory``: builds
+    its selector.
     """
 
     name: str
@@ -63,6 +67,7 @@ class Method:
     pairwise: bool = False
     factory: Factory | None = None
     budget: bool = True
+    multi_output: bool = False
 
     def make(self, k: int, *, within: str = DEFAULT_WITHIN,
              similarity: str = DEFAULT_SIMILARITY,
@@ -120,6 +125,18 @@ def _mrmr(k: int, *, random_state: int, **_: Any) -> Any:
     return MRMRSelector(k, random_state=random_state)
 
 
+def _multi_task_lasso(k: int, **_: Any) -> Any:
+    from spindlebench.selection.multi_output import MultiTaskLassoSelector
+
+    return MultiTaskLassoSelector(k)
+
+
+def _pls_vip(k: int, **_: Any) -> Any:
+    from spindlebench.selection.multi_output import PLSVIPSelector
+
+    return PLSVIPSelector(k)
+
+
 def _all_candidates(k: int, **_: Any) -> Any:
     from spindlebench.selection.selectors import AllCandidates
 
@@ -162,6 +179,12 @@ _BUILT_IN: tuple[Method, ...] = (
     Method("mrmr", "minimum redundancy maximum relevance: greedily the candidate whose mutual "
            "information with the error minus its mean with those chosen is largest",
            seeded=True, factory=_mrmr),
+    Method("mtlasso", "the first k candidates to enter the multi-task LASSO path of every "
+           "target at once (standardised; one candidate set for all targets)",
+           factory=_multi_task_lasso, multi_output=True),
+    Method("pls-vip", "the k candidates of largest VIP in a PLS regression with every target "
+           "as a response (standardised; one candidate set for all targets)",
+           factory=_pls_vip, multi_output=True),
     Method(ALL_CANDIDATES, "no selection: every candidate (k does not apply); "
            "all-candidates+ols is OLS on all sensors, all-candidates+REGRESSOR gives a "
            "regressor or a pipeline of your own every candidate", factory=_all_candidates,
@@ -173,13 +196,21 @@ METHOD_REGISTRY: dict[str, Method] = {method.name: method for method in _BUILT_I
 
 
 def method_names(*, clustered: bool | None = None, seeded: bool | None = None,
-                 pairwise: bool | None = None, budget: bool | None = None) -> tuple[str, ...]:
+                 pairwise: bool | None = None, budget: bool | None = None,
+                 multi_output: bool | None = None) -> tuple[str, ...]:
     """The registered names, in order, optionally only those with the given kinds."""
     return tuple(m.name for m in METHOD_REGISTRY.values()
-                 if (clustered is None or m.clustered == clustered)
+                 if (multi_output is None or m.multi_output == multi_output)
+                 and (clustered is None or m.clustered == clustered)
                  and (seeded is None or m.seeded == seeded)
                  and (pairwise is None or m.pairwise == pairwise)
                  and (budget is None or m.budget == budget))
+
+
+def joint_names() -> tuple[str, ...]:
+    """The joint selections of several targets (``multi_target.evaluate_targets``): the union
+    of the per-target selections, then every multi-output method."""
+    return (JOINT_UNION, *method_names(multi_output=True))
 
 
 def descriptions(*, clustered: bool | None = None) -> dict[str, str]:

@@ -41,7 +41,12 @@ from spindlebench.core.names import DEFAULT_METHOD_SEED, GROUPS
 from spindlebench.formats.toml import Table, in_range, load_toml, non_negative, one_of
 from spindlebench.studies.compensation.controller import ControllerSettings, FaultMonitor
 from spindlebench.studies.family.experiments import experiments
-from spindlebench.studies.family.family_file import Fault, SweepStudy, load_study
+from spindlebench.studies.family.family_file import (
+    Fault,
+    SweepStudy,
+    load_study,
+    require_axial_target,
+)
 
 RETRAIN_RULES = ("never", "weekly", "after-fault")
 DAY_MODES = ("continuous", "cold-starts")
@@ -86,6 +91,7 @@ def _check_model(name: str) -> str | None:
 def load_compensation(path) -> CompensationStudy:
     """Read and check a compensation study (one-line errors naming file and key)."""
     family = load_study(path, extra_tables=("compensate",))
+    require_axial_target(family, "compensation")
     root = Table(load_toml(path, "study"), path)
     t = root.table("compensate")
     models = tuple(t.get_list("models", str, check=_check_model))

@@ -191,4 +191,5 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         initial=initial_for(study, experiment),
         parameters=dict(study.parameters),
         machine=study.machine,
+        probes=study.probes,
     )

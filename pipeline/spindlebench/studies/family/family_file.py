@@ -37,7 +37,13 @@ from spindlebench.core.names import (
 )
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.core.provenance import sha256_file
-from spindlebench.formats.recording import FEED_X_COLUMN, FEED_Y_COLUMN, SPEED_COLUMN
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    ERROR_COLUMNS,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    SPEED_COLUMN,
+)
 from spindlebench.formats.toml import (
     Table,
     in_range,
@@ -189,6 +195,14 @@ class SweepStudy:
     #: ``[axes] machines = { population = N, ... }``: the study is run once per machine drawn
     #: around a base machine (``studies.population``), each into its own results folder.
     population: Population | None = None
+    #: ``[study] targets``: the thermal-error columns the study selects for (default: the
+    #: axial drift alone); any other makes every run record the five probes.
+    targets: tuple[str, ...] = (DRIFT_COLUMN,)
+
+    @property
+    def probes(self) -> bool:
+        """Whether the runs must record the five-probe outputs (a target other than Z)."""
+        return any(target != DRIFT_COLUMN for target in self.targets)
 
     @property
     def sha256(self) -> str:
@@ -225,6 +239,8 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         raise head.error("fmu", f"no such FMU: {fmu}")
     fmu_parameters = _fmu_parameters(head, fmu) if fmu.is_file() else None
     machine_name = head.get("machine", str, default=DEFAULT_MACHINE)
+    targets = tuple(head.get_list("targets", str, default=[DRIFT_COLUMN],
+                                  check=lambda v: one_of(v, ERROR_COLUMNS)))
     try:
         machine_variant = load_machine(machine or machine_name, source=None if machine else path)
     except SpindlebenchError as exc:
@@ -341,7 +357,18 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         speeds_rpm=speeds, programmes=programmes, cooling=cooling, noise=noise, faults=faults,
         training=training, methods=methods, parameters=parameters, soak_days=soak_days,
         indoor=indoor, machine=machine_variant, machines=machine_axis, population=population,
+        targets=targets,
     )
+
+
+def require_axial_target(study: SweepStudy, kind: str) -> None:
+    """Refuse ``[study] targets`` other than the axial drift in a study kind that selects for
+    it alone (the sweep and the compensation: their jobs, tables and reports are per drift)."""
+    if study.targets != (DRIFT_COLUMN,):
+        raise SpindlebenchError(
+            f"{study.path}: key 'study.targets': a {kind} study selects for {DRIFT_COLUMN} "
+            f"only (got {', '.join(study.targets)}); several targets run through "
+            "'spindlebench place' and 'spindlebench evaluate --target A B ...'")
 
 
 def machine_runs(study: SweepStudy, machine: str | None,
@@ -567,7 +594,7 @@ def _methods(t: Table) -> Methods:
     t.finish()
     from spindlebench.selection.method_registry import method_names
 
-    labels = list(method_names(budget=True)) if labels == ["all"] else labels
+    labels = list(method_names(budget=True, multi_output=False)) if labels == ["all"] else labels
     try:
         methods = check_labels(labels, "methods")
     except SpindlebenchError as exc:

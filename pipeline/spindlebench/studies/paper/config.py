@@ -59,7 +59,8 @@ AUTO_SIX = "auto"
 #: uses it when no --config is given.
 CONFIG_NAME = "paper_study.toml"
 
-_KEYS = ("title", "target", "train", "tests", "sensors_all", "six", "clusters", "similarity",
+_KEYS = ("title", "target", "targets", "train", "tests", "sensors_all", "six", "clusters",
+         "similarity",
          "missing", "methods", "seed", "time_column", "exclude", "allow_target_copy",
          "delimiter", "decimal")
 #: ``methods = "all"``: every selection method with its defaults (psi, ols).
@@ -72,6 +73,10 @@ class StudyConfig:
 
     title: str = "paper set-up (exp1 … exp5)"
     target: str = DRIFT_COLUMN
+    #: ``targets = [...]``: several thermal-error columns, each compared on its own (its
+    #: study in ``<out>/<target>/``) and the joint selections beside them; ``target`` is then
+    #: the first. Empty: the one ``target``.
+    targets: tuple[str, ...] = ()
     train: str = "exp1"
     tests: tuple[str, ...] = ("exp2", "exp3", "exp4", "exp5")
     sensors_all: tuple[str, ...] = SENSORS
@@ -109,6 +114,14 @@ class StudyConfig:
                 if not _plain_name(name):
                     raise fail(key, f"{name!r} is not an experiment name (the stem of a CSV "
                                     "in --recordings: no folder separators, '.' or '..')")
+        if self.targets:
+            twice = sorted({t for t in self.targets if self.targets.count(t) > 1})
+            if twice:
+                raise fail("targets", f"{', '.join(twice)} given twice")
+            for other in self.targets[1:]:
+                replace(self, target=other, targets=()).checked()
+            if self.target != self.targets[0]:
+                return replace(self, target=self.targets[0]).checked()
         if self.target == self.time_column:
             raise fail("target", f"{self.time_column} is the time axis, not a thermal error")
         if self.time_column in self.sensors_all:
@@ -174,6 +187,7 @@ class StudyConfig:
             "missing": self.missing, "methods": list(self.methods), "seed": self.seed,
             "time_column": self.time_column, "allow_target_copy": self.allow_target_copy,
             "delimiter": self.delimiter, "decimal": self.decimal, "source": self.source,
+            **({"targets": list(self.targets)} if self.targets else {}),
         }
 
 
@@ -226,13 +240,14 @@ def updated(config: StudyConfig, table: Table) -> StudyConfig:
             if not isinstance(value, str) or not value:
                 raise table.error(key, "expected a non-empty string")
             changes[key] = value
-        elif key in ("tests", "sensors_all", "exclude"):
+        elif key in ("tests", "sensors_all", "exclude", "targets"):
             changes[key] = _names(table, key)
         elif key == "six":
             changes[key] = AUTO_SIX if table.raw(key) == AUTO_SIX else _names(table, key)
         elif key == "methods":
             names = _names(table, key)
-            changes[key] = method_names(budget=True) if names == (ALL_METHODS,) else names
+            changes[key] = (method_names(budget=True, multi_output=False)
+                            if names == (ALL_METHODS,) else names)
         elif key == "seed":
             value = table.raw(key)
             if isinstance(value, str) and value.isdigit():

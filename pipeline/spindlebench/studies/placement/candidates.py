@@ -47,8 +47,10 @@ class Run:
     replica: int
     experiment: Experiment
     node_rises: np.ndarray  # node rises (K, measured or true), zero at the first sample
-    drift_um: np.ndarray  # probe reading, zeroed at the first sample
-    true_drift_um: np.ndarray  # true drift rise
+    #: The target's probe reading, zeroed at the first sample (``drift_um`` unless the
+    #: study's ``targets`` name another; a tilt is in µrad).
+    drift_um: np.ndarray
+    true_drift_um: np.ndarray  # the target's true rise
 
     @property
     def key(self) -> tuple[int, str]:
@@ -63,8 +65,10 @@ def node_seed(study: PlacementStudy, replica: int, experiment: Experiment) -> in
 
 
 def prepare_run(study: PlacementStudy, replica: int, experiment: Experiment,
-                frame: pd.DataFrame) -> Run:
-    """The run's candidate nodes (measured or true), probe drift and true drift rise."""
+                frame: pd.DataFrame, target: str = TARGET) -> Run:
+    """The run's candidate nodes (measured or true), the target's probe reading and true
+    rise. The nodes are measured with the node seed alone, so every target of a study sees
+    the same node readings."""
     columns = [node_column(node) for node in study.nodes]
     missing = [c for c in columns if c not in frame.columns]
     if missing:
@@ -72,14 +76,19 @@ def prepare_run(study: PlacementStudy, replica: int, experiment: Experiment,
                                 f"{missing[0]}: was it made by another FMU?")
     true_C = frame.loc[:, columns].to_numpy(dtype=float)
     true_drift = frame[true_column(DRIFT_COLUMN)].to_numpy(dtype=float)
+    if target not in frame.columns:
+        raise SpindlebenchError(f"recording of {experiment.id} (replica {replica}) lacks the "
+                                f"target {target}: was it simulated without the probes?")
     if study.measured:
         model = sensor_model(study.family.noise[0], None)
         values, _ = measure(model, frame[TIME_COLUMN].to_numpy(float), true_C, true_drift,
                             tuple(study.nodes), node_seed(study, replica, experiment))
     else:
         values = true_C
-    return Run(replica, experiment, rises(values), frame[TARGET].to_numpy(dtype=float),
-               true_drift - true_drift[0])
+    true_target = true_drift if target == DRIFT_COLUMN else \
+        frame[true_column(target)].to_numpy(dtype=float)
+    return Run(replica, experiment, rises(values), frame[target].to_numpy(dtype=float),
+               true_target - true_target[0])
 
 
 def candidate_set(study: PlacementStudy, differences: bool) -> CandidateSet:

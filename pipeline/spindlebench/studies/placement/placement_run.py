@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +34,7 @@ from spindlebench.studies.family.experiments import (
     training_experiments,
 )
 from spindlebench.studies.family.family_file import check_fmu, pinned_content
-from spindlebench.studies.placement.candidates import Run, node_seed, prepare_run
+from spindlebench.studies.placement.candidates import TARGET, Run, node_seed, prepare_run
 from spindlebench.studies.placement.placement_file import (
     PlacementStudy,
     describe,
@@ -68,6 +68,9 @@ class PlacementOutcome:
     failures: dict[str, str]
     search_seconds: float
     no_model_rmse_um: float  # mean RMSE of predicting no drift at all, on the scored test runs
+    target: str = TARGET
+    #: The scored runs per replica: (training runs, held-out runs) of the target.
+    runs: dict[int, tuple[list[Run], list[Run]]] = field(default_factory=dict)
 
 
 class PlacementStudyRun:
@@ -117,13 +120,15 @@ class PlacementStudyRun:
                 + (f" ({others} other distinct error(s))" if others else "")
                 + f"; see {self.store.path(failure_path(replica, experiment))}")
 
-    def runs(self, replica: int) -> tuple[list[Run], list[Run]] | None:
-        """(training runs, held-out runs) of a replica; None if a training run is missing."""
+    def runs(self, replica: int, target: str = TARGET) -> tuple[list[Run], list[Run]] | None:
+        """(training runs, held-out runs) of a replica for ``target``; None if a training
+        run is missing."""
         loaded: dict[str, Run] = {}
         for experiment in self.family:
             if self.store.has_recording(recording_path(replica, experiment)):
                 frame = read_recording(self.store.path(recording_path(replica, experiment)))
-                loaded[experiment.id] = prepare_run(self.study, replica, experiment, frame)
+                loaded[experiment.id] = prepare_run(self.study, replica, experiment, frame,
+                                                    target)
         if any(train.id not in loaded for train in self.trains):
             return None
         train_ids = {train.id for train in self.trains}
@@ -145,19 +150,31 @@ def run_placement(study_path: str | Path, out_dir: str | Path, workers: int | No
     # an unreachable scheduler fails before the folder is made (and locked)
     with runner.connected(), work.store.locked():
         stats, resumed = work.simulate(runner)
-        return _place(work, runner, stats, resumed, stages)
+        targets = study.family.targets
+        if len(targets) == 1:  # one target: the study's folder as it always was
+            return _place(work, runner, stats, resumed, stages, targets[0])
+        outcomes = {target: _place(work, runner, stats, resumed, stages, target,
+                                   ResultStore(work.store.root / target))
+                    for target in targets}
+        from spindlebench.studies.placement.joint import write_joint
+
+        stages("joint placements: one sensor set for every target")
+        write_joint(work, outcomes)
+        return outcomes[targets[0]]
 
 
 def _place(work: PlacementStudyRun, runner: TaskRunner, stats: RunStats,
-           resumed: bool, say: Callable[[str], None] = lambda _: None) -> PlacementOutcome:
-    """Search, score and write the placements of simulated runs (``say`` hears each step:
-    the searches and figures come after the simulations' progress bar)."""
+           resumed: bool, say: Callable[[str], None] = lambda _: None,
+           target: str = TARGET, store: ResultStore | None = None) -> PlacementOutcome:
+    """Search, score and write the placements of simulated runs for ``target`` into
+    ``store`` (default: the study's folder; ``say`` hears each step: the searches and figures
+    come after the simulations' progress bar)."""
     study = work.study
-    say("reading the simulated runs")
+    say("reading the simulated runs" + ("" if store is None else f" for {target}"))
     failures = work.failures()
     runs: dict[int, tuple[list[Run], list[Run]]] = {}
     for replica in replicas(study.family):
-        split = work.runs(replica)
+        split = work.runs(replica, target)
         if split is not None and split[1]:
             runs[replica] = split
     if study.design_replica not in runs:
@@ -175,21 +192,22 @@ def _place(work: PlacementStudyRun, runner: TaskRunner, stats: RunStats,
     tested = [run for r in study.test_replicas if r in runs for run in runs[r][1]]
     no_model = float(np.mean([rmse(run.drift_um, np.zeros_like(run.drift_um))
                               for run in tested]))
-    outcome = PlacementOutcome(work.store.root, placements, table, scores, stats, resumed,
-                               failures, search_seconds, no_model)
+    outcome = PlacementOutcome((store or work.store).root, placements, table, scores, stats,
+                               resumed, failures, search_seconds, no_model, target, runs)
     say("writing tables, figures, schematic drawings and README")
-    write_outputs(work, outcome, runner, sorted(runs))
+    write_outputs(work, outcome, runner, sorted(runs), store)
     return outcome
 
 
 def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: TaskRunner,
-                  scored_replicas: list[int]) -> None:
-    """Tables, figures, README and provenance (each written atomically)."""
+                  scored_replicas: list[int], store: ResultStore | None = None) -> None:
+    """Tables, figures, README and provenance (each written atomically) into ``store``
+    (default: the study's folder; one folder per target when the study has several)."""
     from spindlebench.studies.placement import placement_plots as plots
     from spindlebench.studies.placement import placement_report as report
     from spindlebench.studies.placement import schematic
 
-    store, study = work.store, work.study
+    store, study = store or work.store, work.study
     store.write_frame("placements.csv", outcome.table)
     store.write_frame("scores.csv", outcome.scores)
     references = {"probe noise σ": study.family.noise[0].value.probe_noise_um}
@@ -215,10 +233,16 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
         scored_replicas=scored_replicas,
         executor=runner.describe(),
         no_model_rmse_um=outcome.no_model_rmse_um,
+        **({} if store is work.store else {"target": outcome.target}),
     )
     store.write_json("provenance.json", record_)
-    write_text(store.path("README.md"),
-               report.readme(study, outcome, figures, record_, work.trains, scored_replicas))
+    text = report.readme(study, outcome, figures, record_, work.trains, scored_replicas)
+    if store is not work.store:  # one of several targets: say which, under the title
+        title, rest = text.split("\n", 1)
+        text = (f"{title} — target `{outcome.target}`\n\nThis folder is the study for the "
+                f"target `{outcome.target}` alone (RMSE in its unit; 'drift' below means "
+                "it); the joint placements of all targets are in `../README.md`.\n" + rest)
+    write_text(store.path("README.md"), text)
 
 
 # --------------------------------------------------------------------------- command line

@@ -40,6 +40,7 @@ from spindlebench.studies.family.family_file import (
     describe,
     load_study,
     pinned_content,
+    require_axial_target,
 )
 from spindlebench.studies.family.methods import method_specs
 from spindlebench.studies.running.executor import Outcome, RunStats, Task, TaskRunner
@@ -259,6 +260,7 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
     replaces the study's machine variant."""
     stages = Stages(Path(study_path).stem, enabled=progress)  # timed from the start
     study = load_study(study_path, machine=machine)
+    require_axial_target(study, "sweep")
     stages.label = study.name
     sweep = Sweep(study, Path(out_dir))
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
