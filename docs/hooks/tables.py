@@ -163,12 +163,10 @@ def speed_section(sources: Sources) -> str:
         document = json.loads(path.read_text(encoding="utf-8"))
         source = sources.name(path)
         script = document.get("script", path.stem)
-        parts.append(f"### `bench/{script}.py`\n")
+        parts.append(f"### `bench/{script}.py`\n\n{bench_provenance(document, source)}.\n")
         if document.get("goals"):
-            parts.append(block("bench", source, "goals", bench_provenance(document, source)
-                               + "; the goals", bench_table(path, "goals")))
-        parts.append(block("bench", source, None, bench_provenance(document, source),
-                           bench_table(path)))
+            parts.append(block("bench", source, "goals", "Its goals", bench_table(path, "goals")))
+        parts.append(block("bench", source, None, "Its rows", bench_table(path)))
     return "\n".join(parts)
 
 
@@ -301,7 +299,7 @@ def parameters_table(machines: Path, fmu: Path) -> str:
         start = None if variable is None or variable.start is None else float(variable.start)
         rows.append([f"`{name}`", getattr(variable, "unit", None) or "", start,
                      *[m.parameters.get(name, "") for m in loaded],
-                     getattr(variable, "description", None) or ""])
+                     _short(getattr(variable, "description", None) or "")])
     return markdown_table(["parameter", "unit", "FMU default",
                            *[f"`{m.name}`" for m in loaded], "model description"], rows)
 
@@ -322,13 +320,19 @@ def machine_parameters_section(path: Path, sources: Sources | None = None) -> st
                  machine_parameters_table(path))
 
 
+def _short(text: str, limit: int = 80) -> str:
+    """A model description cut at ``limit`` characters (the full text is the FMU's)."""
+    return text if len(text) <= limit else text[:limit].rsplit(" ", 1)[0] + " …"
+
+
 def parameters_section(sources: Sources) -> str:
     from spindlebench.core.provenance import sha256_file
 
     source = sources.name(sources.machines)
     provenance = (f"From the machine files `{source}/*.toml` and the FMU's model description "
                   f"(`{sources.name(sources.fmu)}`, sha256 {sha256_file(sources.fmu)[:12]}); "
-                  "an empty cell: the machine keeps the FMU's default")
+                  "an empty cell: the machine keeps the FMU's default; descriptions cut at 80 "
+                  "characters")
     return block("parameters", source, None, provenance,
                  parameters_table(sources.machines, sources.fmu))
 
