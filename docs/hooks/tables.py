@@ -29,7 +29,9 @@ Sources (``Sources``, the checkout's by default):
   naming the command;
 - ``scenarios/machines/*.toml`` and the FMU's model description (the parameters table);
 - the stable-room studies' CSVs under ``results/`` (or their committed copies under
-  ``docs/snapshots/`` when the study has not been run in this checkout).
+  ``docs/snapshots/`` when the study has not been run in this checkout: the population runs
+  take half an hour, too long for ``make docs``; the marker names which file was read, and
+  the snapshot's ``provenance.json`` sits beside it).
 """
 
 from __future__ import annotations
