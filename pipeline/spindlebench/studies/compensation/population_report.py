@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.core import atomic
+from spindlebench.core.names import ALL_RAW, SIX_DIFF, SIX_RAW
 from spindlebench.studies.family.population import TABLE_FILE, Member, Population
 from spindlebench.studies.family.population_summary import (
     on_machines,
@@ -23,8 +24,8 @@ from spindlebench.studies.family.population_summary import (
 
 SUMMARY_FILE = "summary.csv"
 RESULT_FILE = "population_compensation.csv"
-DIFF_GROUP = "six_diff"
-RAW_GROUPS = ("all_raw", "six_raw")
+DIFF_GROUP = SIX_DIFF
+RAW_GROUPS = (ALL_RAW, SIX_RAW)
 NONE = "uncompensated"
 PART = "all days"
 
