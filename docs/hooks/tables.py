@@ -184,7 +184,8 @@ def machines_document(sources: Sources) -> dict | None:
         return None
     from spindlebench.studies.fingerprint.machine_check import write_json
 
-    names = [str(p) for p in sorted(sources.machines.glob("*.toml"))]
+    shipped = sources.machines.resolve() == (ROOT / "scenarios" / "machines").resolve()
+    names = [p.stem if shipped else str(p) for p in sorted(sources.machines.glob("*.toml"))]
     return write_json(sources.machines_json, names, sources.fmu)
 
 
