@@ -90,7 +90,7 @@ def number(value: Any) -> str:
     if isinstance(value, float):
         if not math.isfinite(value):
             return "n/a"
-        return f"{value:.4g}" if abs(value) < 1e5 else f"{value:.3e}"
+        return f"{value:.4g}" if abs(value) < 1e5 else f"{value:.6g}"
     if isinstance(value, list | tuple):
         return " ".join(number(v) for v in value)
     return str(value).replace("|", "\\|").replace("\n", " ")
