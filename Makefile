@@ -56,7 +56,7 @@ notebooks: $(STAMP)
 ## results/site/index.html (no server needed).
 docs: notebooks
 	test -f results/README.md || $(MAKE) run
-	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
+	SPINDLEBENCH_DOCS_RUN=1 NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

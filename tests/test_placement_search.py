@@ -158,11 +158,13 @@ def test_schematic_places_every_node_of_the_model_on_its_part():
 def test_findings_name_the_budgets_a_method_wins():
     from spindlebench.studies.placement.placement_report import findings
 
-    rows = [  # greedy wins at m = 3 only; at m = 2 fuzzy is better
+    rows = [  # greedy wins at m = 3 only; at m = 2 fuzzy is better; differences help at m = 2
         ("fuzzy", 2, 0.8), ("greedy", 2, 0.9), ("fuzzy", 3, 0.8), ("greedy", 3, 0.7),
+        ("fuzzy+diff", 2, 0.6), ("fuzzy+diff", 3, 0.9),
     ]
     table = pd.DataFrame([{"label": label, "method": label, "m": m, "test_mean_rmse_um": rmse,
                            "design_rmse_um": rmse, "variables": "a;b", "n_sensors": 2}
                           for label, m, rmse in rows])
     text = "\n".join(findings(table, honest=True))
     assert "- greedy beats fuzzy at 1 of 2 budget(s) (m = 3) on the test days." in text
+    assert "- fuzzy+diff beats fuzzy at 1 of 2 budget(s) (m = 2) on the test days." in text

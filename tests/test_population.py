@@ -138,3 +138,61 @@ def test_a_population_sweep_counts_the_machines_on_which_the_claim_holds(tmp_pat
     for name in files:  # each drawn machine is a machine file the commands read
         machine = load_machine(str(out / "machines" / name))
         assert machine.parameters and (out / machine.name / "README.md").is_file()
+
+
+def _with_population(source: Path, tmp_path: Path, machines: str,
+                     **lines: str) -> Path:
+    """A copy of a tiny study file with ``[axes] machines`` set to ``machines`` (and each
+    ``key = ...`` line of ``lines`` replaced)."""
+    text = source.read_text(encoding="utf-8").replace("[axes]\n",
+                                                      f"[axes]\nmachines = {machines}\n", 1)
+    for key, value in lines.items():
+        text = "\n".join(f"{key} = {value}" if line.startswith(f"{key} =") else line
+                         for line in text.splitlines()) + "\n"
+    path = tmp_path / source.name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.slow
+def test_a_population_placement_counts_the_machines_on_which_differences_help(tmp_path):
+    from spindlebench.commands.main import main
+
+    study = _with_population(REPO / "scenarios" / "studies" / "tiny_placement.toml", tmp_path,
+                             "{ population = 2, spread = 0.15, seed = 5 }",
+                             methods='["fuzzy", "greedy"]')  # the cheap searches only
+    out = tmp_path / "out"
+    assert main(["place", str(study), "-o", str(out), "--workers", "0", "--no-progress"]) == 0
+    rows = pd.read_csv(out / "population_placements.csv")
+    assert sorted(set(rows["machine"])) == ["default-p001", "default-p002"]
+    assert set(rows["method"]) == {"fuzzy", "greedy"} and rows["gain_um"].notna().all()
+    readme = (out / "README.md").read_text(encoding="utf-8")
+    for (method, m), at in rows.groupby(["method", "m"]):
+        own = pd.read_csv(out / at["machine"].iloc[0] / "placements.csv")
+        score = own[(own["method"] == method) & (own["m"] == m)].set_index("differences")
+        first = at.iloc[0]
+        assert first["diff_helps"] == (score.loc[True, "test_mean_rmse_um"]
+                                       < score.loc[False, "test_mean_rmse_um"])
+        helps = int(at["diff_helps"].sum())
+        assert f"| {method} | {m} | 2 | {helps} of 2 machines" in readme
+
+
+@pytest.mark.slow
+def test_a_population_compensation_runs_each_machine_and_counts_them(tmp_path):
+    from spindlebench.commands.main import main
+
+    study = _with_population(REPO / "scenarios" / "studies" / "tiny_compensate.toml", tmp_path,
+                             "{ population = 2, spread = 0.15, seed = 5 }")
+    out = tmp_path / "out"
+    assert main(["compensate", str(study), "-o", str(out), "-q"]) == 0
+    rows = pd.read_csv(out / "population_compensation.csv")
+    assert sorted(set(rows["machine"])) == ["default-p001", "default-p002"]
+    summaries = [pd.read_csv(out / name / "summary.csv") for name in sorted(set(rows["machine"]))]
+    assert not summaries[0]["rms_um"].equals(summaries[1]["rms_um"])  # two different machines
+    readme = (out / "README.md").read_text(encoding="utf-8")
+    for rule, at in rows.groupby("retrain", sort=False):
+        assert f"| {rule} | 2 | {int(at['diff_helps'].sum())} of 2 machines" in readme
+    # --machine runs the one machine into the folder itself, as for every study command
+    single = tmp_path / "single"
+    assert main(["compensate", str(study), "-o", str(single), "-q", "--machine", "default"]) == 0
+    assert (single / "summary.csv").is_file() and not (single / "machines").exists()

@@ -13,16 +13,24 @@ A page typed by hand goes stale at the next change of what it describes; these c
 - ``results/``: the READMEs that ``make run`` writes (the paper's comparison on the synthetic
   experiments and on the real recording), with their figures and tables, and any study results
   folder listed in ``RESULT_FOLDERS`` that exists: the result tables of the site are the files
-  the commands wrote, not copies typed by hand.
+  the commands wrote, not copies typed by hand;
+- in every page, each ``<!-- generate: NAME KEY -->`` line becomes a table generated from the
+  file a command wrote, with its source beside it (``tables.py``: the speed page from
+  ``bench/results/*.json``, the model page's fingerprints, mechanisms, levels and parameters,
+  the stable-room study tables).
 """
 
 from __future__ import annotations
 
 import html
 import logging
+import sys
 from pathlib import Path
 
 from mkdocs.structure.files import File, Files
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import tables  # the hooks folder is not a package: imported from its path
 
 LOG = logging.getLogger("mkdocs.hooks.spindlebench")
 ROOT = Path(__file__).resolve().parents[2]
@@ -32,7 +40,21 @@ RESULT_FOLDERS = {
     "generated/results/paper_study": ROOT / "results" / "paper_study",
     "generated/results/caiviac_study": ROOT / "results" / "caiviac_study",
     "generated/results/population": ROOT / "results" / "population",
+    "generated/results/placement-stable-room": ROOT / "results" / "placement-stable-room"
+                                                / "population",
+    "generated/results/compensate-stable-room": ROOT / "results" / "compensate-stable-room"
+                                                 / "population",
 }
+#: What writes each results folder (for the page shown when it is not there).
+RESULT_COMMANDS = {
+    "placement-stable-room": tables.STUDY_COMMANDS["placement-population"],
+    "compensate-stable-room": tables.STUDY_COMMANDS["compensation-population"],
+}
+
+
+def on_page_markdown(markdown: str, page, config, files) -> str:
+    """Each ``<!-- generate: ... -->`` line of a page becomes its generated table."""
+    return tables.expand(markdown)
 
 
 def on_files(files: Files, config) -> Files:
@@ -89,9 +111,7 @@ def machines_page() -> str:
         machine = load_machine(name)
         lines += [f"## `{name}`", "", machine.description.strip(), ""]
         if machine.parameters:
-            lines += ["| parameter | value |", "|---|---|"]
-            lines += [f"| `{key}` | {value:g} |" for key, value in machine.parameters.items()]
-            lines.append("")
+            lines += [tables.machine_parameters_section(machine.path)]
         else:
             lines += ["Parameters: the FMU's defaults.", ""]
         if machine.targets:
@@ -169,10 +189,13 @@ def result_pages(files: Files, config) -> dict[str, str]:
              "`results/README.md` is missing.", ""]
     for uri, folder in RESULT_FOLDERS.items():
         readme = folder / "README.md"
-        name = folder.name
+        name = uri.rsplit("/", 1)[1]
         if not readme.is_file():  # a page all the same, so the links to it hold
-            pages[f"{uri}/index.md"] = (f"# {name}\n\nNot run in this build: `make run` writes "
-                                        f"`results/{name}/` (`make docs` runs it first).\n")
+            command = RESULT_COMMANDS.get(name)
+            pages[f"{uri}/index.md"] = (
+                f"# {name}\n\nNot run in this build: `{command}` writes it.\n" if command else
+                f"# {name}\n\nNot run in this build: `make run` writes "
+                f"`results/{name}/` (`make docs` runs it first).\n")
             index.append(f"- [{name}]({name}/index.md): not run in this build")
             continue
         for item in sorted(folder.iterdir()):
@@ -181,7 +204,8 @@ def result_pages(files: Files, config) -> dict[str, str]:
                 files.append(File.generated(config, f"{uri}/{item.name}",
                                             abs_src_path=str(item)))
         text = readme.read_text(encoding="utf-8")
-        pages[f"{uri}/index.md"] = _links_to_files(text, folder)
+        pages[f"{uri}/index.md"] = (f"<!-- tables copied from {tables.Sources().name(readme)} "
+                                    "-->\n\n" + _links_to_files(text, folder))
         index.append(f"- [{name}]({name}/index.md)")
     pages["generated/results/index.md"] = "\n".join(index) + "\n"
     return pages

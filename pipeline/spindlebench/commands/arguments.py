@@ -105,7 +105,8 @@ def add_study_arguments(parser: argparse.ArgumentParser, example: str) -> None:
 
 def results_folder(args: argparse.Namespace, study_name: Callable[[Path], str]) -> Path:
     """The study command's output folder, after refusing contradictory execution options."""
-    if args.workers is not None and args.dask_address:
+    # compensate runs in-process: it has neither option
+    if getattr(args, "workers", None) is not None and getattr(args, "dask_address", None):
         raise SpindlebenchError("give either --workers or --dask-address, not both")
     if args.out is not None:
         from spindlebench.core.files import check_output

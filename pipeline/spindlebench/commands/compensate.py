@@ -1,27 +1,37 @@
-"""``spindlebench compensate STUDY.toml [-o DIR]``: the model in the controller, day after day.
+"""``spindlebench compensate STUDY.toml -o DIR``: the model in the controller, day after day.
 
-Writes into DIR (default ``results/<study.name>``): ``README.md`` (set-up, the residual per
-model, per day), ``days.csv`` (one row per model and day), ``summary.csv``,
-``timeseries.csv.gz`` (every sample of the first retraining rule: true drift, prediction,
-applied offset, residual), ``compensation.png`` (uncompensated drift, applied offset and
-residual over the run) and ``provenance.json``.
+Writes into DIR: ``README.md`` (set-up, the residual per model, per day), ``days.csv`` (one
+row per model and day), ``summary.csv``, ``timeseries.csv.gz`` (every sample of the first
+retraining rule: true drift, prediction, applied offset, residual), ``compensation.png``
+(uncompensated drift, applied offset and residual over the run) and ``provenance.json``.
+With ``[axes] machines`` (a list or a population) each machine gets its own folder under DIR
+and, for a population, DIR's README counts the machines on which the difference group wins
+(``studies.compensation.population_report``), like every study command
+(``commands.arguments.run_study_command``).
 """
 
 from __future__ import annotations
 
 import argparse
 from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
 
-from spindlebench.commands.arguments import add_study_file_arguments, default_results_folder
+from spindlebench.commands.arguments import add_study_file_arguments, run_study_command
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_output
 from spindlebench.core.progress import Stages, for_terminal
+from spindlebench.machines.variants import add_machine_argument
 from spindlebench.studies.compensation.compensation_file import (
     DAY_MODES,
     load_compensation,
 )
 from spindlebench.studies.family.family_file import check_fmu
 from spindlebench.studies.running.store import ResultStore
+
+if TYPE_CHECKING:
+    from spindlebench.studies.family.family_file import SweepStudy
+    from spindlebench.studies.family.population import Member, Population
 
 #: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
 HELP = "run the trained model in a simulated controller over many days"
@@ -44,11 +54,32 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "own)")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no step lines on stderr")
+    add_machine_argument(parser, "machine variant of every day",
+                         "the study's [study] machine or [axes] machines, else 'default'")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    """Load, simulate, write."""
+    """One compensation run per machine of the study (``run_study_command``)."""
+    return run_study_command(args, load_family=_family, run_one=_run_one,
+                             population_report=_population_report)
+
+
+def _family(path: Path) -> SweepStudy:
+    return load_compensation(path).family
+
+
+def _population_report(out: Path, population: Population, members: list[Member],
+                       study_path: Path, fmu: Path) -> str:
+    from spindlebench.studies.compensation.population_report import (
+        compensation_population_report,
+    )
+
+    return compensation_population_report(out, population, members, study_path, fmu)
+
+
+def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
+    """Load, simulate, write one machine's compensation into ``out``."""
     # pandas, the runner and the models only here: ``compensate --help`` stays cheap
     import pandas as pd
 
@@ -59,13 +90,10 @@ def run(args: argparse.Namespace) -> int:
     )
     from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
 
-    if args.out is not None:  # before the study is read: a device or / is never a folder
-        check_output(args.out, "-o", [args.study], folder=True)
-    study = load_compensation(args.study)
+    study = load_compensation(args.study, machine)
     if args.days is not None and args.days != study.days:
         study = replace(study, days=args.days)
     fmu = check_fmu(study.family)
-    out = args.out if args.out is not None else default_results_folder(args.study, study.name)
     check_output(out, "-o", [args.study], folder=True)
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"{out}: exists and is not a folder")
@@ -85,4 +113,3 @@ def run(args: argparse.Namespace) -> int:
     print(summary_text(table))
     print(f"wrote {out / 'README.md'} and {len(OUTPUT_FILES) - 1} more files; "
           f"{stages.seconds:.1f} s in all")
-    return 0

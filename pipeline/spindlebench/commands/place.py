@@ -16,6 +16,7 @@ from spindlebench.commands.arguments import register_study_command
 
 if TYPE_CHECKING:
     from spindlebench.studies.family.family_file import SweepStudy
+    from spindlebench.studies.family.population import Member, Population
 
 #: The one-line help of ``spindlebench --help`` (copied into ``commands.main.COMMAND_HELP``).
 HELP = "virtual sensor placement: choose m of the model's nodes per method"
@@ -30,7 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "experiments, choose sensor sets among the temperature-field nodes with the paper's "
         "fuzzy clustering, greedy forward selection and exhaustive search, score them across "
         "seasons and write placements.csv, plots, schematic drawings and README.md.",
-        example="scenarios/studies/placement.toml", load_family=_family, run_one=_run_one)
+        example="scenarios/studies/placement.toml", load_family=_family, run_one=_run_one,
+        population_report=_population_report)
 
 
 # The study's modules (the runner, pandas, scikit-learn) are imported when the command runs,
@@ -39,6 +41,13 @@ def _family(path: Path) -> SweepStudy:
     from spindlebench.studies.placement.placement_file import load_placement_study
 
     return load_placement_study(path).family
+
+
+def _population_report(out: Path, population: Population, members: list[Member],
+                       study_path: Path, fmu: Path) -> str:
+    from spindlebench.studies.placement.population_report import placement_population_report
+
+    return placement_population_report(out, population, members, study_path, fmu)
 
 
 def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:

@@ -88,9 +88,11 @@ def _check_model(name: str) -> str | None:
     return None
 
 
-def load_compensation(path) -> CompensationStudy:
-    """Read and check a compensation study (one-line errors naming file and key)."""
-    family = load_study(path, extra_tables=("compensate",))
+def load_compensation(path, machine: str | None = None) -> CompensationStudy:
+    """Read and check a compensation study (one-line errors naming file and key);
+    ``machine`` (``--machine``, or a drawn machine of the study's population) replaces the
+    study's machine."""
+    family = load_study(path, extra_tables=("compensate",), machine=machine)
     require_axial_target(family, "compensation")
     root = Table(load_toml(path, "study"), path)
     t = root.table("compensate")

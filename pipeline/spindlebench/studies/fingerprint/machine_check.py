@@ -16,11 +16,14 @@ and what the numbers in ``docs/model.md`` come from::
     python -m spindlebench.studies.fingerprint.machine_check --mechanisms
     # bearing rises, column time constant:
     python -m spindlebench.studies.fingerprint.machine_check --levels
+    # all of it for every machine, as the docs' model page reads it (make docs):
+    python -m spindlebench.studies.fingerprint.machine_check --json results/docs/machines.json
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Mapping
 from pathlib import Path
@@ -232,6 +235,51 @@ def table(fingerprints: Mapping[str, Mapping[str, float]]) -> str:
     return "\n".join(lines)
 
 
+def machine_record(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
+                   fingerprints_only: bool = False) -> dict:
+    """Everything the model page shows of one machine: its file (path, SHA-256, parameters),
+    the fingerprint of every run its targets name, the targets met or not, and (unless
+    ``fingerprints_only``) the idle ambient-step response, the levels and, for a machine with
+    issue-20 mechanisms, each mechanism off alone."""
+    stats = machine_fingerprints(machine, fmu_path)
+    record: dict = {"file": machine.path.name, "sha256": machine.sha256,
+                    "parameters": dict(machine.parameters), "fingerprints": stats,
+                    "targets": [t.describe() for t in machine.targets],
+                    "problems": list(target_problems(machine, stats))}
+    if not fingerprints_only:
+        record["ambient_step_um_per_K"] = {f"{h:g} h": v for h, v in
+                                           ambient_step_response(machine, fmu_path).items()}
+        record["levels"] = levels(machine, fmu_path)
+        record["heating_fingerprints"] = {
+            run: run_fingerprint(simulate_scenario_run(machine, run, fmu_path))
+            for run in LEVEL_RUNS}
+        if machine.name in MECHANISMS and machine.path == load_machine(machine.name).path:
+            record["mechanism_run"] = MECHANISM_RUN[machine.name]
+            record["mechanisms"] = mechanism_fingerprints(machine.name, fmu_path)
+    return record
+
+
+def write_json(path: Path, names: list[str], fmu_path: Path = DEFAULT_FMU,
+               fingerprints_only: bool = False) -> dict:
+    """``machine_record`` of every machine named, with provenance (the FMU's and each machine
+    file's SHA-256, the command), written atomically to ``path``."""
+    from spindlebench.core import atomic, provenance
+
+    machines = {}
+    for name in names:
+        machine = load_machine(name)
+        machines[machine.name] = machine_record(machine, fmu_path, fingerprints_only)
+    command = ["python", "-m", "spindlebench.studies.fingerprint.machine_check", *names,
+               "--json", str(path)] + (["--fingerprints-only"] if fingerprints_only else [])
+    document = {"machines": machines,
+                "provenance": provenance.provenance(command=" ".join(command),
+                                                    fmu=provenance.file_entry(Path(fmu_path)))}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(path, json.dumps(document, indent=2, allow_nan=False, default=float)
+                      + "\n")
+    return document
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m spindlebench.studies.fingerprint.machine_check",
@@ -247,8 +295,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--levels", action="store_true",
                         help="print bearing rises of the heating runs and the column's "
                         "time constant to the room")
+    parser.add_argument("--json", type=Path, metavar="OUT.json", default=None,
+                        help="write fingerprints, targets, ambient step, levels and "
+                        "mechanisms of every machine named to OUT.json (the model page's "
+                        "source) instead of printing")
+    parser.add_argument("--fingerprints-only", action="store_true",
+                        help="with --json: only the fingerprints and targets (seconds)")
     args = parser.parse_args(argv)
     failed = False
+    if args.json is not None:
+        names = args.machines or machine_names()
+        document = write_json(args.json, names, args.fmu, args.fingerprints_only)
+        print(f"wrote {args.json}")
+        return 1 if any(m["problems"] for m in document["machines"].values()) else 0
     if args.mechanisms:
         for name in args.machines or list(MECHANISMS):
             print(f"## {name}, {MECHANISM_RUN[name]}\n")

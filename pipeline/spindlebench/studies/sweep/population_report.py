@@ -11,15 +11,17 @@ the method; the numbers say which.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from spindlebench.core import atomic
-from spindlebench.core.provenance import package_versions, sha256_file
-from spindlebench.studies.family.population import TABLE_FILE, Member, Population, population_sha256
+from spindlebench.studies.family.population import TABLE_FILE, Member, Population
+from spindlebench.studies.family.population_summary import (
+    on_machines,
+    write_population_provenance,
+)
 
 VERDICT_FILE = Path("summary") / "verdict.csv"
 RESULT_FILE = "population_verdict.csv"
@@ -63,10 +65,6 @@ def fractions(verdicts: pd.DataFrame, n_machines: int) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _pct(count: int, total: int) -> str:
-    return f"{count} of {total} machines ({100.0 * count / total:.0f} %)" if total else "none"
-
-
 def sweep_population_report(out: Path, population: Population, members: list[Member],
                             study_path: Path, fmu: Path) -> str:
     """Write ``population_verdict.csv``, ``README.md`` and ``provenance.json`` of a population
@@ -89,8 +87,8 @@ def sweep_population_report(out: Path, population: Population, members: list[Mem
     for _, row in counts.iterrows():
         total = int(row["machines"])
         lines.append(
-            f"- {row['data']}, k = {row['k']}: *lower* on {_pct(int(row['lower']), total)}, "
-            f"*lower and more stable* on {_pct(int(row['lower_and_more_stable']), total)}; "
+            f"- {row['data']}, k = {row['k']}: *lower* on {on_machines(int(row['lower']), total)}, "
+            f"*lower and more stable* on {on_machines(int(row['lower_and_more_stable']), total)}; "
             f"median gain {row['median_gain_um']:.2f} µm (IQR {row['gain_q1_um']:.2f} to "
             f"{row['gain_q3_um']:.2f} µm).")
     missing = verdicts[verdicts["data"].isna()]["machine"].tolist() if not verdicts.empty \
@@ -107,9 +105,5 @@ def sweep_population_report(out: Path, population: Population, members: list[Mem
                          f"{np.nanmedian(values):.3f} | {np.nanmax(values):.3f} |")
     text = "\n".join(lines) + "\n"
     atomic.write_text(out / "README.md", text)
-    provenance = {"study": str(study_path), "study_sha256": sha256_file(study_path),
-                  "fmu_sha256": sha256_file(fmu), "population": population.describe(),
-                  "seed": population.seed, "machines_sha256": population_sha256(members),
-                  "package_versions": package_versions()}
-    atomic.write_text(out / "provenance.json", json.dumps(provenance, indent=2) + "\n")
+    write_population_provenance(out, population, members, study_path, fmu)
     return text

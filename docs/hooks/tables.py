@@ -1,0 +1,547 @@
+"""The docs' tables, generated from the files the commands write, each with its source beside it.
+
+A page under ``docs/`` asks for a table with a line of its own::
+
+    <!-- generate: fingerprints default -->
+
+and ``expand`` (called by the MkDocs hook ``generate.py`` for every page) replaces it with the
+table, preceded by a marker naming what made it and from which file, and a visible line with
+that file's provenance::
+
+    <!-- table by=fingerprints source=results/docs/machines.json key=default -->
+
+    *From `results/docs/machines.json`, written by `python -m ...` (FMU sha256 1a2b3c4d5e6f).*
+
+    | run | best_raw_psi | ...
+
+``tests/test_docs_tables.py`` finds every table of every page, reads its marker and calls
+``regenerate(by, source, key)``, which must give the same table from that file: a table typed
+by hand has no marker and must be listed there with the reason it is typed.
+
+Sources (``Sources``, the checkout's by default):
+
+- ``bench/results/*.json`` (``bench/results.py record()``: machine, load, date and commit once
+  per file): every file is rendered, known scripts with chosen columns, others key by key;
+- ``results/docs/machines.json``, written by ``machine_check --json`` from
+  ``scenarios/machines/*.toml`` and the FMU (fingerprints, targets, ambient step, levels,
+  mechanisms). It is stale when a machine file or the FMU changed since: ``make docs``
+  (``SPINDLEBENCH_DOCS_RUN=1``) reruns it then, a plain ``mkdocs build`` shows a placeholder
+  naming the command;
+- ``scenarios/machines/*.toml`` and the FMU's model description (the parameters table);
+- the stable-room studies' CSVs under ``results/`` (or their committed copies under
+  ``docs/snapshots/`` when the study has not been run in this checkout: the population runs
+  take half an hour, too long for ``make docs``; the marker names which file was read, and
+  the snapshot's ``provenance.json`` sits beside it).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+MACHINE_CHECK = "python -m spindlebench.studies.fingerprint.machine_check"
+#: ``make docs`` sets it: run the cheap commands whose output is missing or stale.
+RUN_ENV = "SPINDLEBENCH_DOCS_RUN"
+PLACEHOLDER = re.compile(r"^<!-- generate: (\S+)(?: (\S+))? -->$", re.MULTILINE)
+MARKER = re.compile(r"<!-- table by=(\S+) source=(\S+)(?: key=(\S+))? -->")
+#: A result page copies a README the command wrote: all its tables come from that file.
+COPIED = re.compile(r"<!-- tables copied from (\S+) -->")
+
+
+@dataclass(frozen=True)
+class Sources:
+    """Where the generating files are (the checkout's, or a test's copies)."""
+
+    root: Path = ROOT
+    bench: Path = ROOT / "bench" / "results"
+    machines: Path = ROOT / "scenarios" / "machines"
+    machines_json: Path = ROOT / "results" / "docs" / "machines.json"
+    results: Path = ROOT / "results"
+    snapshots: Path = ROOT / "docs" / "snapshots"
+    fmu: Path = ROOT / "fmus" / "SpindleBench.fmu"
+    run: bool = field(default_factory=lambda: os.environ.get(RUN_ENV) == "1")
+
+    def name(self, path: Path) -> str:
+        """``path`` as the marker writes it: relative to the checkout where it is inside."""
+        try:
+            return str(path.resolve().relative_to(self.root.resolve()))
+        except ValueError:
+            return str(path)
+
+    def path(self, name: str) -> Path:
+        return Path(name) if Path(name).is_absolute() else self.root / name
+
+
+# --------------------------------------------------------------------------- formatting
+
+def number(value: Any) -> str:
+    """One cell: floats with 4 significant digits, lists joined, None as a dash."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return "n/a"
+        return f"{value:.4g}" if abs(value) < 1e5 else f"{value:.6g}"
+    if isinstance(value, list | tuple):
+        return " ".join(number(v) for v in value)
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_table(header: list[str], rows: list[list[Any]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(number(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def block(by: str, source: str, key: str | None, provenance: str, table: str) -> str:
+    """A table with its marker and its visible provenance line."""
+    marker = f"<!-- table by={by} source={source}" + (f" key={key}" if key else "") + " -->"
+    return f"{marker}\n\n*{provenance}*\n\n{table}\n"
+
+
+def placeholder(what: str, command: str) -> str:
+    return f"*({what} is not in this build: `{command}` writes it; `make docs` runs it.)*\n"
+
+
+# --------------------------------------------------------------------------- bench results
+
+#: Known bench scripts: (columns of each row: key, header) in the order shown.
+BENCH_COLUMNS: dict[str, list[tuple[str, str]]] = {
+    "bench_startup": [("command", "command"), ("cpu_s_median", "CPU s (median)"),
+                      ("cpu_s_min", "CPU s (min)"), ("runs", "runs"),
+                      ("goal_cpu_s", "goal CPU s"), ("met", "met")],
+    "bench_sweep": [("executor", "executor"), ("workers", "workers"),
+                    ("simulations", "simulations"), ("wall_s", "wall s"),
+                    ("ms_per_simulation", "ms per simulation"),
+                    ("experiments_per_s", "experiments/s"),
+                    ("s_per_evaluation_job", "s per evaluation job")],
+}
+
+
+def bench_provenance(document: Mapping[str, Any], source: str) -> str:
+    machine = document.get("machine", {})
+    load = document.get("load_average") or []
+    commit = document.get("git_commit") or "unknown"
+    return (f"From `{source}`: measured {document.get('date_utc', 'at an unknown date')} on "
+            f"{machine.get('nproc', '?')} cores ({machine.get('cpu_model', 'unknown CPU')}), "
+            f"load average {' / '.join(f'{v:.1f}' for v in load) or 'unknown'}, commit "
+            f"`{commit[:12]}{'+dirty' if commit.endswith('+dirty') else ''}`")
+
+
+def bench_table(path: Path, key: str | None = None) -> str:
+    """The rows of one bench file: chosen columns for a known script, else every scalar key
+    (``key = "goals"``: its goals, key by key)."""
+    document = json.loads(path.read_text(encoding="utf-8"))
+    if key == "goals":
+        goals = document.get("goals") or {}
+        return markdown_table(["goal", "value"], [[k, v] for k, v in sorted(goals.items())])
+    rows = document.get("rows") or []
+    columns = BENCH_COLUMNS.get(document.get("script", path.stem))
+    if columns is None:
+        keys: list[str] = []
+        for row in rows:
+            keys += [k for k, v in row.items() if k not in keys and not isinstance(v, dict)]
+        columns = [(k, k) for k in keys]
+    return markdown_table([h for _, h in columns], [[row.get(k) for k, _ in columns]
+                                                    for row in rows])
+
+
+def speed_section(sources: Sources) -> str:
+    """Every ``bench/results/*.json``: a heading, its provenance once, its goals and rows."""
+    files = sorted(sources.bench.glob("*.json"))
+    if not files:
+        return placeholder("No benchmark result", "make bench")
+    parts = []
+    for path in files:
+        document = json.loads(path.read_text(encoding="utf-8"))
+        source = sources.name(path)
+        script = document.get("script", path.stem)
+        parts.append(f"### `bench/{script}.py`\n\n{bench_provenance(document, source)}.\n")
+        if document.get("goals"):
+            parts.append(block("bench", source, "goals", "Its goals", bench_table(path, "goals")))
+        parts.append(block("bench", source, None, "Its rows", bench_table(path)))
+    return "\n".join(parts)
+
+
+# --------------------------------------------------------------------------- machines
+
+def machines_document(sources: Sources) -> dict | None:
+    """``machines.json`` if it is up to date with the machine files and the FMU; rerun when
+    ``sources.run`` (``make docs``) and it is missing or stale; else None."""
+    document = _read_json(sources.machines_json)
+    if document is not None and not stale(document, sources):
+        return document
+    if not sources.run:
+        return None
+    from spindlebench.studies.fingerprint.machine_check import write_json
+
+    shipped = sources.machines.resolve() == (ROOT / "scenarios" / "machines").resolve()
+    names = [p.stem if shipped else str(p) for p in sorted(sources.machines.glob("*.toml"))]
+    return write_json(sources.machines_json, names, sources.fmu)
+
+
+def _read_json(path: Path) -> dict | None:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def stale(document: Mapping[str, Any], sources: Sources) -> bool:
+    """A machine file added, removed or changed, or another FMU, since the file was written."""
+    from spindlebench.core.provenance import sha256_file
+
+    files = {p.stem: sha256_file(p) for p in sources.machines.glob("*.toml")}
+    recorded = {Path(m["file"]).stem: m["sha256"] for m in document["machines"].values()}
+    fmu = document.get("provenance", {}).get("fmu", {}).get("sha256")
+    return files != recorded or fmu != sha256_file(sources.fmu)
+
+
+def machines_provenance(document: Mapping[str, Any], source: str) -> str:
+    prov = document["provenance"]
+    return (f"From `{source}`, written by `{prov['command']}` (FMU sha256 "
+            f"{prov['fmu']['sha256'][:12]}; machine files as of their sha256 in the file)")
+
+
+def _machine(document: Mapping[str, Any], key: str) -> Mapping[str, Any]:
+    return document["machines"][key]
+
+
+def fingerprints_table(document: Mapping[str, Any], key: str) -> str:
+    from spindlebench.studies.fingerprint.machine_check import table
+
+    return table(_machine(document, key)["fingerprints"])
+
+
+def mechanisms_table(document: Mapping[str, Any], key: str) -> str:
+    from spindlebench.studies.fingerprint.statistics import KEYS
+
+    rows = _machine(document, key)["mechanisms"]
+    return markdown_table([f"`{key}`", *KEYS], [[label, *[f"{s[k]:.3f}" for k in KEYS]]
+                                                 for label, s in rows.items()])
+
+
+def heating_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    """Every machine's constant-room heating runs (2000 to 12 000 rpm, 8 h, noise-free)."""
+    from spindlebench.studies.fingerprint.statistics import KEYS
+
+    rows = [[f"`{name}`", run, *[f"{stats[k]:.3f}" for k in KEYS]]
+            for name, m in document["machines"].items()
+            for run, stats in m.get("heating_fingerprints", {}).items()]
+    return markdown_table(["machine", "run", *KEYS], rows)
+
+
+def targets_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    rows = []
+    for name, m in document["machines"].items():
+        rows.append([f"`{name}`", "; ".join(m["targets"]) or "none",
+                     "all met" if not m["problems"] else "NOT MET: " + "; ".join(m["problems"])])
+    return markdown_table(["machine", "targets", "result"], rows)
+
+
+def levels_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    with_levels = {n: m["levels"] for n, m in document["machines"].items() if "levels" in m}
+    keys = list(next(iter(with_levels.values()))) if with_levels else []
+    return markdown_table(["machine", *keys], [[f"`{n}`", *[f"{lv[k]:.1f}" for k in keys]]
+                                               for n, lv in with_levels.items()])
+
+
+def ambient_step_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    steps = {n: m["ambient_step_um_per_K"] for n, m in document["machines"].items()
+             if "ambient_step_um_per_K" in m}
+    hours = list(next(iter(steps.values()))) if steps else []
+    return markdown_table(["machine (µm/K)", *hours], [[f"`{n}`", *[f"{s[h]:+.2f}"
+                                                                    for h in hours]]
+                                                       for n, s in steps.items()])
+
+
+MACHINE_TABLES: dict[str, tuple[Callable[[Mapping[str, Any], Any], str], str]] = {
+    "fingerprints": (fingerprints_table, "fingerprints"),
+    "mechanisms": (mechanisms_table, "mechanisms"),
+    "targets": (targets_table, "fingerprints"),
+    "heating": (heating_table, "heating_fingerprints"),
+    "levels": (levels_table, "levels"),
+    "ambient-step": (ambient_step_table, "ambient_step_um_per_K"),
+}
+
+
+def machine_section(by: str, key: str | None, sources: Sources) -> str:
+    document = machines_document(sources)
+    command = f"{MACHINE_CHECK} --json {sources.name(sources.machines_json)}"
+    function, needs = MACHINE_TABLES[by]
+    if document is None or (key is not None and key not in document["machines"]) or \
+            not any(needs in m for m in document["machines"].values()):
+        return placeholder(f"The {by} table", command)
+    source = sources.name(sources.machines_json)
+    return block(by, source, key, machines_provenance(document, source),
+                 function(document, key))
+
+
+def parameters_table(machines: Path, fmu: Path) -> str:
+    """Every parameter a machine file sets: unit, the FMU's default, each machine's value and
+    the model's description (which cites its source by key, docs/model.md)."""
+    from spindlebench.machines.variants import load_machine
+    from spindlebench.testbench.runner import inspect_fmu
+
+    files = sorted(machines.glob("*.toml"))
+    loaded = [load_machine(str(p)) for p in files]
+    known = inspect_fmu(fmu).parameters
+    names = sorted({n for m in loaded for n in m.parameters})
+    rows = []
+    for name in names:
+        variable = known.get(name)
+        start = None if variable is None or variable.start is None else float(variable.start)
+        rows.append([f"`{name}`", getattr(variable, "unit", None) or "", start,
+                     *[m.parameters.get(name, "") for m in loaded],
+                     _short(getattr(variable, "description", None) or "")])
+    return markdown_table(["parameter", "unit", "FMU default",
+                           *[f"`{m.name}`" for m in loaded], "model description"], rows)
+
+
+def machine_parameters_table(path: Path, key: str | None = None) -> str:
+    """One machine file's ``[parameters]``, as the machines page shows it."""
+    from spindlebench.machines.variants import load_machine
+
+    machine = load_machine(str(path))
+    return markdown_table(["parameter", "value"], [[f"`{k}`", f"{v:g}"]
+                                                   for k, v in machine.parameters.items()])
+
+
+def machine_parameters_section(path: Path, sources: Sources | None = None) -> str:
+    sources = sources or Sources()
+    source = sources.name(path)
+    return block("machine-parameters", source, None, f"From `{source}`",
+                 machine_parameters_table(path))
+
+
+def _short(text: str, limit: int = 80) -> str:
+    """A model description cut at ``limit`` characters (the full text is the FMU's)."""
+    return text if len(text) <= limit else text[:limit].rsplit(" ", 1)[0] + " …"
+
+
+def parameters_section(sources: Sources) -> str:
+    from spindlebench.core.provenance import sha256_file
+
+    source = sources.name(sources.machines)
+    provenance = (f"From the machine files `{source}/*.toml` and the FMU's model description "
+                  f"(`{sources.name(sources.fmu)}`, sha256 {sha256_file(sources.fmu)[:12]}); "
+                  "an empty cell: the machine keeps the FMU's default; descriptions cut at 80 "
+                  "characters")
+    return block("parameters", source, None, provenance,
+                 parameters_table(sources.machines, sources.fmu))
+
+
+# --------------------------------------------------------------------------- stable-room studies
+
+#: Study result tables: by → (results folder under results/, file, table function).
+STUDY_FILES = {
+    "placement-population": ("placement-stable-room/population", "population_placements.csv"),
+    "placement-default": ("placement-stable-room/default", "placements.csv"),
+    "compensation-population": ("compensate-stable-room/population",
+                                "population_compensation.csv"),
+    "compensation-default": ("compensate-stable-room/default", "summary.csv"),
+}
+STUDY_COMMANDS = {
+    "placement-population": "spindlebench place scenarios/studies/placement_stable_room.toml "
+                            "-o results/placement-stable-room/population",
+    "placement-default": "spindlebench place scenarios/studies/placement_stable_room.toml "
+                         "--machine default -o results/placement-stable-room/default",
+    "compensation-population": "spindlebench compensate "
+                               "scenarios/studies/compensate_stable_room.toml "
+                               "-o results/compensate-stable-room/population",
+    "compensation-default": "spindlebench compensate "
+                            "scenarios/studies/compensate_stable_room.toml --machine default "
+                            "-o results/compensate-stable-room/default",
+}
+
+
+def study_file(by: str, sources: Sources) -> Path | None:
+    """The study's file in ``results/`` if it was run here, else its committed snapshot."""
+    folder, name = STUDY_FILES[by]
+    for base in (sources.results, sources.snapshots):
+        if (base / folder / name).is_file():
+            return base / folder / name
+    return None
+
+
+def _csv(path: Path) -> list[dict[str, str]]:
+    import csv
+
+    with path.open(encoding="utf-8", newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def _share(count: int, total: int) -> str:
+    return f"{count} of {total} ({100.0 * count / total:.0f} %)" if total else "none"
+
+
+def _quartiles(values: list[float]) -> tuple[float, float, float]:
+    import numpy as np
+
+    q1, median, q3 = np.quantile(np.asarray(values, dtype=float), [0.25, 0.5, 0.75])
+    return float(q1), float(median), float(q3)
+
+
+def placement_population_table(path: Path, key: str | None = None) -> str:
+    groups: dict[tuple[str, int], list[dict[str, str]]] = {}
+    for row in _csv(path):
+        if row["gain_um"] not in ("", "nan"):
+            groups.setdefault((row["method"], int(row["m"])), []).append(row)
+    rows = []
+    for (method, m), at in sorted(groups.items()):
+        helps = sum(r["diff_helps"] == "True" for r in at)
+        q1, median, q3 = _quartiles([float(r["gain_um"]) for r in at])
+        rows.append([method, m, _share(helps, len(at)), f"{median:.2f}",
+                     f"{q1:.2f} to {q3:.2f}"])
+    return markdown_table(["method", "m", "machines where differences help",
+                           "median gain (µm)", "gain IQR (µm)"], rows)
+
+
+def placement_default_table(path: Path, key: str | None = None) -> str:
+    rows = _csv(path)
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    budgets = sorted({int(r["m"]) for r in rows})
+    score = {(r["label"], int(r["m"])): r["test_mean_rmse_um"] for r in rows}
+    return markdown_table(["m", *labels], [[m, *[_um(score.get((lb, m))) for lb in labels]]
+                                           for m in budgets])
+
+
+def _um(text: str | None) -> str:
+    return "—" if text in (None, "", "nan") else f"{float(text):.2f}"
+
+
+def compensation_population_table(path: Path, key: str | None = None) -> str:
+    groups: dict[str, list[dict[str, str]]] = {}
+    for row in _csv(path):
+        groups.setdefault(row["retrain"], []).append(row)
+    rows = []
+    for rule, at in groups.items():
+        helps = sum(r["diff_helps"] == "True" for r in at)
+        comp = sum(r["compensation_helps"] == "True" for r in at)
+        q1, median, q3 = _quartiles([float(r["gain_um"]) for r in at])
+        _, best, _ = _quartiles([float(r["best_model_rms_um"]) for r in at])
+        _, none, _ = _quartiles([float(r["uncompensated_rms_um"]) for r in at])
+        rows.append([rule, _share(helps, len(at)), f"{median:.2f}", f"{q1:.2f} to {q3:.2f}",
+                     _share(comp, len(at)), f"{best:.2f}", f"{none:.2f}"])
+    return markdown_table(["retrain", "machines where six_diff beats the raw groups",
+                           "median gain (µm)", "gain IQR (µm)",
+                           "machines where compensation beats none",
+                           "median residual RMS, best model (µm)",
+                           "median uncompensated RMS (µm)"], rows)
+
+
+def compensation_default_table(path: Path, key: str | None = None) -> str:
+    rows = [r for r in _csv(path) if r["part"] == "all days"]
+    return markdown_table(["retrain", "model", "days", "RMS (µm)", "worst daily RMS (µm)",
+                           "peak (µm)", "within tolerance"],
+                          [[r["retrain"], f"`{r['model']}`", r["days"], _um(r["rms_um"]),
+                            _um(r["worst_daily_rms_um"]), _um(r["peak_um"]),
+                            f"{100.0 * float(r['within_tolerance']):.0f} %"] for r in rows])
+
+
+STUDY_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "placement-population": placement_population_table,
+    "placement-default": placement_default_table,
+    "compensation-population": compensation_population_table,
+    "compensation-default": compensation_default_table,
+}
+
+
+def study_provenance(path: Path, source: str, by: str) -> str:
+    record = _read_json(path.parent / "provenance.json") or {}
+    study = record.get("study")
+    study = study.get("path") if isinstance(study, dict) else study
+    versions = record.get("package_versions", {})
+    return (f"From `{source}`, written by `{STUDY_COMMANDS[by]}` (study `{study}`, "
+            f"spindlebench {versions.get('spindlebench', '?')})")
+
+
+def study_section(by: str, sources: Sources) -> str:
+    path = study_file(by, sources)
+    if path is None:
+        return placeholder(f"The {by} table", STUDY_COMMANDS[by])
+    source = sources.name(path)
+    text = block(by, source, None, study_provenance(path, source, by),
+                 STUDY_TABLES[by](path, None))
+    if by == "placement-population":
+        text += "\n" + placement_verdict(path) + "\n"
+    return text
+
+
+def placement_verdict(path: Path) -> str:
+    """The population's verdict in one generated sentence (from the same CSV)."""
+    rows = [r for r in _csv(path) if r["gain_um"] not in ("", "nan")]
+    machines: dict[str, bool] = {}
+    for r in rows:
+        machines[r["machine"]] = machines.get(r["machine"], True) and r["diff_helps"] == "True"
+    helps = sum(r["diff_helps"] == "True" for r in rows)
+    return (f"Over every method and budget the differences help in {_share(helps, len(rows))} "
+            f"machine × method × budget cases, and at every method and budget on "
+            f"{_share(sum(machines.values()), len(machines))} machines.")
+
+
+# --------------------------------------------------------------------------- pages
+
+def section(by: str, key: str | None, sources: Sources) -> str:
+    """What a ``<!-- generate: BY KEY -->`` line becomes."""
+    if by == "speed":
+        return speed_section(sources)
+    if by == "parameters":
+        return parameters_section(sources)
+    if by in MACHINE_TABLES:
+        return machine_section(by, key, sources)
+    if by in STUDY_TABLES:
+        return study_section(by, sources)
+    raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, parameters, "
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES])})")
+
+
+def expand(markdown: str, sources: Sources | None = None) -> str:
+    """Every ``<!-- generate: ... -->`` line of a page replaced by its table(s)."""
+    sources = sources or Sources()
+    return PLACEHOLDER.sub(lambda m: section(m.group(1), m.group(2), sources), markdown)
+
+
+def regenerate(by: str, source: str, key: str | None, sources: Sources | None = None) -> str:
+    """The table a marker says was made by ``by`` from ``source`` (with ``key``), made again
+    from that file alone (the check of ``tests/test_docs_tables.py``)."""
+    sources = sources or Sources()
+    path = sources.path(source)
+    if by == "bench":
+        return bench_table(path, key)
+    if by == "parameters":
+        return parameters_table(path, sources.fmu)
+    if by == "machine-parameters":
+        return machine_parameters_table(path)
+    if by in MACHINE_TABLES:
+        return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
+    return STUDY_TABLES[by](path, key)
+
+
+def tables(markdown: str) -> list[tuple[re.Match | None, str, str]]:
+    """Every Markdown table of a page: (its marker or None, its header line, its text)."""
+    found = []
+    lines = markdown.splitlines()
+    i = 0
+    while i < len(lines):
+        if lines[i].startswith("|") and i + 1 < len(lines) and \
+                re.match(r"^\|(\s*:?-+:?\s*\|)+\s*$", lines[i + 1]):
+            start = i
+            while i < len(lines) and lines[i].startswith("|"):
+                i += 1
+            before = [ln for ln in lines[max(0, start - 4):start] if ln.strip()]
+            marker = next((MARKER.fullmatch(ln.strip()) for ln in reversed(before)
+                           if MARKER.fullmatch(ln.strip())), None)
+            found.append((marker, lines[start], "\n".join(lines[start:i])))
+        else:
+            i += 1
+    return found
