@@ -1242,4 +1242,97 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     tilt_b_urad = (probe_X1_um - probe_X2_um) / probe_l;
   end MachiningCentre;
 
+  package Examples "Small models, each exercising a few components against a reference result and, where one exists, an analytical solution"
+    // Each has an experiment annotation; its reference result is
+    // models/Resources/Reference/SpindleBench/Examples/<name>.csv, written by
+    //   python -m spindlebench.model.examples --write-references
+    // and compared by tests/test_model_examples.py (through the build's pymoca/CasADi path).
+
+    model TwoSegmentRod "A rod of two segments between a warm and a cool end: the steady state is the linear profile"
+      import SpindleBench.HeatTransfer.Components.SegmentedSolid;
+      import SpindleBench.HeatTransfer.Sources.PrescribedTemperature;
+      import SpindleBench.HeatTransfer.Sources.PrescribedHeatFlow;
+      parameter Real T_warm(unit = "K", min = 250.0, max = 400.0) = 313.15 "Temperature held at end a (x = 0)";
+      parameter Real T_cool(unit = "K", min = 250.0, max = 400.0) = 293.15 "Temperature held at end b (x = 1)";
+      SegmentedSolid rod(n = 2, C = 2000.0, G = 5.0, L = 0.5, alpha = 1.15e-5, T_nominal = 293.15)
+        "Steel rod, 0.5 m, 2 segments starting at 20 degC; end-to-end conductance 5 W/K";
+      PrescribedTemperature warm "Warm end";
+      PrescribedTemperature cool "Cool end";
+      PrescribedHeatFlow no_heat_1 "Nothing enters through positional port 1";
+      PrescribedHeatFlow no_heat_2 "Nothing enters through positional port 2";
+      PrescribedHeatFlow no_heat_3 "Nothing enters through positional port 3";
+      output Real T1_C(unit = "degC") "Segment 1 (centre at x = 1/4)";
+      output Real T2_C(unit = "degC") "Segment 2 (centre at x = 3/4)";
+      output Real Q_W(unit = "W") "Heat entering the rod at the warm end";
+      output Real dL_um(unit = "um") "Elongation of the rod relative to 20 degC";
+    equation
+      warm.T = T_warm;
+      cool.T = T_cool;
+      no_heat_1.Q_flow = 0.0;
+      no_heat_2.Q_flow = 0.0;
+      no_heat_3.Q_flow = 0.0;
+      rod.G_side1 = 0.0;
+      rod.G_side2 = 0.0;
+      connect(warm.port, rod.port_a);
+      connect(rod.port_b, cool.port);
+      connect(no_heat_1.port, rod.port_1);
+      connect(no_heat_2.port, rod.port_2);
+      connect(no_heat_3.port, rod.port_3);
+      connect(rod.side_1, cool.port);
+      connect(rod.side_2, cool.port);
+      T1_C = rod.T[1] - 273.15;
+      T2_C = rod.T[2] - 273.15;
+      Q_W = rod.port_a.Q_flow;
+      dL_um = 1.0e6 * rod.dL;
+      annotation(experiment(StartTime = 0.0, StopTime = 600.0, Interval = 10.0, Tolerance = 1.0e-8));
+    end TwoSegmentRod;
+
+    model BearingAtSpeed "The front bearing set at 8000 rpm in a seat held at 20 degC: Palmgren friction heat against the seat conductance"
+      import SpindleBench.HeatTransfer.Components.HeatCapacitor;
+      import SpindleBench.HeatTransfer.Components.ThermalConductor;
+      import SpindleBench.HeatTransfer.Sources.PrescribedTemperature;
+      import SpindleBench.Machine.BearingFriction;
+      parameter Real n_rpm(unit = "rev/min", min = 0.0, max = 30000.0) = 8000.0 "Shaft speed";
+      parameter Real T_seat(unit = "K", min = 250.0, max = 400.0) = 293.15 "Temperature held at the seat";
+      BearingFriction friction(f0 = 0.75, z = 2.0, f1 = 4.0e-4, P1 = 1500.0, dm = 0.09, nu_40 = 22.0, nu_100 = 4.3)
+        "The machine's front set: 2 x 7014, ISO VG 22 base oil [SKF, HK, D341]";
+      HeatCapacitor rings(C = 1000.0) "Bearing rings and balls (2.2 kg)";
+      ThermalConductor seat(G = 15.0) "Outer rings - seat [BT, HOL]";
+      PrescribedTemperature housing "The seat, held at T_seat";
+      output Real T_rings_C(unit = "degC") "Bearing ring temperature";
+      output Real Q_friction_W(unit = "W") "Friction heat of the set";
+      output Real Q_seat_W(unit = "W") "Heat conducted into the seat";
+    equation
+      friction.n_rpm = n_rpm;
+      friction.P_thermal = 0.0;
+      housing.T = T_seat;
+      connect(friction.port, rings.port);
+      connect(rings.port, seat.port_a);
+      connect(seat.port_b, housing.port);
+      T_rings_C = rings.T - 273.15;
+      Q_friction_W = friction.Q_flow;
+      Q_seat_W = seat.Q_flow;
+      annotation(experiment(StartTime = 0.0, StopTime = 900.0, Interval = 10.0, Tolerance = 1.0e-8));
+    end BearingAtSpeed;
+
+    model ProbeOnPlate "A contact probe put on a plate at 40 degC in 20 degC air: a first-order lag towards a reading between the two"
+      import SpindleBench.HeatTransfer.Sources.PrescribedTemperature;
+      import SpindleBench.Machine.ContactSensor;
+      parameter Real T_plate(unit = "K", min = 250.0, max = 400.0) = 313.15 "Plate temperature";
+      parameter Real T_air(unit = "K", min = 250.0, max = 400.0) = 293.15 "Air temperature";
+      ContactSensor probe(C = 10.0, G_contact = 0.5, G_env = 0.02) "The machine's T1 probe, starting at 20 degC";
+      PrescribedTemperature plate "The plate";
+      PrescribedTemperature air "The air";
+      output Real T_probe_C(unit = "degC") "Probe reading";
+    equation
+      plate.T = T_plate;
+      air.T = T_air;
+      connect(probe.port, plate.port);
+      connect(probe.port_env, air.port);
+      T_probe_C = probe.T - 273.15;
+      annotation(experiment(StartTime = 0.0, StopTime = 120.0, Interval = 1.0, Tolerance = 1.0e-8));
+    end ProbeOnPlate;
+
+  end Examples;
+
 end SpindleBench;
