@@ -185,8 +185,9 @@ def _solve_linear_block(residuals: ca.SX, unknowns: ca.SX, jac: ca.SX,
 
     The alias equations (``u_i = ±u_j``) are substituted first and the rest is one
     ``casadi.solve`` of the remaining unknowns: a loop through a sub-assembly's port is then
-    solved at the size it has without the port (a 24 × 24 solve became 13 × 13), which keeps
-    the FMU's right-hand side as short as it was before the machine was split.
+    solved at about the size it has without the port (the split machine's largest block had 24
+    unknowns before this step, 15 after), and the FMU's right-hand side stays short (7562 CasADi
+    instructions, against 8850 of the machine before the split without this step).
     """
     n = unknowns.numel()
     aliases = _aliases(residuals, unknowns, jac)
