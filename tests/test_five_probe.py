@@ -119,8 +119,8 @@ def test_probe_columns_only_when_the_scenario_asks(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("good, bad", [
     ("curvature = alpha * delta_T / (depth / 2.0);", "curvature = alpha * delta_T;"),
-    ("x_screw_error = alpha_steel * (x_screw.T - T_ref) * x_target_m;",
-     "x_screw_error = alpha_steel * (x_screw.T - T_ref);"),
+    ("x_screw_error = alpha_steel * (x_drive.x_screw.T - T_ref) * x_target_m;",
+     "x_screw_error = alpha_steel * (x_drive.x_screw.T - T_ref);"),
     ("tilt_a_urad = (probe_Y1_um - probe_Y2_um) / probe_l;",
      "tilt_a_urad = probe_Y1_um - probe_Y2_um;"),
 ])

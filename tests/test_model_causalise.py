@@ -64,3 +64,24 @@ def test_structurally_singular_model_is_refused():
     residuals = ca.vertcat(a - 1, 2 * a - 2)  # two equations for a, none for b
     with pytest.raises(SpindlebenchError, match="structurally singular"):
         solve_explicitly(residuals, ca.vertcat(a, b), ["a", "b"])
+
+
+def test_a_loop_through_a_port_is_solved_at_the_size_it_has_without_the_port():
+    # the junction above, with conductor b reached through a sub-assembly's port (pT, pQ):
+    # the alias equations pT = j, pQ = -q2 and q1 = -pQ are substituted: a 2 x 2 solve, not 5 x 5
+    ta, tb, g1, g2 = symbols("Ta", "Tb", "G1", "G2")
+    j, q1, q2, pt, pq = symbols("j", "q1", "q2", "pT", "pQ")
+    residuals = ca.vertcat(
+        q1 - g1 * (ta - j),
+        q2 - g2 * (pt - tb),
+        pt - j,  # the port's temperature is the junction's
+        pq + q2,  # the port's flow (into the assembly) is what leaves through b
+        q1 + pq,  # the junction stores nothing
+    )
+    unknowns = ca.vertcat(j, q1, q2, pt, pq)
+    solution, simultaneous = solve_explicitly(residuals, unknowns, ["j", "q1", "q2", "pT", "pQ"])
+    assert simultaneous == [2]
+    f = ca.Function("f", [ca.vertcat(ta, tb, g1, g2)], [solution])
+    j_val, q1_val, q2_val, pt_val, pq_val = np.array(f([300.0, 280.0, 2.0, 3.0])).ravel()
+    assert j_val == pytest.approx((2 * 300 + 3 * 280) / 5)
+    assert (pt_val, pq_val, q2_val) == (j_val, -q1_val, pytest.approx(q1_val))

@@ -6,6 +6,7 @@ import pytest
 from conftest import MODELS
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.model import MODEL_FILE
+from spindlebench.model.equations import flat_name
 from spindlebench.model.frontend import model_source, translate, validate
 
 
@@ -40,9 +41,12 @@ def test_rumoca_reports_a_syntax_error_with_its_line(tmp_path):
 
 def test_pymoca_translates_the_machine_with_the_requested_segments():
     translated = translate(MODELS, segments=3)
-    shapes = {v.symbol.name(): v.symbol.shape for v in translated.model.states}
+    shapes = {flat_name(v.symbol.name(), assemblies=translated.assemblies): v.symbol.shape
+              for v in translated.model.states}
     for part in ("spindle_shaft", "housing", "column", "bed", "table"):
-        assert shapes[f"{part}.T"] == (3, 1)
+        assert shapes[f"{part}_T"] == (3, 1)
+    assert translated.assemblies == {"spindle_unit", "headstock", "column_unit", "bed_and_table",
+                                     "test_setup", "z_drive", "x_drive", "y_drive"}
     assert translated.symbols["drift_um"].unit == "um"
     assert translated.symbols["h_nat"].description
 

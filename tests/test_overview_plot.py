@@ -113,7 +113,17 @@ def test_spread_labels_keeps_order_and_gap_and_moves_as_little_as_needed():
 
 def test_the_part_table_matches_the_models_sensor_connections():
     source = (MODELS_DIR / "SpindleBench.mo").read_text(encoding="utf-8")
-    connected = {m[1]: m[2].removesuffix(".port")
+
+    def inside(port: str) -> str:
+        """``spindle_unit.cap`` → ``front_cap.port``: the node an assembly's port is joined to."""
+        instance, name = port.split(".")
+        kind = re.search(rf"^\s+(\w+) {instance}\(", source, re.M)
+        if kind is None:  # a component of the machine itself (ambient)
+            return port
+        body = re.search(rf"model {kind[1]} .*?end {kind[1]};", source, re.S)[0]
+        return re.search(rf"connect\(([\w.]+), {name}\);", body)[1]
+
+    connected = {m[1]: inside(m[2]).removesuffix(".port")
                  for m in re.finditer(r"connect\(sensor_(T\d+)\.port,\s*([\w.]+)\)", source)}
     assert connected == {s: node for s, (node, _) in LOCATIONS.items()} | {"T10": "ambient"}
     assert sorted(s for part in PARTS for s in part.sensors) == sorted(LOCATIONS)

@@ -6,7 +6,8 @@ symbolic solve would not scale, so we do what Modelica tools do: match every equ
 unknown (maximum bipartite matching), find the strongly connected blocks of the dependency
 graph (Tarjan) and solve the blocks in dependency order. Each block must be linear in its own
 unknowns (it may be nonlinear in earlier ones, e.g. Palmgren friction in a node temperature);
-a scalar block is a division, a larger one a small ``casadi.solve``.
+a scalar block is a division, a larger one a small ``casadi.solve`` after its alias equations
+(``u_i = ±u_j``) are substituted.
 """
 
 from __future__ import annotations
@@ -137,14 +138,73 @@ def solve_explicitly(
                 f"equations for {names} are nonlinear in these unknowns; only blocks linear "
                 "in their own unknowns can be solved"
             )
-        offset = ca.substitute(block_residuals, block_unknowns, ca.DM.zeros(len(cols)))
         if len(cols) == 1:
+            offset = ca.substitute(block_residuals, block_unknowns, ca.DM.zeros(len(cols)))
             values = [-offset / jac]
         else:
-            simultaneous.append(len(cols))
-            solved = ca.solve(jac, -offset)
-            values = [solved[i] for i in range(len(cols))]
+            values = _solve_linear_block(block_residuals, block_unknowns, jac, simultaneous)
         for j, value in zip(cols, values, strict=True):
             solution[j] = value
             solved_by_name[unknown_names[j]] = j
     return ca.vertcat(*solution), simultaneous
+
+
+
+def _aliases(residuals: ca.SX, unknowns: ca.SX, jac: ca.SX) -> dict[int, tuple[int, float, int]]:
+    """Equations of a block that only say ``u_i = ±u_j``, the equations of a connection set
+    of two connectors (a port of a sub-assembly and what it joins inside):
+    unknown ``i`` → (``j``, sign, the equation's row). No chain closes on itself."""
+    zeros = ca.DM.zeros(unknowns.numel())
+    aliases: dict[int, tuple[int, float, int]] = {}
+    for k in range(residuals.numel()):
+        row = [j for j in range(unknowns.numel()) if not jac[k, j].is_zero()]
+        if len(row) != 2 or not all(jac[k, j].is_constant() for j in row):
+            continue
+        a, b = (float(ca.DM(jac[k, j])) for j in row)
+        if abs(a) != 1.0 or abs(b) != 1.0 or not ca.substitute(residuals[k], unknowns,
+                                                               zeros).is_zero():
+            continue
+        i, j = row
+        if i not in aliases and _root(j, aliases)[0] != i:
+            aliases[i] = (j, -b / a, k)
+    return aliases
+
+
+def _root(i: int, aliases: dict[int, tuple[int, float, int]]) -> tuple[int, float]:
+    """The unknown at the end of ``i``'s alias chain, and the sign it carries."""
+    sign = 1.0
+    while i in aliases:
+        i, step, _ = aliases[i]
+        sign *= step
+    return i, sign
+
+
+def _solve_linear_block(residuals: ca.SX, unknowns: ca.SX, jac: ca.SX,
+                        simultaneous: list[int]) -> list[ca.SX]:
+    """Values of the unknowns of a linear block ``residuals(unknowns) == 0``.
+
+    The alias equations (``u_i = ±u_j``) are substituted first and the rest is one
+    ``casadi.solve`` of the remaining unknowns: a loop through a sub-assembly's port is then
+    solved at about the size it has without the port (the split machine's largest block had 24
+    unknowns before this step, 15 after), and the FMU's right-hand side stays short (7562 CasADi
+    instructions, against 8850 of the machine before the split without this step).
+    """
+    n = unknowns.numel()
+    aliases = _aliases(residuals, unknowns, jac)
+    roots = [_root(j, aliases) for j in range(n)]
+    kept = [j for j in range(n) if j not in aliases]
+    alias_rows = {row for _, _, row in aliases.values()}
+    reduced = ca.vertcat(*[residuals[k] for k in range(residuals.numel()) if k not in alias_rows])
+    if aliases:
+        reduced = ca.substitute(reduced, unknowns, ca.vertcat(
+            *[unknowns[t] if sign == 1.0 else -unknowns[t] for t, sign in roots]))
+    kept_unknowns = ca.vertcat(*[unknowns[j] for j in kept])
+    reduced_jac = ca.jacobian(reduced, kept_unknowns) if aliases else jac
+    offset = ca.substitute(reduced, kept_unknowns, ca.DM.zeros(len(kept)))
+    if len(kept) == 1:
+        solved = -offset / reduced_jac
+    else:
+        simultaneous.append(len(kept))
+        solved = ca.solve(reduced_jac, -offset)
+    value_of = {j: solved[i] for i, j in enumerate(kept)}
+    return [value_of[t] if sign == 1.0 else -value_of[t] for t, sign in roots]

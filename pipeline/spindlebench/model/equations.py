@@ -6,9 +6,12 @@ parameters, substituted) and structural integers (array sizes, fixed at build ti
 equations are causalised. The FMU export and the ``solve_ivp`` baseline of ``bench/`` both use
 this object, so they integrate exactly the same equations.
 
-Naming (the FMU interface in docs/contracts.md): dots become underscores; element ``i`` of an
-array state ``a.T`` is the state ``a_i_T``; every state except the sensor probes'
-(``sensor_*``) is a node of the temperature field with an output ``node_<a_i>_C``.
+Naming (the FMU interface in docs/contracts.md): the sub-assembly level is dropped
+(``spindle_unit.front_bearing.C`` is ``front_bearing_C``: the FMU names were fixed before the
+machine was split into sub-assemblies, and recordings and machine files use them), then dots
+become underscores; element ``i`` of an array state ``a.T`` is the state ``a_i_T``; every state
+except the sensor probes' (``sensor_*``) is a node of the temperature field with an output
+``node_<a_i>_C``.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ import numpy as np
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import node_of_output, node_output
-from spindlebench.model import DEFAULT_SEGMENTS
+from spindlebench.model import DEFAULT_SEGMENTS, MODEL_CLASS
 from spindlebench.model.causalise import solve_explicitly
 from spindlebench.model.frontend import TranslatedModel, translate
 
@@ -70,9 +73,13 @@ class ExplicitOde:
         return np.array([overrides.get(name, value) for name, value in self.parameters.items()])
 
 
-def flat_name(path: str, index: int | None = None) -> str:
-    """FMU name of a Modelica variable: ``a.b.T`` → ``a_b_T``, ``a.T[3]`` → ``a_3_T``."""
+def flat_name(path: str, index: int | None = None, assemblies: frozenset[str] = frozenset()) -> str:
+    """FMU name of a Modelica variable: ``a.b.T`` → ``a_b_T``, ``a.T[3]`` → ``a_3_T``; a first
+    part that is one of the machine's ``assemblies`` is dropped (``headstock.housing.T[3]`` →
+    ``housing_3_T``)."""
     parts = path.split(".")
+    if len(parts) > 2 and parts[0] in assemblies:
+        parts = parts[1:]
     if index is not None:
         parts.insert(len(parts) - 1, str(index))
     return "_".join(parts)
@@ -94,7 +101,7 @@ class _Group:
     bases: list[str]  # declared variable of each element, e.g. ``housing.T``
 
 
-def _group(variables: list) -> _Group:
+def _group(variables: list, assemblies: frozenset[str] = frozenset()) -> _Group:
     mx, names, flat, bases = [], [], [], []
     for variable in variables:
         symbol = variable.symbol
@@ -103,12 +110,12 @@ def _group(variables: list) -> _Group:
         mx.append(symbol)
         if size == 1 and symbol.shape == (1, 1):
             names.append(base)
-            flat.append(flat_name(base))
+            flat.append(flat_name(base, assemblies=assemblies))
             bases.append(base)
         else:
             for i in range(1, size + 1):
                 names.append(f"{base}[{i}]")
-                flat.append(flat_name(base, i))
+                flat.append(flat_name(base, i, assemblies))
                 bases.append(base)
     sx = ca.vertcat(*[ca.SX.sym(name) for name in names]) if names else ca.SX(0, 1)
     return _Group(mx=mx, sx=sx, names=names, flat=flat, bases=bases)
@@ -183,11 +190,11 @@ def _resolve_parameters(model, group: _Group) -> tuple[ca.SX, dict[str, float], 
 def build_explicit_ode(translated: TranslatedModel) -> ExplicitOde:
     """Causalise a translated model into an :class:`ExplicitOde`."""
     model = translated.model
-    states = _group(model.states)
-    derivatives = _group(model.der_states)
-    algebraics = _group(model.alg_states)
-    inputs = _group(model.inputs)
-    params = _group(model.parameters)
+    assemblies = translated.assemblies
+    states, derivatives, algebraics, inputs, params = (
+        _group(group, assemblies) for group in (
+            model.states, model.der_states, model.alg_states, model.inputs, model.parameters)
+    )
 
     residual_function = ca.Function(
         "residuals",
@@ -275,7 +282,10 @@ def _annotations(translated, states, inputs, params, tunable_index, output_names
     descriptions: dict[str, str] = {}
 
     def owner_of(base: str) -> str:
-        return owners.get(base.split(".")[0], "") if "." in base else ""
+        parts = base.split(".")
+        if len(parts) > 2 and parts[0] in translated.assemblies:
+            parts = parts[1:]
+        return owners.get(parts[0], "") if len(parts) > 1 else ""
 
     def declared(flat: str, base: str) -> None:
         info = symbols.get(base)
@@ -320,6 +330,8 @@ def _bounds(translated, inputs, params, tunable_index) -> dict:
     return bounds
 
 
-def explicit_ode(model_dir: str | Path = "models", segments: int = DEFAULT_SEGMENTS) -> ExplicitOde:
-    """Translate ``model_dir``'s Modelica package and return its explicit ODE."""
-    return build_explicit_ode(translate(model_dir, segments))
+def explicit_ode(model_dir: str | Path = "models", segments: int = DEFAULT_SEGMENTS,
+                 model_class: str = MODEL_CLASS) -> ExplicitOde:
+    """Translate ``model_dir``'s Modelica package (its machine, or ``model_class``) and return
+    its explicit ODE."""
+    return build_explicit_ode(translate(model_dir, segments, model_class))

@@ -24,6 +24,8 @@ from spindlebench.model.units import check_connections, check_declared_units, ch
 ca.MX.__div__ = ca.MX.__truediv__
 
 SEGMENTS_PARAMETER = "nSeg"
+#: The package of the machine's sub-assemblies (``SpindleBench.Assemblies``).
+ASSEMBLY_PACKAGE = "Assemblies"
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,9 @@ class TranslatedModel:
     component_descriptions: dict[str, str]
     source: Path
     segments: int
+    #: Instance names of the machine's sub-assemblies (classes of ``ASSEMBLY_PACKAGE``): the
+    #: FMU names drop them (``equations.flat_name``).
+    assemblies: frozenset[str] = frozenset()
 
 
 def model_source(model_dir: str | Path) -> Path:
@@ -113,8 +118,10 @@ def check_segments(segments: object) -> None:
                                 f"{segments!r}")
 
 
-def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
-    """Parse and flatten the machine model into pymoca's CasADi representation.
+def translate(model_dir: str | Path, segments: int,
+              model_class: str = MODEL_CLASS) -> TranslatedModel:
+    """Parse and flatten the machine model (or another class of the package, such as an
+    ``Examples`` model, which has no segment count to set) into pymoca's CasADi representation.
 
     Errors in the Modelica text become one line naming the file and line.
     """
@@ -138,11 +145,14 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
         raise SpindlebenchError(f"{where}: Modelica syntax error: {message}") from None
     if tree is None:
         raise SpindlebenchError(f"{path}: Modelica source could not be parsed")
-    _set_segments(tree, path, segments)
+    if model_class == MODEL_CLASS:
+        _set_segments(tree, path, segments)
+    elif _class_of(tree, model_class) is None:
+        raise SpindlebenchError(f"{path}: no class {model_class}")
     check_connections(tree, path)  # file:line of a connect() of two different connectors
     try:
         with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
-            flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string(MODEL_CLASS))
+            flat = pymoca.tree.flatten(tree, pymoca.ast.ComponentRef.from_string(model_class))
         (flat_class,) = flat.classes.values()
     except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
         raise SpindlebenchError(_semantic_error(path, exc)) from None
@@ -151,7 +161,7 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
         with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
             # generator.generate() would flatten a second time; walk the flat tree ourselves.
             options = generator._merge_default_options(None)
-            casadi_generator = generator.Generator(flat, MODEL_CLASS, options)
+            casadi_generator = generator.Generator(flat, model_class, options)
             generator.GeneratorWalker().walk(casadi_generator, flat)
             model = casadi_generator.model
     except Exception as exc:  # pymoca raises many types; all mean "this model is wrong"
@@ -165,18 +175,43 @@ def translate(model_dir: str | Path, segments: int) -> TranslatedModel:
         )
         for name, sym in flat_class.symbols.items()
     }
-    package, machine = MODEL_CLASS.split(".")
-    components = {
-        name: str(sym.comment or "")
-        for name, sym in tree.classes[package].classes[machine].symbols.items()
-    }
+    assemblies, components = _components(tree, model_class)
     return TranslatedModel(
         model=model,
         symbols=symbols,
         component_descriptions=components,
         source=path,
         segments=segments,
+        assemblies=assemblies,
     )
+
+
+def _components(tree: Any, model_class: str) -> tuple[frozenset[str], dict[str, str]]:
+    """The model's sub-assembly instances, and the description of every component by its
+    FMU name: the model's own, and those inside its sub-assemblies (``front_bearing``)."""
+    top = _class_of(tree, model_class).symbols
+    package = model_class.split(".")[0]
+    assembly_classes = getattr(tree.classes[package].classes.get(ASSEMBLY_PACKAGE), "classes", {})
+    assemblies = frozenset(
+        name for name, sym in top.items()
+        if str(getattr(sym.type, "name", sym.type)).split(".")[-1] in assembly_classes
+    )
+    components = {name: str(sym.comment or "") for name, sym in top.items()}
+    for name in sorted(assemblies):
+        kind = str(getattr(top[name].type, "name", top[name].type)).split(".")[-1]
+        for inner, sym in assembly_classes[kind].symbols.items():
+            components.setdefault(inner, str(sym.comment or ""))
+    return assemblies, components
+
+
+def _class_of(tree: Any, dotted: str) -> Any:
+    """The parsed class ``A.B.C`` of the tree, or None."""
+    found: Any = tree
+    for part in dotted.split("."):
+        found = getattr(found, "classes", {}).get(part)
+        if found is None:
+            return None
+    return found
 
 
 def _set_segments(tree: Any, path: Path, segments: int) -> None:

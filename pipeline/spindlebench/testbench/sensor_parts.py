@@ -2,9 +2,10 @@
 
 One home for "which part is T7 on", so the recording plot (one colour family per part), the
 sensor map and the notebooks say the same thing. The first field of ``LOCATIONS`` is what
-the probe is connected to in ``models/SpindleBench.mo`` (``connect(sensor_Tk.port, X)``: a
-lumped node by its component name, a port of a segmented part as ``part.port_k``; a test
-reads the model and checks this table against it). The ambient probe T10 hangs in the air.
+the probe is connected to in ``models/SpindleBench.mo`` (``connect(sensor_Tk.port, X)``, X a
+sub-assembly's port, joined inside the assembly to a lumped node, named here by its component
+name, or to a port of a segmented part, named ``part.port_k``; a test reads the model and
+checks this table against it). The ambient probe T10 hangs in the air.
 """
 
 from __future__ import annotations
