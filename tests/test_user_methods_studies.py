@@ -39,6 +39,7 @@ def _code_record(provenance: dict) -> dict:
     return code
 
 
+@pytest.mark.slow
 def test_user_method_in_paper_runs_like_a_built_in(tmp_path, as_built_in):
     files = experiment_files(tmp_path, count=3)
     config = tmp_path / "study.toml"

@@ -24,8 +24,10 @@ prediction for every other one.
 
 The dynamic entrants, labels ``dynamic:NAME`` (``DYNAMIC``), wrap the identification
 estimators so they fit on the training run itself (``X`` = ``time_s``, the spindle speed,
-and for the observer the raw values of the ``k`` sensors most correlated with the error on
-that run):
+and for the observer the rises since the run's first row of the ``k`` sensors most
+correlated with the error on that run: raw degC would make a held-out run that starts warmer
+than the training one look like heating to the filter, which a held-out July run showed,
+89 um against 4.2 um with rises on the ambient-following machine):
 
 - ``dynamic:tf1``: ``TransferFunctionRegressor(order=1)``, the speed's heat input through
   one lag;
@@ -106,7 +108,8 @@ def parse_dynamic(label: str) -> DynamicChoice:
 
 class RunModel:
     """An identification estimator fitted on one run and predicting whole runs: ``X`` is the
-    run's time, speed and (observer) the chosen sensors' raw values in degC."""
+    run's time, speed and (observer) the chosen sensors' rises (K since the run's first
+    row, as every static model reads them)."""
 
     def __init__(self, choice: DynamicChoice, k: int, seed: int) -> None:
         from spindlebench.identification import estimators
@@ -121,7 +124,9 @@ class RunModel:
         if missing:
             raise SpindlebenchError(f"a dynamic model needs column(s) {', '.join(missing)} "
                                     "in every run")
-        return run.loc[:, [TIME_COLUMN, SPEED_COLUMN, *self.sensors]].to_numpy(float)
+        X = run.loc[:, [TIME_COLUMN, SPEED_COLUMN, *self.sensors]].to_numpy(float, copy=True)
+        X[:, 2:] -= X[0, 2:]
+        return X
 
     def fit_run(self, run: pd.DataFrame, target: str, sensors: Sequence[str]) -> RunModel:
         y = run[target].to_numpy(float)
