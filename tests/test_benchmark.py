@@ -235,7 +235,11 @@ def test_default_suite_loads_with_a_version():
         pytest.skip("the CAIVIAC recording is not beside this checkout")
     suite = load_suite("default", root)
     assert suite.version and len(suite.tasks_sha256) == 64
-    assert [t.kind for t in suite.tasks] == ["synthetic", "synthetic", "caiviac", "caiviac"]
+    assert [t.kind for t in suite.tasks] == ["synthetic", "synthetic", "synthetic", "scenarios",
+                                             "scenarios", "caiviac", "caiviac"]
+    assert suite.version == "2.0"
+    iso = next(t for t in suite.tasks if t.name == "iso230-3-spindle")
+    assert [p.name for p in iso.predict] == ["spindle.toml"] and iso.probes and not iso.others
 
 
 def test_stability_and_ranks():
@@ -357,3 +361,203 @@ def test_suite_hash_ignores_comments_but_not_parameters(tmp_path):
     assert "\nA_column = 5.0" in machine
     (tmp_path / "m.toml").write_text(machine.replace("\nA_column = 5.0", "\nA_column = 6.0"))
     assert load_suite(tmp_path / "s.toml").tasks_sha256 != base
+
+
+# --- issue 23: the rollout metric, scenario and population tasks ---------------------------
+SCENARIO = """\
+name = "{name}"
+duration_s = 7200
+step_s = 60.0
+sample_interval_s = 120.0
+seed = {seed}
+
+[speed]
+kind = "steps"
+steps = [{{ at_s = 0, rpm = {rpm} }}, {{ at_s = {stop}, rpm = 0 }}]
+
+[feed]
+kind = "constant"
+x_mm_per_min = 0
+y_mm_per_min = 0
+
+[ambient]
+kind = "constant"
+temperature_C = 20.0
+
+[sensors]
+noise_C = 0.05
+quantum_C = 0.1
+
+[initial]
+kind = "cold"
+"""
+SCENARIO_SUITE = """\
+[suite]
+name = "tiny-scenarios"
+version = "0.1"
+k = 2
+methods = ["lasso", "dynamic:tf1", "dynamic:observer"]
+
+[[task]]
+name = "iso"
+kind = "scenarios"
+train = ["a.toml", "b.toml"]
+predict = ["iso.toml"]
+others = false
+targets = ["drift_um", "drift_y_um"]
+probes = true
+"""
+
+
+@pytest.fixture(scope="module")
+def scenario_suite(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("scenario-suite")
+    for name, rpm, stop, seed in (("a", 4000, 7140, 1), ("b", 2000, 7140, 2),
+                                  ("iso", 4000, 3600, 3)):
+        (folder / f"{name}.toml").write_text(SCENARIO.format(name=name, rpm=rpm, stop=stop,
+                                                             seed=seed))
+    (folder / "s.toml").write_text(SCENARIO_SUITE)
+    return folder / "s.toml"
+
+
+@pytest.fixture(scope="module")
+def scenario_board(scenario_suite, tmp_path_factory):
+    out = tmp_path_factory.mktemp("scenario-board")
+    assert main(["benchmark", str(scenario_suite), "-o", str(out)]) == 0
+    return pd.read_csv(out / "leaderboard.csv"), pd.read_csv(out / "folds.csv")
+
+
+@pytest.fixture(scope="module")
+def scenario_tasks(scenario_suite):
+    return build_tasks(load_suite(scenario_suite).tasks[0])
+
+
+def test_scenario_task_folds_targets_and_probes(scenario_suite, scenario_tasks):
+    suite = load_suite(scenario_suite)
+    tasks = scenario_tasks
+    assert [t.name for t in tasks] == ["iso/drift_um", "iso/drift_y_um"]
+    for task in tasks:  # each training scenario once; only the ISO run predicted
+        assert [(f.train_name, list(f.tests)) for f in task.folds] == [("a", ["iso"]),
+                                                                      ("b", ["iso"])]
+        assert "probe_X1_um" in task.folds[0].train  # probes = true on every run
+    # the hash covers the scenario files' bytes
+    before = suite.tasks_sha256
+    path = scenario_suite.parent / "iso.toml"
+    path.write_text(path.read_text().replace("seed = 3", "seed = 4"))
+    try:
+        assert load_suite(scenario_suite).tasks_sha256 != before
+    finally:
+        path.write_text(path.read_text().replace("seed = 4", "seed = 3"))
+
+
+@pytest.mark.slow
+def test_rollout_equals_rmse_for_static_models_not_for_the_observer(scenario_board):
+    frame, folds = scenario_board
+    assert frame["error"].isna().all(), frame["error"].dropna().tolist()
+    static = ~frame["method"].str.startswith("dynamic:observer")
+    # a static model (and tf1, which reads no measurement) has no state to reset: its
+    # rollout is its ordinary prediction
+    assert (frame.loc[static, "rollout_rmse_um"] == frame.loc[static, "rmse_um"]).all()
+    observer = frame[~static]
+    assert (observer["rollout_rmse_um"] != observer["rmse_um"]).all()
+    assert (folds.groupby(["task", "method"])["rollout_rmse_um"].mean().round(12)
+            == frame.set_index(["task", "method"])["rollout_rmse_um"].round(12)
+            .sort_index()).all()
+
+
+@pytest.mark.slow
+def test_observer_rollout_by_hand(scenario_tasks, scenario_board):
+    """The observer's rollout is its network run open loop from the held-out run's start."""
+    from spindlebench.identification.estimators import ObserverRegressor
+    from spindlebench.identification.model import Inputs
+    from spindlebench.selection.regression import rmse
+
+    _, folds = scenario_board
+    task = scenario_tasks[0]
+    fold = task.folds[0]
+    used = folds[(folds.task == task.name) & (folds.method == "dynamic:observer")
+                 & (folds.fold == fold.name)]
+    sensors = used["sensors"].iloc[0].split(";")
+    columns = ["time_s", "spindle_speed_rpm", *sensors]
+
+    def inputs(run):  # time, speed, and the sensors' rises since the run's first row
+        X = run[columns].to_numpy(float, copy=True)
+        X[:, 2:] -= X[0, 2:]
+        return X
+
+    model = ObserverRegressor(n_nodes=1, disturbances=1, random_state=0).fit(
+        inputs(fold.train), fold.train["drift_um"].to_numpy(float))
+    test = fold.tests["iso"]
+    y = test["drift_um"].to_numpy(float)
+    open_loop = model.fit_.predict(Inputs(test["time_s"].to_numpy(float),
+                                          test["spindle_speed_rpm"].to_numpy(float)))[:, 0]
+    filtered = model.predict(inputs(test))
+    assert used["rollout_rmse_um"].iloc[0] == pytest.approx(rmse(y, open_loop), rel=1e-9)
+    assert used["rmse_um"].iloc[0] == pytest.approx(rmse(y, filtered), rel=1e-9)
+
+
+class _ZeroRollout:
+    """A regressor whose rollout predicts no error at all (the hook's contract)."""
+
+    def fit(self, X, y):
+        self.mean_ = float(np.mean(y))
+        return self
+
+    def predict(self, X):
+        return np.full(len(X), self.mean_)
+
+    def predict_rollout(self, run):
+        return np.zeros(len(run))
+
+
+def test_a_regressor_with_the_hook_is_scored_by_it(scenario_tasks):
+    from spindlebench.selection.regression import EstimatorFit
+    from spindlebench.studies.benchmark import rollout
+
+    task = scenario_tasks[0]
+    test = task.folds[0].tests["iso"]
+    y = test["drift_um"].to_numpy(float)
+    fit = EstimatorFit(_ZeroRollout().fit(None, y), 0.0)
+    assert np.array_equal(rollout.rollout_of(fit.estimator, test, y + 1.0), np.zeros(len(y)))
+    assert np.array_equal(rollout.rollout_of(object(), test, y + 1.0), y + 1.0)  # static
+    with pytest.raises(SpindlebenchError, match="one each is needed"):
+        rollout.rollout_of(type("Bad", (), {"predict_rollout": lambda self, r: [1.0]})(),
+                           test, y)
+
+
+def test_unknown_dynamic_model_is_one_line(tmp_path):
+    (tmp_path / "tiny-study.toml").write_text(TINY_STUDY)
+    (tmp_path / "d.toml").write_text(SUITE.replace('"closure",', '"dynamic:nope", "closure",'))
+    with pytest.raises(SpindlebenchError, match=r"suite\.methods.*unknown dynamic model 'nope'"):
+        load_suite(tmp_path / "d.toml")
+
+
+def test_population_task_draws_the_sweep_machines_in_memory(tmp_path):
+    from spindlebench.machines.variants import load_machine
+    from spindlebench.studies.benchmark.tasks import family_studies
+    from spindlebench.studies.family.family_file import load_study
+    from spindlebench.studies.family.population import draw_parameters
+    from spindlebench.testbench.runner import inspect_fmu
+
+    study_text = TINY_STUDY.replace(
+        'months = ["Jan", "Jul"]',
+        'machines = { population = 2, base = "default", spread = 0.2, seed = 4 }\n'
+        'months = ["Jan", "Jul"]')
+    (tmp_path / "tiny-study.toml").write_text(study_text)
+    (tmp_path / "s.toml").write_text(SUITE)
+    study = load_study(tmp_path / "tiny-study.toml")
+    members = family_studies(study, tmp_path / "tiny-study.toml")
+    assert [name for name, _ in members] == ["default-p001", "default-p002"]
+    known = inspect_fmu(study.fmu).parameters
+    for index, (_, member) in enumerate(members, start=1):
+        assert dict(member.machine.parameters) == draw_parameters(
+            study.population, load_machine("default"), known, index)
+    assert members[0][1].machine.parameters != members[1][1].machine.parameters
+    tasks = build_tasks(load_suite(tmp_path / "s.toml").tasks[0])
+    assert [t.name for t in tasks] == ["synthetic/default-p001/lab+none",
+                                       "synthetic/default-p002/lab+none"]
+    # the machines differ, so their held-out runs do
+    first, second = (t.folds[0].tests for t in tasks)
+    assert list(first) == list(second) and first
+    for name in first:
+        assert not np.allclose(first[name]["drift_um"], second[name]["drift_um"])

@@ -164,6 +164,11 @@ METHOD_NAME_EXCEPTIONS = {
     *(("studies/placement/" + name, "greedy") for name in (
         "placement_file.py", "placement_report.py", "placement_run.py", "placements.py",
         "schematic.py")),
+    # the placement study's own exhaustive search (judged across its seasons, with its
+    # exhaustive_limit) keeps its label; the selection method of that name is the same
+    # search on one training run (selection/exhaustive.py serves both)
+    *(("studies/placement/" + name, "exhaustive") for name in (
+        "placement_file.py", "placement_report.py", "placements.py", "schematic.py")),
     # the sweep report's "stability" table (the spread of scores), not the method
     ("studies/sweep/summary.py", "stability"),
     ("studies/sweep/sweep_report.py", "stability"),

@@ -527,3 +527,67 @@ def test_a_ridge_fit_reports_its_penalty_and_ols_none():
     fit = fit_regressor("ridge", X, y)
     assert fit.penalty["alpha"] > 0 and set(fit.penalty) == {"alpha", "grid", "at_edge"}
     assert fit_regressor("ols", X, y).penalty is None
+
+
+# --- issue 23: exhaustive search outside place -------------------------------------------
+from spindlebench.selection.selectors import ExhaustiveSelector  # noqa: E402
+
+
+@parametrize_with_checks([ExhaustiveSelector()])
+def test_sklearn_estimator_checks_of_exhaustive(estimator, check):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SelectionWarning)
+        check(estimator)
+
+
+def _pair_case():
+    """y = a + b exactly; c = a + b + a wiggle is the best single predictor, so greedy takes
+    c first and no pair containing c is exact; (a, b) fits every half exactly."""
+    t = np.linspace(0, 1, 80)
+    a, b, d = t, np.sin(4 * t), np.cos(2 * t) * t
+    c = a + b + 0.2 * np.cos(9 * t)
+    return np.column_stack([a, d, b, c]), a + b
+
+
+def test_exhaustive_by_hand_beats_greedy_and_equals_brute_force():
+    import itertools
+
+    from spindlebench.selection.forward import validation_score
+    from spindlebench.selection.selectors import _validation_blocks
+
+    X, y = _pair_case()
+    chosen = ExhaustiveSelector(2).fit(X, y)
+    assert chosen.selected_.tolist() == [0, 2]
+    assert chosen.score_ == pytest.approx(0.0, abs=1e-9) and chosen.n_combinations_ == 6
+    # by hand: every pair refitted with one plain OLS on the first half, scored on the second
+    train, valid = _validation_blocks(X, y, None, 2, 2, "test")
+    scores = {pair: validation_score(train, valid, pair)
+              for pair in itertools.combinations(range(4), 2)}
+    assert min(scores, key=scores.get) == (0, 2)
+    assert sorted(scores.values())[1] > 1e-3  # the runner-up leaves an error
+    greedy = GreedyForwardSelector(2).fit(X, y).selected_.tolist()
+    assert greedy[0] == 3 and scores[tuple(sorted(greedy))] > 1e-3
+
+
+def test_exhaustive_refuses_above_its_combination_budget_in_one_line():
+    X, y = _pair_case()
+    with pytest.raises(SelectionError, match=r"C\(4, 2\) = 6 subsets, more than "
+                                             r"max_combinations = 5"):
+        ExhaustiveSelector(2, max_combinations=5).fit(X, y)
+    assert ExhaustiveSelector(2, max_combinations=6).fit(X, y).selected_.tolist() == [0, 2]
+
+
+def test_exhaustive_is_registered_once_and_runs_through_evaluate(tmp_path):
+    from spindlebench.selection import evaluate
+    from spindlebench.selection.method_registry import METHOD_REGISTRY
+
+    entry = METHOD_REGISTRY["exhaustive"]
+    assert entry.budget and not entry.seeded and not entry.clustered
+    files = experiment_files(tmp_path)
+    result = evaluate(files[0], files[1:], "drift_um", SIX, k=2, method=parse_label("exhaustive"))
+    import pandas as pd
+
+    train = pd.read_csv(files[0])
+    rises = train[SIX].to_numpy(float) - train[SIX].to_numpy(float)[0]
+    by_hand = ExhaustiveSelector(2).fit(rises, train["drift_um"].to_numpy(float))
+    assert result.selected == [SIX[i] for i in by_hand.selected_]

@@ -34,7 +34,7 @@ def test_methods_key_gives_group_label_specs(tmp_path):
     assert spec.group == "six_diff" and spec.choice.within == "grey" and spec.seed == 4
     assert MethodSpec("ridge", None).group is None
     everything = _study(tmp_path, 'methods = ["all"]').methods.methods
-    assert everything[0] == "closure" and "greedy" in everything and len(everything) == 13
+    assert everything[0] == "closure" and "exhaustive" in everything and len(everything) == 14
     assert "all-candidates" not in everything  # k does not apply to it
 
 

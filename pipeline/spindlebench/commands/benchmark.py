@@ -34,9 +34,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("suite", nargs="?", default=None,
                         help="suite name in benchmarks/ or a .toml path (default: default)")
     parser.add_argument("--method", action="append", default=[], metavar="LABEL",
-                        help="an entrant: a method label (kmeans+grey+ridge) or your class by "
-                        "import path (mypkg.sel:MySel, all-candidates+mypkg.reg:MyReg); repeat "
-                        "for more")
+                        help="an entrant: a method label (kmeans+grey+ridge), your class by "
+                        "import path (mypkg.sel:MySel, all-candidates+mypkg.reg:MyReg), or an "
+                        "identified dynamic model (dynamic:tf1, dynamic:network, "
+                        "dynamic:observer); repeat for more")
     parser.add_argument("--method-param", action="append", default=[], metavar="NAME=VALUE",
                         help="a parameter of every --method given by import path")
     parser.add_argument("--only", action="store_true",

@@ -149,6 +149,12 @@ def _greedy(k: int, **_: Any) -> Any:
     return GreedyForwardSelector(k)
 
 
+def _exhaustive(k: int, **_: Any) -> Any:
+    from spindlebench.selection.selectors import ExhaustiveSelector
+
+    return ExhaustiveSelector(k)
+
+
 _BUILT_IN: tuple[Method, ...] = (
     # cluster methods first; the first is the paper's (names.DEFAULT_METHOD)
     Method(DEFAULT_METHOD, "the paper's fuzzy equivalence closure t(R) cut into k clusters "
@@ -173,6 +179,9 @@ _BUILT_IN: tuple[Method, ...] = (
            "over 50 random half-samples", seeded=True, factory=_stability),
     Method("greedy", "greedy forward selection by cross-experiment RMSE of OLS (train on the "
            "first half of the run, score on the second)", factory=_greedy),
+    Method("exhaustive", "every k-subset scored by greedy's objective (OLS on the first half "
+           "of the run, RMSE on the second); the best; refused above 200 000 subsets",
+           factory=_exhaustive),
     Method("mi", "the k candidates with the largest mutual information with the error "
            "(scikit-learn mutual_info_regression, 3 neighbours, seeded)", seeded=True,
            factory=_mutual_information),

@@ -159,6 +159,13 @@ def check_labels(labels, where: str) -> tuple[str, ...]:
     return tuple(out)
 
 
+def methods_record(labels) -> dict[str, dict[str, Any]]:
+    """``{label: MethodChoice.to_dict()}`` of study method labels: what a study's provenance
+    records of its methods (a user's class with its package, version and source hash, as
+    ``evaluate --json`` and ``benchmark`` record it)."""
+    return {label: parse_method(label).to_dict() for label in labels}
+
+
 def with_params(choice: MethodChoice, params: str | list[str] | None) -> MethodChoice:
     """``choice`` with ``name=value`` parameters (``--method-param``) added to its user
     class: the method's if it is one, else the regressor's."""

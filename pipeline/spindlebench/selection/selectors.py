@@ -46,7 +46,8 @@ from spindlebench.core.names import WITHIN as WITHIN_CHOICES
 from spindlebench.selection.closure import CLOSURES
 from spindlebench.selection.clustering import CLUSTERINGS, cluster_candidates
 from spindlebench.selection.errors import SelectionError, SelectionWarning, column_list
-from spindlebench.selection.forward import Block, greedy_forward
+from spindlebench.selection.exhaustive import exhaustive_search, n_subsets
+from spindlebench.selection.forward import Block, greedy_forward, usable_candidates
 from spindlebench.selection.genetic import GENERATIONS, POPULATION, genetic_choice
 from spindlebench.selection.grey import DEFAULT_RHO, NORMALISATIONS, grey_relational_grade
 from spindlebench.selection.randomness import RANDOM_STATE_CONSTRAINT, as_generator
@@ -444,6 +445,36 @@ class StabilitySelector(_Selector):
         return self
 
 
+def _validation_blocks(X: np.ndarray, y: np.ndarray, groups, n_blocks: int, k: int,
+                       what: str) -> tuple[Block, Block]:
+    """The training part and the validation runs of a search by validation RMSE (greedy,
+    exhaustive): with ``groups`` the first experiment trains and the others validate; without,
+    the first of ``n_blocks`` contiguous time blocks trains and the others validate."""
+    if groups is not None:
+        groups = check_groups(groups, X.shape[0])
+        labels = list(dict.fromkeys(groups.tolist()))
+        if len(labels) < 2:
+            raise SelectionError(f"{what} needs at least 2 experiments in groups (one trains, "
+                                 "the others score)")
+        is_train = groups == labels[0]
+        valid_rows = np.concatenate([np.flatnonzero(groups == g) for g in labels[1:]])
+        starts = np.cumsum([0] + [int((groups == g).sum()) for g in labels[1:-1]])
+    else:
+        if X.shape[0] < 2 * n_blocks:
+            raise SelectionError(f"{what} needs at least {2 * n_blocks} samples for "
+                                 f"{n_blocks} blocks, got {X.shape[0]}")
+        edges = np.linspace(0, X.shape[0], n_blocks + 1).round().astype(int)
+        is_train = np.arange(X.shape[0]) < edges[1]
+        valid_rows = np.arange(edges[1], X.shape[0])
+        starts = edges[1:-1] - edges[1]
+    train = Block(X[is_train], y[is_train], np.array([0]))
+    valid = Block(X[valid_rows], y[valid_rows], np.asarray(starts, dtype=np.intp))
+    if train.X.shape[0] < k + 2:
+        raise SelectionError(f"{what}: {train.X.shape[0]} training sample(s) cannot fit {k} "
+                             "input(s)")
+    return train, valid
+
+
 class GreedyForwardSelector(_Selector):
     """Greedy forward selection by cross-experiment RMSE of an OLS on the chosen rises.
 
@@ -489,29 +520,8 @@ class GreedyForwardSelector(_Selector):
         X, y = self._data(X, y)
         k = self._k()
         _budget(k, X.shape[1])
-        if groups is not None:
-            groups = check_groups(groups, X.shape[0])
-            labels = list(dict.fromkeys(groups.tolist()))
-            if len(labels) < 2:
-                raise SelectionError("greedy forward selection needs at least 2 experiments in "
-                                     "groups (one trains, the others score)")
-            is_train = groups == labels[0]
-            valid_rows = np.concatenate([np.flatnonzero(groups == g) for g in labels[1:]])
-            starts = np.cumsum([0] + [int((groups == g).sum()) for g in labels[1:-1]])
-        else:
-            if X.shape[0] < 2 * self.n_blocks:
-                raise SelectionError(f"greedy forward selection needs at least "
-                                     f"{2 * self.n_blocks} samples for {self.n_blocks} blocks, "
-                                     f"got {X.shape[0]}")
-            edges = np.linspace(0, X.shape[0], self.n_blocks + 1).round().astype(int)
-            is_train = np.arange(X.shape[0]) < edges[1]
-            valid_rows = np.arange(edges[1], X.shape[0])
-            starts = edges[1:-1] - edges[1]
-        train = Block(X[is_train], y[is_train], np.array([0]))
-        valid = Block(X[valid_rows], y[valid_rows], np.asarray(starts, dtype=np.intp))
-        if train.X.shape[0] < k + 2:
-            raise SelectionError(f"greedy forward selection: {train.X.shape[0]} training "
-                                 f"sample(s) cannot fit {k} input(s)")
+        train, valid = _validation_blocks(X, y, groups, self.n_blocks, k,
+                                          "greedy forward selection")
         path = greedy_forward(train, valid, k)
         if len(path.chosen) < k:
             raise SelectionError(f"greedy forward selection found only {len(path.chosen)} "
@@ -519,6 +529,94 @@ class GreedyForwardSelector(_Selector):
                                  f"select {k}")
         self.selected_ = np.asarray(path.chosen, dtype=np.intp)
         self.scores_ = np.asarray(path.scores)
+        return self
+
+
+#: Subsets ``ExhaustiveSelector`` scores at most by default (C(20, 3) = 1140 raw sensors at
+#: k = 3; C(210, 3) = 1 521 520 with every difference is refused): about a second here.
+DEFAULT_MAX_COMBINATIONS = 200_000
+
+
+class ExhaustiveSelector(_Selector):
+    """Every k-subset of the candidates, scored by validation RMSE; the best is kept.
+
+    The objective is greedy forward selection's (``forward.validation_score``: OLS on the
+    training part's rises, mean RMSE over the validation runs), so the two differ only in
+    the search: greedy grows one set, this scores all ``C(n, k)`` of them
+    (``exhaustive.exhaustive_search``, from Gram matrices) and finds the best set where greedy
+    misses it. No randomness: ties go to the first subset in lexicographic order, so there is
+    no seed. Above ``max_combinations`` subsets it refuses in one line rather than run for
+    hours.
+
+    Parameters
+    ----------
+    k : int, default=2
+    n_blocks : int, default=2
+        Without ``groups`` at fit: the rows are cut into this many contiguous time blocks, the
+        first trains and the others validate (as greedy's).
+    max_combinations : int, default=200000
+        The largest ``C(n, k)`` scored; more is a ``SelectionError``.
+
+    Attributes
+    ----------
+    selected_ : ndarray
+        The best subset's input columns, ascending.
+    score_ : float
+        Its mean validation RMSE.
+    n_combinations_ : int
+        How many subsets were scored.
+
+    Examples
+    --------
+    ``y = a + b`` exactly; ``c`` is each of them plus noise, the best single predictor, so
+    greedy starts with it and no pair with ``c`` is exact; every pair is scored here:
+
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 80)
+    >>> a, b = t, np.sin(4 * t)
+    >>> c = a + b + 0.2 * np.cos(9 * t)
+    >>> X = np.column_stack([a, b, c])
+    >>> ExhaustiveSelector(2).fit(X, a + b).selected_.tolist()
+    [0, 1]
+    >>> GreedyForwardSelector(2).fit(X, a + b).selected_.tolist()[0]
+    2
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "k": K_CONSTRAINT,
+        "n_blocks": [Interval(Integral, 2, None, closed="left")],
+        "max_combinations": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    def __init__(self, k: int = 2, n_blocks: int = 2,
+                 max_combinations: int = DEFAULT_MAX_COMBINATIONS):
+        self.k = k
+        self.n_blocks = n_blocks
+        self.max_combinations = max_combinations
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y, groups=None):
+        """Score every k-subset: train on the first experiment (or block), score the rest."""
+        X, y = self._data(X, y)
+        k = self._k()
+        _budget(k, X.shape[1])
+        count = n_subsets(X.shape[1], k)
+        if count > self.max_combinations:
+            raise SelectionError(
+                f"exhaustive search: C({X.shape[1]}, {k}) = {count:,} subsets, more than "
+                f"max_combinations = {self.max_combinations:,}; use fewer candidates (no "
+                "differences), a smaller k, or greedy")
+        train, valid = _validation_blocks(X, y, groups, self.n_blocks, k, "exhaustive search")
+        pool = usable_candidates(train)
+        if pool.size < k:
+            raise SelectionError(f"exhaustive search: only {pool.size} candidate(s) vary on the "
+                                 f"training part; cannot select {k}")
+        result = exhaustive_search(train, valid, k, pool)
+        if not np.isfinite(result.score):
+            raise SelectionError("exhaustive search: no subset gave a finite validation RMSE")
+        self.selected_ = np.asarray(sorted(result.chosen), dtype=np.intp)
+        self.score_ = result.score
+        self.n_combinations_ = result.evaluated
         return self
 
 

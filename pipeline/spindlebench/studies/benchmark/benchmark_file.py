@@ -27,6 +27,16 @@ Format::
     study = "studies/synthetic-default.toml"   # relative to the suite file
 
     [[task]]
+    name = "iso230-3-spindle"
+    kind = "scenarios"    # scenario files simulated with the FMU, as they are written
+    train = ["../scenarios/heating/room20_4000.toml"]   # each trains once (one fold each)
+    predict = ["../scenarios/iso230-3/spindle.toml"]    # predicted in every fold
+    others = false        # the other train scenarios are predicted too (default true)
+    targets = ["drift_um", "drift_y_um"]   # one task per target (default ["drift_um"])
+    probes = true         # record the five-probe channels in every run (default false)
+    machine = "default"   # the machine variant every run simulates
+
+    [[task]]
     name = "caiviac-heating"
     kind = "caiviac"      # the CAIVIAC FL_THERMAL runs (read in place)
     phase = "heating"     # or "cycle"
@@ -48,7 +58,7 @@ from spindlebench.formats.toml import Table, in_range, load_toml, one_of, positi
 #: Where suites live: ``benchmarks/`` of the checkout (a wheel's copy when installed).
 SUITES_DIR = BENCHMARKS_DIR
 DEFAULT_SUITE = "default"
-TASK_KINDS = ("synthetic", "caiviac")
+TASK_KINDS = ("synthetic", "scenarios", "caiviac")
 PHASES = ("heating", "cycle")
 
 
@@ -59,6 +69,15 @@ class TaskSpec:
     name: str
     kind: str
     study: Path | None = None
+    #: ``scenarios`` kind: the scenario files that train (one fold each), the ones predicted
+    #: in every fold, whether the other training files are predicted too, the targets, the
+    #: five-probe outputs, the machine.
+    train: tuple[Path, ...] = ()
+    predict: tuple[Path, ...] = ()
+    others: bool = True
+    targets: tuple[str, ...] = ()
+    probes: bool = False
+    machine: str = "default"
     phase: str = "heating"
     source: str = "caiviac-fl-thermal/data.csv"
     description: str = ""
@@ -129,8 +148,20 @@ def load_suite(name_or_path: str | None = None, recordings_root: Path | None = N
     methods = tuple(head.get_list("methods", str, default=[]))
     head.finish()
     from spindlebench.selection.registry import check_labels
+    from spindlebench.studies.benchmark.rollout import is_dynamic, parse_dynamic
 
-    methods = check_labels(methods, f"{path}: key 'suite.methods'")
+    where = f"{path}: key 'suite.methods'"
+    for label in methods:
+        if is_dynamic(label):
+            try:
+                parse_dynamic(label)
+            except SpindlebenchError as exc:
+                raise SpindlebenchError(f"{where}: {exc}") from None
+    static = check_labels([m for m in methods if not is_dynamic(m)], where)
+    dynamic = [m for m in methods if is_dynamic(m)]
+    if len(set(dynamic)) < len(dynamic):
+        raise SpindlebenchError(f"{where}: a dynamic model is listed twice")
+    methods = (*static, *dynamic)
     tasks = []
     for table in root.tables("task"):
         tasks.append(_task(table, path, root_dir))
@@ -149,6 +180,53 @@ def _machine_content(machine) -> dict[str, Any]:
     """A machine (``machines.variants.Machine``) as the task hash sees it: its name and
     parameter values."""
     return {"name": machine.name, "parameters": dict(sorted(machine.parameters.items()))}
+
+
+def _scenarios_task(table: Table, suite_file: Path, name: str, description: str,
+                    content: dict[str, Any]) -> TaskSpec:
+    """A ``scenarios`` task: its files checked (each loads as a scenario), their bytes'
+    SHA-256, the machine's parameter values and the FMU's SHA-256 in the hash."""
+    from spindlebench.core.paths import DEFAULT_FMU
+    from spindlebench.core.provenance import sha256_file
+    from spindlebench.formats.recording import DRIFT_COLUMN
+    from spindlebench.machines.variants import load_machine
+    from spindlebench.testbench.scenario import load_scenario
+
+    folder = suite_file.resolve().parent
+    files = {}
+    for key in ("train", "predict"):
+        listed = table.get_list(key, str, default=[]) if key == "predict" else \
+            table.get_list(key, str)
+        files[key] = tuple((folder / p).resolve() for p in listed)
+        for path in files[key]:
+            if not path.is_file():
+                raise table.error(key, f"no such scenario file: {path}")
+            try:
+                load_scenario(path)
+            except SpindlebenchError as exc:
+                raise table.error(key, str(exc)) from None
+    others = table.get("others", bool, default=True)
+    targets = tuple(table.get_list("targets", str, default=[DRIFT_COLUMN]))
+    probes = table.get("probes", bool, default=False)
+    machine_name = table.get("machine", str, default="default")
+    table.finish()
+    if not files["train"]:
+        raise table.error("train", "give at least one training scenario")
+    every = [*files["train"], *files["predict"]]
+    if len(set(every)) < len(every):
+        raise table.error("predict", "a scenario is listed twice")
+    if len(files["train"]) < 2 and not files["predict"]:
+        raise table.error("predict", "one training scenario and nothing to predict")
+    try:
+        machine = load_machine(machine_name, source=suite_file)
+    except SpindlebenchError as exc:
+        raise table.error("machine", str(exc)) from None
+    content["scenario_sha256"] = {p.name: sha256_file(p) for p in every}
+    content["machine_content"] = _machine_content(machine)
+    content["fmu_sha256"] = sha256_file(DEFAULT_FMU)
+    return TaskSpec(name, "scenarios", train=files["train"], predict=files["predict"],
+                    others=others, targets=targets, probes=probes, machine=machine_name,
+                    description=description, content=content)
 
 
 def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
@@ -173,7 +251,12 @@ def _task(table: Table, suite_file: Path, recordings_root: Path) -> TaskSpec:
         content["machines"] = [_machine_content(load_machine(m, source=study))
                                for m in loaded.machines]
         content["fmu_sha256"] = sha256_file(loaded.fmu)  # another model: other task data
+        if loaded.population is not None:  # the draw also depends on the base machine
+            content["population_base"] = _machine_content(
+                load_machine(loaded.population.base, source=loaded.population.source))
         return TaskSpec(name, kind, study=study, description=description, content=content)
+    if kind == "scenarios":
+        return _scenarios_task(table, suite_file, name, description, content)
     phase = table.get("phase", str, default="heating", check=lambda v: one_of(v, PHASES))
     source = table.get("source", str, default="caiviac-fl-thermal/data.csv")
     table.finish()

@@ -30,7 +30,8 @@ from spindlebench.studies.benchmark.benchmark_file import Suite
 from spindlebench.studies.benchmark.scoring import BASELINES, Entry
 
 COLUMNS = ("task", "method", "rank", "rmse_um", "rmse_sd_um", "max_abs_error_um",
-           "within_band", "n_sensors", "stability", "worse_than", "folds", "error")
+           "within_band", "n_sensors", "stability", "rollout_rmse_um", "worse_than", "folds",
+           "error")
 #: Short marks of the baselines in the Markdown tables.
 MARKS = {"baseline:constant": "C", "baseline:replay": "R", "baseline:ols-all": "O"}
 
@@ -89,10 +90,13 @@ def fold_rows(entries: Sequence[Entry]) -> pd.DataFrame:
             for test, value in fold.rmse_um.items():
                 records.append({"task": entry.task, "method": entry.method,
                                 "fold": fold.fold, "test": test, "rmse_um": value,
+                                "rollout_rmse_um": (fold.rollout_rmse_um or
+                                                    fold.rmse_um)[test],
                                 "sensors": ";".join(fold.sensors),
                                 "selected": ";".join(fold.selected)})
     return pd.DataFrame.from_records(
-        records, columns=["task", "method", "fold", "test", "rmse_um", "sensors", "selected"])
+        records, columns=["task", "method", "fold", "test", "rmse_um", "rollout_rmse_um",
+                          "sensors", "selected"])
 
 
 def _cell(value: Any, digits: int = 2) -> str:
@@ -114,7 +118,10 @@ def markdown(suite: Suite, frame: pd.DataFrame, table: pd.DataFrame,
         f"seed {suite.seed}. Made by `{command}`.",
         "",
         "Marks: C, R, O = worse (higher RMSE) than the constant training-mean predictor, "
-        "the replay of the training run's error, OLS on all sensors.",
+        "the replay of the training run's error, OLS on all sensors. Rollout: the RMSE of "
+        "the prediction over each whole held-out run from its start, no resets (a static "
+        "model's is its RMSE; a dynamic model's differs when its ordinary prediction "
+        "corrects itself with the run's measurements).",
         "",
         "## Overall (mean rank over tasks)",
         "",
@@ -128,15 +135,16 @@ def markdown(suite: Suite, frame: pd.DataFrame, table: pd.DataFrame,
     for task, part in frame.groupby("task", sort=False):
         lines += ["", f"## {task}", "",
                   f"| rank | method | RMSE µm | sd over folds | max abs µm | within ±{band} µm "
-                  "| sensors | stability | worse than |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+                  "| sensors | stability | rollout µm | worse than |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
         for row in part.sort_values(["rank", "method"], na_position="last").itertuples():
             marks = "".join(MARKS[b] for b in row.worse_than.split(";") if b)
             shown = f"failed: {row.error}" if row.error else _cell(row.rmse_um)
             lines.append(
                 f"| {_cell(row.rank, 1)} | `{row.method}` | {shown} | {_cell(row.rmse_sd_um)} | "
                 f"{_cell(row.max_abs_error_um)} | {_cell(row.within_band)} | "
-                f"{_cell(row.n_sensors, 1)} | {_cell(row.stability)} | {marks} |")
+                f"{_cell(row.n_sensors, 1)} | {_cell(row.stability)} | "
+                f"{_cell(row.rollout_rmse_um)} | {marks} |")
     return "\n".join(lines) + "\n"
 
 

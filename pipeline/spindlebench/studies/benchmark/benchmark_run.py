@@ -41,20 +41,20 @@ class BenchmarkRequest:
 
 def entrants(args: BenchmarkRequest, suite_methods: tuple[str, ...]):
     """The method choices to score, checked (one line), in order, without repeats."""
-    from spindlebench.selection.registry import parse_method, with_params
+    from spindlebench.selection.registry import with_params
 
     given = []
     for label in args.methods:
-        choice = parse_method(label)
-        if args.method_params and (choice.user_method or choice.user_regressor):
+        choice = parse_entrant(label)
+        if args.method_params and _user(choice):
             choice = with_params(choice, args.method_params)
         given.append(choice)
-    if args.method_params and not any(c.user_method or c.user_regressor for c in given):
+    if args.method_params and not any(_user(c) for c in given):
         raise SpindlebenchError("--method-param applies to a --method given by import path "
                                 "(package.module:Class); none was given")
     if args.only and not given:
         raise SpindlebenchError("--only: give the entrants with --method")
-    chosen = ([] if args.only else [parse_method(label) for label in suite_methods]) + given
+    chosen = ([] if args.only else [parse_entrant(label) for label in suite_methods]) + given
     out, seen = [], set()
     for choice in chosen:
         if choice.label not in seen:
@@ -63,12 +63,31 @@ def entrants(args: BenchmarkRequest, suite_methods: tuple[str, ...]):
     return out
 
 
+def parse_entrant(label: str):
+    """A method label (``selection.registry.parse_method``) or a dynamic model
+    (``dynamic:NAME``, ``rollout.parse_dynamic``)."""
+    from spindlebench.selection.registry import parse_method
+    from spindlebench.studies.benchmark.rollout import is_dynamic, parse_dynamic
+
+    return parse_dynamic(label) if is_dynamic(label) else parse_method(label)
+
+
+def _user(choice) -> bool:
+    return bool(getattr(choice, "user_method", None) or getattr(choice, "user_regressor", None))
+
+
 def run_benchmark(args: BenchmarkRequest) -> list[Path]:
     """Load the suite, build the tasks, score every entrant, write the leaderboard; return the
     files written."""
     from spindlebench.studies.benchmark import benchmark_report as leaderboard
     from spindlebench.studies.benchmark.benchmark_file import load_suite
-    from spindlebench.studies.benchmark.scoring import BASELINES, score_baseline, score_method
+    from spindlebench.studies.benchmark.rollout import DynamicChoice
+    from spindlebench.studies.benchmark.scoring import (
+        BASELINES,
+        score_baseline,
+        score_dynamic,
+        score_method,
+    )
     from spindlebench.studies.benchmark.tasks import build_tasks, own_task
 
     suite = load_suite(args.suite, args.recordings_root)
@@ -104,7 +123,8 @@ def run_benchmark(args: BenchmarkRequest) -> list[Path]:
         for baseline in BASELINES:
             entries.append(score_baseline(task, baseline, suite.k, suite.seed))
         for choice in choices:
-            entries.append(score_method(task, choice, suite.k, suite.seed))
+            score = score_dynamic if isinstance(choice, DynamicChoice) else score_method
+            entries.append(score(task, choice, suite.k, suite.seed))
         mine = [e for e in entries if e.task == task.name]
         failed = [e.method for e in mine if e.error]
         slowest = max(mine, key=lambda e: e.seconds)

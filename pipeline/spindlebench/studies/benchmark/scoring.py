@@ -17,8 +17,11 @@ Per task and entrant (over all its folds): ``rmse_um`` is the mean over folds of
 of any held-out sample, ``within_band`` the share of held-out samples with
 |error| <= ``band_um``, ``n_sensors`` the mean number of distinct sensors the fitted model
 reads, and ``stability`` the mean Jaccard index of those sensor sets between pairs of folds
-(1: the same sensors in every fold). A method that fails on a fold is recorded with its
-one-line error and gets no score on that task.
+(1: the same sensors in every fold), and ``rollout_rmse_um`` the same mean of the RMSE of
+the rollout over each whole held-out run from its start, no resets (``rollout``: a dynamic
+model's ``predict_rollout``; a static model's ordinary prediction, which is already that). A
+method that fails on a fold is recorded with its one-line error and gets no score on that
+task.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from spindlebench.selection.evaluate import (
 )
 from spindlebench.selection.registry import MethodChoice, parse_method
 from spindlebench.selection.regression import rmse
+from spindlebench.studies.benchmark.rollout import DynamicChoice, RunModel, rollout_of
 from spindlebench.studies.benchmark.tasks import TIME, Fold, Task
 
 CONSTANT, REPLAY, OLS_ALL = "baseline:constant", "baseline:replay", "baseline:ols-all"
@@ -58,10 +62,17 @@ class FoldScore:
     errors: np.ndarray
     sensors: tuple[str, ...]
     selected: tuple[str, ...] = ()
+    #: Per held-out run, the RMSE of the rollout from the run's start (``rollout``); the
+    #: ordinary ``rmse_um`` for a static model.
+    rollout_rmse_um: dict[str, float] = field(default_factory=dict)
 
     @property
     def mean_rmse_um(self) -> float:
         return float(np.mean(list(self.rmse_um.values())))
+
+    @property
+    def mean_rollout_rmse_um(self) -> float:
+        return float(np.mean(list((self.rollout_rmse_um or self.rmse_um).values())))
 
 
 @dataclass
@@ -79,7 +90,8 @@ class Entry:
         """The leaderboard's numbers (None where the entrant failed)."""
         if self.error or not self.folds:
             return {"rmse_um": None, "rmse_sd_um": None, "max_abs_error_um": None,
-                    "within_band": None, "n_sensors": None, "stability": None}
+                    "within_band": None, "n_sensors": None, "stability": None,
+                    "rollout_rmse_um": None}
         per_fold = np.array([f.mean_rmse_um for f in self.folds])
         errors = np.concatenate([f.errors for f in self.folds])
         return {
@@ -89,6 +101,7 @@ class Entry:
             "within_band": float(np.mean(np.abs(errors) <= band_um)),
             "n_sensors": float(np.mean([len(f.sensors) for f in self.folds])),
             "stability": stability([f.sensors for f in self.folds]),
+            "rollout_rmse_um": float(np.mean([f.mean_rollout_rmse_um for f in self.folds])),
         }
 
 
@@ -113,18 +126,30 @@ def sensors_read(result: Evaluation) -> tuple[str, ...]:
 def score_method(task: Task, choice: MethodChoice, k: int, seed: int,
                  differences: bool = False) -> Entry:
     """``choice`` on every fold of ``task`` through ``evaluate``."""
-    entry = Entry(task.name, choice.label)
+    def score(fold: Fold) -> FoldScore:
+        result = evaluate_fold(task, fold, choice, k, seed, differences)
+        errors = np.concatenate([result.measured[name] - result.predictions[name]
+                                 for name in fold.tests])
+        estimator = getattr(result.fit, "estimator", None)
+        rollouts = {name: rmse(result.measured[name], rollout_of(
+            estimator, fold.tests[name], result.predictions[name])) for name in fold.tests}
+        return FoldScore(fold.name, dict(result.rmse_um), errors, sensors_read(result),
+                         tuple(result.selected), rollouts)
+
+    return _scored(Entry(task.name, choice.label), task, score)
+
+
+def _scored(entry: Entry, task: Task, score) -> Entry:
+    """``score(fold)`` of every fold into ``entry``, with the warnings it gave and its time;
+    an exception becomes the entry's one-line error (one failing method must not cost the
+    others)."""
     started = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             for fold in task.folds:
-                result = evaluate_fold(task, fold, choice, k, seed, differences)
-                errors = np.concatenate([result.measured[name] - result.predictions[name]
-                                         for name in fold.tests])
-                entry.folds.append(FoldScore(fold.name, dict(result.rmse_um), errors,
-                                             sensors_read(result), tuple(result.selected)))
-        except Exception as exc:  # one failing method must not cost the others
+                entry.folds.append(score(fold))
+        except Exception as exc:
             entry.error = " ".join(f"{type(exc).__name__}: {exc}".split())
             entry.folds = []
     entry.warnings = sorted({" ".join(str(w.message).split()) for w in caught})
@@ -174,3 +199,22 @@ def score_baseline(task: Task, name: str, k: int, seed: int) -> Entry:
         entry.folds.append(FoldScore(fold.name, scores, np.concatenate(errors), ()))
     entry.seconds = time.perf_counter() - started
     return entry
+
+
+def score_dynamic(task: Task, choice: DynamicChoice, k: int, seed: int) -> Entry:
+    """A dynamic entrant (``rollout.RunModel``) on every fold: fitted on the training run,
+    its ordinary prediction and its rollout on every held-out run."""
+    def score(fold: Fold) -> FoldScore:
+        model = RunModel(choice, min(k, len(task.sensors)), seed)
+        model.fit_run(fold.train, task.target, task.sensors)
+        scores, rollouts, errors = {}, {}, []
+        for name, frame in fold.tests.items():
+            y = frame[task.target].to_numpy(float)
+            predicted = model.predict(frame)
+            scores[name] = rmse(y, predicted)
+            rollouts[name] = rmse(y, rollout_of(model, frame, predicted))
+            errors.append(y - predicted)
+        return FoldScore(fold.name, scores, np.concatenate(errors), model.sensors,
+                         model.sensors, rollouts)
+
+    return _scored(Entry(task.name, choice.label), task, score)

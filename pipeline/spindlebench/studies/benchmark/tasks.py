@@ -59,11 +59,13 @@ def build_tasks(spec: TaskSpec) -> list[Task]:
         raise SpindlebenchError(spec.missing)
     if spec.kind == "synthetic":
         return synthetic_tasks(spec)
+    if spec.kind == "scenarios":
+        return scenario_tasks(spec)
     return [caiviac_task(spec)]
 
 
 def synthetic_tasks(spec: TaskSpec) -> list[Task]:
-    from spindlebench.formats.recording import DRIFT_COLUMN, TRUTH_COLUMNS
+    from spindlebench.formats.recording import DRIFT_COLUMN, SPEED_COLUMN, TRUTH_COLUMNS
     from spindlebench.studies.family.experiments import (
         conditions,
         experiments,
@@ -77,10 +79,8 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
 
     assert spec.study is not None
     base = load_study(spec.study)
-    machines = list(base.machines) or [None]
     tasks: list[Task] = []
-    for machine in machines:
-        study = load_study(spec.study, machine=machine) if machine else base
+    for label, study in family_studies(base, spec.study):
         family = experiments(study)
         trains = training_experiments(study, family)
         if len(trains) != 1:
@@ -88,11 +88,13 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
                                     f"training experiment ([training] rule 'one')")
         train = trains[0]
         truths: dict[int, dict[str, pd.DataFrame]] = {}
+        speeds: dict[tuple[int, str], pd.Series] = {}  # the dynamic models' input
         for replica in replicas(study):
             truths[replica] = {}
             for experiment in family:
                 frame, _ = simulate_job(scenario_for(study, replica, experiment), study.fmu)
                 truths[replica][experiment.id] = frame.loc[:, list(TRUTH_COLUMNS)].copy()
+                speeds[(replica, experiment.id)] = frame[SPEED_COLUMN].to_numpy(float)
         for condition in conditions(study):
             folds = []
             for replica in replicas(study):
@@ -103,8 +105,10 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
                     duration_s=study.duration_s, specs=(), similarity="abs-pearson")
                 train_frame = measured_frame(job, train, held_out=False)
                 tests = {e.id: measured_frame(job, e) for e in family if e != train}
+                for experiment, frame in [(train, train_frame),
+                                          *((e, tests[e.id]) for e in family if e != train)]:
+                    frame[SPEED_COLUMN] = speeds[(replica, experiment.id)]
                 folds.append(Fold(f"replica {replica}", train.id, train_frame, tests))
-            label = machine or study.machine.name
             tasks.append(Task(
                 name=f"{spec.name}/{label}/{condition.id}", kind="synthetic",
                 description=(spec.description or study.description)
@@ -113,6 +117,90 @@ def synthetic_tasks(spec: TaskSpec) -> list[Task]:
                 provenance={"study": str(spec.study), "machine": label,
                             "condition": condition.id, "replicas": study.replicas,
                             "train": train.id, "tests": [e.id for e in family if e != train]}))
+    return tasks
+
+
+def family_studies(base, path: Path) -> list[tuple[str, Any]]:
+    """(machine label, study) of every machine of a synthetic family: the study's own
+    machine, each of ``[axes] machines``, or each machine of its population drawn in memory
+    (``studies.family.population.draw_parameters``: the same parameters a sweep's machine
+    files hold; no fingerprint is simulated and nothing is written)."""
+    import dataclasses
+
+    from spindlebench.studies.family.family_file import load_study
+
+    if base.population is not None:
+        return [(machine.name, dataclasses.replace(base, machine=machine, population=None))
+                for machine in population_machines(base)]
+    if base.machines:
+        return [(name, load_study(path, machine=name)) for name in base.machines]
+    return [(base.machine.name, base)]
+
+
+def population_machines(study) -> list:
+    """The machines of ``study``'s population (``keep = "all"`` only: keeping by targets
+    would simulate every draw's fingerprint)."""
+    from spindlebench.machines.variants import Machine, load_machine
+    from spindlebench.studies.family.population import draw_parameters, machine_name
+    from spindlebench.testbench.runner import inspect_fmu
+
+    population = study.population
+    if population.keep != "all":
+        raise SpindlebenchError(f"{study.path}: key 'axes.machines.keep': a benchmark task "
+                                "draws its population with keep = \"all\"")
+    base = load_machine(population.base, source=population.source)
+    known = inspect_fmu(study.fmu).parameters
+    out = []
+    for index in range(1, population.size + 1):
+        name = machine_name(population, base, index)
+        out.append(Machine(name=name, description=f"machine {index} of a population around "
+                           f"{base.name}", path=base.path, sha256=base.sha256,
+                           parameters=draw_parameters(population, base, known, index)))
+    return out
+
+
+def scenario_tasks(spec: TaskSpec) -> list[Task]:
+    """Scenario files simulated with the FMU as written (their own sensors, noise and seed;
+    the task's machine; the five-probe outputs if ``probes``): each training scenario trains
+    once, the prediction scenarios (and, with ``others``, the other training ones) are
+    predicted; one task per target."""
+    import dataclasses
+
+    from spindlebench.core.paths import DEFAULT_FMU
+    from spindlebench.machines.variants import load_machine
+    from spindlebench.testbench.scenario import load_scenario
+    from spindlebench.testbench.simulate import record
+
+    machine = load_machine(spec.machine)
+    frames: dict[str, pd.DataFrame] = {}
+    names: dict[Path, str] = {}
+    for path in (*spec.train, *spec.predict):
+        scenario = load_scenario(path)
+        scenario = dataclasses.replace(scenario, machine=machine,
+                                       probes=spec.probes or scenario.probes)
+        frame, _ = record(scenario, DEFAULT_FMU)
+        names[path] = scenario.name
+        frames[scenario.name] = frame
+    tasks = []
+    for target in spec.targets:
+        for path, name in names.items():
+            if target not in frames[name]:
+                raise SpindlebenchError(f"task {spec.name}: scenario {path} records no "
+                                        f"{target!r} (probes = true gives the five-probe "
+                                        "channels)")
+        folds = []
+        for path in spec.train:
+            tests = [p for p in (*spec.train, *spec.predict) if p != path
+                     and (spec.others or p in spec.predict)]
+            folds.append(Fold(f"train {names[path]}", names[path], frames[names[path]],
+                              {names[p]: frames[names[p]] for p in tests}))
+        tasks.append(Task(
+            name=spec.name if len(spec.targets) == 1 else f"{spec.name}/{target}",
+            kind="scenarios", description=(spec.description or "scenario files")
+            + f" (machine {machine.name}, target {target})",
+            target=target, sensors=SENSORS, folds=folds,
+            provenance={"scenarios": [str(p) for p in names], "machine": machine.name,
+                        "target": target, "probes": spec.probes}))
     return tasks
 
 

@@ -21,6 +21,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import DEFAULT_METHOD, GROUP_LABELS
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import sidecar_mismatch
+from spindlebench.selection.registry import methods_record
 from spindlebench.studies.paper import figures, reference
 from spindlebench.studies.paper import paper_tables as tables
 from spindlebench.studies.paper.analysis import StudyResult
@@ -325,5 +326,6 @@ def _write_all(result: StudyResult, out_dir: Path, command: str) -> dict[str, Pa
         inputs=_inputs(result),
         outputs=sorted(p.name for p in paths.values()),
         paper=reference.CITATION,
+        methods=methods_record(result.config.methods),
     ))
     return paths

@@ -27,6 +27,7 @@ from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import read_recording
 from spindlebench.selection import rmse
+from spindlebench.selection.registry import methods_record
 from spindlebench.studies.family.experiments import (
     experiments,
     replicas,
@@ -36,6 +37,7 @@ from spindlebench.studies.family.experiments import (
 from spindlebench.studies.family.family_file import check_fmu, pinned_content
 from spindlebench.studies.placement.candidates import TARGET, Run, node_seed, prepare_run
 from spindlebench.studies.placement.placement_file import (
+    METHODS,
     PlacementStudy,
     describe,
     load_placement_study,
@@ -229,6 +231,9 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
         study_seed=study.family.seed,
         seeds=seeds,
         settings=describe(study),
+        # the labels that are selection methods (not the study's own fuzzy, greedy and
+        # exhaustive searches), a user's class with its code's package, version and hash
+        methods=methods_record([m for m in study.methods if m not in METHODS]),
         training=[e.id for e in work.trains],
         scored_replicas=scored_replicas,
         executor=runner.describe(),

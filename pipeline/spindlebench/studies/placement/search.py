@@ -1,12 +1,10 @@
 """Searching sensor sets by validation RMSE: greedy forward selection and exhaustive search.
 
-The objective of a candidate set S is the one the placement study reports (see
-``spindlebench.selection.forward``, the one home of the objective and of greedy forward
-selection, which ``evaluate --method greedy`` uses too). This module adds the exhaustive
-search:
-
-- :func:`exhaustive_search` scores every m-subset from Gram matrices (training X'X, X'y and
-  per-run validation X'X, X'e), batched: one m x m solve per subset, no pass over the samples.
+The objective of a candidate set S is the one the placement study reports. Both searches
+live in the selection package, because both are selection methods too (``evaluate --method
+greedy`` / ``exhaustive``): ``spindlebench.selection.forward`` (the objective, greedy forward
+selection) and ``spindlebench.selection.exhaustive`` (every m-subset from Gram matrices).
+This module is the placement study's view of them.
 
 Both searches only rank sets: the study re-scores the winners with :func:`validation_score`,
 so every reported number comes from one plain least-squares fit.
@@ -14,13 +12,13 @@ so every reported number comes from one plain least-squares fit.
 
 from __future__ import annotations
 
-import itertools
-import math
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
-
-import numpy as np
-
+from spindlebench.selection.exhaustive import (
+    EXHAUSTIVE_CHUNK,
+    ExhaustiveResult,
+    exhaustive_search,
+    n_subsets,
+    subset_batches,
+)
 from spindlebench.selection.forward import (
     Block,
     GreedyPath,
@@ -31,6 +29,7 @@ from spindlebench.selection.forward import (
 )
 
 __all__ = [
+    "EXHAUSTIVE_CHUNK",
     "Block",
     "ExhaustiveResult",
     "GreedyPath",
@@ -42,102 +41,3 @@ __all__ = [
     "usable_candidates",
     "validation_score",
 ]
-
-#: Subsets scored per batch in the exhaustive search (bounds memory to a few tens of MB).
-EXHAUSTIVE_CHUNK = 4096
-
-
-def n_subsets(n_candidates: int, size: int) -> int:
-    return math.comb(n_candidates, size)
-
-
-@dataclass(frozen=True)
-class ExhaustiveResult:
-    """The best m-subset, its score and how many subsets were scored."""
-
-    chosen: list[int]
-    score: float
-    evaluated: int
-
-
-def subset_batches(n: int, size: int, chunk: int = EXHAUSTIVE_CHUNK) -> Iterator[np.ndarray]:
-    """Every ``size``-subset of ``range(n)`` in lexicographic order, as index arrays of about
-    ``chunk`` rows: all but the last two members come from ``itertools``, the last two from
-    ``numpy.triu_indices``, so Python loops once per prefix, not once per subset."""
-    if size == 1:
-        for start in range(0, n, chunk):
-            yield np.arange(start, min(n, start + chunk), dtype=np.intp)[:, None]
-        return
-    pending: list[np.ndarray] = []
-    count = 0
-    for prefix in itertools.combinations(range(n), size - 2):
-        low = prefix[-1] + 1 if prefix else 0
-        first, second = np.triu_indices(n - low, k=1)
-        if first.size == 0:
-            continue
-        tail = np.column_stack([first + low, second + low]).astype(np.intp)
-        head = np.broadcast_to(np.asarray(prefix, dtype=np.intp), (tail.shape[0], size - 2))
-        rows = np.hstack([head, tail])
-        for start in range(0, rows.shape[0], chunk):
-            part = rows[start:start + chunk]
-            pending.append(part)
-            count += part.shape[0]
-            if count >= chunk:
-                yield np.vstack(pending)
-                pending, count = [], 0
-    if pending:
-        yield np.vstack(pending)
-
-
-def _gram_data(train: Block, valid: Block, pool: np.ndarray):
-    """Training and per-run validation Gram matrices of the (scaled, centred) pool columns.
-
-    The per-run matrices are stored run-last (p x p x runs) so that gathering a subset's
-    entries reads contiguous vectors.
-    """
-    x_mean = train.X[:, pool].mean(axis=0)
-    Xc = train.X[:, pool] - x_mean
-    scale = np.sqrt(np.einsum("ij,ij->j", Xc, Xc))
-    Xc /= scale
-    yc = train.y - train.y.mean()
-    Xv = (valid.X[:, pool] - x_mean) / scale
-    e0 = valid.y - train.y.mean()
-    runs = np.split(np.arange(valid.X.shape[0]), valid.starts[1:])
-    H = np.stack([Xv[rows].T @ Xv[rows] for rows in runs], axis=-1)  # p x p x runs
-    u = np.stack([Xv[rows].T @ e0[rows] for rows in runs], axis=-1)  # p x runs
-    E = np.array([e0[rows] @ e0[rows] for rows in runs])
-    return Xc.T @ Xc, Xc.T @ yc, H, u, E, valid.lengths.astype(float)
-
-
-def _solve_batch(G: np.ndarray, b: np.ndarray) -> np.ndarray:
-    try:
-        return np.linalg.solve(G, b[..., None])[..., 0]
-    except np.linalg.LinAlgError:  # a singular subset: minimum-norm solution, as lstsq gives
-        return (np.linalg.pinv(G, hermitian=True) @ b[..., None])[..., 0]
-
-
-def exhaustive_search(train: Block, valid: Block, size: int,
-                      pool: Sequence[int] | None = None,
-                      chunk: int = EXHAUSTIVE_CHUNK) -> ExhaustiveResult:
-    """Score every ``size``-subset of ``pool`` and return the best (first on ties)."""
-    pool = usable_candidates(train) if pool is None else np.asarray(pool, dtype=np.intp)
-    if size > pool.size:
-        raise ValueError(f"cannot choose {size} of {pool.size} candidates")
-    G, b, H, u, E, lengths = _gram_data(train, valid, pool)
-    best_score, best_subset, evaluated = np.inf, None, 0
-    for idx in subset_batches(pool.size, size, chunk):
-        c = idx.shape[0]
-        rows, cols = idx[:, :, None], idx[:, None, :]
-        beta = _solve_batch(G[rows, cols], b[idx])  # c x m
-        outer = (beta[:, :, None] * beta[:, None, :]).reshape(c, 1, size * size)
-        quad = (outer @ H[rows, cols].reshape(c, size * size, -1))[:, 0, :]  # c x runs
-        cross = np.einsum("cmr,cm->cr", u[idx], beta)
-        sse = np.maximum(E - 2.0 * cross + quad, 0.0)
-        score = np.sqrt(sse / lengths).mean(axis=1)
-        score[~np.isfinite(score)] = np.inf
-        at = int(np.argmin(score))
-        if score[at] < best_score:
-            best_score, best_subset = float(score[at]), idx[at]
-        evaluated += c
-    assert best_subset is not None
-    return ExhaustiveResult([int(pool[i]) for i in best_subset], best_score, evaluated)
