@@ -26,7 +26,7 @@ from spindlebench.identification.model import (
     rezeroed_rmse,
     select_order,
 )
-from spindlebench.identification.observer import build_observer
+from spindlebench.identification.observer import ObserverError, build_observer
 
 #: Orders tried when ``n_nodes="auto"``.
 AUTO_ORDERS = (1, 2, 3)
@@ -296,7 +296,11 @@ class ObserverRegressor(RegressorMixin, BaseEstimator):
                 fitted = fit(Structure("network", n), inputs, outputs, w, scales=scales,
                              seed=self.random_state, starts=self.starts)
                 for r in dists:
-                    obs = build_observer(fitted, inputs, outputs, w > 0, r)
+                    try:
+                        obs = build_observer(fitted, inputs, outputs, w > 0, r)
+                    except ObserverError:  # no filter for this structure: never chosen
+                        scores[(n, r)].append(np.inf)
+                        continue
                     predicted = obs.run(inputs, outputs[:, 1:])
                     scores[(n, r)].append(rezeroed_rmse(predicted[part], outputs[part, 0]))
         self.choice_scores_ = [{"n_nodes": n, "disturbances": r, "held_out_rmse": v,
