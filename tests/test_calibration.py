@@ -159,3 +159,49 @@ def test_fit_bounds_respect_the_fmus_declared_range():
     assert np.exp(upper[0]) == pytest.approx(2.0) and np.exp(lower[0]) == pytest.approx(0.1)
     with pytest.raises(SpindlebenchError, match="h_nat: the start value is outside"):
         Discretisation(ode, ["h_nat"], ode.parameter_vector(h_nat=150.0)).log_bounds()
+
+
+def test_fitted_end_state_continues_the_recording(twin):
+    """Issue 22: calibrate writes the fitted states (``NAME.state.json``, the sidecar format)
+    and a ``continue`` scenario on ``simulate --machine`` starts the calibrated machine where
+    the recording ended: its drift follows the true machine's continuation (from the twin
+    recording's own end state) far closer than a cold start does."""
+    tmp_path, out = twin
+    machine = tmp_path / "machines" / "twin.toml"
+    state = tmp_path / "machines" / "twin.state.json"
+    assert "twin.state.json" in out and "twin.state.json" in machine.read_text()
+    saved = json.loads(state.read_text())
+    true_end = json.loads((tmp_path / "twin.json").read_text())["end_state"]["states_K"]
+    fitted_end = saved["end_state"]["states_K"]
+    assert set(fitted_end) == set(true_end) and saved["end_state"]["time_s"] > 0
+    # the fitted end state of the parts the error comes from is the true one to about 1 K
+    for name in ("spindle_shaft_1_T", "front_bearing_T", "housing_1_T"):
+        assert abs(fitted_end[name] - true_end[name]) < 1.5, name
+    report = json.loads((tmp_path / "machines" / "twin.calibration.json").read_text())
+    assert report["fitted_states_K"][0]["end"] == fitted_end
+
+    def scenario(name: str, parameters: dict, initial: str) -> Path:
+        path = tmp_path / f"{name}.toml"
+        path.write_text("\n".join([
+            'description = "continuation"', "duration_s = 3600", "step_s = 60.0",
+            "sample_interval_s = 60.0", "seed = 7", "[speed]", 'kind = "steps"',
+            "steps = [{at_s = 0, rpm = 2000}]", "[feed]", 'kind = "with_spindle"',
+            "x_mm_per_min = 1500", "y_mm_per_min = 1500", "[ambient]", 'kind = "season"',
+            "low_C = 19", "high_C = 22", initial, "[parameters]",
+            *[f"{k} = {v!r}" for k, v in parameters.items()]]) + "\n", encoding="utf-8")
+        return path
+
+    runs = {
+        "truth": (scenario("truth", TRUE, f'[initial]\nkind = "continue"\nfrom = '
+                                          f'"{tmp_path / "twin.json"}"'), []),
+        "continued": (scenario("continued", {}, f'[initial]\nkind = "continue"\nfrom = '
+                                                f'"{state}"'), ["--machine", str(machine)]),
+        "cold": (scenario("cold", {}, ""), ["--machine", str(machine)]),
+    }
+    drift = {}
+    for name, (path, extra) in runs.items():
+        assert main(["simulate", str(path), "-o", str(path.with_suffix(".csv")), *extra]) == 0
+        drift[name] = read_recording(path.with_suffix(".csv"))["true_drift_um"].to_numpy()
+    continued = float(np.sqrt(np.mean((drift["continued"] - drift["truth"]) ** 2)))
+    cold = float(np.sqrt(np.mean((drift["cold"] - drift["truth"]) ** 2)))
+    assert continued < 1.0 and continued < cold / 3, (continued, cold)

@@ -207,3 +207,26 @@ def test_bad_day_mode_is_one_line(tmp_path, line, message):
     path.write_text(text.replace("[compensate]\n", f"[compensate]\n{line}\n"), encoding="utf-8")
     with pytest.raises(SpindlebenchError, match=message):
         load_compensation(path)
+
+
+@pytest.mark.slow
+def test_identified_models_run_in_the_controller(tiny):
+    """Issue 22: a dynamic regressor in a compensation model reads each day's speed
+    programme (``selection.dynamic``); the speed-only one gives the same offset whatever the
+    sensors say, the observer reads them."""
+    study, truths = tiny
+    dynamic = type(study)(**{**study.__dict__, "models": ("all_raw:closure+tf1",
+                                                          "six_raw:all-candidates+observer")})
+    outcome = run_loop(dynamic, truths, "never")
+    days = pd.DataFrame(outcome.days)
+    assert set(days["model"]) == set(dynamic.models) and len(days) == 3 * 2
+    assert np.isfinite(days["rms_residual_um"]).all()
+    tf1 = outcome.models["all_raw:closure+tf1"][0]
+    assert tf1.regressor == "tf1" and type(tf1.fit.estimator).__name__ == \
+        "TransferFunctionRegressor"
+    series = pd.concat(outcome.series)
+    day2 = series[(series["model"] == "all_raw:closure+tf1") & (series["day"] == 2)]
+    # day 2 runs at 2000 rpm after 4000 on day 1: the speed model predicts a smaller drift
+    assert 0 < np.abs(day2["predicted_um"]).max() < np.abs(
+        tf1.fit.estimator.predict(np.column_stack([
+            truths[1]["time_s"], truths[1]["spindle_speed_rpm"]]))).max()

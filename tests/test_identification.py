@@ -255,3 +255,52 @@ def test_calibration_rejects_a_trial_point_whose_step_fails(monkeypatch):
     theta, _, message = problem._gauss_newton(d, [], layout, np.array([1.0, 5.0]), 50, False)
     assert np.allclose(theta, target, atol=1e-6)
     assert calls["failed"] >= 1 and "rejected" in message
+
+
+def test_fixed_exponent_basis_recovers_an_on_off_loss_and_friction():
+    """Issue 22: ``basis=(0, 5/3)`` fits an on/off loss and Palmgren friction, each with its
+    own lag; the known mixture comes back, and a repeated exponent is refused."""
+    from spindlebench.identification.estimators import ThermalNetworkRegressor
+    from spindlebench.identification.model import lag
+
+    t = np.arange(0, 24 * 3600, 120.0)
+    n = np.select([(t // 7200) % 3 == 0, (t // 7200) % 3 == 1], [6000.0, 2000.0], 0.0)
+    on = (n > 0).astype(float)
+    friction = (n / 6000.0) ** (5 / 3)
+    y = 4.0 * lag(on, 1800.0, t) - 12.0 * lag(friction, 9000.0, t)
+    X = np.column_stack([t, n])
+    model = ThermalNetworkRegressor(n_nodes=2, basis=(0.0, 5 / 3)).fit(X, y)
+    assert np.sqrt(np.mean((model.predict(X) - y) ** 2)) < 0.05
+    assert sorted(np.round(model.fit_.taus_s / 100) * 100) == [1800.0, 9000.0]
+    with pytest.raises(ValueError, match="distinct"):
+        ThermalNetworkRegressor(n_nodes=1, basis=(1.0, 1.0)).fit(X, y)
+
+
+def test_an_observer_without_a_stabilising_filter_is_one_line_and_never_chosen(monkeypatch):
+    """A Riccati equation without a stabilising solution (a disturbance the sensors cannot
+    see; seen on one CAIVIAC cycle) skips that noise scale; a structure where every scale
+    fails is never chosen by leave-one-cycle-out, and alone it is one line, not a traceback."""
+    from spindlebench.identification import observer as observer_module
+    from spindlebench.identification.estimators import ObserverRegressor
+    from spindlebench.identification.observer import ObserverError
+
+    t = np.arange(0, 24 * 3600, 300.0)
+    n = np.where((t // 14400) % 2 == 0, 4000.0, 0.0)
+    node = lag(n / 4000.0, 7200.0, t)
+    X = np.column_stack([t, n, 20 + 10 * node + 0.01 * np.sin(t / 5000)])
+    y = -30 * node
+    real = observer_module.kalman_gain
+
+    def without_disturbances(A, H, Q, R):  # a filter exists only without disturbance states
+        if A.shape[0] > 1:
+            raise np.linalg.LinAlgError("eigenvalues too close to the unit circle")
+        return real(A, H, Q, R)
+
+    monkeypatch.setattr(observer_module, "kalman_gain", without_disturbances)
+    model = ObserverRegressor(n_nodes=1).fit(X, y)
+    assert model.disturbances_ == 0
+    assert all(np.isinf(row["mean"]) for row in model.choice_scores_ if row["disturbances"])
+    with pytest.raises(ObserverError, match=r"observer: no process-noise scale .* 1 "
+                       r"disturbance"):
+        ObserverRegressor(n_nodes=1, disturbances=1).fit(X, y)
+    assert issubclass(ObserverError, SpindlebenchError)

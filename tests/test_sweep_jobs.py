@@ -163,3 +163,22 @@ def test_result_frame_is_the_grown_frame_to_the_byte(swept, tmp_path, ks, rmse, 
     store.write_frame("grown.csv", grown)
     store.write_frame("made.csv", made)
     assert (tmp_path / "made.csv").read_bytes() == (tmp_path / "grown.csv").read_bytes()
+
+
+def test_measured_frames_carry_the_programme_for_identified_models(swept):
+    """Issue 22: a sweep's measured frame holds the run's speed and ambient (from its truth),
+    so a dynamic regressor (``selection.dynamic``) scores on the sweep's protocol."""
+    from spindlebench.studies.family.methods import MethodSpec
+
+    sweep, _ = swept
+    condition = sweep.conditions[0]
+    job = sweep.evaluation_task(1, condition, sweep.trains[:1]).args[0]
+    train = sweep.trains[0]
+    frame = measured_frame(job, train, held_out=False)
+    truth = job.truths[train.id]
+    assert (frame["spindle_speed_rpm"].to_numpy() == truth["spindle_speed_rpm"].to_numpy()).all()
+    assert (frame["ambient_C"].to_numpy() == truth["ambient_C"].to_numpy()).all()
+    tests = {e.id: measured_frame(job, e) for e in job.experiments if e != train}
+    rows = pd.DataFrame(score_all([MethodSpec("six_raw:closure+tf1", 2)], frame, tests,
+                                  job.similarity))
+    assert len(rows) == len(tests) and rows["rmse_um"].notna().all(), rows

@@ -18,7 +18,42 @@ from matplotlib.figure import Figure
 
 from spindlebench.calibration.problem import Fit
 from spindlebench.core import atomic
+from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
+
+
+def state_path(machine_file: Path) -> Path:
+    """The fitted states written beside ``machine_file``: ``NAME.state.json``."""
+    stem = machine_file.with_suffix("")
+    return stem.with_name(stem.name + ".state.json")
+
+
+def state_record(fit: Fit, series_list: Sequence, provenance: Mapping[str, Any]
+                 ) -> dict[str, Any]:
+    """The fitted initial and end states of the last recording, in the sidecar format
+    (``formats.recording.sidecar_record``): a ``continue`` scenario naming this file in
+    ``[initial] from`` starts the calibrated machine (``simulate --machine NAME.toml``) where
+    the recording ended, instead of cold. The last recording, because a continuation
+    continues the latest one; each recording's states are in the report too.
+
+    Why a sidecar and not a table of the machine file: the machine file is a parameter set
+    that many scenarios share, while a state belongs to one recording's end; the sidecar is
+    what ``continue`` already reads (one home for saved states)."""
+    from spindlebench.formats.recording import sidecar_record
+
+    last = len(series_list) - 1
+    series = series_list[last]
+    record = sidecar_record(
+        provenance={**provenance, "state_of": series.name},
+        initial_state_K=_kelvin(fit.state_names, fit.initial_states[last]),
+        end_time_s=float(series.time_s[-1] - series.time_s[0]),
+        end_state_K=_kelvin(fit.state_names, fit.end_states[last]))
+    return record
+
+
+def _kelvin(names: Sequence[str], state_C: np.ndarray) -> dict[str, float]:
+    return {name: float(value) + KELVIN_OFFSET for name, value in zip(names, state_C,
+                                                                      strict=True)}
 
 
 def report_paths(machine_file: Path) -> tuple[Path, Path]:
@@ -39,6 +74,9 @@ def machine_text(name: str, description: str, parameters: Mapping[str, float],
     lines = [
         f"# Calibrated by 'spindlebench calibrate' ({fit.method}, reduced chi-square "
         f"{fit.chi2_reduced:.3g}); full report: {report_paths(Path(name + '.toml'))[0].name}",
+        f"# fitted states at the start and end of the last recording: "
+        f"{state_path(Path(name + '.toml')).name} (a continuation: [initial] kind = "
+        f"\"continue\", from = that file)",
     ]
     for recording in provenance["recordings"]:
         lines.append(f"# recording {recording['path']} sha256 {recording['sha256']}")
@@ -77,6 +115,11 @@ def report_dict(fit: Fit, provenance: Mapping[str, Any], ignored: Mapping[str, S
         "residuals": fit.channel_rmse,
         AMBIENT_COLUMN: [np.round(t[AMBIENT_COLUMN], 3).tolist() for t in fit.trajectories],
         "ignored_columns": {k: list(v) for k, v in ignored.items()},
+        "fitted_states_K": [
+            {"recording": t["recording"], "initial": _kelvin(fit.state_names, start),
+             "end": _kelvin(fit.state_names, end)}
+            for t, start, end in zip(fit.trajectories, fit.initial_states, fit.end_states,
+                                     strict=True)],
     }
 
 

@@ -29,6 +29,11 @@ DEFAULT_FIT: dict[str, str] = {
     "housing_L": "effective expansion length alpha*L of the headstock term",
     "column_L": "effective expansion length alpha*L of the column term",
     "table_L": "effective expansion length alpha*L of the table term",
+    # the heat capacities of the three masses that set the error's time scales (issue 22: a
+    # real machine's 5-34 h against the model's 0.6-2.4 h could not move without them)
+    "spindle_shaft_C": "heat capacity of the spindle shaft (its minutes-to-an-hour response)",
+    "housing_C": "heat capacity of the headstock housing (the hours-long rise)",
+    "column_C": "heat capacity of the column (the slow pull-back over many hours)",
 }
 
 #: Prior standard deviation of each log-factor: a factor e (2.7) is one sigma, so the prior

@@ -322,6 +322,8 @@ class Evaluation:
     n_data: int
     models: list[list[np.ndarray]]  # per recording, per channel: modelled values at all samples
     initial_states: list[np.ndarray]
+    #: Per recording, the state (degC) at its last sample: where a continuation starts.
+    end_states: list[np.ndarray] = field(default_factory=list)
 
 
 def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
@@ -329,11 +331,12 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
     """Whitened residuals measured-vs-model and priors, and their Jacobian in ``theta``."""
     n_s = layout.n_s
     s = theta[:n_s]
-    parts, jac_parts, models, initial_states = [], [], [], []
+    parts, jac_parts, models, initial_states, end_states = [], [], [], [], []
     for series, (shift, knots, offset) in zip(series_list, layout.blocks, strict=True):
         z0 = initial_state(d, series, s, theta[shift][0], theta[knots])
         initial_states.append(z0)
         states, S = trajectory(d, series, z0, s, theta[knots], jacobian)
+        end_states.append(states[:, -1].copy())
         inputs = series.inputs.copy()
         inputs[AMBIENT] = ambient_series(series, theta[knots])
         names = [c.output for c in series.channels]
@@ -371,6 +374,7 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
         residuals=np.concatenate([data, prior]),
         jacobian=np.vstack([*jac_parts, prior_jac]) if jacobian else None,
         n_data=data.size, models=models, initial_states=initial_states,
+        end_states=end_states,
     )
 
 
@@ -392,6 +396,10 @@ class Fit:
     seconds: float
     method: str
     initial_states: list[np.ndarray]
+    #: Per recording, the fitted state (degC, ``state_names`` order) at its last sample.
+    end_states: list[np.ndarray] = field(default_factory=list)
+    #: The model's state names (``ode.states``: the FMU's), the order of the states above.
+    state_names: list[str] = field(default_factory=list)
 
     @property
     def log_factors(self) -> np.ndarray:
@@ -534,5 +542,6 @@ def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit
         theta=theta, layout=layout, covariance=covariance, correlation=correlation,
         chi2_reduced=chi2_reduced, channel_rmse=channel_rmse, trajectories=trajectories,
         evaluations=evaluations, status=status, seconds=time.perf_counter() - started,
-        method=method, initial_states=final.initial_states,
+        method=method, initial_states=final.initial_states, end_states=final.end_states,
+        state_names=list(d.ode.states),
     )

@@ -110,7 +110,7 @@ def _run(args: argparse.Namespace) -> int:
     if out.suffix != ".toml":
         raise SpindlebenchError(f"-o {out}: a machine file ends in .toml")
     report_path, figure_path = report.report_paths(out)
-    for written in (out, report_path, figure_path):
+    for written in (out, report_path, figure_path, report.state_path(out)):
         check_output(written, "-o", [*args.recordings, args.map_file])
         refuse_shipped(written)  # now, not after minutes of fitting
     if not 2 <= args.segments <= MAX_SEGMENTS:
@@ -179,8 +179,10 @@ def _run(args: argparse.Namespace) -> int:
     stages("writing the machine file, its report and figure")
     report.figure(fit, figure_path, title=f"{name}: measured (dots) vs calibrated (lines)")
     report.write_report(report_path, content)
+    state_file = report.state_path(out)
+    report.write_report(state_file, report.state_record(fit, series_list, record))
     atomic.write_text(out, machine_text)
-    print(f"wrote {out} (+ {report_path.name}, {figure_path.name}); "
+    print(f"wrote {out} (+ {report_path.name}, {figure_path.name}, {state_file.name}); "
           f"{fit.evaluations} of at most {args.max_iter} evaluations, fit {fit.seconds:.0f} s, "
           f"{stages.seconds:.0f} s in all; stopped: {content['stop_reason']}")
     return 0

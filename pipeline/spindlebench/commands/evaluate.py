@@ -14,6 +14,7 @@ import dataclasses
 import json
 import sys
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -32,6 +33,7 @@ from spindlebench.formats.roles import (
     refuse_target_copies,
 )
 from spindlebench.selection.closure import CLOSURES
+from spindlebench.selection.dynamic import driver_columns, is_dynamic
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.evaluate import (
     Evaluation,
@@ -98,8 +100,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _read_used(path: Path, target: str, roles: ColumnRoles,
-               missing: str, others: Sequence[str] = ()) -> tuple[RecordingTable, RoleChoice]:
-    """One recording with only the target (and the ``others`` of several targets), time and
+               missing: str, others: Sequence[str] = (),
+               drivers: Sequence[str] = ()) -> tuple[RecordingTable, RoleChoice]:
+    """One recording with only the target (and the ``others`` of several targets, and the
+    ``drivers`` a dynamic regressor reads, issue 22), time and
     sensor columns read and checked: a gap or a note in a column nobody uses must not reject
     the file. As arrays: the command never imports pandas (half a second of its start-up)
     unless a file needs its parser."""
@@ -111,7 +115,7 @@ def _read_used(path: Path, target: str, roles: ColumnRoles,
     try:
         table, taken = read_table_with_roles(path, target, roles,
                                              allow_missing=missing == "drop-rows",
-                                             extra=others)
+                                             extra=(*others, *drivers))
     except MissingValueError as exc:
         raise SelectionError(f"{exc}; {DROP_HINT}") from exc
     overlap = [other for other in others if other in taken.sensors]
@@ -139,7 +143,9 @@ def run(args: argparse.Namespace) -> int:
     args.target, others = targets[0], targets[1:]  # one target: as before, to the byte
     roles = ColumnRoles.from_args(args)
     choice = choice_from_args(args)  # checked before reading
-    train, taken = _read_used(args.train, args.target, roles, args.missing, others)
+    # a dynamic regressor (issue 22) reads the speed programme (and the room) too
+    drivers = driver_columns(choice.regressor)[1:] if is_dynamic(choice.regressor) else ()
+    train, taken = _read_used(args.train, args.target, roles, args.missing, others, drivers)
     sensors = taken.sensors
     n = len(sensors) * (len(sensors) + 1) // 2 if args.differences else len(sensors)
     if n > MAX_CANDIDATES:  # 5 000 sensors with --differences: 12.5 million columns
@@ -161,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
             theirs = choose(read_header(path, detect_dialect(path, roles.delimiter)[0]),
                             args.target, roles, str(path)).sensors
             check_same_sensors(str(path), theirs, sensors, str(args.train))
-        tests.append(_read_used(path, args.target, same, args.missing, others)[0])
+        tests.append(_read_used(path, args.target, same, args.missing, others, drivers)[0])
     if others:
         return _run_targets(args, targets, joint, train, tests, taken, sensors, choice)
     with warnings.catch_warnings(record=True) as caught:

@@ -82,7 +82,20 @@ REGRESSORS: dict[str, str] = {
            "seeded); nonlinear",
     "mlp": "a small neural network (scikit-learn MLPRegressor, one hidden layer of 16, "
            "standardised inputs, seeded); nonlinear",
+    "tf1": "identified first-order transfer function from the speed programme (dynamic: "
+           "reads time and speed, not the selected rises)",
+    "tf2": "identified second-order transfer function from the speed programme (dynamic)",
+    "network": "identified grey-box thermal network from the speed programme, 1-3 nodes by "
+               "leave-one-cycle-out, the room constant (dynamic)",
+    "network-ambient": "the same network with the recording's ambient as a second input "
+                       "(dynamic)",
+    "observer": "steady-state Kalman filter on a network identified on the error and the "
+                "selected rises: reads the speed programme and those rises (dynamic)",
 }
+#: The regressors that are dynamic models of a recording's time axis (issue 22,
+#: ``identification``): besides the selected rises they read the recording's time and its
+#: speed programme (and ``network-ambient`` its ambient); ``selection.dynamic`` hands them over.
+DYNAMIC_REGRESSORS: tuple[str, ...] = ("tf1", "tf2", "network", "network-ambient", "observer")
 #: The regressors whose model is ``intercept + rises @ coefficients``.
 LINEAR_REGRESSORS: tuple[str, ...] = ("ols", "ridge", "pls")
 DEFAULT_REGRESSOR = "ols"

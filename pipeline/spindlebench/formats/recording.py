@@ -148,6 +148,9 @@ TRUE_SENSOR_COLUMNS: tuple[str, ...] = tuple(true_column(o) for o in SENSOR_OUTP
 #: Truth columns a study's evaluation needs from a recording.
 TRUTH_COLUMNS: tuple[str, ...] = (TIME_COLUMN, *(true_column(o) for o in SENSOR_OUTPUTS),
                                   true_column(DRIFT_COLUMN))
+#: The driver columns a study keeps beside its truth, for the dynamic regressors that read
+#: the speed programme and the room (``selection.dynamic``).
+STUDY_DRIVER_COLUMNS: tuple[str, ...] = (SPEED_COLUMN, AMBIENT_COLUMN)
 
 
 def _output_order(name: str) -> int:

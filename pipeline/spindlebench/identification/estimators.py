@@ -26,7 +26,7 @@ from spindlebench.identification.model import (
     rezeroed_rmse,
     select_order,
 )
-from spindlebench.identification.observer import build_observer
+from spindlebench.identification.observer import ObserverError, build_observer
 
 #: Orders tried when ``n_nodes="auto"``.
 AUTO_ORDERS = (1, 2, 3)
@@ -59,6 +59,12 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         Fit each node's initial temperature (else the first sample is at rest).
     exponent : float or None, default=None
         A fixed heat-input exponent (None: fitted in [0.3, 3]).
+    basis : tuple of float or None, default=None
+        Fixed exponents, one speed source each, instead of ``speed_sources``/``exponent``:
+        ``(0.0, 5/3)`` is a loss present whenever the spindle turns (exponent 0: the on/off
+        indicator; feeds, a motor's base loss) plus Palmgren bearing friction. Fixed and
+        distinct, so two sources cannot cancel with huge opposite weights as two fitted
+        exponents at the same value do.
     starts : int, default=4
         Starting points of the least squares (the first fixed, the others seeded).
     random_state : int, default=0
@@ -91,12 +97,14 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         "ambient": ["boolean"],
         "initial": ["boolean"],
         "exponent": [Interval(Real, 0, None, closed="neither"), None],
+        "basis": ["array-like", None],
         "starts": [Interval(Integral, 1, None, closed="left")],
         "random_state": [Interval(Integral, 0, None, closed="left")],
     }
 
     def __init__(self, n_nodes="auto", speed_sources: int = 1, ambient: bool = False,
-                 initial: bool = False, exponent=None, starts: int = 4, random_state: int = 0):
+                 initial: bool = False, exponent=None, starts: int = 4, random_state: int = 0,
+                 basis=None):
         self.n_nodes = n_nodes
         self.speed_sources = speed_sources
         self.ambient = ambient
@@ -104,10 +112,14 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         self.exponent = exponent
         self.starts = starts
         self.random_state = random_state
+        self.basis = basis
 
     def _structure(self, n_nodes: int) -> Structure:
+        basis = () if self.basis is None else tuple(float(a) for a in self.basis)
+        if any(not a >= 0 for a in basis) or len(set(basis)) < len(basis):
+            raise ValueError(f"basis {self.basis!r}: exponents must be >= 0 and distinct")
         return Structure("network", n_nodes, self.speed_sources, 0, self.ambient, self.initial,
-                         self.exponent)
+                         self.exponent, basis=basis)
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, sample_weight=None):
@@ -284,7 +296,11 @@ class ObserverRegressor(RegressorMixin, BaseEstimator):
                 fitted = fit(Structure("network", n), inputs, outputs, w, scales=scales,
                              seed=self.random_state, starts=self.starts)
                 for r in dists:
-                    obs = build_observer(fitted, inputs, outputs, w > 0, r)
+                    try:
+                        obs = build_observer(fitted, inputs, outputs, w > 0, r)
+                    except ObserverError:  # no filter for this structure: never chosen
+                        scores[(n, r)].append(np.inf)
+                        continue
                     predicted = obs.run(inputs, outputs[:, 1:])
                     scores[(n, r)].append(rezeroed_rmse(predicted[part], outputs[part, 0]))
         self.choice_scores_ = [{"n_nodes": n, "disturbances": r, "held_out_rmse": v,

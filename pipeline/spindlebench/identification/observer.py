@@ -166,7 +166,10 @@ def build_observer(fitted: FitResult, inputs: Inputs, outputs: np.ndarray, mask:
     best = None
     for q in q_grid:
         Q = np.diag(np.r_[q * node_var * (1 - phi2), np.maximum(q_dist, 1e-12)])
-        K, P = kalman_gain(Ad, H, Q, R)
+        try:
+            K, P = kalman_gain(Ad, H, Q, R)
+        except np.linalg.LinAlgError:  # no stabilising solution at this scale: next one
+            continue
         obs = SteadyStateObserver(Ad, Bd, H, offsets[1:], error_row, float(offsets[0]), K,
                                   float(q), float("nan"), fitted, dt)
         _, nu = filter_states(obs, inputs, outputs[:, 1:])
@@ -177,9 +180,19 @@ def build_observer(fitted: FitResult, inputs: Inputs, outputs: np.ndarray, mask:
         if best is None or ll > best.log_likelihood:
             obs.log_likelihood = float(ll)
             best = obs
+    if best is None:
+        raise ObserverError(
+            f"observer: no process-noise scale in {q_grid[0]:g} .. {q_grid[-1]:g} gives a "
+            f"steady-state Kalman filter for {n_nodes} node(s) and {r} disturbance(s) (the "
+            "Riccati equation has eigenvalues on the unit circle: a disturbance the sensors "
+            "cannot see); use fewer disturbances or train on more cycles")
     if refit_readout:
         _refit_readout(best, inputs, outputs, mask)
     return best
+
+
+class ObserverError(SpindlebenchError):
+    """No steady-state filter exists for a structure on these training data."""
 
 
 def _refit_readout(obs: SteadyStateObserver, inputs: Inputs, outputs: np.ndarray,

@@ -221,6 +221,12 @@ def synthetic(folder: Path) -> dict:
     for nodes in (2, 3, 4):
         models[f"network, {nodes} nodes (speed + ambient)"] = (
             ThermalNetworkRegressor(n_nodes=nodes, ambient=True), "room")
+    # issue 22's try towards the 1 um goal: two heat sources of fixed, distinct exponents, a
+    # loss present whenever the spindle turns (the feeds, the motor's base loss: exponent 0)
+    # and Palmgren friction (5/3), instead of one fitted exponent averaging them
+    for nodes in (2, 3):
+        models[f"network, {nodes} nodes, sources n^0 + n^(5/3) (speed + ambient)"] = (
+            ThermalNetworkRegressor(n_nodes=nodes, basis=(0.0, 5 / 3), ambient=True), "room")
     models["observer, 4 sensors"] = (ObserverRegressor(), "observer")
     results: dict = {"observer_sensors": [f"T{j + 1}" for j in sorted(chosen)], "rmse_um": {},
                      "train_rmse_um": {}, "models": {}}

@@ -40,6 +40,13 @@ from spindlebench.formats.recording import (
     recording_name,
 )
 from spindlebench.selection.differences import difference_names, pair_indices
+from spindlebench.selection.dynamic import (
+    check_drivers,
+    driver_columns,
+    is_dynamic,
+    model_inputs,
+    reads_rises,
+)
 from spindlebench.selection.errors import (
     SelectionError,
     SelectionOverflowError,
@@ -72,7 +79,8 @@ def seeded(choice: MethodChoice) -> bool:
     a seeded part, or a user's class, which may: say so)."""
     entry = METHOD_REGISTRY.get(choice.method)
     return ((entry is not None and entry.seeded) or choice.within in SEEDED_PARTS
-            or choice.regressor in SEEDED_PARTS or choice.user_method is not None
+            or choice.regressor in SEEDED_PARTS or is_dynamic(choice.regressor)
+            or choice.user_method is not None
             or choice.user_regressor is not None)
 
 #: ``CandidateSet.matrix`` builds at most this many candidates column by column.
@@ -395,7 +403,13 @@ class Evaluation:
         ):
             shown = ", ".join(members[:8]) + (f", ... ({len(members)})" if len(members) > 8 else "")
             lines.append(f"  {number}: keep {chosen} (psi = {psi:+.4f}) from [{shown}]")
-        if self.coefficients is None:
+        if is_dynamic(self.method.regressor):
+            reads = ", ".join(driver_columns(self.method.regressor)[1:])
+            if reads_rises(self.method.regressor):
+                reads += f" and d({'), d('.join(self.selected)})"
+            lines.append(f"model: {self.target} = {type(self.fit.estimator).__name__} of "
+                         f"{reads} along time_s (dynamic: no coefficients)")
+        elif self.coefficients is None:
             lines.append(f"model: {self.target} = {type(self.fit.estimator).__name__} of "
                          f"d({'), d('.join(self.selected)}) (not linear: no coefficients)")
         else:
@@ -713,6 +727,11 @@ def evaluate_checked(
     frames = {name: recording.frame for name, recording in tests.items()}
     chosen = resolve_sensors(train_name, train.frame, frames, target, sensors)
     checked = [*chosen, target]
+    dynamic = is_dynamic(choice.regressor)
+    if dynamic:  # the regressor reads the speed programme too: present and finite everywhere
+        for recording in [train, *tests.values()]:
+            check_drivers(choice.regressor, recording.name, recording.columns)
+        checked += [c for c in driver_columns(choice.regressor) if c not in checked]
     for recording in [train, *tests.values()]:
         # a check that passed is not repeated; one that failed raises again, in this order
         recording.memo(("checked", tuple(checked), missing),
@@ -722,7 +741,8 @@ def evaluate_checked(
     train_frame = train
     if missing == "drop-rows":
         chosen = _sparse_sensors(train, chosen)
-        train_rows = _complete_rows(train, [*chosen, target])
+        train_rows = _complete_rows(train, [*chosen, target, *(
+            driver_columns(choice.regressor) if dynamic else ())])
         if len(train_rows) < len(train):  # else its conversions serve again (every k)
             train_frame = train.take(train_rows)
     candidates = CandidateSet(tuple(chosen), differences)
@@ -740,9 +760,13 @@ def evaluate_checked(
         selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure) \
             if support is None else given_selection(matrix, y_train, names, support, train_name)
         selected_names = [names[i] for i in selection.selected]
-        fit = fit_with(choice, candidates.matrix(train_frame, selection.selected), y_train,
-                       names=selected_names, random_state=seed)
+        train_values = candidates.matrix(train_frame, selection.selected)
+        if dynamic:  # the driver columns in front of the rises (``selection.dynamic``)
+            train_values = model_inputs(choice.regressor, train_frame.values, train_values)
+        fit = fit_with(choice, train_values, y_train, names=selected_names, random_state=seed)
     used = [*candidates.sensors_of(selection.selected), target]
+    if dynamic:
+        used += list(driver_columns(choice.regressor))
     predictions, measured, errors, test_rows = {}, {}, {}, {}
     for name, recording in tests.items():
         test_rows[name] = np.arange(len(recording))
@@ -760,7 +784,8 @@ def evaluate_checked(
             values = recording.memo(("candidates", candidates, tuple(selection.selected)),
                                     candidate_values) if frame is recording else \
                 candidate_values()
-            predictions[name] = fit.predict(values)
+            predictions[name] = fit.predict(
+                model_inputs(choice.regressor, frame.values, values) if dynamic else values)
             if not np.all(np.isfinite(predictions[name])):
                 raise SelectionOverflowError("values too large to predict (overflow)")
             errors[name] = rmse(measured[name], predictions[name])

@@ -38,6 +38,7 @@ from spindlebench.core.names import (
     REGRESSORS,
     WITHIN,
 )
+from spindlebench.selection.dynamic import is_dynamic, make_dynamic
 from spindlebench.selection.errors import SelectionError
 from spindlebench.selection.method_registry import METHOD_REGISTRY, descriptions, method_names
 from spindlebench.selection.user_methods import (
@@ -202,6 +203,8 @@ def make_regressor(choice: MethodChoice, random_state=DEFAULT_METHOD_SEED) -> Ba
 
     if choice.user_regressor is not None:
         return choice.user_regressor.build(None, random_state, role="regressor")
+    if is_dynamic(choice.regressor):  # time and speed in front of the rises (``dynamic``)
+        return make_dynamic(choice.regressor, random_state)
     if choice.regressor == "gbr":
         return nonlinear.BoostedRiseRegressor(random_state=random_state)
     if choice.regressor == "mlp":
@@ -218,6 +221,10 @@ def make_pipeline(choice: MethodChoice, k: int, differences: bool = False,
 
     from spindlebench.selection.estimators import PairwiseDifferences
 
+    if is_dynamic(choice.regressor):
+        raise SelectionError(f"regressor {choice.regressor!r} is a dynamic model that reads a "
+                             "recording's time and speed besides the rises; it runs through "
+                             "evaluate, not a Pipeline on rises")
     steps = [("differences", PairwiseDifferences())] if differences else []
     steps += [("select", make_selector(choice, k, similarity, random_state)),
               ("regress", make_regressor(choice, random_state))]

@@ -28,7 +28,12 @@ import pandas as pd
 
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
-from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN, TRUE_SENSOR_COLUMNS
+from spindlebench.formats.recording import (
+    STUDY_DRIVER_COLUMNS,
+    TIME_COLUMN,
+    TRUE_DRIFT_COLUMN,
+    TRUE_SENSOR_COLUMNS,
+)
 from spindlebench.studies.family.experiments import (
     ambient_for,
     initial_for,
@@ -190,6 +195,8 @@ def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int
         frame[list(SENSORS)] = readings.iloc[rows].to_numpy()
         frame[TARGET] = probe[rows] - probe[offset]
         frame[TRUTH] = drift[rows] - drift[offset]
+        for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
+            frame[column] = truths[day.number][column].to_numpy(float)
         frames[day.number] = frame
         offset += n
     return frames

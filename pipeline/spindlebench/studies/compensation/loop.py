@@ -34,10 +34,16 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.core.names import SENSORS, SIX_DIFF
-from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN, TRUE_SENSOR_COLUMNS
+from spindlebench.formats.recording import (
+    STUDY_DRIVER_COLUMNS,
+    TIME_COLUMN,
+    TRUE_DRIFT_COLUMN,
+    TRUE_SENSOR_COLUMNS,
+)
 from spindlebench.selection import SelectionWarning, evaluate
+from spindlebench.selection.dynamic import is_dynamic, model_inputs
 from spindlebench.selection.evaluate import CandidateSet
-from spindlebench.selection.regression import LinearFit
+from spindlebench.selection.regression import EstimatorFit, LinearFit
 from spindlebench.studies.compensation import continuous
 from spindlebench.studies.compensation.compensation_file import CompensationStudy
 from spindlebench.studies.compensation.controller import applied_offset, detect_faults
@@ -90,6 +96,8 @@ def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame) -> pd.Data
     frame[list(SENSORS)] = pd.DataFrame(readings).ffill().bfill().to_numpy()
     frame[TARGET] = probe
     frame[TRUTH] = drift - drift[0]
+    for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
+        frame[column] = truth[column].to_numpy(float)
     return frame
 
 
@@ -101,16 +109,21 @@ class TrainedModel:
     candidates: CandidateSet
     columns: np.ndarray
     selected: tuple[str, ...]
-    fit: LinearFit
+    fit: LinearFit | EstimatorFit
     trained_on_day: int
     excluded: tuple[str, ...] = ()
+    #: The regressor's name: a dynamic one reads the day's time and speed too.
+    regressor: str = "ols"
 
     @property
     def sensors(self) -> list[str]:
         return self.candidates.sensors_of(self.columns)
 
     def predict(self, frame: pd.DataFrame) -> np.ndarray:
-        return self.fit.predict(self.candidates.matrix(frame, self.columns))
+        values = self.candidates.matrix(frame, self.columns)
+        if is_dynamic(self.regressor):  # time and speed in front (``selection.dynamic``)
+            values = model_inputs(self.regressor, lambda c: frame[c].to_numpy(float), values)
+        return self.fit.predict(values)
 
 
 def train(name: str, study: CompensationStudy, frame: pd.DataFrame, day: int,
@@ -125,7 +138,8 @@ def train(name: str, study: CompensationStudy, frame: pd.DataFrame, day: int,
                           seed=study.seed, missing="drop-rows")
     candidates = CandidateSet(tuple(result.sensors), spec.group == SIX_DIFF)
     return TrainedModel(name, candidates, np.asarray(result.selection.selected),
-                        tuple(result.selected), result.fit, day, excluded)
+                        tuple(result.selected), result.fit, day, excluded,
+                        spec.choice.regressor)
 
 
 @dataclass

@@ -23,7 +23,7 @@ from threadpoolctl import threadpool_limits
 
 from spindlebench.core.console import one_line_error
 from spindlebench.core.names import SENSORS
-from spindlebench.formats.recording import TIME_COLUMN, TRUTH_COLUMNS
+from spindlebench.formats.recording import STUDY_DRIVER_COLUMNS, TIME_COLUMN, TRUTH_COLUMNS
 from spindlebench.studies.family.experiments import Condition, Experiment, sensor_model
 from spindlebench.studies.family.methods import TARGET, TRUTH, MethodSpec, SharedRuns, score_all
 from spindlebench.testbench.scenario import Scenario
@@ -77,7 +77,8 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
 
     A sensor that drops out is held at its last good reading, as a compensation controller
     would; the columns are T1..T20 (degC), ``drift_um`` (probe, zeroed at the first sample)
-    and the true drift rise for scoring.
+    and the true drift rise for scoring, then the speed and ambient driver columns when the
+    truth holds them (the sweep's does: ``STUDY_DRIVER_COLUMNS``).
     """
     truth = job.truths[experiment.id]
     temperatures = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
@@ -100,7 +101,11 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
         values[:, 1:-2] = measured_C
         values[:, -2] = measured_drift
     values[:, -1] = drift - drift[0]
-    return pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
+    frame = pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
+    for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
+        if column in truth.columns:
+            frame[column] = truth[column].to_numpy(float)
+    return frame
 
 
 def evaluate_job(job: EvaluationJob) -> dict[str, TrainingResult]:

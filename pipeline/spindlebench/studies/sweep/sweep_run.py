@@ -24,7 +24,12 @@ from spindlebench.core.atomic import write_text
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
-from spindlebench.formats.recording import TRUTH_COLUMNS, read_back, read_recording
+from spindlebench.formats.recording import (
+    STUDY_DRIVER_COLUMNS,
+    TRUTH_COLUMNS,
+    read_back,
+    read_recording,
+)
 from spindlebench.studies.family.experiments import (
     Condition,
     Experiment,
@@ -140,7 +145,7 @@ class Sweep:
         key = (replica, experiment.id)
         if key not in self._truths:
             frame = read_recording(self.store.path(recording_path(replica, experiment)))
-            self._truths[key] = frame.loc[:, list(TRUTH_COLUMNS)].copy()
+            self._truths[key] = frame.loc[:, [*TRUTH_COLUMNS, *STUDY_DRIVER_COLUMNS]].copy()
         return self._truths[key]
 
     # ----------------------------------------------------------------- running
@@ -221,7 +226,7 @@ class Sweep:
         replica, experiment = self.simulations.store_outcome(outcome)
         if outcome.ok:  # its truth as the file reads back, without reading it
             truth = read_back(self.store.path(recording_path(replica, experiment)),
-                              outcome.value[0], TRUTH_COLUMNS)
+                              outcome.value[0], (*TRUTH_COLUMNS, *STUDY_DRIVER_COLUMNS))
             if truth is not None:
                 self._truths[(replica, experiment.id)] = truth
         waiting[replica].discard(experiment.id)
