@@ -22,8 +22,9 @@ benchmark calls it on the fitted estimator of any entrant that has it (a user's 
 import path too, or an identified model once it is a ``--regressor``), and uses the ordinary
 prediction for every other one.
 
-The dynamic entrants, labels ``dynamic:NAME`` (``DYNAMIC``), wrap the identification
-estimators so they fit on the training run itself (``X`` = ``time_s``, the spindle speed,
+The dynamic entrants, labels ``dynamic:NAME`` (``DYNAMIC``), are the ``--regressor``
+models of ``selection.dynamic`` (one home for how each is built: ``make_dynamic``) with fixed
+orders, fitted on the training run itself (``X`` = ``time_s``, the spindle speed,
 and for the observer the rises since the run's first row of the ``k`` sensors most
 correlated with the error on that run: raw degC would make a held-out run that starts warmer
 than the training one look like heating to the filter, which a held-out July run showed,
@@ -57,13 +58,19 @@ from spindlebench.formats.recording import SPEED_COLUMN, TIME_COLUMN
 #: The hook's name (one home: the benchmark looks it up with ``getattr``).
 HOOK = "predict_rollout"
 PREFIX = "dynamic:"
-#: Dynamic entrant name -> (estimator class in ``identification.estimators``, parameters,
-#: whether it reads sensors).
-DYNAMIC: dict[str, tuple[str, dict[str, Any], bool]] = {
-    "tf1": ("TransferFunctionRegressor", {"order": 1}, False),
-    "network": ("ThermalNetworkRegressor", {"n_nodes": 2}, False),
-    "observer": ("ObserverRegressor", {"n_nodes": 1, "disturbances": 1}, True),
+#: Dynamic entrant name (a ``selection.dynamic`` regressor) -> its fixed orders.
+DYNAMIC: dict[str, dict[str, Any]] = {
+    "tf1": {"order": 1},
+    "network": {"n_nodes": 2},
+    "observer": {"n_nodes": 1, "disturbances": 1},
 }
+
+
+def _estimator(name: str, seed: int):
+    """The entrant's estimator: the ``--regressor`` model with the entrant's fixed orders."""
+    from spindlebench.selection.dynamic import make_dynamic
+
+    return make_dynamic(name, random_state=seed).set_params(**DYNAMIC[name])
 
 
 def is_dynamic(label: str) -> bool:
@@ -93,9 +100,11 @@ class DynamicChoice:
         return PREFIX + self.name
 
     def to_dict(self) -> dict[str, Any]:
-        cls, params, reads = DYNAMIC[self.name]
+        from spindlebench.selection.dynamic import reads_rises
+
+        cls = type(_estimator(self.name, 0)).__name__
         return {"dynamic": self.name, "estimator": f"spindlebench.identification.estimators:"
-                f"{cls}", "params": params, "reads_sensors": reads}
+                f"{cls}", "params": DYNAMIC[self.name], "reads_sensors": reads_rises(self.name)}
 
 
 def parse_dynamic(label: str) -> DynamicChoice:
@@ -112,10 +121,10 @@ class RunModel:
     row, as every static model reads them)."""
 
     def __init__(self, choice: DynamicChoice, k: int, seed: int) -> None:
-        from spindlebench.identification import estimators
+        from spindlebench.selection.dynamic import reads_rises
 
-        cls, params, self.reads_sensors = DYNAMIC[choice.name]
-        self.estimator = getattr(estimators, cls)(**params, random_state=seed)
+        self.reads_sensors = reads_rises(choice.name)
+        self.estimator = _estimator(choice.name, seed)
         self.k = k
         self.sensors: tuple[str, ...] = ()
 
