@@ -24,8 +24,9 @@ Also the fast closure against the paper's max-min squaring (identical results ch
 Absolute times depend on the machine's load; the ratios are what to compare.
 
 Run: .venv/bin/python bench/bench_selection.py  (``make bench`` runs every bench script);
-``bench/bench_selection.py --large``: 1 000 sensors timed and 2 000 run for a while
-(``bench/results/bench_selection_large.json``).
+``bench/bench_selection.py --large [--smoke-cpu-s S] [--smoke-only]``: 1 000 sensors timed
+and 2 000 run for S CPU seconds (default ``SMOKE_CPU_S``; ``bench/results/
+bench_selection_large.json``, rewritten after each row; ``--smoke-only``: only the 2 000 row).
 """
 
 from __future__ import annotations
@@ -141,11 +142,12 @@ def smoke(n_sensors: int, n_samples: int, k: int, limit_s: float) -> dict:
             "error": outcome.get("error"), "clusters": outcome.get("clusters")}
 
 
-def large() -> None:
-    """The issue-26 rows: 1 000 sensors timed, 2 000 run for ``SMOKE_CPU_S``."""
+def large(smoke_cpu_s: float = SMOKE_CPU_S, timed: bool = True) -> None:
+    """The issue-26 rows: 1 000 sensors timed (unless ``timed`` is false), 2 000 run for
+    ``smoke_cpu_s`` CPU seconds (none: 0). The file is written after each row."""
     rows: list[dict] = []
     print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
-    for n_sensors, n_samples, k, goal_s, goal_mb in LARGE:
+    for n_sensors, n_samples, k, goal_s, goal_mb in LARGE if timed else ():
         result = child("--measure", str(n_sensors), str(n_samples), str(k), "False")
         n = n_sensors * (n_sensors + 1) // 2
         print(f"{n_sensors} sensors, {n} candidates: {result['row_cpu_s']:.1f} CPU-s "
@@ -154,7 +156,10 @@ def large() -> None:
         rows.append({"row": "selection", "sensors": n_sensors, "candidates": n,
                      "goal_cpu_s": goal_s, "goal_MB": goal_mb,
                      "load_after": list(os.getloadavg()), **result})
-    result = child("--smoke", *map(str, SMOKE), str(SMOKE_CPU_S))
+        record("bench_selection_large", rows)
+    if smoke_cpu_s <= 0:
+        return
+    result = child("--smoke", *map(str, SMOKE), str(smoke_cpu_s))
     print(f"{SMOKE[0]} sensors: {'finished' if result['finished'] else 'still running'} after "
           f"{result['cpu_s']:.0f} CPU-s, {result['peak_MB']:.0f} MB peak, "
           f"error: {result['error']}", flush=True)
@@ -282,7 +287,10 @@ def main() -> None:
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--large"]:
-        large()
+        options = sys.argv[2:]
+        limit = float(options[options.index("--smoke-cpu-s") + 1]) \
+            if "--smoke-cpu-s" in options else SMOKE_CPU_S
+        large(limit, timed="--smoke-only" not in options)
     elif sys.argv[1:2] == ["--smoke"]:
         m, samples, k, limit = sys.argv[2:6]
         print(json.dumps(smoke(int(m), int(samples), int(k), float(limit))), flush=True)
