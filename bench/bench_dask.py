@@ -14,11 +14,20 @@ CPU seconds are those of the whole process tree (user + system): this process ma
 the subreaper of its descendants (``prctl(PR_SET_CHILD_SUBREAPER)``), so a forkserver's
 workers, a nanny's worker and anything orphaned are reaped here and their CPU lands in
 ``RUSAGE_CHILDREN``. For Dask that includes the cluster's start-up and its idle time while
-the command starts; ``dask_idle`` measures that part alone (a cluster started, left idle for
-as long as the Dask run took, stopped). The results CSV of every run is compared with the
+the command starts; ``dask_idle`` measures that part alone (a cluster started, left idle,
+stopped, ``IDLE_S`` seconds in all). The scheduler runs with ``QUIET_SCHEDULER`` (the
+settings docs/speed.md gives for a study cluster); workers and nannies with Dask's defaults,
+quieted by the study's plugins. The results CSV of every run is compared with the
 first's, byte for byte.
 
 Run: .venv/bin/python bench/bench_dask.py  (writes bench/results/bench_dask.json)
+
+Keys of a ``sweep`` row: ``executor`` (local or dask), ``workers``, ``cpu_s`` (process tree,
+cluster included), ``command_wall_s`` (the sweep command), ``total_wall_s`` (with the
+cluster's start and stop), ``cluster_start_wall_s``, ``load_before``/``load_after``,
+``results_sha256`` (of results.csv). ``dask_idle``: ``cpu_s`` over ``wall_s``, and
+``cores_busy`` = their ratio. ``summary``: ``dask_over_local_cpu_N`` = Dask's ``cpu_s`` over
+the local pool's for N workers, against ``goal_ratio``.
 """
 
 from __future__ import annotations
@@ -45,6 +54,13 @@ WORKERS = (1, 2)
 #: Seconds to wait for a started cluster to accept its workers.
 CLUSTER_START_S = 120.0
 PR_SET_CHILD_SUBREAPER = 36
+#: The scheduler's settings for a study cluster (docs/speed.md): its event-loop tick and
+#: system monitor less often. The workers and nannies run Dask's defaults; the study's
+#: plugins quiet them (``dask_plugin.QUIET``).
+QUIET_SCHEDULER = {"DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "1s",
+                   "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__INTERVAL": "5s"}
+#: Wall seconds of the idle-cluster rows.
+IDLE_S = 60.0
 
 
 def subreaper() -> None:
@@ -85,7 +101,7 @@ class Cluster:
         quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
         self.processes = [subprocess.Popen(
             [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", port,
-             "--no-dashboard"], **quiet)]
+             "--no-dashboard"], env={**os.environ, **QUIET_SCHEDULER}, **quiet)]
         self.processes.append(subprocess.Popen(
             [str(BIN / "dask"), "worker", self.address, "--nworkers", str(workers),
              "--nthreads", "1", "--no-dashboard", "--memory-limit", "0"], **quiet))
@@ -160,8 +176,10 @@ def idle(workers: int, seconds: float) -> dict:
     cluster = Cluster(workers)
     time.sleep(max(0.0, seconds - (time.perf_counter() - start)))
     cluster.stop()
-    return {"row": "dask_idle", "workers": workers, "cpu_s": children_cpu() - cpu,
-            "wall_s": time.perf_counter() - start}
+    wall = time.perf_counter() - start
+    used = children_cpu() - cpu
+    return {"row": "dask_idle", "workers": workers, "cpu_s": used, "wall_s": wall,
+            "cores_busy": used / wall}
 
 
 def main() -> None:
@@ -178,8 +196,7 @@ def main() -> None:
                 print(f"{kind:>6} {workers} worker(s): {row['cpu_s']:7.1f} CPU-s, command "
                       f"{row['command_wall_s']:6.1f} s wall, load {row['load_after'][0]:.1f}",
                       flush=True)
-            dask_row = rows[-1]
-            rows.append(idle(workers, dask_row["total_wall_s"]))
+            rows.append(idle(workers, IDLE_S))
             print(f"  idle cluster of {workers} for {rows[-1]['wall_s']:.0f} s: "
                   f"{rows[-1]['cpu_s']:.1f} CPU-s", flush=True)
     if len({row["results_sha256"] for row in rows if row["row"] == "sweep"}) != 1:
