@@ -27,7 +27,9 @@ the same result checked:
 The load average is printed first: on the shared machine wall times follow it, CPU seconds
 much less.
 
-Run: .venv/bin/python bench/bench_placement.py  (``make bench`` runs every bench script)
+Run: .venv/bin/python bench/bench_placement.py  (``make bench`` runs every bench script);
+``bench/bench_placement.py --methods``: CPU seconds of every method of the tiny study against
+the fuzzy method on the same candidates (``bench/results/bench_placement_methods.json``).
 """
 
 from __future__ import annotations
@@ -46,6 +48,8 @@ import numpy as np
 from spindlebench.selection import SelectionWarning, select_sensitive_points
 from spindlebench.selection.differences import pairwise_differences
 from spindlebench.studies.placement.search import Block, exhaustive_search, greedy_forward
+
+from results import record
 
 N_NODES, N_SAMPLES, N_VALID = 100, 361, 8
 #: (nodes, run the old matrix way too, goal s, goal MB) of the placement study's fuzzy rows
@@ -205,8 +209,61 @@ def placement_rows() -> None:
               f"{r['peak_MB']:6.0f}MB {goal:>16}  {old}", flush=True)
 
 
+#: Nodes of the per-method rows: the model's 81 field nodes (3 321 candidates with
+#: differences), as in the tiny study, here on a synthetic field.
+METHOD_NODES = 81
+#: Each method's CPU seconds are the median of this many searches (after one untimed
+#: search that pays its imports and compilation).
+METHOD_REPEATS = 3
+
+
+def method_rows() -> list[dict]:
+    """CPU seconds of every method of the tiny study (``find_placements``, one method and
+    candidate set at a time, so BLAS/OpenMP are limited as in ``place``) and its ratio to
+    the fuzzy method on the same candidates (issue 26: within 3x)."""
+    import statistics
+
+    from spindlebench.studies.placement.placements import find_placements
+
+    study, train_runs, valid_runs = placement_case(METHOD_NODES)
+    methods = load_tiny_methods()
+    study = dataclasses.replace(study, budgets=(2, 3))
+    rows = []
+    for differences in (False, True):
+        cpu = {}
+        for method in methods:
+            one = dataclasses.replace(study, methods=(method,), with_differences=(differences,))
+            find_placements(one, train_runs, valid_runs)  # imports, compiled code
+            times = []
+            for _ in range(METHOD_REPEATS):
+                start = time.process_time()
+                find_placements(one, train_runs, valid_runs)
+                times.append(time.process_time() - start)
+            cpu[method] = statistics.median(times)
+        for method in methods:
+            rows.append({"row": "placement_method", "method": method,
+                         "differences": differences, "nodes": METHOD_NODES,
+                         "candidates": len(study.nodes) * (len(study.nodes) + 1) // 2
+                         if differences else len(study.nodes),
+                         "budgets": list(study.budgets), "cpu_s": cpu[method],
+                         "ratio_to_fuzzy": cpu[method] / cpu["fuzzy"], "goal_ratio": 3.0})
+            print(f"  {method + ('+diff' if differences else ''):>18} {cpu[method]:7.3f} CPU-s "
+                  f"({cpu[method] / cpu['fuzzy']:5.1f}x fuzzy)", flush=True)
+    return rows
+
+
+def load_tiny_methods() -> tuple[str, ...]:
+    from spindlebench.studies.placement.placement_file import load_placement_study
+
+    return load_placement_study(TINY).methods
+
+
 def main() -> None:
     print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
+    if sys.argv[1:2] == ["--methods"]:
+        print(f"[every method of {TINY.name}, {METHOD_NODES} synthetic nodes, budgets 2, 3]")
+        print(f"wrote {record('bench_placement_methods', method_rows())}")
+        return
     placement_rows()  # first: a child's maxrss starts at this process's size at the fork
     print(f"\nsynthetic field: {N_NODES} nodes, {N_SAMPLES} samples per run, 1 training + "
           f"{N_VALID} validation runs")

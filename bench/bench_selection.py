@@ -23,7 +23,10 @@ much less.
 Also the fast closure against the paper's max-min squaring (identical results checked).
 Absolute times depend on the machine's load; the ratios are what to compare.
 
-Run: .venv/bin/python bench/bench_selection.py  (``make bench`` runs every bench script)
+Run: .venv/bin/python bench/bench_selection.py  (``make bench`` runs every bench script);
+``bench/bench_selection.py --large [--smoke-cpu-s S] [--smoke-only]``: 1 000 sensors timed
+and 2 000 run for S CPU seconds (default ``SMOKE_CPU_S``; ``bench/results/
+bench_selection_large.json``, rewritten after each row; ``--smoke-only``: only the 2 000 row).
 """
 
 from __future__ import annotations
@@ -96,6 +99,72 @@ def measure(n_sensors: int, n_samples: int, k: int, with_matrix: bool) -> dict:
         out["same_clusters"] = all(
             np.array_equal(a, b) for a, b in zip(matrix.clusters, rows.clusters, strict=True))
     return out
+
+
+#: (sensors, samples, clusters, goal CPU-s, goal MB) of the large rows (issue 26): run by
+#: ``--large``, written to ``bench/results/bench_selection_large.json``.
+LARGE = [(1000, 1440, 4, 60.0, 1000)]
+#: The 2 000-sensor case (2 001 000 candidates) only has to run without a crash: it runs for
+#: at most this many CPU seconds (Prim is n^2; to the end it would take about an hour here).
+SMOKE = (2000, 1440, 4)
+SMOKE_CPU_S = 600.0
+
+
+def smoke(n_sensors: int, n_samples: int, k: int, limit_s: float) -> dict:
+    """Run the selection in a thread (the compiled loop releases the GIL) and watch it: peak
+    memory and CPU seconds until it ends or ``limit_s`` CPU seconds have passed."""
+    import threading
+
+    from spindlebench.selection import pairs
+
+    raw = synthetic_temperatures(n_sensors, n_samples)
+    raw = raw - raw[0]
+    y = drift(raw)
+    above, pairs.COMPILED_ABOVE = pairs.COMPILED_ABOVE, 0  # load the compiled kernel
+    pairs.select_among_pairs(raw[:, :4], y, 2)
+    pairs.COMPILED_ABOVE = above
+    outcome: dict = {}
+
+    def work() -> None:
+        try:
+            outcome["clusters"] = len(pairs.select_among_pairs(raw, y, k).clusters)
+        except BaseException as error:  # reported in the row, not hidden
+            outcome["error"] = repr(error)
+
+    cpu = time.process_time()
+    thread = threading.Thread(target=work, daemon=True)
+    thread.start()
+    while thread.is_alive() and time.process_time() - cpu < limit_s:
+        thread.join(timeout=5.0)
+    return {"row": "smoke", "sensors": n_sensors, "candidates": n_sensors * (n_sensors + 1) // 2,
+            "cpu_s": time.process_time() - cpu, "peak_MB": peak_mb(),
+            "finished": not thread.is_alive(), "cpu_limit_s": limit_s,
+            "error": outcome.get("error"), "clusters": outcome.get("clusters")}
+
+
+def large(smoke_cpu_s: float = SMOKE_CPU_S, timed: bool = True) -> None:
+    """The issue-26 rows: 1 000 sensors timed (unless ``timed`` is false), 2 000 run for
+    ``smoke_cpu_s`` CPU seconds (none: 0). The file is written after each row."""
+    rows: list[dict] = []
+    print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
+    for n_sensors, n_samples, k, goal_s, goal_mb in LARGE if timed else ():
+        result = child("--measure", str(n_sensors), str(n_samples), str(k), "False")
+        n = n_sensors * (n_sensors + 1) // 2
+        print(f"{n_sensors} sensors, {n} candidates: {result['row_cpu_s']:.1f} CPU-s "
+              f"({result['row_s']:.1f} s wall), {result['row_peak_MB']:.0f} MB "
+              f"(goal <= {goal_s:g} CPU-s, {goal_mb} MB)", flush=True)
+        rows.append({"row": "selection", "sensors": n_sensors, "candidates": n,
+                     "goal_cpu_s": goal_s, "goal_MB": goal_mb,
+                     "load_after": list(os.getloadavg()), **result})
+        record("bench_selection_large", rows)
+    if smoke_cpu_s <= 0:
+        return
+    result = child("--smoke", *map(str, SMOKE), str(smoke_cpu_s))
+    print(f"{SMOKE[0]} sensors: {'finished' if result['finished'] else 'still running'} after "
+          f"{result['cpu_s']:.0f} CPU-s, {result['peak_MB']:.0f} MB peak, "
+          f"error: {result['error']}", flush=True)
+    rows.append({**result, "load_after": list(os.getloadavg())})
+    print(f"wrote {record('bench_selection_large', rows)}")
 
 
 def child(*args: str) -> dict:
@@ -217,7 +286,16 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--measure"]:
+    if sys.argv[1:2] == ["--large"]:
+        options = sys.argv[2:]
+        limit = float(options[options.index("--smoke-cpu-s") + 1]) \
+            if "--smoke-cpu-s" in options else SMOKE_CPU_S
+        large(limit, timed="--smoke-only" not in options)
+    elif sys.argv[1:2] == ["--smoke"]:
+        m, samples, k, limit = sys.argv[2:6]
+        print(json.dumps(smoke(int(m), int(samples), int(k), float(limit))), flush=True)
+        os._exit(0)  # a selection still running in its thread is not waited for
+    elif sys.argv[1:2] == ["--measure"]:
         m, samples, k, with_matrix = sys.argv[2:6]
         print(json.dumps(measure(int(m), int(samples), int(k), with_matrix == "True")))
     else:

@@ -160,3 +160,25 @@ def test_dask_workers_get_one_blas_thread_like_the_local_pool():
     assert variables == dict.fromkeys(variables, "1")
     blas = [pool for pool in pools if pool["user_api"] == "blas"]
     assert blas and all(pool["num_threads"] == 1 for pool in pools)
+
+
+def test_dask_workers_and_nannies_are_quieted():
+    """``dask_executor`` stops each worker's statistical profiler and slows its event-loop
+    tick and system monitor (``dask_plugin.QUIET``), and the nanny's too: an idle cluster
+    otherwise wakes every 10-20 ms."""
+    from distributed import get_worker
+    from spindlebench.studies.running.executor import dask_executor
+
+    def periods():
+        callbacks = get_worker().periodic_callbacks
+        return (callbacks["profile"].is_running(), callbacks["tick"].callback_time,
+                callbacks["monitor"].callback_time)
+
+    with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                   protocol="tcp://", dashboard_address=None) as cluster,
+          dask_executor(cluster.scheduler_address) as executor):
+        profiling, tick_ms, monitor_ms = executor.submit(periods).result()
+        nanny = next(iter(cluster.workers.values()))
+        nanny_tick_ms = nanny.periodic_callbacks["tick"].callback_time
+    assert not profiling
+    assert (tick_ms, monitor_ms, nanny_tick_ms) == (1000, 5000, 1000)

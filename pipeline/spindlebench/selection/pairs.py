@@ -259,7 +259,7 @@ COMPILED_ABOVE = 10000
 
 
 def maximum_spanning_tree_of_pairs(
-    geometry: PairGeometry, kept: np.ndarray
+    geometry: PairGeometry, kept: np.ndarray, screen: bool = True
 ) -> SpanningTree:
     """Prim's algorithm over the ``kept`` candidates, one row of R at a time.
 
@@ -291,11 +291,16 @@ def maximum_spanning_tree_of_pairs(
     tree_parent = np.full(n_all, -1, dtype=np.int64)
     factor_rows = np.vstack([geometry.factor.T, np.zeros((1, geometry.factor.shape[0]))])
     factor = np.ascontiguousarray(geometry.factor)
+    screen_threshold = np.full(kept.size, -np.inf, dtype=np.float32)
     with threadpool_limits(limits=1, user_api="blas"):
+        gram = np.zeros((m + 1, m + 1))
+        for block in range(0, m, 256):  # small blocks: one BLAS thread, little memory
+            gram[block:min(block + 256, m), :m] = factor[:, block:block + 256].T @ factor
+        norm_bound = float(np.sqrt(np.diag(gram).max())) * (1 + 1e-6)
         for start in range(0, kept.size, PRIM_BATCH):
-            prim_steps(factor_rows, factor, ids, first, second, inverse, best, parent,
-                       threshold, tree, state, order, weight, tree_parent, start,
-                       min(start + PRIM_BATCH, kept.size))
+            prim_steps(factor_rows, factor, gram, norm_bound, ids, first, second, inverse,
+                       best, parent, threshold, screen_threshold, tree, state, order, weight,
+                       tree_parent, start, min(start + PRIM_BATCH, kept.size), screen)
     local = np.full(n_all, -1, dtype=np.intp)
     local[kept] = np.arange(kept.size)
     parents = np.full(kept.size, -1, dtype=np.intp)

@@ -81,8 +81,9 @@ def _replay(best, tree, position):  # pragma: no cover (compiled)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def prim_steps(factor_rows, factor, ids, first, second, inverse_norm, best, parent, threshold,
-               tree, state, order, weight, tree_parent, start, stop):  # pragma: no cover
+def prim_steps(factor_rows, factor, gram, norm_bound, ids, first, second, inverse_norm, best,
+               parent, threshold, screen_threshold, tree, state, order, weight, tree_parent,
+               start, stop, screen):  # pragma: no cover (compiled)
     """Add vertices ``order[start:stop]`` to the tree; ``state`` = [position of the next
     vertex in the outside arrays, number of outside entries, entries of tree members].
 
@@ -99,10 +100,21 @@ def prim_steps(factor_rows, factor, ids, first, second, inverse_norm, best, pare
     row raises it and it is never the largest: the next vertex is the outside one with the
     largest link, the first on ties; a parent changes only on a strictly larger similarity
     (the rules of ``closure.prim_tree``).
+
+    With ``screen``, each candidate is first compared through the Gram matrix (``gram`` =
+    G^T G with a zero row and column appended, (m + 1)^2): the new vertex's covariances with
+    the sensors are a difference of two rows of it, O(m) instead of the O(m r) product.
+    Those values differ from the product's by at most ``screen_margin`` (a rounding bound,
+    ``norm_bound`` = the largest |g_j|), so a candidate whose screened difference is not
+    above its threshold minus the margin cannot pass the exact test and is skipped. Only when
+    one can, the product is formed (once per row) and the exact test decides with exactly
+    the numbers of the unscreened loop: the same tree, bit for bit, as ``screen=False``.
     """
     m = factor_rows.shape[0] - 1
+    r = factor.shape[0]
     size = tree.shape[0] // 2
     u = np.zeros(m + 1)
+    near = np.zeros(m + 1)
     at, n_active, dead = state[0], state[1], state[2]
     for position in range(start, stop):
         vertex = ids[at]
@@ -112,12 +124,11 @@ def prim_steps(factor_rows, factor, ids, first, second, inverse_norm, best, pare
             tree_parent[vertex] = parent[at]
         scale = inverse_norm[at]
         a, b = first[at], second[at]
-        rows = min((a if b == m else max(a, b)) + 1, factor.shape[0])  # nonzero entries
-        direction = (factor_rows[a, :rows] - factor_rows[b, :rows]) * scale
-        u[:m] = direction @ factor[:rows]  # covariance of the new vertex with every sensor
+        rows = min((a if b == m else max(a, b)) + 1, r)  # nonzero entries
         best[at] = -np.inf
         inverse_norm[at] = np.nan
         threshold[at] = np.inf
+        screen_threshold[at] = np.inf
         tree[size + at] = -1
         _replay(best, tree, at)
         dead += 1
@@ -132,18 +143,74 @@ def prim_steps(factor_rows, factor, ids, first, second, inverse_norm, best, pare
                     best[kept] = best[j]
                     parent[kept] = parent[j]
                     threshold[kept] = threshold[j]
+                    screen_threshold[kept] = screen_threshold[j]
                     kept += 1
             n_active = kept
             dead = 0
             tournament(best, tree, n_active)
-        for j in range(n_active):
-            d = abs(u[first[j]] - u[second[j]])
-            if d > threshold[j]:  # the similarity beats the best link (exactly)
-                r = min(d * inverse_norm[j], 1.0)
-                best[j] = r
-                parent[j] = vertex
-                threshold[j] = link_threshold(r, inverse_norm[j])
-                _replay(best, tree, j)
+        formed = False
+        if screen:
+            for i in range(m):
+                near[i] = (gram[a, i] - gram[b, i]) * scale
+            spread = (np.sqrt(gram[a, a]) + np.sqrt(gram[b, b])) * scale
+            margin = screen_margin(r, norm_bound, spread)
+            for j in range(n_active):
+                if abs(near[first[j]] - near[second[j]]) + margin > screen_threshold[j]:
+                    if not formed:
+                        direction = (factor_rows[a, :rows] - factor_rows[b, :rows]) * scale
+                        u[:m] = direction @ factor[:rows]  # covariances with every sensor
+                        formed = True
+                    d = abs(u[first[j]] - u[second[j]])
+                    if d > threshold[j]:  # the similarity beats the best link (exactly)
+                        _link(j, d, vertex, inverse_norm, best, parent, threshold, tree)
+                        screen_threshold[j] = below32(threshold[j])
+        else:
+            direction = (factor_rows[a, :rows] - factor_rows[b, :rows]) * scale
+            u[:m] = direction @ factor[:rows]  # covariance of the new vertex with every sensor
+            for j in range(n_active):
+                d = abs(u[first[j]] - u[second[j]])
+                if d > threshold[j]:  # the similarity beats the best link (exactly)
+                    _link(j, d, vertex, inverse_norm, best, parent, threshold, tree)
         at = tree[1]
     state[0], state[1], state[2] = at, n_active, dead
     return at
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _link(j, d, vertex, inverse_norm, best, parent, threshold, tree):  # pragma: no cover
+    """Candidate ``j``'s best link becomes ``vertex`` with difference ``d``."""
+    similarity = min(d * inverse_norm[j], 1.0)
+    best[j] = similarity
+    parent[j] = vertex
+    threshold[j] = link_threshold(similarity, inverse_norm[j])
+    _replay(best, tree, j)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def below32(value):  # pragma: no cover (compiled)
+    """The largest float32 not above ``value`` (half the bytes per visit of the screen)."""
+    rounded = np.float32(value)
+    if rounded > value:
+        rounded = np.nextafter(rounded, np.float32(-np.inf))
+    return rounded
+
+
+@njit(cache=True, nogil=True, inline="always")
+def screen_margin(r, norm_bound, spread):  # pragma: no cover (compiled)
+    """A bound on |screened - exact| covariance difference of one row.
+
+    With unit u = 2^-53, gamma = r u / (1 - r u) (a length-r dot product's relative
+    rounding bound) and |g| <= ``norm_bound``: a Gram entry is off by at most gamma |g_i||g_j|,
+    so the screened covariance (G_a - G_b) . g_j s is off by at most
+    (gamma + 2u)(1 + u) s (|g_a| + |g_b|) |g_j| (``spread`` = s (|g_a| + |g_b|), at least
+    |d| ~ 1, large when g_a ~ g_b); the product's is off by at most
+    (gamma + 3u)(1 + gamma) |d| |g_j| with |d| <= 1 + 3u. Two covariances and the final
+    subtraction of each way give the factor 2 and the last terms; the whole bound is doubled
+    again as headroom for the rounding of this very formula and of the norms.
+    """
+    unit = 2.0 ** -53
+    gamma = r * unit / (1.0 - r * unit)
+    screened = (gamma + 2 * unit) * (1 + unit) * spread
+    exact = (gamma + 3 * unit) * (1 + gamma) * (1 + 3 * unit)
+    per_covariance = (screened + exact) * norm_bound
+    return 2.0 * (2.0 * per_covariance + 2 * unit * (spread + 1.0) * 2.0 * norm_bound)

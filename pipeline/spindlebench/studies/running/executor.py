@@ -265,9 +265,10 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
         ) from None
     try:
         # every worker, also one that joins later, single-threaded in BLAS like the local pool
-        from spindlebench.studies.running.dask_plugin import OneBlasThread
+        from spindlebench.studies.running.dask_plugin import OneBlasThread, QuietNanny
 
         client.register_plugin(OneBlasThread(), name=OneBlasThread.name)
+        client.register_plugin(QuietNanny(), name=QuietNanny.name)
         yield client.get_executor()
     finally:
         client.close()

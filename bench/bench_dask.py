@@ -1,0 +1,218 @@
+"""Benchmark: the season sweep's CPU seconds on the local pool and on a real Dask cluster,
+1 and 2 workers (issue 26: Dask within 1.2x the local pool's CPU).
+
+The study is ``bench_sweep.bench_study``'s cut of the example season sweep (2 replicas, one
+training run: 48 six-hour simulations and 14 evaluation jobs). Every configuration runs the
+real command, ``spindlebench sweep STUDY -o DIR -q``, from scratch in its own folder:
+
+- ``local``: ``--workers N`` (forkserver pool of N processes);
+- ``dask``: a cluster of separate processes started here, ``dask scheduler`` and ``dask
+  worker --nworkers N --nthreads 1`` (each worker under its nanny), then the command with
+  ``--dask-address``; the cluster is stopped (SIGTERM) right after the command ends.
+
+CPU seconds are those of the whole process tree (user + system): this process makes itself
+the subreaper of its descendants (``prctl(PR_SET_CHILD_SUBREAPER)``), so a forkserver's
+workers, a nanny's worker and anything orphaned are reaped here and their CPU lands in
+``RUSAGE_CHILDREN``. For Dask that includes the cluster's start-up and its idle time while
+the command starts; ``dask_idle`` measures that part alone (a cluster started, left idle,
+stopped, ``IDLE_S`` seconds in all). The scheduler runs with ``QUIET_SCHEDULER`` (the
+settings docs/speed.md gives for a study cluster); workers and nannies with Dask's defaults,
+quieted by the study's plugins. The results CSV of every run is compared with the
+first's, byte for byte.
+
+Run: .venv/bin/python bench/bench_dask.py  (writes bench/results/bench_dask.json)
+
+Keys of a ``sweep`` row: ``executor`` (local or dask), ``workers``, ``cpu_s`` (process tree,
+cluster included), ``command_wall_s`` (the sweep command), ``total_wall_s`` (with the
+cluster's start and stop), ``cluster_start_wall_s``, ``load_before``/``load_after``,
+``results_sha256`` (of results.csv). ``dask_idle``: ``cpu_s`` over ``wall_s``, and
+``cores_busy`` = their ratio. ``summary``: ``dask_over_local_cpu_N`` = Dask's ``cpu_s`` over
+the local pool's for N workers, against ``goal_ratio``.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import resource
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from bench_sweep import bench_study
+
+from results import record
+
+BIN = Path(sys.executable).parent
+#: Worker counts measured.
+WORKERS = (1, 2)
+#: Seconds to wait for a started cluster to accept its workers.
+CLUSTER_START_S = 120.0
+PR_SET_CHILD_SUBREAPER = 36
+#: The scheduler's settings for a study cluster (docs/speed.md): its event-loop tick and
+#: system monitor less often. The workers and nannies run Dask's defaults; the study's
+#: plugins quiet them (``dask_plugin.QUIET``).
+QUIET_SCHEDULER = {"DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "1s",
+                   "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__INTERVAL": "5s"}
+#: Wall seconds of the idle-cluster rows.
+IDLE_S = 60.0
+
+
+def subreaper() -> None:
+    """Orphaned descendants are re-parented to this process (Linux), so their CPU counts."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) != 0:
+        raise SystemExit(f"prctl(PR_SET_CHILD_SUBREAPER): errno {ctypes.get_errno()}")
+
+
+def reap() -> None:
+    """Wait for every child that has ended (re-parented orphans included)."""
+    while True:
+        try:
+            pid, _ = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            return
+        if pid == 0:
+            return
+
+
+def children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+class Cluster:
+    """``dask scheduler`` and ``dask worker`` processes of our own, on 127.0.0.1."""
+
+    def __init__(self, workers: int) -> None:
+        self.address = f"tcp://127.0.0.1:{free_port()}"
+        port = self.address.rsplit(":", 1)[1]
+        quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+        self.processes = [subprocess.Popen(
+            [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", port,
+             "--no-dashboard"], env={**os.environ, **QUIET_SCHEDULER}, **quiet)]
+        self.processes.append(subprocess.Popen(
+            [str(BIN / "dask"), "worker", self.address, "--nworkers", str(workers),
+             "--nthreads", "1", "--no-dashboard", "--memory-limit", "0"], **quiet))
+        self._wait_for(workers)
+
+    def _wait_for(self, workers: int) -> None:
+        from distributed import Client
+
+        deadline = time.monotonic() + CLUSTER_START_S
+        while time.monotonic() < deadline:
+            try:
+                with Client(self.address, timeout="5s") as client:
+                    client.wait_for_workers(workers, timeout=CLUSTER_START_S)
+                    return
+            except OSError:
+                time.sleep(1.0)
+        raise SystemExit(f"no Dask cluster with {workers} worker(s) at {self.address}")
+
+    def stop(self) -> None:
+        for process in reversed(self.processes):  # workers first, then the scheduler
+            process.send_signal(signal.SIGTERM)
+            try:
+                process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        time.sleep(1.0)  # nanny-spawned workers exit after their nanny
+        reap()
+
+
+def sweep(study: Path, out: Path, executor: list[str]) -> float:
+    """Run the sweep command; its wall seconds."""
+    start = time.perf_counter()
+    subprocess.run([str(BIN / "spindlebench"), "sweep", str(study), "-o", str(out), "-q",
+                    *executor], check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def digest(out: Path) -> str:
+    return hashlib.sha256((out / "results.csv").read_bytes()).hexdigest()
+
+
+def measure(study: Path, folder: Path, kind: str, workers: int) -> dict:
+    out = folder / f"{kind}{workers}"
+    reap()
+    cpu, load = children_cpu(), list(os.getloadavg())
+    start = time.perf_counter()
+    if kind == "local":
+        wall = sweep(study, out, ["--workers", str(workers)])
+    else:
+        cluster = Cluster(workers)
+        started = time.perf_counter() - start
+        try:
+            wall = sweep(study, out, ["--dask-address", cluster.address])
+        finally:
+            cluster.stop()
+    reap()
+    row = {"row": "sweep", "executor": kind, "workers": workers,
+           "cpu_s": children_cpu() - cpu, "command_wall_s": wall,
+           "total_wall_s": time.perf_counter() - start, "load_before": load,
+           "load_after": list(os.getloadavg()), "results_sha256": digest(out)}
+    if kind == "dask":
+        row["cluster_start_wall_s"] = started
+    return row
+
+
+def idle(workers: int, seconds: float) -> dict:
+    """A cluster's own CPU: started, idle for ``seconds``, stopped."""
+    reap()
+    cpu = children_cpu()
+    start = time.perf_counter()
+    cluster = Cluster(workers)
+    time.sleep(max(0.0, seconds - (time.perf_counter() - start)))
+    cluster.stop()
+    wall = time.perf_counter() - start
+    used = children_cpu() - cpu
+    return {"row": "dask_idle", "workers": workers, "cpu_s": used, "wall_s": wall,
+            "cores_busy": used / wall}
+
+
+def main() -> None:
+    subreaper()
+    print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
+    rows: list[dict] = []
+    with tempfile.TemporaryDirectory(prefix="bench-dask-") as name:
+        folder = Path(name)
+        study = bench_study(folder)
+        for workers in WORKERS:
+            for kind in ("local", "dask"):
+                row = measure(study, folder, kind, workers)
+                rows.append(row)
+                print(f"{kind:>6} {workers} worker(s): {row['cpu_s']:7.1f} CPU-s, command "
+                      f"{row['command_wall_s']:6.1f} s wall, load {row['load_after'][0]:.1f}",
+                      flush=True)
+            rows.append(idle(workers, IDLE_S))
+            print(f"  idle cluster of {workers} for {rows[-1]['wall_s']:.0f} s: "
+                  f"{rows[-1]['cpu_s']:.1f} CPU-s", flush=True)
+    if len({row["results_sha256"] for row in rows if row["row"] == "sweep"}) != 1:
+        raise SystemExit("results.csv differs between executors")
+    summary = {}
+    for workers in WORKERS:
+        local = next(r for r in rows if r["row"] == "sweep" and r["executor"] == "local"
+                     and r["workers"] == workers)
+        dask = next(r for r in rows if r["row"] == "sweep" and r["executor"] == "dask"
+                    and r["workers"] == workers)
+        summary[f"dask_over_local_cpu_{workers}"] = dask["cpu_s"] / local["cpu_s"]
+        print(f"{workers} worker(s): Dask / local pool CPU = "
+              f"{dask['cpu_s'] / local['cpu_s']:.2f} (goal <= 1.2)")
+    rows.append({"row": "summary", **summary, "goal_ratio": 1.2})
+    print(f"wrote {record('bench_dask', rows, {'dask_over_local_cpu': 1.2})}")
+
+
+if __name__ == "__main__":
+    main()

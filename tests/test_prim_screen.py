@@ -1,0 +1,65 @@
+"""The screened Prim loop (``prim_kernel.prim_steps`` with ``screen``) builds the unscreened
+loop's tree bit for bit: the screen only skips candidates that provably fail the exact test.
+
+Random warm-ups with ties (duplicated sensors, an offset copy, a scaled copy, a sensor that
+is another's difference partner twice) and a nearly collinear pair (cancellation, where the
+screen's rounding bound is widest)."""
+
+import importlib
+
+import numpy as np
+import pytest
+from spindlebench.selection.pairs import (
+    PairCandidates,
+    PairGeometry,
+    check_candidates,
+    maximum_spanning_tree_of_pairs,
+    standardized_centre,
+)
+
+pairs_module = importlib.import_module("spindlebench.selection.pairs")
+
+
+def warm_up(n_sensors: int, n_samples: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, n_samples)[:, None]
+    tau = rng.uniform(0.05, 0.8, n_sensors)
+    gain = rng.uniform(0.5, 15.0, n_sensors)
+    raw = gain * (1 - np.exp(-t / tau)) + rng.normal(0, 0.03, (n_samples, n_sensors))
+    return raw - raw[0]
+
+
+def with_ties(seed: int) -> np.ndarray:
+    base = warm_up(36, 300, seed)
+    rng = np.random.default_rng(seed + 100)
+    return np.column_stack([base, base[:, 3], base[:, 7], base[:, 9] + 0.25,
+                            3.0 * base[:, 11], base[:, 5] + 1e-7 * rng.normal(size=300)])
+
+
+def trees(raw: np.ndarray, monkeypatch):
+    monkeypatch.setattr(pairs_module, "COMPILED_ABOVE", 0)
+    candidates = PairCandidates(raw)
+    constant = check_candidates(candidates, None)
+    kept = np.flatnonzero(~constant)
+    geometry = PairGeometry.of(candidates, standardized_centre(raw))
+    return (maximum_spanning_tree_of_pairs(geometry, kept, screen=True),
+            maximum_spanning_tree_of_pairs(geometry, kept, screen=False))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_screened_tree_is_the_unscreened_tree_bit_for_bit(seed, monkeypatch):
+    screened, reference = trees(with_ties(seed), monkeypatch)
+    np.testing.assert_array_equal(screened.order, reference.order)
+    np.testing.assert_array_equal(screened.parent, reference.parent)
+    np.testing.assert_array_equal(screened.weight.view(np.int64),
+                                  reference.weight.view(np.int64))
+    assert (reference.weight[reference.order[1:]] >= 1.0).sum() >= 2  # the ties are there
+
+
+def test_screened_tree_without_samples_to_spare(monkeypatch):
+    """Fewer samples than sensors (G is r x m with r < m) and raw sensors included."""
+    raw = warm_up(30, 20, 5)
+    screened, reference = trees(raw, monkeypatch)
+    np.testing.assert_array_equal(screened.order, reference.order)
+    np.testing.assert_array_equal(screened.parent, reference.parent)
+    np.testing.assert_array_equal(screened.weight, reference.weight)
