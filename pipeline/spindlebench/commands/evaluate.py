@@ -187,14 +187,7 @@ def run(args: argparse.Namespace) -> int:
         )
     messages = [str(item.message) for item in caught]
     text = None if args.json is None else _json_text(result, args, messages)
-    for message in messages:
-        print(f"warning: {message}", file=sys.stderr)
-    print(taken.report())
-    print(result.summary())
-    if text is not None:
-        atomic.write_text(args.json, text)
-        print(f"wrote {args.json}")
-    return 0
+    return _finish(args, messages, taken, result, text)
 
 
 def _run_targets(args: argparse.Namespace, targets: list[str], joint: Sequence[str],
@@ -223,6 +216,12 @@ def _run_targets(args: argparse.Namespace, targets: list[str], joint: Sequence[s
             differences=args.differences, similarity=args.similarity, closure=args.closure,
             missing=args.missing, method=choice.to_dict(), seed=args.seed, warnings=messages)
         text = _dumps(record, args)
+    return _finish(args, messages, taken, result, text)
+
+
+def _finish(args: argparse.Namespace, messages: Sequence[str], taken: RoleChoice, result,
+            text: str | None) -> int:
+    """The end of every evaluate: its warnings, the roles taken, the summary, the JSON."""
     for message in messages:
         print(f"warning: {message}", file=sys.stderr)
     print(taken.report())
