@@ -34,7 +34,13 @@ import numpy as np
 import pandas as pd
 
 from spindlebench.core.names import SENSORS, SIX_DIFF
-from spindlebench.formats.recording import TIME_COLUMN, TRUE_DRIFT_COLUMN, TRUE_SENSOR_COLUMNS
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    TIME_COLUMN,
+    TRUE_DRIFT_COLUMN,
+    TRUE_SENSOR_COLUMNS,
+    true_column,
+)
 from spindlebench.selection import SelectionWarning, evaluate
 from spindlebench.selection.evaluate import CandidateSet
 from spindlebench.selection.regression import LinearFit
@@ -44,6 +50,7 @@ from spindlebench.studies.compensation.controller import applied_offset, detect_
 from spindlebench.studies.family.experiments import (
     Experiment,
     experiments,
+    measured_target,
     replicas,
     scenario_for,
     sensor_model,
@@ -76,19 +83,25 @@ def plan_days(study: CompensationStudy) -> list[Day]:
             for i, (r, e) in enumerate(order, start=1)]
 
 
-def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame) -> pd.DataFrame:
+def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame,
+             target: str = DRIFT_COLUMN,
+             geometry_m: tuple[float, float] | None = None) -> pd.DataFrame:
     """What the controller reads on ``day``: T1..T20 (a dropout held at its last reading),
-    the probe's drift (``drift_um``, for training) and the true drift rise (``TRUTH``)."""
+    the probe's drift (``drift_um``, for training) and the true drift rise (``TRUTH``).
+    Another ``target`` (``[study] targets``) stands in those two columns: its probe reading
+    (``experiments.measured_target``, over the probes' ``geometry_m``) and its true rise."""
     family = study.family
     temperatures = truth[list(TRUE_SENSOR_COLUMNS)].to_numpy(float)
     drift = truth[TRUE_DRIFT_COLUMN].to_numpy(float)
     time_s = truth[TIME_COLUMN].to_numpy(float)
     model = sensor_model(family.noise[0], study.fault if day.fault_active else None)
-    readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
-                              sensor_seed(family, day.replica, day.experiment))
+    seed = sensor_seed(family, day.replica, day.experiment)
+    readings, probe = measure(model, time_s, temperatures, drift, SENSORS, seed)
     frame = pd.DataFrame({TIME_COLUMN: time_s})
     frame[list(SENSORS)] = pd.DataFrame(readings).ffill().bfill().to_numpy()
-    frame[TARGET] = probe
+    frame[TARGET] = measured_target(target, model, time_s, truth, probe, seed, geometry_m)
+    if target != DRIFT_COLUMN:
+        drift = truth[true_column(target)].to_numpy(float)
     frame[TRUTH] = drift - drift[0]
     return frame
 
@@ -175,23 +188,28 @@ def simulate_days(study: CompensationStudy, fmu: Path,
     return truths
 
 
-def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame]
+def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame],
+                 target: str = DRIFT_COLUMN, geometry_m: tuple[float, float] | None = None,
                  ) -> dict[int, pd.DataFrame]:
-    """What the controller reads on every day (``measured``), by day number."""
+    """What the controller reads on every day (``measured``) for ``target``, by day number."""
     days = plan_days(study)
     if study.days == "continuous":
-        return continuous.measure_continuous(study, days, truths)
-    return {day.number: measured(study, day, truths[day.number]) for day in days}
+        return continuous.measure_continuous(study, days, truths, target, geometry_m)
+    return {day.number: measured(study, day, truths[day.number], target, geometry_m)
+            for day in days}
 
 
 def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
-             retrain: str | None = None) -> Outcome:
+             retrain: str | None = None, target: str = DRIFT_COLUMN,
+             geometry_m: tuple[float, float] | None = None) -> Outcome:
     """Run every model of the study through the controller on the simulated days, retrained
-    by rule ``retrain`` (default: the study's first)."""
+    by rule ``retrain`` (default: the study's first), compensating ``target`` (the axial
+    drift by default; another of ``[study] targets`` over the probes' ``geometry_m``, its
+    offsets and residuals in its own unit)."""
     retrain = study.retrain[0] if retrain is None else retrain
     days = plan_days(study)
     outcome = Outcome()
-    frames = measure_days(study, truths)
+    frames = measure_days(study, truths, target, geometry_m)
     current: dict[str, TrainedModel] = {}
     for day in days:
         frame = frames[day.number]

@@ -361,16 +361,6 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
     )
 
 
-def require_axial_target(study: SweepStudy, kind: str) -> None:
-    """Refuse ``[study] targets`` other than the axial drift in a study kind that selects for
-    it alone (the sweep and the compensation: their jobs, tables and reports are per drift)."""
-    if study.targets != (DRIFT_COLUMN,):
-        raise SpindlebenchError(
-            f"{study.path}: key 'study.targets': a {kind} study selects for {DRIFT_COLUMN} "
-            f"only (got {', '.join(study.targets)}); several targets run through "
-            "'spindlebench place' and 'spindlebench evaluate --target A B ...'")
-
-
 def machine_runs(study: SweepStudy, machine: str | None,
                  out: Path) -> list[tuple[str | None, Path]]:
     """The (machine, results folder) of each run of a study command: one run on ``machine``

@@ -29,10 +29,15 @@ from spindlebench.formats.recording import (
     TRUTH_COLUMNS,
     true_column,
 )
-from spindlebench.studies.family.experiments import Condition, Experiment, sensor_model
+from spindlebench.studies.family.experiments import (
+    Condition,
+    Experiment,
+    measured_target,
+    sensor_model,
+)
 from spindlebench.studies.family.methods import TARGET, TRUTH, MethodSpec, SharedRuns, score_all
 from spindlebench.testbench.scenario import Scenario
-from spindlebench.testbench.sensors import RADIAL_PROBES, measure, measure_probes
+from spindlebench.testbench.sensors import measure
 from spindlebench.testbench.simulate import record
 
 #: Pseudo-condition of the ground-truth rows.
@@ -69,20 +74,11 @@ class EvaluationJob:
     specs: tuple[MethodSpec, ...]
     similarity: str
     #: The thermal error the methods predict (``[study] targets``); another than the axial
-    #: drift is measured from the truths of ``target_truth_columns(target)`` with the
-    #: condition's probes (``sensors.measure_probes``) over ``probe_geometry_m`` (l and the
-    #: end-face offset, m), and stands in the frames' ``drift_um`` column.
+    #: drift is measured from the truths of ``experiments.target_truth_columns(target)`` with
+    #: the condition's probes (``experiments.measured_target``) over ``probe_geometry_m`` (l
+    #: and the end-face offset, m), and stands in the frames' ``drift_um`` column.
     target: str = DRIFT_COLUMN
     probe_geometry_m: tuple[float, float] | None = None
-
-
-def target_truth_columns(target: str) -> tuple[str, ...]:
-    """The truth columns an evaluation for ``target`` needs beyond ``TRUTH_COLUMNS``: none
-    for the axial drift; the radial probes (the measured target is computed from them, as
-    the recording's is) and the target's own truth otherwise."""
-    if target == DRIFT_COLUMN:
-        return ()
-    return tuple(dict.fromkeys([*(true_column(p) for p in RADIAL_PROBES), true_column(target)]))
 
 
 #: What ``evaluate_job`` gives per training run: its result rows, or the one-line error of
@@ -121,8 +117,9 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
         values[:, 1:-2] = measured_C
         values[:, -2] = measured_drift
         if job.target != DRIFT_COLUMN:
-            values[:, -2] = _measured_target(job, model, time_s, truth, measured_drift,
-                                             job.seeds[experiment.id])
+            values[:, -2] = measured_target(job.target, model, time_s, truth,
+                                            measured_drift, job.seeds[experiment.id],
+                                            job.probe_geometry_m)
     values[:, -1] = drift - drift[0]
     if job.target != DRIFT_COLUMN:
         true_target = truth[true_column(job.target)].to_numpy(float)
@@ -130,18 +127,6 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
         if job.condition is None:
             values[:, -2] = values[:, -1]
     return pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
-
-
-def _measured_target(job: EvaluationJob, model: Any, time_s: np.ndarray, truth: pd.DataFrame,
-                     measured_drift: np.ndarray, seed: int) -> np.ndarray:
-    """The target's reading as the condition's five probes give it (``measure_probes``: the
-    radial probes' noise, drift and resolution; tilts and end-face drifts computed from them)."""
-    if job.probe_geometry_m is None:
-        raise ValueError(f"target {job.target}: the job has no probe geometry")
-    radial = {p: truth[true_column(p)].to_numpy(float) for p in RADIAL_PROBES}
-    readings = measure_probes(model, time_s, radial, *job.probe_geometry_m, measured_drift,
-                              seed)
-    return readings[job.target]
 
 
 def evaluate_job(job: EvaluationJob) -> dict[str, TrainingResult]:

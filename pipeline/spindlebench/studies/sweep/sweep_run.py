@@ -34,15 +34,16 @@ from spindlebench.formats.recording import (
     TRUTH_COLUMNS,
     read_back,
     read_recording,
-    read_sidecar,
 )
 from spindlebench.studies.family.experiments import (
     Condition,
     Experiment,
     conditions,
     experiments,
+    probe_geometry_m,
     replicas,
     sensor_seed,
+    target_truth_columns,
     training_experiments,
 )
 from spindlebench.studies.family.family_file import (
@@ -58,7 +59,6 @@ from spindlebench.studies.running.jobs import (
     NOISE_FREE,
     EvaluationJob,
     evaluate_job,
-    target_truth_columns,
 )
 from spindlebench.studies.running.simulations import (
     Simulations,
@@ -154,7 +154,7 @@ class Sweep:
             seeds={e.id: sensor_seed(self.study, replica, e) for e in self.family},
             duration_s=self.study.duration_s, specs=self.specs,
             similarity=self.study.methods.similarity, target=self.target,
-            probe_geometry_m=self.probe_geometry(replica))
+            probe_geometry_m=self.probe_geometry())
         key = f"evaluate r{replica} {condition_id(condition)}"
         if list(trains) != self.trains:
             key += " " + " ".join(train.id for train in trains)
@@ -182,24 +182,12 @@ class Sweep:
         return [self.results if t == self.target else ResultStore(self.store.root / t)
                 for t in self.study.targets]
 
-    def probe_geometry(self, replica: int) -> tuple[float, float] | None:
-        """(l, end-face offset) in m of the five-probe set-up the runs were recorded with
-        (their sidecar's parameters, else the FMU's defaults); None for the axial drift,
-        which needs none."""
+    def probe_geometry(self) -> tuple[float, float] | None:
+        """(l, end-face offset) in m of the runs' five probes; None for the axial drift."""
         if self.target == DRIFT_COLUMN:
             return None
         if self._geometry is None:
-            from spindlebench.testbench.simulate import run_parameter
-
-            done = [e for e in self.family
-                    if self.store.has_recording(recording_path(replica, e))]
-            if not done:
-                raise SpindlebenchError(f"{self.store.root}: replica {replica} has no "
-                                        "recording to read the probe geometry from")
-            path = self.store.path(recording_path(replica, done[0]))
-            parameters = read_sidecar(path).get("parameters", {})
-            self._geometry = (run_parameter(parameters, self.fmu, "probe_l", path),
-                              run_parameter(parameters, self.fmu, "probe_end_offset", path))
+            self._geometry = probe_geometry_m(self.study, self.fmu)
         return self._geometry
 
     # ----------------------------------------------------------------- running
