@@ -11,7 +11,7 @@ from conftest import REPO
 from spindlebench.commands import main as cli
 
 TINY = REPO / "scenarios" / "studies" / "tiny_compensate.toml"
-TARGETS = ["drift_um", "tilt_a_urad"]
+TARGETS = ["drift_um", "drift_x_um"]
 FILES = ("days.csv", "summary.csv", "timeseries.csv.gz")
 
 
@@ -39,7 +39,27 @@ def test_the_drift_of_a_multi_target_compensation_is_the_drift_alone(runs):
         assert (folder / "multi" / "drift_um" / name).read_bytes() == \
             (folder / "single" / name).read_bytes(), name
     readme = (folder / "multi" / "README.md").read_text()
-    assert "| after-fault | all_raw |" in readme and "tilt_a_urad" in readme
+    assert "| after-fault | all_raw |" in readme and "drift_x_um" in readme
+    assert "| after-fault | six_diff@mtlasso |" in readme
+
+
+@pytest.mark.slow
+def test_a_joint_model_reads_one_sensor_set_for_every_target(runs):
+    folder, _ = runs
+    days = {t: pd.read_csv(folder / "multi" / "joint" / t / "days.csv", keep_default_na=False)
+            for t in TARGETS}
+    models = set(days["drift_um"]["model"])
+    assert models == {f"{m}@{j}" for m in ("all_raw", "six_diff", "all_raw:greedy")
+                      for j in ("union", "mtlasso", "pls-vip")}
+    pd.testing.assert_series_equal(days["drift_um"]["inputs"], days["drift_x_um"]["inputs"])
+    own = {t: pd.read_csv(folder / "multi" / t / "days.csv", keep_default_na=False)
+           for t in TARGETS}
+    first = {t: set(own[t].loc[(own[t]["model"] == "six_diff") & (own[t]["day"] == 2),
+                                "inputs"].iloc[0].split(";")) for t in TARGETS}
+    union = days["drift_um"]
+    union = set(union.loc[(union["model"] == "six_diff@union") & (union["day"] == 2),
+                          "inputs"].iloc[0].split(";"))
+    assert union == first["drift_um"] | first["drift_x_um"]
 
 
 @pytest.mark.slow
@@ -53,13 +73,13 @@ def test_each_targets_residual_is_its_true_rise_minus_its_offset(runs):
     from dataclasses import replace
 
     truths = simulate_days(replace(study, days="cold-starts"), DEFAULT_FMU)
-    series = pd.read_csv(folder / "multi" / "tilt_a_urad" / "timeseries.csv.gz")
-    summary = pd.read_csv(folder / "multi" / "tilt_a_urad" / "summary.csv")
+    series = pd.read_csv(folder / "multi" / "drift_x_um" / "timeseries.csv.gz")
+    summary = pd.read_csv(folder / "multi" / "drift_x_um" / "summary.csv")
     drift = pd.read_csv(folder / "multi" / "drift_um" / "timeseries.csv.gz")
     for day, at in series[series["model"] == "all_raw"].groupby("day"):
-        tilt = truths[day]["true_tilt_a_urad"].to_numpy()
-        # the tilt's own true rise (µrad), not the axial drift's
-        np.testing.assert_allclose(at["true_drift_um"], tilt - tilt[0], rtol=1e-5, atol=1e-4)
+        x = truths[day]["true_drift_x_um"].to_numpy()
+        # the X drift's own true rise, not the axial drift's
+        np.testing.assert_allclose(at["true_drift_um"], x - x[0], rtol=1e-5, atol=1e-4)
         z = drift[(drift["model"] == "all_raw") & (drift["day"] == day)]["true_drift_um"]
         assert not np.allclose(at["true_drift_um"], z)
         np.testing.assert_allclose(at["residual_um"], at["true_drift_um"] - at["offset_um"],
@@ -70,4 +90,4 @@ def test_each_targets_residual_is_its_true_rise_minus_its_offset(runs):
                                           rel=1e-4)
     uncompensated = summary[(summary["part"] == "all days")
                             & (summary["model"] == "uncompensated")].iloc[0]
-    assert row["rms_um"] < uncompensated["rms_um"]  # the tilt's model compensates the tilt
+    assert row["rms_um"] < uncompensated["rms_um"]  # the X drift's model compensates it

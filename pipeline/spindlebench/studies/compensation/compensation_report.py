@@ -97,12 +97,21 @@ def _write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: P
 
 
 def targets_readme(study: CompensationStudy, study_path: Path,
-                   tables: dict[str, pd.DataFrame]) -> str:
+                   tables: dict[str, pd.DataFrame],
+                   joint_tables: dict[str, pd.DataFrame] | None = None) -> str:
     """The folder's README of a study with several targets: every target's residual RMS over
-    all days, per retraining rule and model, beside the uncompensated target."""
+    all days, per retraining rule and model (each target's own, then the joint models
+    ``<model>@<joint>`` of ``joint_tables``), beside the uncompensated target."""
     targets = list(tables)
     first = tables[targets[0]]
     rows = first[first["part"] == "all days"][["retrain", "model"]]
+    if joint_tables:
+        tables = {t: pd.concat([tables[t], joint_tables[t][joint_tables[t]["model"]
+                                                           != "uncompensated"]])
+                  for t in targets}
+        joint = joint_tables[targets[0]]
+        extra = joint[(joint["part"] == "all days") & (joint["model"] != "uncompensated")]
+        rows = pd.concat([rows, extra[["retrain", "model"]]])
     lines = [f"# Compensation in the loop: {study.name}, several targets", "",
              f"Made by `spindlebench compensate {study_path}`: one simulation of the days, then "
              "each target compensated on its own (its models trained on day 1 on its probe "
@@ -111,6 +120,11 @@ def targets_readme(study: CompensationStudy, study_path: Path,
              + ", ".join(f"[`{t}/`]({t}/README.md)" for t in targets) + ".", "",
              "Residual RMS over all compensated days (each target in its unit: µm for a "
              "drift, µrad for a tilt):", "",
+             "Per-target models (`all_raw`, ...) select for each target on its own; a joint "
+             "model `<model>@<joint>` reads one candidate set for every target, chosen on day "
+             "1 (`union`: the union of the per-target selections; `mtlasso`, `pls-vip`: k "
+             "candidates for all targets at once), each target refitted on it "
+             "(in `joint/<target>/`).", "",
              "| retrain | model | " + " | ".join(targets) + " |",
              "|---|---|" + "---|" * len(targets)]
     for row in rows.itertuples():

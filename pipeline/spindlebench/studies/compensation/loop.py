@@ -42,7 +42,7 @@ from spindlebench.formats.recording import (
     true_column,
 )
 from spindlebench.selection import SelectionWarning, evaluate
-from spindlebench.selection.evaluate import CandidateSet
+from spindlebench.selection.evaluate import CandidateSet, CheckedRecording, evaluate_checked
 from spindlebench.selection.regression import LinearFit
 from spindlebench.studies.compensation import continuous
 from spindlebench.studies.compensation.compensation_file import CompensationStudy
@@ -126,16 +126,30 @@ class TrainedModel:
         return self.fit.predict(self.candidates.matrix(frame, self.columns))
 
 
+#: Between a model and a joint selection in a joint model's name (``six_diff@union``).
+JOINT_SEPARATOR = "@"
+
+
 def train(name: str, study: CompensationStudy, frame: pd.DataFrame, day: int,
-          excluded: tuple[str, ...] = ()) -> TrainedModel:
-    """Fit model ``name`` (a sweep method name) on one measured day, without ``excluded``."""
-    spec = MethodSpec(name, study.k, study.seed)
+          excluded: tuple[str, ...] = (),
+          supports: JointSupports | None = None) -> TrainedModel:
+    """Fit model ``name`` (a sweep method name) on one measured day, without ``excluded``.
+
+    A joint model ``<model>@<joint>`` (several targets) reads the candidates chosen for
+    every target at once without ``excluded`` (``supports.get``): no selection here, the
+    model's regressor is fitted on them."""
+    spec = MethodSpec(name.partition(JOINT_SEPARATOR)[0], study.k, study.seed)
     sensors = [s for s in GROUP_SENSORS[spec.group] if s not in excluded]
+    options = dict(sensors=sensors, k=study.k, differences=spec.group == SIX_DIFF,
+                   method=spec.choice, seed=study.seed, missing="drop-rows")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SelectionWarning)
-        result = evaluate(frame, {"commissioning": frame}, TARGET, sensors=sensors, k=study.k,
-                          differences=spec.group == SIX_DIFF, method=spec.choice,
-                          seed=study.seed, missing="drop-rows")
+        if supports is not None and JOINT_SEPARATOR in name:
+            checked = CheckedRecording("commissioning", frame)
+            result = evaluate_checked(checked, {"commissioning": checked}, TARGET, **options,
+                                      support=supports.get(name, excluded))
+        else:
+            result = evaluate(frame, {"commissioning": frame}, TARGET, **options)
     candidates = CandidateSet(tuple(result.sensors), spec.group == SIX_DIFF)
     return TrainedModel(name, candidates, np.asarray(result.selection.selected),
                         tuple(result.selected), result.fit, day, excluded)
@@ -148,6 +162,51 @@ class Outcome:
     days: list[dict] = field(default_factory=list)
     series: list[pd.DataFrame] = field(default_factory=list)
     models: dict[str, list[TrainedModel]] = field(default_factory=dict)
+
+
+class JointSupports:
+    """The candidates of the joint models ``<model>@<joint>`` of several targets: each of the
+    study's models × ``method_registry.joint_names()``, chosen on the commissioning day for
+    every target at once by ``multi_target.evaluate_targets`` (the home of joint selection)
+    from ``frames``, each target's measured day 1 (``measure_days``). A model retrained
+    without a faulty sensor gets the joint choice made again without it (the monitor sees
+    the same sensor readings whatever the target, so every target drops the same sensor)."""
+
+    def __init__(self, study: CompensationStudy, frames: dict[str, pd.DataFrame]) -> None:
+        from spindlebench.selection.method_registry import joint_names
+
+        self.study = study
+        self.targets = list(frames)
+        self.joints = joint_names()
+        day1 = frames[self.targets[0]].loc[:, [TIME_COLUMN, *SENSORS]].copy()
+        for target, frame in frames.items():
+            day1[target] = frame[TARGET].to_numpy()
+        self.day1 = CheckedRecording("commissioning", day1)
+        self._chosen: dict[tuple[str, tuple[str, ...]], dict[str, tuple[str, ...]]] = {}
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """The joint models' names, model by model."""
+        return tuple(f"{name}{JOINT_SEPARATOR}{joint}" for name in self.study.models
+                     for joint in self.joints)
+
+    def get(self, name: str, excluded: tuple[str, ...] = ()) -> tuple[str, ...]:
+        """The candidates of joint model ``name`` chosen without the ``excluded`` sensors."""
+        from spindlebench.selection.multi_target import evaluate_targets
+
+        model, _, joint = name.partition(JOINT_SEPARATOR)
+        key = (model, tuple(sorted(excluded)))
+        if key not in self._chosen:
+            spec = MethodSpec(model, self.study.k, self.study.seed)
+            sensors = [s for s in GROUP_SENSORS[spec.group] if s not in excluded]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SelectionWarning)
+                result = evaluate_targets(
+                    self.day1, {"commissioning": self.day1}, self.targets, sensors=sensors,
+                    k=self.study.k, differences=spec.group == SIX_DIFF, missing="drop-rows",
+                    method=spec.choice, seed=self.study.seed, joint=self.joints)
+            self._chosen[key] = {j: tuple(r.selected) for j, r in result.joint.items()}
+        return self._chosen[key][joint]
 
 
 def _day_row(study: CompensationStudy, day: Day, model: TrainedModel, residual: np.ndarray,
@@ -201,11 +260,13 @@ def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame],
 
 def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
              retrain: str | None = None, target: str = DRIFT_COLUMN,
-             geometry_m: tuple[float, float] | None = None) -> Outcome:
+             geometry_m: tuple[float, float] | None = None,
+             supports: JointSupports | None = None) -> Outcome:
     """Run every model of the study through the controller on the simulated days, retrained
     by rule ``retrain`` (default: the study's first), compensating ``target`` (the axial
     drift by default; another of ``[study] targets`` over the probes' ``geometry_m``, its
-    offsets and residuals in its own unit)."""
+    offsets and residuals in its own unit). ``supports``: the candidates of the joint models
+    among ``study.models`` (``JointSupports``)."""
     retrain = study.retrain[0] if retrain is None else retrain
     days = plan_days(study)
     outcome = Outcome()
@@ -215,7 +276,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
         frame = frames[day.number]
         if day.number == 1:
             for name in study.models:
-                current[name] = train(name, study, frame, 1)
+                current[name] = train(name, study, frame, 1, supports=supports)
                 outcome.models[name] = [current[name]]
             continue
         time_s = frame[TIME_COLUMN].to_numpy(float)
@@ -224,7 +285,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
             model = current[name]
             if retrain == "weekly" and (day.number - 1) % study.retrain_every_days == 0:
                 model = train(name, study, frames[day.number - 1], day.number - 1,
-                              model.excluded)
+                              model.excluded, supports)
                 outcome.models[name].append(model)
             predicted = model.predict(frame)
             detection = ""
@@ -235,7 +296,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
                 if found:
                     first = min(found, key=lambda d: d.sample)
                     model = train(name, study, frames[1], day.number,
-                                  (*model.excluded, first.sensor))
+                                  (*model.excluded, first.sensor), supports)
                     outcome.models[name].append(model)
                     predicted[first.sample:] = model.predict(frame)[first.sample:]
                     detection = (f"{first.sensor} {first.kind} at "
