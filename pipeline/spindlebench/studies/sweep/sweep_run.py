@@ -86,6 +86,9 @@ class SweepOutcome:
     #: (replica, condition, training run) evaluations done now; ``stats`` counts their jobs
     #: (one per replica and condition)
     evaluated: int = 0
+    #: Several targets: the study's folder (its README has the joint selections), while
+    #: ``out_dir`` is the first target's; None for one target.
+    study_dir: Path | None = None
 
 
 def condition_id(condition: Condition | None) -> str:
@@ -327,6 +330,7 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
 
             stages("joint selections: one sensor set for every target")
             write_joint(sweeps, runner)
+            outcomes[0].study_dir = sweeps[0].store.root
     return outcomes[0]
 
 
