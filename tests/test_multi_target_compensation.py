@@ -18,7 +18,8 @@ FILES = ("days.csv", "summary.csv", "timeseries.csv.gz")
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("compensate")
-    # one rule, cold starts: the shortest run that still trains, faults and retrains
+    # one rule, consecutive days (one simulation): the shortest run that still trains,
+    # faults and retrains
     text = TINY.read_text().replace('retrain = ["after-fault", "never"]',
                                     'retrain = ["after-fault"]')
     single = folder / "single.toml"
@@ -27,8 +28,7 @@ def runs(tmp_path_factory):
     multi.write_text(text.replace('climate = "chongqing"',
                                   f'climate = "chongqing"\ntargets = {TARGETS}', 1))
     for name, path in (("single", single), ("multi", multi)):
-        assert cli.main(["compensate", str(path), "-o", str(folder / name), "-q",
-                         "--days", "cold-starts"]) == 0
+        assert cli.main(["compensate", str(path), "-o", str(folder / name), "-q"]) == 0
     return folder, multi
 
 
@@ -69,10 +69,7 @@ def test_each_targets_residual_is_its_true_rise_minus_its_offset(runs):
     from spindlebench.studies.compensation.loop import simulate_days
 
     folder, multi = runs
-    study = load_compensation(multi)
-    from dataclasses import replace
-
-    truths = simulate_days(replace(study, days="cold-starts"), DEFAULT_FMU)
+    truths = simulate_days(load_compensation(multi), DEFAULT_FMU)
     series = pd.read_csv(folder / "multi" / "drift_x_um" / "timeseries.csv.gz")
     summary = pd.read_csv(folder / "multi" / "drift_x_um" / "summary.csv")
     drift = pd.read_csv(folder / "multi" / "drift_um" / "timeseries.csv.gz")
