@@ -102,3 +102,15 @@ def test_joint_placements_are_one_set_scored_for_every_target(study):
                   for r in score_placement(study, union, *outcomes[target].runs[replica])]
         assert row[f"test_mean_rmse_{target}"] == pytest.approx(np.mean(scores))
         assert row[f"test_mean_rmse_{target}"] < 0.1
+
+
+def test_a_population_study_with_several_targets_is_one_line(tmp_path):
+    from spindlebench.studies.family.family_file import load_study
+
+    source = REPO / "scenarios" / "studies" / "population_stable_room.toml"
+    text = source.read_text().replace("[study]\n", f"[study]\ntargets = {TARGETS}\n", 1)
+    path = tmp_path / "population.toml"
+    path.write_text(text)
+    with pytest.raises(SpindlebenchError, match=r"key 'study\.targets': a population study"):
+        load_study(path)
+    load_study(source)  # one target: as before

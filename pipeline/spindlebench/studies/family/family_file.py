@@ -312,6 +312,9 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
                          f"{MAX_SIMULATIONS:,} a study may run; split it into several studies")
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
+    if population is not None and len(targets) > 1:  # its report counts one result per machine
+        raise head.error("targets", "a population study ([axes] machines = { population = "
+                         "... }) takes one target; run each target as its own study")
     for name in machine_axis:
         try:
             variant = load_machine(name, source=path)
