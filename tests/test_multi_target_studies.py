@@ -1,5 +1,7 @@
 """Several targets in study files (issue 21 item 4): ``[study] targets`` read once, the runs
-record the five probes, the placement's joint sets are one set scored for every target."""
+record the five probes, the placement's joint sets are one set scored for every target (the
+sweep's and the compensation's several targets: test_multi_target_sweep.py and
+test_multi_target_compensation.py)."""
 
 from __future__ import annotations
 
@@ -40,19 +42,6 @@ def test_study_targets_are_read_once_and_make_the_runs_record_the_probes(study, 
     assert plain.targets == ("drift_um",) and not scenario_for(plain, 1, first).probes
     with pytest.raises(SpindlebenchError, match=r"study.targets.*tilt_c_urad"):
         load_study(with_targets(tmp_path, '["tilt_c_urad"]'), extra_tables=("placement",))
-
-
-def test_sweep_and_compensation_refuse_other_targets_in_one_line(tmp_path):
-    from spindlebench.studies.compensation.compensation_file import load_compensation
-    from spindlebench.studies.sweep.sweep_run import run_sweep
-
-    sweep = with_targets(tmp_path, '["drift_y_um"]', REPO / "scenarios/studies/tiny_sweep.toml")
-    with pytest.raises(SpindlebenchError, match=r"key 'study\.targets': a sweep study"):
-        run_sweep(sweep, tmp_path / "out", workers=0, progress=False)
-    compensation = with_targets(tmp_path, '["drift_y_um"]',
-                                REPO / "scenarios/studies/tiny_compensate.toml")
-    with pytest.raises(SpindlebenchError, match="a compensation study"):
-        load_compensation(compensation)
 
 
 def _runs(study, rng, weights, n_runs):
@@ -113,3 +102,15 @@ def test_joint_placements_are_one_set_scored_for_every_target(study):
                   for r in score_placement(study, union, *outcomes[target].runs[replica])]
         assert row[f"test_mean_rmse_{target}"] == pytest.approx(np.mean(scores))
         assert row[f"test_mean_rmse_{target}"] < 0.1
+
+
+def test_a_population_study_with_several_targets_is_one_line(tmp_path):
+    from spindlebench.studies.family.family_file import load_study
+
+    source = REPO / "scenarios" / "studies" / "population_stable_room.toml"
+    text = source.read_text().replace("[study]\n", f"[study]\ntargets = {TARGETS}\n", 1)
+    path = tmp_path / "population.toml"
+    path.write_text(text)
+    with pytest.raises(SpindlebenchError, match=r"key 'study\.targets': a population study"):
+        load_study(path)
+    load_study(source)  # one target: as before

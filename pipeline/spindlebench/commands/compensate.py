@@ -8,6 +8,14 @@ With ``[axes] machines`` (a list or a population) each machine gets its own fold
 and, for a population, DIR's README counts the machines on which the difference group wins
 (``studies.compensation.population_report``), like every study command
 (``commands.arguments.run_study_command``).
+
+A study with several ``[study] targets`` (issue 21) is simulated once; each target is
+compensated on its own (its models trained on its probe reading, its residual = its true rise
+minus its applied offset, in its unit) into ``DIR/<target>/`` (the same files as that target
+alone); the joint models (``loop.JointSupports``: each model's candidates chosen on day 1 for
+every target at once, as the union of the per-target selections or by a multi-output method,
+each target refitted on them) into ``DIR/joint/<target>/``; ``DIR/README.md`` holds every
+target's residual side by side, per-target and joint (``compensation_report.targets_readme``).
 """
 
 from __future__ import annotations
@@ -83,12 +91,22 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
     # pandas, the runner and the models only here: ``compensate --help`` stays cheap
     import pandas as pd
 
+    from spindlebench.core.atomic import write_text
+    from spindlebench.formats.recording import DRIFT_COLUMN
     from spindlebench.studies.compensation.compensation_report import (
         OUTPUT_FILES,
         summary_text,
+        targets_readme,
         write_outputs,
     )
-    from spindlebench.studies.compensation.loop import run_loop, simulate_days, summary
+    from spindlebench.studies.compensation.loop import (
+        JointSupports,
+        measure_days,
+        run_loop,
+        simulate_days,
+        summary,
+    )
+    from spindlebench.studies.family.experiments import probe_geometry_m
 
     study = load_compensation(args.study, machine)
     if args.days is not None and args.days != study.days:
@@ -99,17 +117,41 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
         raise SpindlebenchError(f"{out}: exists and is not a folder")
     stages = Stages("compensate", enabled=for_terminal(getattr(args, "quiet", False)))
     # its own folder only (a sweep's README is not ours to replace), one process at a time
-    store = ResultStore(out, owned=lambda entry: entry.name in OUTPUT_FILES)
+    targets = study.family.targets
+    store = ResultStore(out, owned=lambda entry: entry.name in OUTPUT_FILES
+                        or (len(targets) > 1 and entry.name in (*targets, "joint")))
+    geometry = None if targets == (DRIFT_COLUMN,) else probe_geometry_m(study.family, fmu)
+    tables: dict[str, pd.DataFrame] = {}
+    joint_tables: dict[str, pd.DataFrame] = {}
     with store.locked():
         truths = simulate_days(study, fmu, progress=stages)
-        stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})")
-        outcomes = {rule: run_loop(study, truths, rule) for rule in study.retrain}
-        days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
-        series = pd.concat([part for o in outcomes.values() for part in o.series],
-                           ignore_index=True)
-        table = summary(study, days, series)
-        stages(f"writing tables, figure and README into {out}")
-        write_outputs(study, args.study, fmu, out, days, series, table, outcomes)
-    print(summary_text(table))
-    print(f"wrote {out / 'README.md'} and {len(OUTPUT_FILES) - 1} more files; "
-          f"{stages.seconds:.1f} s in all")
+        runs = [(target, out if len(targets) == 1 else out / target, study, None, tables)
+                for target in targets]
+        if len(targets) > 1:
+            stages("joint models: one sensor set per model for every target (day 1)")
+            supports = JointSupports(study, {t: measure_days(study, truths, t, geometry)[1]
+                                             for t in targets})
+            joint = replace(study, models=supports.models)
+            runs += [(t, out / "joint" / t, joint, supports, joint_tables) for t in targets]
+        for target, where, study_, supports_, into in runs:
+            stages(f"training, compensating and scoring the days ({', '.join(study.retrain)})"
+                   + ("" if len(targets) == 1 else f" into {where}"))
+            outcomes = {rule: run_loop(study_, truths, rule, target, geometry, supports_)
+                        for rule in study.retrain}
+            days = pd.DataFrame([row for o in outcomes.values() for row in o.days])
+            series = pd.concat([part for o in outcomes.values() for part in o.series],
+                               ignore_index=True)
+            into[target] = summary(study_, days, series)
+            if len(targets) == 1:
+                stages(f"writing tables, figure and README into {where}")
+            write_outputs(study_, args.study, fmu, where, days, series, into[target],
+                          outcomes, None if len(targets) == 1 else target)
+        if len(targets) > 1:
+            write_text(out / "README.md",
+                       targets_readme(study, args.study, tables, joint_tables))
+    for target, table in tables.items():
+        if len(targets) > 1:
+            print(f"target {target} (residual in its unit; {out / target}):")
+        print(summary_text(table))
+    print(f"wrote {out / 'README.md'} and {len(OUTPUT_FILES) - 1} more files"
+          + ("" if len(targets) == 1 else " per target") + f"; {stages.seconds:.1f} s in all")

@@ -66,4 +66,7 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
           f"{stats.seconds:.1f} s (skipped {outcome.skipped['simulation']} done simulation(s), "
           f"{outcome.skipped['evaluation']} done evaluation(s)); {len(results)} result rows, "
           f"{failed} with errors; {time.perf_counter() - started:.1f} s in all")
-    print(f"results: {outcome.out_dir / 'README.md'}")
+    if outcome.study_dir is not None:  # several targets: the counts above are the first's
+        print(f"target {outcome.out_dir.name} above; each target's sweep is in "
+              f"{outcome.study_dir}/<target>/")
+    print(f"results: {(outcome.study_dir or outcome.out_dir) / 'README.md'}")

@@ -158,11 +158,18 @@ def simulate_scenario(scenario_path: str | Path, out_csv: str | Path,
 
 def _parameter(simulation: Simulation, fmu: Path, scenario: Scenario, name: str) -> float:
     """A parameter's value in a run: the one given, else the FMU's default."""
-    if name in simulation.parameters:
-        return float(simulation.parameters[name])
+    return run_parameter(simulation.parameters, fmu, name, scenario.path)
+
+
+def run_parameter(parameters: Mapping[str, Any], fmu: Path, name: str, where: Any) -> float:
+    """A parameter's value in a run whose set parameters are ``parameters`` (a sidecar's
+    ``parameters``): the one given, else the FMU's default (``where`` names the file that
+    asked for it in the error)."""
+    if name in parameters:
+        return float(parameters[name])
     variable = inspect_fmu(fmu).parameters.get(name)
     if variable is None or variable.start is None:
-        raise SpindlebenchError(f"{scenario.path}: key 'outputs.probes': the FMU {fmu} has no "
+        raise SpindlebenchError(f"{where}: key 'outputs.probes': the FMU {fmu} has no "
                                 f"five-probe parameter {name!r} (rebuild it)")
     return float(variable.start)
 

@@ -41,12 +41,7 @@ from spindlebench.core.names import DEFAULT_METHOD_SEED, GROUPS
 from spindlebench.formats.toml import Table, in_range, load_toml, non_negative, one_of
 from spindlebench.studies.compensation.controller import ControllerSettings, FaultMonitor
 from spindlebench.studies.family.experiments import experiments
-from spindlebench.studies.family.family_file import (
-    Fault,
-    SweepStudy,
-    load_study,
-    require_axial_target,
-)
+from spindlebench.studies.family.family_file import Fault, SweepStudy, load_study
 
 RETRAIN_RULES = ("never", "weekly", "after-fault")
 DAY_MODES = ("continuous", "cold-starts")
@@ -93,7 +88,6 @@ def load_compensation(path, machine: str | None = None) -> CompensationStudy:
     ``machine`` (``--machine``, or a drawn machine of the study's population) replaces the
     study's machine."""
     family = load_study(path, extra_tables=("compensate",), machine=machine)
-    require_axial_target(family, "compensation")
     root = Table(load_toml(path, "study"), path)
     t = root.table("compensate")
     models = tuple(t.get_list("models", str, check=_check_model))

@@ -46,20 +46,21 @@ def _csv(path: Path, frame: pd.DataFrame) -> None:
 
 def write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
                   days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
-                  outcomes: dict) -> None:
+                  outcomes: dict, target: str | None = None) -> None:
     """Every output file; a signal waits until they are all written, and the two files that
     say the folder is complete (README, provenance) go first and come back last, so even a
-    ``kill -9`` leaves no old README over new tables."""
+    ``kill -9`` leaves no old README over new tables. ``target``: the folder is one of a
+    study's several targets (said under the README's title and in the provenance)."""
     with interrupts.deferred():
         out.mkdir(parents=True, exist_ok=True)
         for marker in COMPLETE_MARKERS:
             (out / marker).unlink(missing_ok=True)
-        _write_outputs(study, study_path, fmu, out, days, series, table, outcomes)
+        _write_outputs(study, study_path, fmu, out, days, series, table, outcomes, target)
 
 
 def _write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: Path,
                    days: pd.DataFrame, series: pd.DataFrame, table: pd.DataFrame,
-                   outcomes: dict) -> None:
+                   outcomes: dict, target: str | None = None) -> None:
     _csv(out / "days.csv", days)
     _csv(out / "summary.csv", table)
     rule = study.retrain[0]
@@ -82,9 +83,61 @@ def _write_outputs(study: CompensationStudy, study_path: Path, fmu: Path, out: P
         tolerance_um=study.tolerance_um, retrain=list(study.retrain),
         fault=None if study.fault is None else study.fault.name,
         fault_from_day=study.fault_from_day, days=study.days,
-        off_h=study.off_h if study.days == "continuous" else None)
-    atomic.write_text(out / "README.md", readme(study, study_path, days, table))
+        off_h=study.off_h if study.days == "continuous" else None,
+        **({} if target is None else {"target": target}))
+    text = readme(study, study_path, days, table)
+    if target is not None:  # one of several targets: say which, under the title
+        title, rest = text.split("\n", 1)
+        text = (f"{title} — target `{target}`\n\nThis folder compensates the target "
+                f"`{target}` alone (its models trained on its probe reading; 'drift', 'µm' "
+                "and the tolerance below are in its unit); every target's residual is in "
+                "`../README.md`.\n" + rest)
+    atomic.write_text(out / "README.md", text)
     atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
+
+
+def targets_readme(study: CompensationStudy, study_path: Path,
+                   tables: dict[str, pd.DataFrame],
+                   joint_tables: dict[str, pd.DataFrame] | None = None) -> str:
+    """The folder's README of a study with several targets: every target's residual RMS over
+    all days, per retraining rule and model (each target's own, then the joint models
+    ``<model>@<joint>`` of ``joint_tables``), beside the uncompensated target."""
+    targets = list(tables)
+    first = tables[targets[0]]
+    rows = first[first["part"] == "all days"][["retrain", "model"]]
+    if joint_tables:
+        tables = {t: pd.concat([tables[t], joint_tables[t][joint_tables[t]["model"]
+                                                           != "uncompensated"]])
+                  for t in targets}
+        joint = joint_tables[targets[0]]
+        extra = joint[(joint["part"] == "all days") & (joint["model"] != "uncompensated")]
+        rows = pd.concat([rows, extra[["retrain", "model"]]])
+    lines = [f"# Compensation in the loop: {study.name}, several targets", "",
+             f"Made by `spindlebench compensate {study_path}`: one simulation of the days, then "
+             "each target compensated on its own (its models trained on day 1 on its probe "
+             "reading, its residual = its true rise − its applied offset). Each target's "
+             "folder holds the same files as a study of that target alone: "
+             + ", ".join(f"[`{t}/`]({t}/README.md)" for t in targets) + ".", "",
+             "Residual RMS over all compensated days (each target in its unit: µm for a "
+             "drift, µrad for a tilt):", "",
+             "Per-target models (`all_raw`, ...) select for each target on its own; a joint "
+             "model `<model>@<joint>` reads one candidate set for every target, chosen on day "
+             "1 (`union`: the union of the per-target selections; `mtlasso`, `pls-vip`: k "
+             "candidates for all targets at once), each target refitted on it "
+             "(in `joint/<target>/`).", "",
+             "| retrain | model | " + " | ".join(targets) + " |",
+             "|---|---|" + "---|" * len(targets)]
+    for row in rows.itertuples():
+        cells = []
+        for target in targets:
+            t = tables[target]
+            at = t[(t["part"] == "all days") & (t["retrain"] == row.retrain)
+                   & (t["model"] == row.model)]
+            cells.append(_fmt(float(at["rms_um"].iloc[0])) if len(at) else "–")
+        lines.append(f"| {row.retrain} | {row.model} | " + " | ".join(cells) + " |")
+    lines += ["", "The controller's settings (dead band, rate limit, tolerance) apply to every "
+              "target in its own unit.", ""]
+    return "\n".join(lines)
 
 
 def best_model(table: pd.DataFrame) -> str:

@@ -29,16 +29,20 @@ import pandas as pd
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
 from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
     STUDY_DRIVER_COLUMNS,
     TIME_COLUMN,
     TRUE_DRIFT_COLUMN,
     TRUE_SENSOR_COLUMNS,
+    true_column,
 )
 from spindlebench.studies.family.experiments import (
     ambient_for,
     initial_for,
+    measured_target,
     scenario_for,
     sensor_model,
+    target_truth_columns,
 )
 from spindlebench.studies.family.seeds import derive_seed
 from spindlebench.testbench.drivers import speed_rpm
@@ -163,10 +167,13 @@ def split_days(study, days, truth: pd.DataFrame) -> dict[int, pd.DataFrame]:
     return out
 
 
-def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int, pd.DataFrame]:
+def measure_continuous(study, days, truths: dict[int, pd.DataFrame], target: str = DRIFT_COLUMN,
+                       geometry_m: tuple[float, float] | None = None,
+                       ) -> dict[int, pd.DataFrame]:
     """What the controller reads on every day, measured once over the run: the readings of
     T1..T20 (a dropout held at its last reading), the probe's drift since the day's power-on
-    (``drift_um``, for training) and the true drift rise since power-on."""
+    (``drift_um``, for training) and the true drift rise since power-on. Another ``target``
+    stands in those two columns (as in ``loop.measured``)."""
     from spindlebench.studies.family.methods import TARGET, TRUTH
 
     family = study.family
@@ -183,8 +190,13 @@ def measure_continuous(study, days, truths: dict[int, pd.DataFrame]) -> dict[int
             start_s = day_start_s(study, fault_day.number) + study.fault.value.start_s
             fault = replace(study.fault, value=replace(study.fault.value, start_s=start_s))
     model = sensor_model(family.noise[0], fault)
-    readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
-                              derive_seed(family.seed, "compensate", "continuous"))
+    seed = derive_seed(family.seed, "compensate", "continuous")
+    readings, probe = measure(model, time_s, temperatures, drift, SENSORS, seed)
+    if target != DRIFT_COLUMN:
+        columns = target_truth_columns(target)
+        truth = pd.concat([truths[d.number][list(columns)] for d in days], ignore_index=True)
+        probe = measured_target(target, model, time_s, truth, probe, seed, geometry_m)
+        drift = truth[true_column(target)].to_numpy(float)
     readings = pd.DataFrame(readings, columns=list(SENSORS)).ffill().bfill()
     frames = {}
     offset = 0

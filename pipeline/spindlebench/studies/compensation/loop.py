@@ -35,14 +35,16 @@ import pandas as pd
 
 from spindlebench.core.names import SENSORS, SIX_DIFF
 from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
     STUDY_DRIVER_COLUMNS,
     TIME_COLUMN,
     TRUE_DRIFT_COLUMN,
     TRUE_SENSOR_COLUMNS,
+    true_column,
 )
 from spindlebench.selection import SelectionWarning, evaluate
 from spindlebench.selection.dynamic import is_dynamic, model_inputs
-from spindlebench.selection.evaluate import CandidateSet
+from spindlebench.selection.evaluate import CandidateSet, CheckedRecording, evaluate_checked
 from spindlebench.selection.regression import EstimatorFit, LinearFit
 from spindlebench.studies.compensation import continuous
 from spindlebench.studies.compensation.compensation_file import CompensationStudy
@@ -50,6 +52,7 @@ from spindlebench.studies.compensation.controller import applied_offset, detect_
 from spindlebench.studies.family.experiments import (
     Experiment,
     experiments,
+    measured_target,
     replicas,
     scenario_for,
     sensor_model,
@@ -82,19 +85,25 @@ def plan_days(study: CompensationStudy) -> list[Day]:
             for i, (r, e) in enumerate(order, start=1)]
 
 
-def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame) -> pd.DataFrame:
+def measured(study: CompensationStudy, day: Day, truth: pd.DataFrame,
+             target: str = DRIFT_COLUMN,
+             geometry_m: tuple[float, float] | None = None) -> pd.DataFrame:
     """What the controller reads on ``day``: T1..T20 (a dropout held at its last reading),
-    the probe's drift (``drift_um``, for training) and the true drift rise (``TRUTH``)."""
+    the probe's drift (``drift_um``, for training) and the true drift rise (``TRUTH``).
+    Another ``target`` (``[study] targets``) stands in those two columns: its probe reading
+    (``experiments.measured_target``, over the probes' ``geometry_m``) and its true rise."""
     family = study.family
     temperatures = truth[list(TRUE_SENSOR_COLUMNS)].to_numpy(float)
     drift = truth[TRUE_DRIFT_COLUMN].to_numpy(float)
     time_s = truth[TIME_COLUMN].to_numpy(float)
     model = sensor_model(family.noise[0], study.fault if day.fault_active else None)
-    readings, probe = measure(model, time_s, temperatures, drift, SENSORS,
-                              sensor_seed(family, day.replica, day.experiment))
+    seed = sensor_seed(family, day.replica, day.experiment)
+    readings, probe = measure(model, time_s, temperatures, drift, SENSORS, seed)
     frame = pd.DataFrame({TIME_COLUMN: time_s})
     frame[list(SENSORS)] = pd.DataFrame(readings).ffill().bfill().to_numpy()
-    frame[TARGET] = probe
+    frame[TARGET] = measured_target(target, model, time_s, truth, probe, seed, geometry_m)
+    if target != DRIFT_COLUMN:
+        drift = truth[true_column(target)].to_numpy(float)
     frame[TRUTH] = drift - drift[0]
     for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
         frame[column] = truth[column].to_numpy(float)
@@ -126,16 +135,30 @@ class TrainedModel:
         return self.fit.predict(values)
 
 
+#: Between a model and a joint selection in a joint model's name (``six_diff@union``).
+JOINT_SEPARATOR = "@"
+
+
 def train(name: str, study: CompensationStudy, frame: pd.DataFrame, day: int,
-          excluded: tuple[str, ...] = ()) -> TrainedModel:
-    """Fit model ``name`` (a sweep method name) on one measured day, without ``excluded``."""
-    spec = MethodSpec(name, study.k, study.seed)
+          excluded: tuple[str, ...] = (),
+          supports: JointSupports | None = None) -> TrainedModel:
+    """Fit model ``name`` (a sweep method name) on one measured day, without ``excluded``.
+
+    A joint model ``<model>@<joint>`` (several targets) reads the candidates chosen for
+    every target at once without ``excluded`` (``supports.get``): no selection here, the
+    model's regressor is fitted on them."""
+    spec = MethodSpec(name.partition(JOINT_SEPARATOR)[0], study.k, study.seed)
     sensors = [s for s in GROUP_SENSORS[spec.group] if s not in excluded]
+    options = dict(sensors=sensors, k=study.k, differences=spec.group == SIX_DIFF,
+                   method=spec.choice, seed=study.seed, missing="drop-rows")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SelectionWarning)
-        result = evaluate(frame, {"commissioning": frame}, TARGET, sensors=sensors, k=study.k,
-                          differences=spec.group == SIX_DIFF, method=spec.choice,
-                          seed=study.seed, missing="drop-rows")
+        if supports is not None and JOINT_SEPARATOR in name:
+            checked = CheckedRecording("commissioning", frame)
+            result = evaluate_checked(checked, {"commissioning": checked}, TARGET, **options,
+                                      support=supports.get(name, excluded))
+        else:
+            result = evaluate(frame, {"commissioning": frame}, TARGET, **options)
     candidates = CandidateSet(tuple(result.sensors), spec.group == SIX_DIFF)
     return TrainedModel(name, candidates, np.asarray(result.selection.selected),
                         tuple(result.selected), result.fit, day, excluded,
@@ -149,6 +172,51 @@ class Outcome:
     days: list[dict] = field(default_factory=list)
     series: list[pd.DataFrame] = field(default_factory=list)
     models: dict[str, list[TrainedModel]] = field(default_factory=dict)
+
+
+class JointSupports:
+    """The candidates of the joint models ``<model>@<joint>`` of several targets: each of the
+    study's models × ``method_registry.joint_names()``, chosen on the commissioning day for
+    every target at once by ``multi_target.evaluate_targets`` (the home of joint selection)
+    from ``frames``, each target's measured day 1 (``measure_days``). A model retrained
+    without a faulty sensor gets the joint choice made again without it (the monitor sees
+    the same sensor readings whatever the target, so every target drops the same sensor)."""
+
+    def __init__(self, study: CompensationStudy, frames: dict[str, pd.DataFrame]) -> None:
+        from spindlebench.selection.method_registry import joint_names
+
+        self.study = study
+        self.targets = list(frames)
+        self.joints = joint_names()
+        day1 = frames[self.targets[0]].loc[:, [TIME_COLUMN, *SENSORS]].copy()
+        for target, frame in frames.items():
+            day1[target] = frame[TARGET].to_numpy()
+        self.day1 = CheckedRecording("commissioning", day1)
+        self._chosen: dict[tuple[str, tuple[str, ...]], dict[str, tuple[str, ...]]] = {}
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """The joint models' names, model by model."""
+        return tuple(f"{name}{JOINT_SEPARATOR}{joint}" for name in self.study.models
+                     for joint in self.joints)
+
+    def get(self, name: str, excluded: tuple[str, ...] = ()) -> tuple[str, ...]:
+        """The candidates of joint model ``name`` chosen without the ``excluded`` sensors."""
+        from spindlebench.selection.multi_target import evaluate_targets
+
+        model, _, joint = name.partition(JOINT_SEPARATOR)
+        key = (model, tuple(sorted(excluded)))
+        if key not in self._chosen:
+            spec = MethodSpec(model, self.study.k, self.study.seed)
+            sensors = [s for s in GROUP_SENSORS[spec.group] if s not in excluded]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SelectionWarning)
+                result = evaluate_targets(
+                    self.day1, {"commissioning": self.day1}, self.targets, sensors=sensors,
+                    k=self.study.k, differences=spec.group == SIX_DIFF, missing="drop-rows",
+                    method=spec.choice, seed=self.study.seed, joint=self.joints)
+            self._chosen[key] = {j: tuple(r.selected) for j, r in result.joint.items()}
+        return self._chosen[key][joint]
 
 
 def _day_row(study: CompensationStudy, day: Day, model: TrainedModel, residual: np.ndarray,
@@ -189,29 +257,36 @@ def simulate_days(study: CompensationStudy, fmu: Path,
     return truths
 
 
-def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame]
+def measure_days(study: CompensationStudy, truths: dict[int, pd.DataFrame],
+                 target: str = DRIFT_COLUMN, geometry_m: tuple[float, float] | None = None,
                  ) -> dict[int, pd.DataFrame]:
-    """What the controller reads on every day (``measured``), by day number."""
+    """What the controller reads on every day (``measured``) for ``target``, by day number."""
     days = plan_days(study)
     if study.days == "continuous":
-        return continuous.measure_continuous(study, days, truths)
-    return {day.number: measured(study, day, truths[day.number]) for day in days}
+        return continuous.measure_continuous(study, days, truths, target, geometry_m)
+    return {day.number: measured(study, day, truths[day.number], target, geometry_m)
+            for day in days}
 
 
 def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
-             retrain: str | None = None) -> Outcome:
+             retrain: str | None = None, target: str = DRIFT_COLUMN,
+             geometry_m: tuple[float, float] | None = None,
+             supports: JointSupports | None = None) -> Outcome:
     """Run every model of the study through the controller on the simulated days, retrained
-    by rule ``retrain`` (default: the study's first)."""
+    by rule ``retrain`` (default: the study's first), compensating ``target`` (the axial
+    drift by default; another of ``[study] targets`` over the probes' ``geometry_m``, its
+    offsets and residuals in its own unit). ``supports``: the candidates of the joint models
+    among ``study.models`` (``JointSupports``)."""
     retrain = study.retrain[0] if retrain is None else retrain
     days = plan_days(study)
     outcome = Outcome()
-    frames = measure_days(study, truths)
+    frames = measure_days(study, truths, target, geometry_m)
     current: dict[str, TrainedModel] = {}
     for day in days:
         frame = frames[day.number]
         if day.number == 1:
             for name in study.models:
-                current[name] = train(name, study, frame, 1)
+                current[name] = train(name, study, frame, 1, supports=supports)
                 outcome.models[name] = [current[name]]
             continue
         time_s = frame[TIME_COLUMN].to_numpy(float)
@@ -220,7 +295,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
             model = current[name]
             if retrain == "weekly" and (day.number - 1) % study.retrain_every_days == 0:
                 model = train(name, study, frames[day.number - 1], day.number - 1,
-                              model.excluded)
+                              model.excluded, supports)
                 outcome.models[name].append(model)
             predicted = model.predict(frame)
             detection = ""
@@ -231,7 +306,7 @@ def run_loop(study: CompensationStudy, truths: dict[int, pd.DataFrame],
                 if found:
                     first = min(found, key=lambda d: d.sample)
                     model = train(name, study, frames[1], day.number,
-                                  (*model.excluded, first.sensor))
+                                  (*model.excluded, first.sensor), supports)
                     outcome.models[name].append(model)
                     predicted[first.sample:] = model.predict(frame)[first.sample:]
                     detection = (f"{first.sensor} {first.kind} at "

@@ -193,3 +193,46 @@ def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Sce
         machine=study.machine,
         probes=study.probes,
     )
+
+
+# ----------------------------------------------------------------- targets other than drift_um
+
+def target_truth_columns(target: str) -> tuple[str, ...]:
+    """The truth columns a study re-measuring ``target`` needs beyond the sensors' and the
+    axial drift's: none for the axial drift; the radial probes (the target is computed from
+    them, as the recording computes it) and the target's own truth otherwise."""
+    from spindlebench.formats.recording import DRIFT_COLUMN, true_column
+    from spindlebench.testbench.sensors import RADIAL_PROBES
+
+    if target == DRIFT_COLUMN:
+        return ()
+    return tuple(dict.fromkeys([*(true_column(p) for p in RADIAL_PROBES), true_column(target)]))
+
+
+def probe_geometry_m(study: SweepStudy, fmu) -> tuple[float, float]:
+    """(l, end-face offset) in m of the five-probe set-up of the study's runs: the machine's
+    and the study's parameters on top of the FMU's defaults, as ``scenario_for`` gives them
+    to the runner."""
+    from spindlebench.testbench.simulate import run_parameter
+
+    parameters = {**study.machine.parameters, **study.parameters}
+    return (run_parameter(parameters, fmu, "probe_l", study.path),
+            run_parameter(parameters, fmu, "probe_end_offset", study.path))
+
+
+def measured_target(target: str, model, time_s: np.ndarray, truth, measured_drift: np.ndarray,
+                    seed: int, geometry_m: tuple[float, float] | None) -> np.ndarray:
+    """``target``'s reading as the sensor ``model`` measures it from the run's ``truth``
+    (a frame with ``target_truth_columns(target)``): the axial probe's ``measured_drift``
+    for the axial drift, else the five probes of ``sensors.measure_probes`` (each radial
+    probe with the axial probe's noise, drift and resolution; tilts and end-face drifts
+    computed from them over ``geometry_m``), seeded as a recording's are."""
+    from spindlebench.formats.recording import DRIFT_COLUMN, true_column
+    from spindlebench.testbench.sensors import RADIAL_PROBES, measure_probes
+
+    if target == DRIFT_COLUMN:
+        return measured_drift
+    if geometry_m is None:
+        raise ValueError(f"target {target}: no probe geometry given")
+    radial = {p: np.asarray(truth[true_column(p)], dtype=float) for p in RADIAL_PROBES}
+    return measure_probes(model, time_s, radial, *geometry_m, measured_drift, seed)[target]

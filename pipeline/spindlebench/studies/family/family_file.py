@@ -312,6 +312,9 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
                          f"{MAX_SIMULATIONS:,} a study may run; split it into several studies")
     if (machine_axis or population) and machine_name != DEFAULT_MACHINE:
         raise axes.error("machines", "give either [study] machine or [axes] machines, not both")
+    if population is not None and len(targets) > 1:  # its report counts one result per machine
+        raise head.error("targets", "a population study ([axes] machines = { population = "
+                         "... }) takes one target; run each target as its own study")
     for name in machine_axis:
         try:
             variant = load_machine(name, source=path)
@@ -359,16 +362,6 @@ def load_study(path: str | Path, extra_tables: tuple[str, ...] = (),
         indoor=indoor, machine=machine_variant, machines=machine_axis, population=population,
         targets=targets,
     )
-
-
-def require_axial_target(study: SweepStudy, kind: str) -> None:
-    """Refuse ``[study] targets`` other than the axial drift in a study kind that selects for
-    it alone (the sweep and the compensation: their jobs, tables and reports are per drift)."""
-    if study.targets != (DRIFT_COLUMN,):
-        raise SpindlebenchError(
-            f"{study.path}: key 'study.targets': a {kind} study selects for {DRIFT_COLUMN} "
-            f"only (got {', '.join(study.targets)}); several targets run through "
-            "'spindlebench place' and 'spindlebench evaluate --target A B ...'")
 
 
 def machine_runs(study: SweepStudy, machine: str | None,

@@ -23,8 +23,19 @@ from threadpoolctl import threadpool_limits
 
 from spindlebench.core.console import one_line_error
 from spindlebench.core.names import SENSORS
-from spindlebench.formats.recording import STUDY_DRIVER_COLUMNS, TIME_COLUMN, TRUTH_COLUMNS
-from spindlebench.studies.family.experiments import Condition, Experiment, sensor_model
+from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
+    STUDY_DRIVER_COLUMNS,
+    TIME_COLUMN,
+    TRUTH_COLUMNS,
+    true_column,
+)
+from spindlebench.studies.family.experiments import (
+    Condition,
+    Experiment,
+    measured_target,
+    sensor_model,
+)
 from spindlebench.studies.family.methods import TARGET, TRUTH, MethodSpec, SharedRuns, score_all
 from spindlebench.testbench.scenario import Scenario
 from spindlebench.testbench.sensors import measure
@@ -63,6 +74,12 @@ class EvaluationJob:
     duration_s: float
     specs: tuple[MethodSpec, ...]
     similarity: str
+    #: The thermal error the methods predict (``[study] targets``); another than the axial
+    #: drift is measured from the truths of ``experiments.target_truth_columns(target)`` with
+    #: the condition's probes (``experiments.measured_target``) over ``probe_geometry_m`` (l
+    #: and the end-face offset, m), and stands in the frames' ``drift_um`` column.
+    target: str = DRIFT_COLUMN
+    probe_geometry_m: tuple[float, float] | None = None
 
 
 #: What ``evaluate_job`` gives per training run: its result rows, or the one-line error of
@@ -78,7 +95,9 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
     A sensor that drops out is held at its last good reading, as a compensation controller
     would; the columns are T1..T20 (degC), ``drift_um`` (probe, zeroed at the first sample)
     and the true drift rise for scoring, then the speed and ambient driver columns when the
-    truth holds them (the sweep's does: ``STUDY_DRIVER_COLUMNS``).
+    truth holds them (the sweep's does: ``STUDY_DRIVER_COLUMNS``). With another
+    ``job.target`` the drift columns hold that target's measured reading and true rise (in
+    its unit) instead.
     """
     truth = job.truths[experiment.id]
     temperatures = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
@@ -100,7 +119,16 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
             measured_C = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
         values[:, 1:-2] = measured_C
         values[:, -2] = measured_drift
+        if job.target != DRIFT_COLUMN:
+            values[:, -2] = measured_target(job.target, model, time_s, truth,
+                                            measured_drift, job.seeds[experiment.id],
+                                            job.probe_geometry_m)
     values[:, -1] = drift - drift[0]
+    if job.target != DRIFT_COLUMN:
+        true_target = truth[true_column(job.target)].to_numpy(float)
+        values[:, -1] = true_target - true_target[0]
+        if job.condition is None:
+            values[:, -2] = values[:, -1]
     frame = pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
     for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
         if column in truth.columns:

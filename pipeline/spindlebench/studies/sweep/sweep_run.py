@@ -10,6 +10,11 @@ stopped; a failed simulation is recorded with its error and the sweep carries on
 The results folder holds ``results.csv`` (tidy: one row per replica × condition × method × k
 × held-out experiment), ``summary.csv``, box plots, ``README.md`` (the findings, computed from
 the data) and ``provenance.json``.
+
+A study with several ``[study] targets`` (issue 21) is laid out as ``place`` lays it out: the
+simulations once in the folder, each target's sweep (the same files as that target alone)
+in ``<out>/<target>/``, and the joint selections of all targets (``studies.sweep.joint``) in
+``<out>/joint.csv`` and ``<out>/README.md``. One target: the folder as it always was.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.progress import Stages
 from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import (
+    DRIFT_COLUMN,
     STUDY_DRIVER_COLUMNS,
     TRUTH_COLUMNS,
     read_back,
@@ -35,8 +41,10 @@ from spindlebench.studies.family.experiments import (
     Experiment,
     conditions,
     experiments,
+    probe_geometry_m,
     replicas,
     sensor_seed,
+    target_truth_columns,
     training_experiments,
 )
 from spindlebench.studies.family.family_file import (
@@ -45,11 +53,14 @@ from spindlebench.studies.family.family_file import (
     describe,
     load_study,
     pinned_content,
-    require_axial_target,
 )
 from spindlebench.studies.family.methods import method_specs
 from spindlebench.studies.running.executor import Outcome, RunStats, Task, TaskRunner
-from spindlebench.studies.running.jobs import NOISE_FREE, EvaluationJob, evaluate_job
+from spindlebench.studies.running.jobs import (
+    NOISE_FREE,
+    EvaluationJob,
+    evaluate_job,
+)
 from spindlebench.studies.running.simulations import (
     Simulations,
     failure_path,
@@ -76,6 +87,9 @@ class SweepOutcome:
     #: (replica, condition, training run) evaluations done now; ``stats`` counts their jobs
     #: (one per replica and condition)
     evaluated: int = 0
+    #: Several targets: the study's folder (its README has the joint selections), while
+    #: ``out_dir`` is the first target's; None for one target.
+    study_dir: Path | None = None
 
 
 def condition_id(condition: Condition | None) -> str:
@@ -92,11 +106,22 @@ def error_path(relative: str) -> str:
 
 
 class Sweep:
-    """One sweep of one study into one results folder (plans, runs and collects)."""
+    """One sweep of one study into one results folder (plans, runs and collects), for one
+    ``target``: the study's first by default. The simulations are in ``store`` (the study's
+    folder); the evaluations and outputs in ``results``: the same folder for a study of one
+    target, ``<out>/<target>/`` for one of several."""
 
-    def __init__(self, study: SweepStudy, out_dir: Path) -> None:
+    def __init__(self, study: SweepStudy, out_dir: Path, target: str | None = None,
+                 store: ResultStore | None = None) -> None:
         self.study = study
-        self.store = ResultStore(out_dir)
+        self.target = study.targets[0] if target is None else target
+        # one store (and lock) of the folder shared by the sweeps of a study's targets
+        self.store = ResultStore(out_dir) if store is None else store
+        self.results = self.store if len(study.targets) == 1 else \
+            ResultStore(Path(out_dir) / self.target)
+        self.truth_columns = (*TRUTH_COLUMNS, *STUDY_DRIVER_COLUMNS,
+                              *target_truth_columns(self.target))
+        self._geometry: tuple[float, float] | None = None
         self.family = experiments(study)
         self.trains = training_experiments(study, self.family)
         self.conditions: list[Condition | None] = list(conditions(study))
@@ -133,7 +158,8 @@ class Sweep:
             experiments=tuple(self.family), truths=truths, failures=failures,
             seeds={e.id: sensor_seed(self.study, replica, e) for e in self.family},
             duration_s=self.study.duration_s, specs=self.specs,
-            similarity=self.study.methods.similarity)
+            similarity=self.study.methods.similarity, target=self.target,
+            probe_geometry_m=self.probe_geometry())
         key = f"evaluate r{replica} {condition_id(condition)}"
         if list(trains) != self.trains:
             key += " " + " ".join(train.id for train in trains)
@@ -145,8 +171,29 @@ class Sweep:
         key = (replica, experiment.id)
         if key not in self._truths:
             frame = read_recording(self.store.path(recording_path(replica, experiment)))
-            self._truths[key] = frame.loc[:, [*TRUTH_COLUMNS, *STUDY_DRIVER_COLUMNS]].copy()
+            missing = [c for c in self.truth_columns if c not in frame.columns]
+            if missing:
+                raise SpindlebenchError(
+                    f"{self.store.path(recording_path(replica, experiment))}: lacks "
+                    f"{missing[0]} for the target {self.target}: was it simulated without "
+                    "the probes?")
+            self._truths[key] = frame.loc[:, list(self.truth_columns)].copy()
         return self._truths[key]
+
+    def target_stores(self) -> list[ResultStore]:
+        """The evaluations' folder of every target of the study (this one's is ``results``)."""
+        if len(self.study.targets) == 1:
+            return [self.results]
+        return [self.results if t == self.target else ResultStore(self.store.root / t)
+                for t in self.study.targets]
+
+    def probe_geometry(self) -> tuple[float, float] | None:
+        """(l, end-face offset) in m of the runs' five probes; None for the axial drift."""
+        if self.target == DRIFT_COLUMN:
+            return None
+        if self._geometry is None:
+            self._geometry = probe_geometry_m(self.study, self.fmu)
+        return self._geometry
 
     # ----------------------------------------------------------------- running
 
@@ -166,8 +213,9 @@ class Sweep:
             if exps:
                 # Its recordings change: evaluations made from the old set are stale.
                 for condition, train in self.evaluation_keys(replica):
-                    self.store.remove(evaluation_path(replica, condition, train))
-                    self.store.remove(error_path(evaluation_path(replica, condition, train)))
+                    for results in self.target_stores():  # every target's are stale
+                        results.remove(evaluation_path(replica, condition, train))
+                        results.remove(error_path(evaluation_path(replica, condition, train)))
                 tasks.extend(self.simulation_task(replica, e) for e in exps)
             else:
                 todo = self._evaluations_to_do(replica)
@@ -187,7 +235,7 @@ class Sweep:
         follow_ups = len(self.conditions) * sum(1 for exps in pending.values() if exps)
         stats = runner.run(tasks, on_outcome, expected_follow_ups=follow_ups)
         results = self.collect()
-        return SweepOutcome(self.store.root, results, stats, resumed, skipped, evaluated[0])
+        return SweepOutcome(self.results.root, results, stats, resumed, skipped, evaluated[0])
 
     def _evaluations_to_do(self, replica: int) -> list[Task]:
         """One task per condition of ``replica`` for its training runs without a result file
@@ -195,7 +243,7 @@ class Sweep:
         tasks = []
         for condition in self.conditions:
             missing = [train for train in self.trains
-                       if not self.store.exists(evaluation_path(replica, condition, train))]
+                       if not self.results.exists(evaluation_path(replica, condition, train))]
             if missing:
                 tasks.append(self.evaluation_task(replica, condition, missing))
         for experiment in self.family:  # the jobs hold their data now: free the cache
@@ -212,10 +260,10 @@ class Sweep:
             path = evaluation_path(job.replica, condition, train)
             value = outcome.value[train.id] if outcome.ok else outcome.error
             if isinstance(value, pd.DataFrame):
-                self.store.write_frame(path, value)
-                self.store.remove(error_path(path))
+                self.results.write_frame(path, value)
+                self.results.remove(error_path(path))
                 continue
-            self.store.write_frame(error_path(path), pd.DataFrame([{
+            self.results.write_frame(error_path(path), pd.DataFrame([{
                 "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
                 "noise": condition.noise.name if condition else NOISE_FREE,
                 "fault": condition.fault_name if condition else "none",
@@ -226,7 +274,7 @@ class Sweep:
         replica, experiment = self.simulations.store_outcome(outcome)
         if outcome.ok:  # its truth as the file reads back, without reading it
             truth = read_back(self.store.path(recording_path(replica, experiment)),
-                              outcome.value[0], (*TRUTH_COLUMNS, *STUDY_DRIVER_COLUMNS))
+                              outcome.value[0], self.truth_columns)
             if truth is not None:
                 self._truths[(replica, experiment.id)] = truth
         waiting[replica].discard(experiment.id)
@@ -241,8 +289,8 @@ class Sweep:
             for condition, train in self.evaluation_keys(replica):
                 relative = evaluation_path(replica, condition, train)
                 for candidate in (relative, error_path(relative)):
-                    if self.store.exists(candidate):
-                        frames.append(self.store.read_frame(candidate))
+                    if self.results.exists(candidate):
+                        frames.append(self.results.read_frame(candidate))
                         break
         if not frames:
             return pd.DataFrame(columns=list(RESULT_COLUMNS))
@@ -265,16 +313,27 @@ def run_sweep(study_path: str | Path, out_dir: str | Path, workers: int | None =
     replaces the study's machine variant."""
     stages = Stages(Path(study_path).stem, enabled=progress)  # timed from the start
     study = load_study(study_path, machine=machine)
-    require_axial_target(study, "sweep")
     stages.label = study.name
-    sweep = Sweep(study, Path(out_dir))
+    sweeps = [Sweep(study, Path(out_dir), study.targets[0])]
+    sweeps += [Sweep(study, Path(out_dir), target, sweeps[0].store)
+               for target in study.targets[1:]]
     runner = TaskRunner(workers=workers, dask_address=dask_address, progress=progress,
                         desc=study.name, unit="job")
     # an unreachable scheduler fails before the folder is made (and locked)
-    with runner.connected(), sweep.store.locked():
-        outcome = sweep.run(runner)
-        write_outputs(sweep, outcome, runner, stages)
-    return outcome
+    with runner.connected(), sweeps[0].store.locked():
+        outcomes = []
+        for sweep in sweeps:  # the first simulates; the others find the recordings done
+            if len(sweeps) > 1:
+                stages(f"target {sweep.target}: evaluating into {sweep.results.root}")
+            outcomes.append(sweep.run(runner))
+            write_outputs(sweep, outcomes[-1], runner, stages)
+        if len(sweeps) > 1:
+            from spindlebench.studies.sweep.joint import write_joint
+
+            stages("joint selections: one sensor set for every target")
+            write_joint(sweeps, runner)
+            outcomes[0].study_dir = sweeps[0].store.root
+    return outcomes[0]
 
 
 def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
@@ -285,7 +344,7 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
     from spindlebench.studies.sweep import sweep_plots as plots
     from spindlebench.studies.sweep import sweep_report as report
 
-    store, study = sweep.store, sweep.study
+    store, study = sweep.results, sweep.study
     results = outcome.results
     say(f"writing results.csv ({len(results)} rows)")
     store.write_frame("results.csv", results)
@@ -311,10 +370,16 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
         seeds=seeds,
         axes=describe(study),
         executor=runner.describe(),
+        **({} if store is sweep.store else {"target": sweep.target}),
     )
     store.write_json("provenance.json", record)
-    write_text(store.path("README.md"),
-               report.readme(study, results, tables, figures, record, sweep.trains))
+    text = report.readme(study, results, tables, figures, record, sweep.trains)
+    if store is not sweep.store:  # one of several targets: say which, under the title
+        title, rest = text.split("\n", 1)
+        text = (f"{title} — target `{sweep.target}`\n\nThis folder is the sweep for the "
+                f"target `{sweep.target}` alone (RMSE in its unit; 'drift' below means it); "
+                "the joint selections of all targets are in `../README.md`.\n" + rest)
+    write_text(store.path("README.md"), text)
 
 
 def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchError:
@@ -324,7 +389,7 @@ def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchErr
     judge; results.csv (written before) keeps every row with its error, and the README and
     the error line point at the first cause instead of a crash in the summary.
     """
-    store, study = sweep.store, sweep.study
+    store, study = sweep.results, sweep.study
     runs, failed = sweep.simulations.runs(), sweep.simulations.failed()
     if failed:
         where = failure_path(*failed[0])
@@ -346,7 +411,8 @@ def nothing_to_summarise(sweep: Sweep, results: pd.DataFrame) -> SpindlebenchErr
         "`results.csv` lists every result row with its error. Fix the cause and run the same "
         "command again: finished work is kept and failed simulations and evaluations are "
         "retried.", ""]))
-    return SpindlebenchError(f"sweep: {what}; first: {first}; see {store.path(where)}")
+    home = sweep.store if failed else store  # the simulations' folder, or the target's
+    return SpindlebenchError(f"sweep: {what}; first: {first}; see {home.path(where)}")
 
 
 # --------------------------------------------------------------------- command line
