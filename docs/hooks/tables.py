@@ -31,7 +31,11 @@ Sources (``Sources``, the checkout's by default):
 - the stable-room studies' CSVs under ``results/`` (or their committed copies under
   ``docs/snapshots/`` when the study has not been run in this checkout: the population runs
   take half an hour, too long for ``make docs``; the marker names which file was read, and
-  the snapshot's ``provenance.json`` sits beside it).
+  the snapshot's ``provenance.json`` sits beside it);
+- what ``make run`` writes under ``results/paper_study/`` and ``results/caiviac_study/``
+  (``run-table FOLDER/FILE[@N]``: the N-th table of that file as written; ``paper-summary
+  FOLDER``: the mean RMSE per k and group of its ``table6_rmse.csv``), or their committed
+  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run.
 """
 
 from __future__ import annotations
@@ -489,6 +493,86 @@ def placement_verdict(path: Path) -> str:
             f"{_share(sum(machines.values()), len(machines))} machines.")
 
 
+# --------------------------------------------------------------------------- make run's studies
+
+#: What ``make run`` (``spindlebench demo --out results``) writes, per folder under results/.
+RUN_FOLDERS = ("paper_study", "caiviac_study")
+RUN_COMMAND = "make run"
+GROUPS = (("all_raw", "all raw"), ("six_raw", "six raw"), ("six_diff", "six + differences"))
+
+
+def run_file(name: str, sources: Sources) -> Path | None:
+    """``results/<name>`` if ``make run`` wrote it in this checkout, else its committed copy
+    under ``docs/snapshots/<name>`` (``name``: ``paper_study/table6.md``)."""
+    if name.split("/", 1)[0] not in RUN_FOLDERS:
+        raise ValueError(f"{name}: not a file make run writes (folders: {RUN_FOLDERS})")
+    for base in (sources.results, sources.snapshots):
+        if (base / name).is_file():
+            return base / name
+    return None
+
+
+def run_provenance(path: Path, source: str) -> str:
+    record = _read_json(path.parent / "provenance.json") or {}
+    versions = record.get("package_versions", {})
+    return (f"From `{source}`, written by `{RUN_COMMAND}` (`{record.get('command', '?')}`, "
+            f"spindlebench {versions.get('spindlebench', '?')})")
+
+
+def file_table(path: Path, key: str | None = None) -> str:
+    """The ``key``-th (1 by default) Markdown table of a file a command wrote, as written."""
+    found = tables(path.read_text(encoding="utf-8"))
+    index = int(key or 1)
+    if not 1 <= index <= len(found):
+        raise ValueError(f"{path}: has {len(found)} tables, not a table number {index}")
+    return found[index - 1][2]
+
+
+def paper_summary_table(path: Path, key: str | None = None) -> str:
+    """Mean RMSE per k and group from a paper study's ``table6_rmse.csv`` (and the paper's
+    printed means, when the study predicts its experiments)."""
+    rows = _csv(path)
+    mean = {(r["clusters"], r["group"]): r["mean"] for r in rows}
+    paper = {(r["clusters"], r["group"]): r.get("paper_mean") for r in rows}
+    header = ["k", *[label for _, label in GROUPS]]
+    with_paper = any(v not in (None, "", "nan") for v in paper.values())
+    if with_paper:
+        header.append("paper: " + " / ".join(label for _, label in GROUPS))
+    body = []
+    for k in dict.fromkeys(r["clusters"] for r in rows):
+        line = [k, *[_um1(mean.get((k, g))) for g, _ in GROUPS]]
+        if with_paper:
+            line.append(" / ".join(_um1(paper.get((k, g))) for g, _ in GROUPS))
+        body.append(line)
+    return markdown_table(header, body)
+
+
+def _um1(text: str | None) -> str:
+    return "—" if text in (None, "", "nan") else f"{float(text):.1f}"
+
+
+RUN_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "run-table": file_table,
+    "paper-summary": paper_summary_table,
+}
+
+
+def run_section(by: str, key: str | None, sources: Sources) -> str:
+    """``run-table FOLDER/FILE[@N]``: the N-th table of that file; ``paper-summary FOLDER``:
+    the mean RMSE table of ``FOLDER/table6_rmse.csv``."""
+    if key is None:
+        raise ValueError(f"<!-- generate: {by} -->: needs a file (e.g. paper_study/table6.md)")
+    name, _, number = key.partition("@")
+    if by == "paper-summary":
+        name = f"{name}/table6_rmse.csv"
+    path = run_file(name, sources)
+    if path is None:
+        return placeholder(f"`results/{name}`", RUN_COMMAND)
+    source = sources.name(path)
+    return block(by, source, number or None, run_provenance(path, source),
+                 RUN_TABLES[by](path, number or None))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -501,8 +585,10 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return machine_section(by, key, sources)
     if by in STUDY_TABLES:
         return study_section(by, sources)
+    if by in RUN_TABLES:
+        return run_section(by, key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES])})")
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])})")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -524,6 +610,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return machine_parameters_table(path)
     if by in MACHINE_TABLES:
         return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
+    if by in RUN_TABLES:
+        return RUN_TABLES[by](path, key)
     return STUDY_TABLES[by](path, key)
 
 
