@@ -49,9 +49,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
      "| fault days, retrained after the fault | fault days, retrained weekly | healthy days, "
      "retrained weekly: RMS |"): STALE,
     ("contracts.md", "| name | unit | meaning |"): PROSE,
-    ("fmu.md", "| compared | max \\|Δ drift\\| | max \\|Δ T\\| (all temperature outputs) |"):
-        "bench_cosim.py's numbers, now in bench/results/bench_cosim.json and on the speed "
-        "page; this page keeps its typed copy until it reads that file",
     ("fmu.md", "| symbol | what it does |"): PROSE,
     ("fmu.md", "| run | Python callbacks | C right-hand side | ratio | same bytes | C, forward "
      "Jacobian | C, coloured differences |"): TIMING,

@@ -159,6 +159,19 @@ def bench_table(path: Path, key: str | None = None) -> str:
                                                     for row in rows])
 
 
+def bench_section(script: str | None, sources: Sources) -> str:
+    """``<!-- generate: bench SCRIPT -->`` on another page than the speed page: the rows of
+    ``bench/results/SCRIPT.json`` with its machine, load and date."""
+    if script is None:
+        raise ValueError("<!-- generate: bench -->: needs the script (e.g. bench_cosim)")
+    path = sources.bench / f"{script}.json"
+    if not path.is_file():
+        return placeholder(f"`bench/results/{script}.json`", f"python bench/{script}.py")
+    source = sources.name(path)
+    document = json.loads(path.read_text(encoding="utf-8"))
+    return block("bench", source, None, bench_provenance(document, source), bench_table(path))
+
+
 def speed_section(sources: Sources) -> str:
     """Every ``bench/results/*.json``: a heading, its provenance once, its goals and rows."""
     files = sorted(sources.bench.glob("*.json"))
@@ -579,6 +592,8 @@ def section(by: str, key: str | None, sources: Sources) -> str:
     """What a ``<!-- generate: BY KEY -->`` line becomes."""
     if by == "speed":
         return speed_section(sources)
+    if by == "bench":
+        return bench_section(key, sources)
     if by == "parameters":
         return parameters_section(sources)
     if by in MACHINE_TABLES:
