@@ -107,8 +107,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
      "k=3 all_raw | k=3 six_raw | k=3 six_diff | k=4 all_raw | k=4 six_raw | k=4 six_diff |"):
         RUNS,
     ("validation.md", "| method | k | all 16 raw | six raw | six + 15 differences |"): RUNS,
-    ("validation.md", "| k | default machine (real-spindle regime) | ambient-following machine "
-     "| CAIVIAC heating runs (above) |"): RUNS,
     ("validation.md", "| method | run4_5000rpm | run5_3500rpm | run6_stepped |"): NO_FILE +
         " (the calibration script of that section)",
 }

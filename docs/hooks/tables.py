@@ -508,9 +508,17 @@ def placement_verdict(path: Path) -> str:
 
 # --------------------------------------------------------------------------- make run's studies
 
-#: What ``make run`` (``spindlebench demo --out results``) writes, per folder under results/.
-RUN_FOLDERS = ("paper_study", "caiviac_study")
 RUN_COMMAND = "make run"
+#: Paper-comparison folders under results/ and what writes each: ``make run`` (``spindlebench
+#: demo --out results``) the first two.
+RUN_FOLDERS = {
+    "paper_study": RUN_COMMAND,
+    "caiviac_study": RUN_COMMAND,
+    "ambient_following_study": "spindlebench simulate scenarios/paper -o "
+                               "results/ambient_following --machine ambient-following; "
+                               "spindlebench paper --recordings results/ambient_following "
+                               "--out results/ambient_following_study",
+}
 GROUPS = (("all_raw", "all raw"), ("six_raw", "six raw"), ("six_diff", "six + differences"))
 
 
@@ -518,7 +526,7 @@ def run_file(name: str, sources: Sources) -> Path | None:
     """``results/<name>`` if ``make run`` wrote it in this checkout, else its committed copy
     under ``docs/snapshots/<name>`` (``name``: ``paper_study/table6.md``)."""
     if name.split("/", 1)[0] not in RUN_FOLDERS:
-        raise ValueError(f"{name}: not a file make run writes (folders: {RUN_FOLDERS})")
+        raise ValueError(f"{name}: not in a paper-comparison folder ({', '.join(RUN_FOLDERS)})")
     for base in (sources.results, sources.snapshots):
         if (base / name).is_file():
             return base / name
@@ -528,8 +536,11 @@ def run_file(name: str, sources: Sources) -> Path | None:
 def run_provenance(path: Path, source: str) -> str:
     record = _read_json(path.parent / "provenance.json") or {}
     versions = record.get("package_versions", {})
-    return (f"From `{source}`, written by `{RUN_COMMAND}` (`{record.get('command', '?')}`, "
-            f"spindlebench {versions.get('spindlebench', '?')})")
+    command = RUN_FOLDERS[path.parent.name]
+    shown = f"`{command}` (`{record.get('command', '?')}`" if command == RUN_COMMAND else \
+        f"`{command}` (its last step"
+    return (f"From `{source}`, written by {shown}, spindlebench "
+            f"{versions.get('spindlebench', '?')})")
 
 
 def file_table(path: Path, key: str | None = None) -> str:
@@ -580,7 +591,7 @@ def run_section(by: str, key: str | None, sources: Sources) -> str:
         name = f"{name}/table6_rmse.csv"
     path = run_file(name, sources)
     if path is None:
-        return placeholder(f"`results/{name}`", RUN_COMMAND)
+        return placeholder(f"`results/{name}`", RUN_FOLDERS[name.split("/", 1)[0]])
     source = sources.name(path)
     return block(by, source, number or None, run_provenance(path, source),
                  RUN_TABLES[by](path, number or None))
