@@ -97,15 +97,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
      "| ch3_um at end of heating | at end of cycle |"): NO_FILE + " (the adapter's cut)",
-    ("validation.md", "| k | all raw (ours) | six raw (ours) | six + differences (ours) | all "
-     "raw (paper) | six raw (paper) | six + differences (paper) |"): RUNS,
-    ("validation.md", "| k | all raw | six raw | six + differences |"): RUNS,
-    ("validation.md", "| k | group | run1_1250rpm | run2_2500rpm | run3_3750rpm | run5_3500rpm "
-     "| run6_stepped | **mean** | paper exp2 | paper exp3 | paper exp4 | paper exp5 | **paper "
-     "mean** |"): RUNS,
-    ("validation.md", "| training run | six (auto) | k=2 all_raw | k=2 six_raw | k=2 six_diff | "
-     "k=3 all_raw | k=3 six_raw | k=3 six_diff | k=4 all_raw | k=4 six_raw | k=4 six_diff |"):
-        RUNS,
     ("validation.md", "| method | k | all 16 raw | six raw | six + 15 differences |"): RUNS,
     ("validation.md", "| method | run4_5000rpm | run5_3500rpm | run6_stepped |"): NO_FILE +
         " (the calibration script of that section)",

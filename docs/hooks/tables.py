@@ -518,6 +518,10 @@ RUN_FOLDERS = {
                                "results/ambient_following --machine ambient-following; "
                                "spindlebench paper --recordings results/ambient_following "
                                "--out results/ambient_following_study",
+    "caiviac_cycle_study": "spindlebench adapt caiviac --phase cycle --out results/caiviac_cycle; "
+                           "spindlebench paper --recordings results/caiviac_cycle --config "
+                           "results/caiviac_cycle/paper_study.toml --out "
+                           "results/caiviac_cycle_study",
 }
 GROUPS = (("all_raw", "all raw"), ("six_raw", "six raw"), ("six_diff", "six + differences"))
 
@@ -597,6 +601,58 @@ def run_section(by: str, key: str | None, sources: Sources) -> str:
                  RUN_TABLES[by](path, number or None))
 
 
+SENSITIVITY = "caiviac_sensitivity"
+SENSITIVITY_COMMAND = ("spindlebench paper --recordings DIR --config DIR/paper_study.toml "
+                       "--train RUN --tests OTHERS --out results/caiviac_sensitivity/PHASE/"
+                       "train_RUN, for each constant-speed RUN (docs/validation.md)")
+
+
+def sensitivity_folder(phase: str, sources: Sources) -> Path | None:
+    """``results/caiviac_sensitivity/<phase>`` with its ``train_*`` runs, else its snapshot."""
+    for base in (sources.results, sources.snapshots):
+        if any((base / SENSITIVITY / phase).glob("train_*/table6_rmse.csv")):
+            return base / SENSITIVITY / phase
+    return None
+
+
+def sensitivity_table(folder: Path, key: str | None = None) -> str:
+    """One row per training run (``train_<run>/``): its six sensors and the mean RMSE over the
+    other runs of each k and group; last, their average over the training runs."""
+    import numpy as np
+
+    header, body, columns = ["training run", "six (auto)"], [], None
+    for run in sorted(folder.glob("train_*/table6_rmse.csv")):
+        rows = _csv(run)
+        keys = [(r["clusters"], r["group"]) for r in rows]
+        if columns is None:
+            columns = keys
+            header += [f"k={k} {g}" for k, g in keys]
+        mean = {(r["clusters"], r["group"]): float(r["mean"]) for r in rows}
+        six = (_read_json(run.parent / "provenance.json") or {}).get("six", [])
+        body.append([run.parent.name.removeprefix("train_"),
+                     ", ".join(s.removesuffix("_C") for s in six),
+                     *[mean.get(c, float("nan")) for c in columns]])
+    average = ["**mean over training runs**", "",
+               *[float(np.mean([row[2 + i] for row in body])) for i in range(len(columns))]]
+    return markdown_table(header, [[*row[:2], *(f"{v:.1f}" for v in row[2:])]
+                                   for row in [*body, average]])
+
+
+def sensitivity_section(phase: str | None, sources: Sources) -> str:
+    if phase is None:
+        raise ValueError("<!-- generate: sensitivity -->: needs the phase (heating, cycle)")
+    folder = sensitivity_folder(phase, sources)
+    if folder is None:
+        return placeholder(f"`results/{SENSITIVITY}/{phase}/`", SENSITIVITY_COMMAND)
+    source = sources.name(folder)
+    first = sorted(folder.glob("train_*/provenance.json"))
+    versions = (_read_json(first[0]) or {}).get("package_versions", {}) if first else {}
+    provenance = (f"From `{source}/train_*/table6_rmse.csv` (the `mean` column) and each "
+                  f"run's `provenance.json` (the six), written by `spindlebench paper` for each "
+                  f"training run, spindlebench {versions.get('spindlebench', '?')}")
+    return block("sensitivity", source, None, provenance, sensitivity_table(folder))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -613,8 +669,10 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return study_section(by, sources)
     if by in RUN_TABLES:
         return run_section(by, key, sources)
-    raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])})")
+    if by == "sensitivity":
+        return sensitivity_section(key, sources)
+    raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, sensitivity)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -638,6 +696,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
     if by in RUN_TABLES:
         return RUN_TABLES[by](path, key)
+    if by == "sensitivity":
+        return sensitivity_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 
