@@ -63,7 +63,8 @@ docs: notebooks
 ## (what a checkout without results/ shows), only those that results/ has.
 SNAPSHOT_FILES := README.md table6_rmse.csv provenance.json
 docs-snapshots:
-	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study; do \
+	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study \
+	    caiviac_methods; do \
 	  for f in $(SNAPSHOT_FILES); do test ! -f results/$$study/$$f || \
 	    { mkdir -p docs/snapshots/$$study && cp results/$$study/$$f docs/snapshots/$$study/; }; \
 	  done; done

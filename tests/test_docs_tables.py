@@ -97,7 +97,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
      "| ch3_um at end of heating | at end of cycle |"): NO_FILE + " (the adapter's cut)",
-    ("validation.md", "| method | k | all 16 raw | six raw | six + 15 differences |"): RUNS,
     ("validation.md", "| method | run4_5000rpm | run5_3500rpm | run6_stepped |"): NO_FILE +
         " (the calibration script of that section)",
 }

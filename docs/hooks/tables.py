@@ -522,6 +522,8 @@ RUN_FOLDERS = {
                            "spindlebench paper --recordings results/caiviac_cycle --config "
                            "results/caiviac_cycle/paper_study.toml --out "
                            "results/caiviac_cycle_study",
+    "caiviac_methods": "spindlebench adapt caiviac --out results/caiviac; spindlebench paper "
+                       "--recordings results/caiviac --out results/caiviac_methods --methods all",
 }
 GROUPS = (("all_raw", "all raw"), ("six_raw", "six raw"), ("six_diff", "six + differences"))
 
