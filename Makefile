@@ -71,6 +71,8 @@ docs-snapshots:
 	for run in results/caiviac_sensitivity/*/train_*; do test -d $$run || continue; \
 	  dest=docs/snapshots/$${run#results/}; mkdir -p $$dest; \
 	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
+	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
+	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

@@ -73,8 +73,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("model.md", "| statistic | real spindles, min–max (issue 20) |"): QUOTED,
     ("model.md", "| segments | 1 h | 2 h | 4 h |"): NO_FILE + " (`python -m "
         "spindlebench.model.discretisation`, minutes of CPU)",
-    ("recordings.md", "| statistic | default machine (median of exp1–5) | ambient-following "
-     "machine (median of exp1–5) | CAIVIAC (median of 6 runs, `ch3_um`) |"): NO_FILE,
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
     ("studies.md", "| k | all_raw | six_raw | six_diff | top-k-correlated | ridge | oracle "

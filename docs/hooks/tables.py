@@ -655,6 +655,52 @@ def sensitivity_section(phase: str | None, sources: Sources) -> str:
     return block("sensitivity", source, None, provenance, sensitivity_table(folder))
 
 
+FINGERPRINTS = "fingerprint"
+FINGERPRINT_COMMAND = "spindlebench fingerprint RECORDINGS --json results/fingerprint/NAME.json"
+
+
+def fingerprint_folder(sources: Sources) -> Path | None:
+    """``results/fingerprint/`` (``fingerprint --json`` files) if there are any, else the
+    committed copies under ``docs/snapshots/fingerprint/``."""
+    for base in (sources.results, sources.snapshots):
+        if any((base / FINGERPRINTS).glob("*.json")):
+            return base / FINGERPRINTS
+    return None
+
+
+def fingerprint_medians_table(folder: Path, key: str | None) -> str:
+    """The default machine's median (the reference of the first file), then the median of each
+    named file (``key``: ``ambient_following,caiviac``), statistic by statistic."""
+    from spindlebench.studies.fingerprint.statistics import KEYS
+
+    names = (key or "").split(",")
+    documents = [json.loads((folder / f"{n}.json").read_text(encoding="utf-8")) for n in names]
+    reference = documents[0]["reference"]
+    header = ["statistic", f"{reference['label']} (median of {len(reference['recordings'])})",
+              *[f"`{n}` (median of {len(d['recordings'])})" for n, d in zip(names, documents,
+                                                                           strict=True)]]
+    return markdown_table(header, [[k, f"{reference['median'][k]:.3f}",
+                                    *[f"{d['median'][k]:.3f}" for d in documents]]
+                                   for k in KEYS])
+
+
+def fingerprint_section(key: str | None, sources: Sources) -> str:
+    if not key:
+        raise ValueError("<!-- generate: fingerprint-medians -->: needs the files "
+                         "(e.g. ambient_following,caiviac)")
+    folder = fingerprint_folder(sources)
+    if folder is None or not all((folder / f"{n}.json").is_file() for n in key.split(",")):
+        return placeholder("The fingerprint medians", FINGERPRINT_COMMAND)
+    source = sources.name(folder)
+    first = _read_json(folder / f"{key.split(',')[0]}.json") or {}
+    versions = first.get("provenance", {}).get("package_versions", {})
+    provenance = (f"From `{source}/{{{key}}}.json`, written by `{FINGERPRINT_COMMAND}` "
+                  f"(spindlebench {versions.get('spindlebench', '?')}; each file's provenance "
+                  "names its recordings and their sha256)")
+    return block("fingerprint-medians", source, key, provenance,
+                 fingerprint_medians_table(folder, key))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -673,8 +719,11 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return run_section(by, key, sources)
     if by == "sensitivity":
         return sensitivity_section(key, sources)
+    if by == "fingerprint-medians":
+        return fingerprint_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, sensitivity)")
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, "
+                     "sensitivity, fingerprint-medians)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -700,6 +749,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return RUN_TABLES[by](path, key)
     if by == "sensitivity":
         return sensitivity_table(path, key)
+    if by == "fingerprint-medians":
+        return fingerprint_medians_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 
