@@ -229,3 +229,39 @@ def test_a_changed_machine_parameter_updates_every_table_that_depends_on_it(tmp_
     for marker, _, table in tables.tables(after):  # and each still matches its source
         by, source, key = marker.groups()
         assert tables.regenerate(by, source, key, sources) == table
+
+
+def test_the_run_tables_come_from_results_first_then_the_snapshot_and_average_what_they_read(
+        tmp_path):
+    """``paper-summary``, ``run-table`` and ``sensitivity`` read ``results/`` when a command
+    wrote it there, else the snapshot; the sensitivity's last row is computed from the runs."""
+    results, snapshots = tmp_path / "results", tmp_path / "snapshots"
+    csv = ("clusters,group,a,mean\n2,all_raw,1,1.0\n2,six_raw,1,2.0\n2,six_diff,1,3.0\n")
+    for base, scale in ((snapshots, 1.0), (results, 10.0)):
+        (base / "paper_study").mkdir(parents=True)
+        (base / "paper_study" / "table6_rmse.csv").write_text(
+            csv.replace(",1.0", f",{1.0 * scale}").replace(",2.0", f",{2.0 * scale}"),
+            encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=results, snapshots=snapshots)
+    page = tables.expand("<!-- generate: paper-summary paper_study -->\n", sources)
+    assert "source=results/paper_study/table6_rmse.csv" in page and "| 2 | 10.0 | 20.0 |" in page
+    shutil.rmtree(results)
+    page = tables.expand("<!-- generate: paper-summary paper_study -->\n", sources)
+    assert "source=snapshots/paper_study/table6_rmse.csv" in page and "| 2 | 1.0 | 2.0 |" in page
+    with pytest.raises(ValueError, match="paper-comparison folder"):
+        tables.run_file("elsewhere/table6_rmse.csv", sources)
+    (snapshots / "paper_study" / "README.md").write_text(
+        "text\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\nmore\n\n| c |\n|---|\n| 3 |\n",
+        encoding="utf-8")
+    page = tables.expand("<!-- generate: run-table paper_study/README.md@2 -->\n", sources)
+    assert "| c |\n|---|\n| 3 |" in page and "| a | b |" not in page
+    for run, mean in (("run1", 1.0), ("run2", 4.0)):
+        folder = snapshots / "caiviac_sensitivity" / "heating" / f"train_{run}"
+        folder.mkdir(parents=True)
+        (folder / "table6_rmse.csv").write_text(f"clusters,group,mean\n2,all_raw,{mean}\n",
+                                                encoding="utf-8")
+        (folder / "provenance.json").write_text('{"six": ["t1_C", "t2_C"]}', encoding="utf-8")
+    page = tables.expand("<!-- generate: sensitivity heating -->\n", sources)
+    assert "| run1 | t1, t2 | 1.0 |" in page and "| **mean over training runs** |  | 2.5 |" in page
+    for marker, _, table in tables.tables(page):
+        assert tables.regenerate(*marker.groups(), sources) == table
