@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-quick lint bench compile notebooks docs clean-venv
+.PHONY: run test test-quick lint bench compile notebooks docs docs-snapshots clean-venv
 
 ## The package is installed editable, so Python compiles its modules from source on every
 ## start unless their bytecode is cached; with PYTHONDONTWRITEBYTECODE set (as on this
@@ -57,6 +57,22 @@ notebooks: $(STAMP)
 docs: notebooks
 	test -f results/README.md || $(MAKE) run
 	SPINDLEBENCH_DOCS_RUN=1 NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
+
+## After a model change and a rerun (make run, the studies of docs/validation.md): copy the
+## files the docs' tables read from results/ to their committed copies in docs/snapshots/
+## (what a checkout without results/ shows), only those that results/ has.
+SNAPSHOT_FILES := README.md table6_rmse.csv provenance.json
+docs-snapshots:
+	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study \
+	    caiviac_methods; do \
+	  for f in $(SNAPSHOT_FILES); do test ! -f results/$$study/$$f || \
+	    { mkdir -p docs/snapshots/$$study && cp results/$$study/$$f docs/snapshots/$$study/; }; \
+	  done; done
+	for run in results/caiviac_sensitivity/*/train_*; do test -d $$run || continue; \
+	  dest=docs/snapshots/$${run#results/}; mkdir -p $$dest; \
+	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
+	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
+	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

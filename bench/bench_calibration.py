@@ -12,7 +12,8 @@ budget: at most 2 minutes on this 2-core machine), and the two solvers against e
     .venv/bin/python bench/bench_calibration.py [--hours 24] [--compare-h 1] [--segments 12]
 
 At ``--compare-h 3`` IPOPT did not finish within 13 minutes here (Gauss-Newton: 6 s), so the
-default compares on 1 h to keep ``make bench`` finite.
+default compares on 1 h to keep ``make bench`` finite. The rows are written to
+``bench/results/bench_calibration.json`` (``bench/results.py``).
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ from spindlebench.calibration.series import load_series
 from spindlebench.commands.main import main
 from spindlebench.model.equations import explicit_ode
 
+from results import record
+
 ROOT = Path(__file__).resolve().parents[1]
 #: 10 of the default set (the table's expansion length and the Y feed loss left at default).
 FIT = [name for name in DEFAULT_FIT if name not in ("table_L", "c_y_motor")]
@@ -51,6 +54,10 @@ def twin_scenario(path: Path, hours: float, truth: dict[str, float]) -> Path:
              *[f"{k} = {v!r}" for k, v in truth.items()]]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+#: Issue 13's budget for the 24 h fit, wall seconds on this 2-core machine.
+GOAL_S = 120.0
 
 
 def run(hours: float, compare_h: float, segments: int) -> None:
@@ -76,6 +83,10 @@ def run(hours: float, compare_h: float, segments: int) -> None:
               f"error {100 * worst:.1f} %, reduced chi-square {fit.chi2_reduced:.2f}; "
               f"{seconds / fit.evaluations:.1f} s per evaluation, {len(ode.states)} states, "
               f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+        rows = [{"fit": f"gauss-newton, {hours:g} h", "hours": hours, "parameters": len(FIT),
+                 "segments": segments, "wall_s": seconds, "evaluations": fit.evaluations,
+                 "peak_MB": peak_mb, "inside_95": inside, "worst_relative_error": worst,
+                 "chi2_reduced": fit.chi2_reduced}]
 
         short = load_series(folder / "twin.csv", recording_map, None)
         keep = short.time_s <= compare_h * 3600
@@ -91,9 +102,16 @@ def run(hours: float, compare_h: float, segments: int) -> None:
             count = "iterations" if method == "ipopt" else "evaluations"
             print(f"{method}, first {compare_h:g} h: {timings[method]:.1f} s, "
                   f"{result.evaluations} {count}, {result.status}")
+            rows.append({"fit": f"{method}, first {compare_h:g} h", "hours": compare_h,
+                         "parameters": len(FIT), "segments": segments,
+                         "wall_s": timings[method], "evaluations": result.evaluations,
+                         "status": str(result.status)})
         gap = float(np.max(np.abs(np.exp(estimates["ipopt"] - estimates["gauss-newton"]) - 1)))
         print(f"ipopt / gauss-newton time ratio: {timings['ipopt'] / timings['gauss-newton']:.1f}"
               f"; largest relative difference of their estimates {100 * gap:.2f} %")
+    rows[-1].update({"ratio_to_gauss_newton": timings["ipopt"] / timings["gauss-newton"],
+                     "largest_relative_difference": gap})
+    print(f"wrote {record('bench_calibration', rows, {'wall_s_24h': GOAL_S})}")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,8 @@ Prints CPU seconds and the largest differences in drift and in every temperature
 depends on the step and on the air (``input_timing``).
 
     PYTHONPATH=pipeline .venv/bin/python bench/bench_cosim.py [--fmu FILE]
+
+Every comparison is also a row of ``bench/results/bench_cosim.json`` (``bench/results.py``).
 """
 
 from __future__ import annotations
@@ -27,14 +29,27 @@ from spindlebench.testbench import runner
 from spindlebench.testbench.cosim import co_simulate_cs
 from spindlebench.testbench.scenario import load_scenario
 
+from results import record
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def differences(a: dict, b: dict) -> str:
+#: The comparisons as rows for ``bench/results/bench_cosim.json``.
+ROWS: list[dict] = []
+#: The issue's agreement of fmi3DoStep with CVode.
+GOALS = {"max_d_drift_um": 0.01, "max_d_T_K": 0.001}
+
+
+def differences(a: dict, b: dict, what: str = "") -> str:
+    """The largest differences of drift and of any temperature between two runs (and a row
+    of the results file named ``what``, when given)."""
     temps = [n for n in a if n.endswith("_C") and n in b]
     worst = max(temps, key=lambda n: float(np.max(np.abs(a[n] - b[n]))))
     d_t = float(np.max(np.abs(a[worst] - b[worst])))
     d_drift = float(np.max(np.abs(a["drift_um"] - b["drift_um"])))
+    if what:
+        ROWS.append({"comparison": what, "max_d_drift_um": d_drift, "max_d_T_K": d_t,
+                     "worst_output": worst})
     return f"max|d drift| {d_drift:.2e} um, max|d T| {d_t:.2e} K ({worst})"
 
 
@@ -59,13 +74,23 @@ def main() -> None:
     print(f"CVode rtol 1e-6 (runner hold):  {cpu[1e-6]:6.2f} CPU-s")
     print(f"CVode rtol 1e-8 (runner hold):  {cpu[1e-8]:6.2f} CPU-s")
     print(f"fmi3DoStep, tolerance 1e-6:     {cpu_cs:6.2f} CPU-s")
-    print(f"fmi3DoStep vs CVode 1e-8: {differences(cs, results[1e-8])}")
-    print(f"fmi3DoStep vs CVode 1e-6: {differences(cs, results[1e-6])}")
-    print(f"CVode 1e-6 vs CVode 1e-8: {differences(results[1e-6], results[1e-8])}")
-    print(f"each converged on its own: fmi3DoStep 1e-9 vs 1e-6: {differences(cs_tight, cs)}; "
-          f"CVode 1e-10 vs 1e-8: {differences(results[1e-10], results[1e-8])}")
+    for label, seconds in (("CVode rtol 1e-6 (runner hold)", cpu[1e-6]),
+                           ("CVode rtol 1e-8 (runner hold)", cpu[1e-8]),
+                           ("fmi3DoStep, tolerance 1e-6", cpu_cs)):
+        ROWS.append({"comparison": f"exp1 6 h: CPU s of {label}", "cpu_s": seconds})
+    print("fmi3DoStep vs CVode 1e-8: "
+          f"{differences(cs, results[1e-8], 'exp1 6 h: fmi3DoStep 1e-6 vs CVode 1e-8')}")
+    print("fmi3DoStep vs CVode 1e-6: "
+          f"{differences(cs, results[1e-6], 'exp1 6 h: fmi3DoStep 1e-6 vs CVode 1e-6')}")
+    print("CVode 1e-6 vs CVode 1e-8: "
+          f"{differences(results[1e-6], results[1e-8], 'exp1 6 h: CVode 1e-6 vs 1e-8')}")
+    print("each converged on its own: fmi3DoStep 1e-9 vs 1e-6: "
+          f"{differences(cs_tight, cs, 'exp1 6 h: fmi3DoStep 1e-9 vs 1e-6')}; "
+          "CVode 1e-10 vs 1e-8: "
+          f"{differences(results[1e-10], results[1e-8], 'exp1 6 h: CVode 1e-10 vs 1e-8')}")
     cross_check_reference(args.fmu)
     input_timing(scenario, args.fmu)
+    print(f"wrote {record('bench_cosim', ROWS, GOALS)}")
 
 
 def input_timing(scenario, fmu: Path) -> None:
@@ -81,7 +106,8 @@ def input_timing(scenario, fmu: Path) -> None:
                                base, ambient=ConstantAmbient(temperature_C=7.0)))):
         cvode = runner.co_simulate(variant, fmu).outputs
         cs = co_simulate_cs(variant, fmu, tolerance=1e-8).outputs
-        print(f"3 h, {label}: fmi3DoStep vs CVode {differences(cs, cvode)}")
+        print(f"3 h, {label}: fmi3DoStep vs CVode "
+              f"{differences(cs, cvode, f'exp1 3 h, {label}: fmi3DoStep 1e-8 vs CVode 1e-9')}")
 
 
 def cross_check_reference(fmu: Path) -> None:
@@ -95,7 +121,8 @@ def cross_check_reference(fmu: Path) -> None:
                                input=inputs, output_interval=1.0, relative_tolerance=rtol,
                                output=list(REFERENCE_OUTPUTS)) for rtol in (1e-8, 1e-10)}
     a, b = ({n: r[n] for n in REFERENCE_OUTPUTS} for r in runs.values())
-    print(f"cross-check experiment, FMPy CVode 1e-8 vs 1e-10: {differences(a, b)}")
+    print("cross-check experiment, FMPy CVode 1e-8 vs 1e-10: "
+          f"{differences(a, b, 'cross-check experiment: FMPy CVode 1e-8 vs 1e-10')}")
 
 
 if __name__ == "__main__":

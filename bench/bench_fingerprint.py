@@ -11,7 +11,8 @@ resident memory (``getrusage`` maxrss of that child, from ``os.wait4``) is its o
 - ``function``: ``spindlebench.studies.fingerprint.statistics.fingerprint`` alone on arrays
   of that size (the arrays' own 8 x rows x (sensors + 2) bytes included).
 
-Goal (issue 28): 10^6 rows x 20 sensors in <= 1 GB.
+Goal (issue 28): 10^6 rows x 20 sensors in <= 1 GB. The rows are written to
+``bench/results/bench_fingerprint.json`` (``bench/results.py``), which the speed page shows.
 
 Run: .venv/bin/python bench/bench_fingerprint.py [ROWS ...]   (default: 100000 1000000)
 """
@@ -27,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from results import record
 
 SENSORS = 20
 GOAL_MB = 1024.0
@@ -73,6 +76,7 @@ def main(sizes: list[int]) -> None:
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores; "
           f"{SENSORS} sensors; goal <= {GOAL_MB:.0f} MB at 10^6 rows")
     print(f"{'rows':>9} {'what':>9} {'wall s':>7} {'peak MB':>8}  result")
+    table = []
     with tempfile.TemporaryDirectory() as scratch:
         for rows in sizes:
             path = recording(Path(scratch), rows, SENSORS)
@@ -83,7 +87,19 @@ def main(sizes: list[int]) -> None:
                                   str(SENSORS)])):
                 wall, peak, last = peak_of(argv)
                 print(f"{rows:>9} {what:>9} {wall:>7.1f} {peak:>8.0f}  {last[:60]}")
+                table.append({"rows": rows, "sensors": SENSORS, "what": what,
+                              "wall_s": wall, "peak_MB": peak,
+                              "best_diff_psi": _number(last)})
             path.unlink()
+    print(f"wrote {record('bench_fingerprint', table, {'peak_MB_at_1e6_rows': GOAL_MB})}")
+
+
+def _number(text: str) -> float | None:
+    """The child's last line as a number (the best difference's ψ), None if it is not one."""
+    try:
+        return float(text)
+    except ValueError:
+        return None
 
 
 if __name__ == "__main__":

@@ -8,7 +8,8 @@ the error, the ambient unknown, t1/t4 as sensors), once per form: the grey-box n
 its order chosen by leave-one-cycle-out (six cycles x three orders, then the final fit), a
 fixed 2-node network, the first-order transfer function, and the 2-node network with the
 observer on t1 and t4. Prints wall and CPU seconds of each (the command in-process, so the
-interpreter's start-up is not counted) and the load average, since the machine is shared.
+interpreter's start-up is not counted) and the load average, since the machine is shared,
+and writes the rows to ``bench/results/bench_identification.json`` (``bench/results.py``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from pathlib import Path
 
 from spindlebench.adapters import caiviac
 from spindlebench.commands.main import main
+
+from results import record
 
 MAP = """[inputs]
 spindle_speed_rpm = "spindle_rpm"
@@ -45,7 +48,12 @@ RUNS = {
 }
 
 
+#: Issue 22's budget for the whole recording, wall seconds on this machine.
+GOAL_S = 60.0
+
+
 def run(source: Path) -> None:
+    rows = []
     with tempfile.TemporaryDirectory() as folder:
         map_file = Path(folder) / "map.toml"
         map_file.write_text(MAP, encoding="utf-8")
@@ -57,6 +65,9 @@ def run(source: Path) -> None:
             assert status == 0
             print(f"BENCH {label}: {wall:.1f} s wall, {cpu:.1f} s CPU "
                   f"(load average {os.getloadavg()[0]:.1f})", flush=True)
+            rows.append({"form": label, "flags": " ".join(flags) or "(defaults)",
+                         "wall_s": wall, "cpu_s": cpu, "met": wall <= GOAL_S})
+    print(f"wrote {record('bench_identification', rows, {'wall_s': GOAL_S})}")
 
 
 if __name__ == "__main__":

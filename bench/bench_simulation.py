@@ -29,6 +29,9 @@ are the same bytes; e.g. the FMU of the commit before the value-reference table
 interface (``fmi3DoStep``, ``testbench.cosim``) on the same experiment, with its difference
 to the runner's hold.
 
+Every row (and the build comparison) is also written to ``bench/results/bench_simulation.json``
+(``bench/results.py``), which the speed page shows.
+
     .venv/bin/python bench/bench_simulation.py [--scenario FILE] [--fmu FILE] [--method LSODA]
         [--baseline-fmu OLD.fmu]
 """
@@ -56,8 +59,12 @@ from spindlebench.testbench.runner import (
 )
 from spindlebench.testbench.scenario import Scenario, load_scenario
 
+from results import record
+
 ROOT = Path(__file__).resolve().parents[1]
 ABSOLUTE_TOLERANCE_K = 1e-6
+#: Issue 10's goal: continuous inputs at least this much faster than the 1 s hold.
+GOALS = {"continuous_speed_up_over_hold": 10.0, "max_d_drift_um": 0.01, "max_d_T_K": 0.01}
 
 
 def fmu_segments(info: FmuInterface) -> int | None:
@@ -148,8 +155,9 @@ def main() -> None:
                         help="an older FMU build: CPU ratio of the default runner on it and on "
                              "--fmu, and whether their outputs are the same bytes")
     args = parser.parse_args()
+    rows: list[dict] = []
     if args.baseline_fmu is not None:
-        compare_builds(load_scenario(args.scenario), args.baseline_fmu, args.fmu)
+        rows.append(compare_builds(load_scenario(args.scenario), args.baseline_fmu, args.fmu))
     scenario = dataclasses.replace(load_scenario(args.scenario), inputs="hold")
     hours = scenario.duration_s / 3600.0
     info = inspect_fmu(args.fmu)
@@ -171,6 +179,7 @@ def main() -> None:
 
     def report(label: str, seconds: float, states: np.ndarray | None) -> None:
         line = f"{label:<46} {seconds:8.3f} s = {seconds / hours:7.3f} s/sim h"
+        row = {"variant": label, "wall_s": seconds, "s_per_simulated_h": seconds / hours}
         if states is not None:
             other = eq.outputs(states)
             drift = np.abs(simulation.outputs["drift_um"] - other["drift_um"]).max()
@@ -178,12 +187,19 @@ def main() -> None:
                         for i in range(1, 21))
             line += (f"  {seconds / runner_s:6.2f}x the runner's time, "
                      f"max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K")
+            row.update({"ratio_to_hold": seconds / runner_s, "max_d_drift_um": float(drift),
+                        "max_d_T_K": float(temps)})
+        rows.append(row)
         print(line)
 
     print(f"{'runner, continuous inputs (default)':<46} {continuous_s:8.3f} s = "
           f"{continuous_s / hours:7.3f} s/sim h  {runner_s / continuous_s:6.1f}x faster than "
           f"the 1 s hold ({smooth.solver['solver_stops']} vs {simulation.solver['solver_stops']}"
           f" CVode stops), max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K")
+    rows.append({"variant": "runner, continuous inputs (default)", "wall_s": continuous_s,
+                 "s_per_simulated_h": continuous_s / hours,
+                 "ratio_to_hold": continuous_s / runner_s, "max_d_drift_um": float(drift),
+                 "max_d_T_K": float(temps), "solver_stops": smooth.solver["solver_stops"]})
     report("runner, 1 s hold: FMPy + CVode on the FMU", runner_s, None)
     report("solve_ivp per communication step (same job)", stepped_s, stepped)
     report("solve_ivp in one call (not a co-simulation)", single_s, single)
@@ -198,15 +214,20 @@ def main() -> None:
     print(f"{'fmi3DoStep (SDIRK4 in the FMU), 1 s steps':<46} {cs_s:8.3f} s = "
           f"{cs_s / hours:7.3f} s/sim h  {cs_s / runner_s:6.2f}x the runner's time, "
           f"max|d drift| {drift:.1e} um, max|d T| {temps:.1e} K (all temperature outputs)")
+    rows.append({"variant": "fmi3DoStep (SDIRK4 in the FMU), 1 s steps", "wall_s": cs_s,
+                 "s_per_simulated_h": cs_s / hours, "ratio_to_hold": cs_s / runner_s,
+                 "max_d_drift_um": float(drift), "max_d_T_K": float(temps)})
     print("Jacobian from the FMU's directional derivatives instead of CVode's difference "
           "quotients (continuous inputs, best of 3, CPU seconds):")
-    jacobian_variant.report(args.scenario.name, continuous, args.fmu)
+    rows += jacobian_variant.report(args.scenario.name, continuous, args.fmu)
     stops = load_scenario(ROOT / "scenarios/examples/start_stop_cycles.toml")
-    jacobian_variant.report(stops.path.name, stops, args.fmu)
+    rows += jacobian_variant.report(stops.path.name, stops, args.fmu)
+    print(f"wrote {record('bench_simulation', rows, GOALS)}")
 
 
-def compare_builds(scenario: Scenario, baseline: Path, fmu: Path) -> None:
-    """CPU seconds (best of 5) of the default runner on two FMU builds, and equal bytes."""
+def compare_builds(scenario: Scenario, baseline: Path, fmu: Path) -> dict:
+    """CPU seconds (best of 5) of the default runner on two FMU builds, and equal bytes (also
+    returned as a row)."""
     def best(path: Path) -> tuple[float, Any]:
         times, result = [], None
         for _ in range(5):
@@ -222,6 +243,8 @@ def compare_builds(scenario: Scenario, baseline: Path, fmu: Path) -> None:
     print(f"runner (default inputs) on {baseline}: {old_s * 1e3:.1f} CPU-ms, on {fmu}: "
           f"{new_s * 1e3:.1f} CPU-ms, ratio {old_s / new_s:.2f}; outputs identical in bytes: "
           f"{same} ({len(old.outputs)} outputs)")
+    return {"variant": f"runner (default inputs) on {baseline.name} against {fmu.name}",
+            "cpu_s": new_s, "baseline_cpu_s": old_s, "identical_outputs": same}
 
 
 if __name__ == "__main__":

@@ -12,7 +12,8 @@ B. the soak is simulated once; its end is saved as an FMU state (``fmi3GetFMUSta
 
 Prints the CPU seconds (``time.process_time``, this process only) of A and B, their ratio,
 the load average, and whether the twenty recordings of A and B are the same bytes (they must
-be: the restored state is exactly the soak's end).
+be: the restored state is exactly the soak's end), and writes them to
+``bench/results/bench_warm_start.json`` (``bench/results.py``).
 
     PYTHONPATH=pipeline .venv/bin/python bench/bench_warm_start.py [--days 7] [--hours 1]
 """
@@ -31,6 +32,8 @@ from spindlebench.testbench import soak
 from spindlebench.testbench.runner import DEFAULT_FMU, co_simulate
 from spindlebench.testbench.scenario import ConstantSpeed, InitialState, load_scenario
 from spindlebench.testbench.simulate import run_start_with_state
+
+from results import record
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS_RPM = tuple(range(1000, 5000, 200))  # 20 scenarios
@@ -82,6 +85,11 @@ def main() -> None:
     print(f"A. 20 soaks:                      {cpu_a:7.2f} CPU-s")
     print(f"B. 1 soak, saved state restored:  {cpu_b:7.2f} CPU-s")
     print(f"ratio A/B {cpu_a / cpu_b:.2f}; recordings identical in bytes: {same} of {len(runs)}")
+    common = {"runs": len(runs), "hours_per_run": args.hours, "soak_days": args.days}
+    rows = [{"way": "A. every run soaks itself", **common, "cpu_s": cpu_a},
+            {"way": "B. one soak, saved FMU state restored", **common, "cpu_s": cpu_b,
+             "ratio_A_over_B": cpu_a / cpu_b, "identical_recordings": same}]
+    print(f"wrote {record('bench_warm_start', rows)}")
 
 
 if __name__ == "__main__":

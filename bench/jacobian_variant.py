@@ -152,17 +152,21 @@ def run(scenario: Scenario, fmu: Path, directional: bool, repeat: int = 3) -> Ru
     return Run(best, counts, simulation, error)
 
 
-def report(label: str, scenario: Scenario, fmu: Path) -> None:
-    """Print one scenario's comparison (CPU seconds: the machine is shared)."""
+def report(label: str, scenario: Scenario, fmu: Path) -> list[dict]:
+    """Print one scenario's comparison (CPU seconds: the machine is shared) and return it as
+    rows for ``bench/results.py record()``."""
     own, directional = run(scenario, fmu, False), run(scenario, fmu, True)
     c = own.counts
     print(f"  {label}: CVode's difference quotients {own.cpu_s:.3f} s CPU ({c.steps} steps, "
           f"{c.rhs} + {c.rhs_for_jacobians} right-hand sides for {c.jacobians} Jacobians)")
+    rows = [{"variant": f"{label}: Jacobian by CVode's difference quotients",
+             "cpu_s": own.cpu_s, "steps": c.steps, "jacobians": c.jacobians}]
     d = directional.counts
     if directional.error or directional.simulation is None or own.simulation is None:
         print(f"  {label}: FMU directional derivatives FAILED: {directional.error} "
               f"({d.nan_jacobians} of {d.jacobians} Jacobians held NaN)")
-        return
+        return [*rows, {"variant": f"{label}: Jacobian by the FMU's directional derivatives",
+                        "failed": str(directional.error)}]
     drift = np.abs(directional.simulation.outputs["drift_um"]
                    - own.simulation.outputs["drift_um"]).max()
     temps = max(np.abs(directional.simulation.outputs[f"T{i}_C"]
@@ -171,3 +175,7 @@ def report(label: str, scenario: Scenario, fmu: Path) -> None:
           f"({own.cpu_s / directional.cpu_s:.2f}x; {d.steps} steps, {d.rhs} right-hand sides, "
           f"{d.jacobians} Jacobians, {d.nan_jacobians} with NaN), max|d drift| {drift:.1e} um, "
           f"max|d T| {temps:.1e} K")
+    return [*rows, {"variant": f"{label}: Jacobian by the FMU's directional derivatives",
+                    "cpu_s": directional.cpu_s, "steps": d.steps, "jacobians": d.jacobians,
+                    "cpu_ratio_to_quotients": directional.cpu_s / own.cpu_s,
+                    "max_d_drift_um": float(drift), "max_d_T_K": float(temps)}]

@@ -31,7 +31,11 @@ Sources (``Sources``, the checkout's by default):
 - the stable-room studies' CSVs under ``results/`` (or their committed copies under
   ``docs/snapshots/`` when the study has not been run in this checkout: the population runs
   take half an hour, too long for ``make docs``; the marker names which file was read, and
-  the snapshot's ``provenance.json`` sits beside it).
+  the snapshot's ``provenance.json`` sits beside it);
+- what ``make run`` writes under ``results/paper_study/`` and ``results/caiviac_study/``
+  (``run-table FOLDER/FILE[@N]``: the N-th table of that file as written; ``paper-summary
+  FOLDER``: the mean RMSE per k and group of its ``table6_rmse.csv``), or their committed
+  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run.
 """
 
 from __future__ import annotations
@@ -153,6 +157,19 @@ def bench_table(path: Path, key: str | None = None) -> str:
         columns = [(k, k) for k in keys]
     return markdown_table([h for _, h in columns], [[row.get(k) for k, _ in columns]
                                                     for row in rows])
+
+
+def bench_section(script: str | None, sources: Sources) -> str:
+    """``<!-- generate: bench SCRIPT -->`` on another page than the speed page: the rows of
+    ``bench/results/SCRIPT.json`` with its machine, load and date."""
+    if script is None:
+        raise ValueError("<!-- generate: bench -->: needs the script (e.g. bench_cosim)")
+    path = sources.bench / f"{script}.json"
+    if not path.is_file():
+        return placeholder(f"`bench/results/{script}.json`", f"python bench/{script}.py")
+    source = sources.name(path)
+    document = json.loads(path.read_text(encoding="utf-8"))
+    return block("bench", source, None, bench_provenance(document, source), bench_table(path))
 
 
 def speed_section(sources: Sources) -> str:
@@ -489,20 +506,224 @@ def placement_verdict(path: Path) -> str:
             f"{_share(sum(machines.values()), len(machines))} machines.")
 
 
+# --------------------------------------------------------------------------- make run's studies
+
+RUN_COMMAND = "make run"
+#: Paper-comparison folders under results/ and what writes each: ``make run`` (``spindlebench
+#: demo --out results``) the first two.
+RUN_FOLDERS = {
+    "paper_study": RUN_COMMAND,
+    "caiviac_study": RUN_COMMAND,
+    "ambient_following_study": "spindlebench simulate scenarios/paper -o "
+                               "results/ambient_following --machine ambient-following; "
+                               "spindlebench paper --recordings results/ambient_following "
+                               "--out results/ambient_following_study",
+    "caiviac_cycle_study": "spindlebench adapt caiviac --phase cycle --out results/caiviac_cycle; "
+                           "spindlebench paper --recordings results/caiviac_cycle --config "
+                           "results/caiviac_cycle/paper_study.toml --out "
+                           "results/caiviac_cycle_study",
+    "caiviac_methods": "spindlebench adapt caiviac --out results/caiviac; spindlebench paper "
+                       "--recordings results/caiviac --out results/caiviac_methods --methods all",
+}
+GROUPS = (("all_raw", "all raw"), ("six_raw", "six raw"), ("six_diff", "six + differences"))
+
+
+def run_file(name: str, sources: Sources) -> Path | None:
+    """``results/<name>`` if ``make run`` wrote it in this checkout, else its committed copy
+    under ``docs/snapshots/<name>`` (``name``: ``paper_study/table6.md``)."""
+    if name.split("/", 1)[0] not in RUN_FOLDERS:
+        raise ValueError(f"{name}: not in a paper-comparison folder ({', '.join(RUN_FOLDERS)})")
+    for base in (sources.results, sources.snapshots):
+        if (base / name).is_file():
+            return base / name
+    return None
+
+
+def run_provenance(path: Path, source: str) -> str:
+    record = _read_json(path.parent / "provenance.json") or {}
+    versions = record.get("package_versions", {})
+    command = RUN_FOLDERS[path.parent.name]
+    shown = f"`{command}` (`{record.get('command', '?')}`" if command == RUN_COMMAND else \
+        f"`{command}` (its last step"
+    return (f"From `{source}`, written by {shown}, spindlebench "
+            f"{versions.get('spindlebench', '?')})")
+
+
+def file_table(path: Path, key: str | None = None) -> str:
+    """The ``key``-th (1 by default) Markdown table of a file a command wrote, as written."""
+    found = tables(path.read_text(encoding="utf-8"))
+    index = int(key or 1)
+    if not 1 <= index <= len(found):
+        raise ValueError(f"{path}: has {len(found)} tables, not a table number {index}")
+    return found[index - 1][2]
+
+
+def paper_summary_table(path: Path, key: str | None = None) -> str:
+    """Mean RMSE per k and group from a paper study's ``table6_rmse.csv`` (and the paper's
+    printed means, when the study predicts its experiments)."""
+    rows = _csv(path)
+    mean = {(r["clusters"], r["group"]): r["mean"] for r in rows}
+    paper = {(r["clusters"], r["group"]): r.get("paper_mean") for r in rows}
+    header = ["k", *[label for _, label in GROUPS]]
+    with_paper = any(v not in (None, "", "nan") for v in paper.values())
+    if with_paper:
+        header.append("paper: " + " / ".join(label for _, label in GROUPS))
+    body = []
+    for k in dict.fromkeys(r["clusters"] for r in rows):
+        line = [k, *[_um1(mean.get((k, g))) for g, _ in GROUPS]]
+        if with_paper:
+            line.append(" / ".join(_um1(paper.get((k, g))) for g, _ in GROUPS))
+        body.append(line)
+    return markdown_table(header, body)
+
+
+def _um1(text: str | None) -> str:
+    return "—" if text in (None, "", "nan") else f"{float(text):.1f}"
+
+
+RUN_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "run-table": file_table,
+    "paper-summary": paper_summary_table,
+}
+
+
+def run_section(by: str, key: str | None, sources: Sources) -> str:
+    """``run-table FOLDER/FILE[@N]``: the N-th table of that file; ``paper-summary FOLDER``:
+    the mean RMSE table of ``FOLDER/table6_rmse.csv``."""
+    if key is None:
+        raise ValueError(f"<!-- generate: {by} -->: needs a file (e.g. paper_study/table6.md)")
+    name, _, number = key.partition("@")
+    if by == "paper-summary":
+        name = f"{name}/table6_rmse.csv"
+    path = run_file(name, sources)
+    if path is None:
+        return placeholder(f"`results/{name}`", RUN_FOLDERS[name.split("/", 1)[0]])
+    source = sources.name(path)
+    return block(by, source, number or None, run_provenance(path, source),
+                 RUN_TABLES[by](path, number or None))
+
+
+SENSITIVITY = "caiviac_sensitivity"
+SENSITIVITY_COMMAND = ("spindlebench paper --recordings DIR --config DIR/paper_study.toml "
+                       "--train RUN --tests OTHERS --out results/caiviac_sensitivity/PHASE/"
+                       "train_RUN, for each constant-speed RUN (docs/validation.md)")
+
+
+def sensitivity_folder(phase: str, sources: Sources) -> Path | None:
+    """``results/caiviac_sensitivity/<phase>`` with its ``train_*`` runs, else its snapshot."""
+    for base in (sources.results, sources.snapshots):
+        if any((base / SENSITIVITY / phase).glob("train_*/table6_rmse.csv")):
+            return base / SENSITIVITY / phase
+    return None
+
+
+def sensitivity_table(folder: Path, key: str | None = None) -> str:
+    """One row per training run (``train_<run>/``): its six sensors and the mean RMSE over the
+    other runs of each k and group; last, their average over the training runs."""
+    import numpy as np
+
+    header, body, columns = ["training run", "six (auto)"], [], None
+    for run in sorted(folder.glob("train_*/table6_rmse.csv")):
+        rows = _csv(run)
+        keys = [(r["clusters"], r["group"]) for r in rows]
+        if columns is None:
+            columns = keys
+            header += [f"k={k} {g}" for k, g in keys]
+        mean = {(r["clusters"], r["group"]): float(r["mean"]) for r in rows}
+        six = (_read_json(run.parent / "provenance.json") or {}).get("six", [])
+        body.append([run.parent.name.removeprefix("train_"),
+                     ", ".join(s.removesuffix("_C") for s in six),
+                     *[mean.get(c, float("nan")) for c in columns]])
+    average = ["**mean over training runs**", "",
+               *[float(np.mean([row[2 + i] for row in body])) for i in range(len(columns))]]
+    return markdown_table(header, [[*row[:2], *(f"{v:.1f}" for v in row[2:])]
+                                   for row in [*body, average]])
+
+
+def sensitivity_section(phase: str | None, sources: Sources) -> str:
+    if phase is None:
+        raise ValueError("<!-- generate: sensitivity -->: needs the phase (heating, cycle)")
+    folder = sensitivity_folder(phase, sources)
+    if folder is None:
+        return placeholder(f"`results/{SENSITIVITY}/{phase}/`", SENSITIVITY_COMMAND)
+    source = sources.name(folder)
+    first = sorted(folder.glob("train_*/provenance.json"))
+    versions = (_read_json(first[0]) or {}).get("package_versions", {}) if first else {}
+    provenance = (f"From `{source}/train_*/table6_rmse.csv` (the `mean` column) and each "
+                  f"run's `provenance.json` (the six), written by `spindlebench paper` for each "
+                  f"training run, spindlebench {versions.get('spindlebench', '?')}")
+    return block("sensitivity", source, None, provenance, sensitivity_table(folder))
+
+
+FINGERPRINTS = "fingerprint"
+FINGERPRINT_COMMAND = "spindlebench fingerprint RECORDINGS --json results/fingerprint/NAME.json"
+
+
+def fingerprint_folder(sources: Sources) -> Path | None:
+    """``results/fingerprint/`` (``fingerprint --json`` files) if there are any, else the
+    committed copies under ``docs/snapshots/fingerprint/``."""
+    for base in (sources.results, sources.snapshots):
+        if any((base / FINGERPRINTS).glob("*.json")):
+            return base / FINGERPRINTS
+    return None
+
+
+def fingerprint_medians_table(folder: Path, key: str | None) -> str:
+    """The default machine's median (the reference of the first file), then the median of each
+    named file (``key``: ``ambient_following,caiviac``), statistic by statistic."""
+    from spindlebench.studies.fingerprint.statistics import KEYS
+
+    names = (key or "").split(",")
+    documents = [json.loads((folder / f"{n}.json").read_text(encoding="utf-8")) for n in names]
+    reference = documents[0]["reference"]
+    header = ["statistic", f"{reference['label']} (median of {len(reference['recordings'])})",
+              *[f"`{n}` (median of {len(d['recordings'])})" for n, d in zip(names, documents,
+                                                                           strict=True)]]
+    return markdown_table(header, [[k, f"{reference['median'][k]:.3f}",
+                                    *[f"{d['median'][k]:.3f}" for d in documents]]
+                                   for k in KEYS])
+
+
+def fingerprint_section(key: str | None, sources: Sources) -> str:
+    if not key:
+        raise ValueError("<!-- generate: fingerprint-medians -->: needs the files "
+                         "(e.g. ambient_following,caiviac)")
+    folder = fingerprint_folder(sources)
+    if folder is None or not all((folder / f"{n}.json").is_file() for n in key.split(",")):
+        return placeholder("The fingerprint medians", FINGERPRINT_COMMAND)
+    source = sources.name(folder)
+    first = _read_json(folder / f"{key.split(',')[0]}.json") or {}
+    versions = first.get("provenance", {}).get("package_versions", {})
+    provenance = (f"From `{source}/{{{key}}}.json`, written by `{FINGERPRINT_COMMAND}` "
+                  f"(spindlebench {versions.get('spindlebench', '?')}; each file's provenance "
+                  "names its recordings and their sha256)")
+    return block("fingerprint-medians", source, key, provenance,
+                 fingerprint_medians_table(folder, key))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
     """What a ``<!-- generate: BY KEY -->`` line becomes."""
     if by == "speed":
         return speed_section(sources)
+    if by == "bench":
+        return bench_section(key, sources)
     if by == "parameters":
         return parameters_section(sources)
     if by in MACHINE_TABLES:
         return machine_section(by, key, sources)
     if by in STUDY_TABLES:
         return study_section(by, sources)
-    raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES])})")
+    if by in RUN_TABLES:
+        return run_section(by, key, sources)
+    if by == "sensitivity":
+        return sensitivity_section(key, sources)
+    if by == "fingerprint-medians":
+        return fingerprint_section(key, sources)
+    raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, "
+                     "sensitivity, fingerprint-medians)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -524,6 +745,12 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return machine_parameters_table(path)
     if by in MACHINE_TABLES:
         return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
+    if by in RUN_TABLES:
+        return RUN_TABLES[by](path, key)
+    if by == "sensitivity":
+        return sensitivity_table(path, key)
+    if by == "fingerprint-medians":
+        return fingerprint_medians_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 
