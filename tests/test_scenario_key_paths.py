@@ -5,17 +5,28 @@ unchanged; and each testbench value round-trips through its scenario table."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import MISSING, fields, replace
 from pathlib import Path
 
 import pytest
+from spindlebench.formats.toml import Table, with_key_paths
 from spindlebench.studies.family import experiments as ex
 from spindlebench.studies.family.family_file import SweepStudy, load_study
 from spindlebench.testbench.scenario import (
     ConstantFeed,
+    Cooling,
     FeedWithSpindle,
+    IndoorAmbient,
     Scenario,
+    SeasonAmbient,
+    SensorFault,
+    SensorModel,
+    SpeedCycles,
+    SpeedStep,
+    SteppedSpeed,
     at_speed,
+    read_scenario,
+    scenario_table,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,3 +138,41 @@ def test_the_variants_the_shipped_studies_miss_merge_the_same(tmp_path, indoor):
     other = replace(study, weather_sd_C=0.0, parameters={"probe_l": 0.1}, soak_days=None,
                     machine=replace(study.machine, name="drawn-007"))
     assert _check_study(other) == 2 * 2 * 2 * 3 * 3
+
+
+def _off_default(value):
+    """``value``, after checking that each of its fields (but ``kind``) is off its default:
+    a new field must be given a value here, so the round trip below covers its key."""
+    for f in fields(value):
+        if f.name != "kind" and f.default is not MISSING:
+            assert getattr(value, f.name) != f.default, (type(value).__name__, f.name)
+    return value
+
+
+def test_every_field_of_a_scenario_section_is_its_key(tmp_path):
+    """The rule ``scenario_table`` rests on (a field is named as its key), for every
+    section a study merges: each value read back from its table is the value."""
+    faults = (SensorFault("T1", "stuck", 60.0, 120.0, value_C=21.0),
+              SensorFault("T2", "offset", 0.0, None, offset_C=0.5))
+    sensors = _off_default(SensorModel(
+        noise_C=0.07, quantum_C=0.05, probe_noise_um=0.4, probe_quantum_um=0.05, faults=faults,
+        noise_kind="ar1", noise_lag1=0.5, probe_drift_um_per_sqrt_h=0.1,
+        probe_drift_rate_um_per_h=-0.1))
+    indoor = _off_default(IndoorAmbient(
+        15.0, 25.0, start_hour=7.0, trough_hour=5.0, peak_hour=14.0, attenuation=0.3, lag_h=1.0,
+        building_offset_K=1.0, weather_sd_K=2.0, weather_tau_h=24.0, weather_seed=9))
+    season = _off_default(SeasonAmbient(12.0, 22.0, start_hour=7.0, trough_hour=5.0,
+                                        peak_hour=14.0))
+    cycles = _off_default(SpeedCycles(3000.0, 120.0, 60.0, start_s=60.0, count=2))
+    steps = SteppedSpeed((SpeedStep(0.0, 1000.0), SpeedStep(300.0, 2000.0)))
+    cooling = _off_default(Cooling("follow_ambient", -1.0))
+    for speed, ambient, feed in [(cycles, indoor, FeedWithSpindle(100.0, 50.0)),
+                                 (steps, season, ConstantFeed(80.0, 40.0))]:
+        table = with_key_paths({"duration_s": 600.0, "step_s": 60.0, "sample_interval_s": 60.0},
+                               {"speed": scenario_table(speed), "feed": scenario_table(feed),
+                                "ambient": scenario_table(ambient),
+                                "cooling": scenario_table(cooling),
+                                "sensors": scenario_table(sensors)})
+        read = read_scenario(Table(table, "roundtrip"), tmp_path / "roundtrip.toml")
+        assert (read.speed, read.feed, read.ambient, read.cooling, read.sensors) == (
+            speed, feed, ambient, cooling, sensors)
