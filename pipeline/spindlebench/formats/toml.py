@@ -58,6 +58,27 @@ def load_toml(path: str | Path, what: str = "") -> dict[str, Any]:
                                 "deeply") from None
 
 
+def with_key_paths(table: Mapping[str, Any], values: Mapping[str, Any]) -> dict[str, Any]:
+    """``table`` with each dotted key path of ``values`` set (``"speed.rpm"`` is ``rpm`` of
+    the ``[speed]`` table, made if missing); a table value merges into the table already
+    there, key by key, as TOML's ``[a]`` then ``[a.b]`` would. ``table`` is not changed.
+
+    >>> with_key_paths({"speed": {"kind": "constant"}}, {"speed.rpm": 2000.0, "seed": 3})
+    {'speed': {'kind': 'constant', 'rpm': 2000.0}, 'seed': 3}
+    """
+    merged: dict[str, Any] = dict(table)
+    for path, value in values.items():
+        head, _, rest = path.partition(".")
+        if rest:
+            value = {rest: value}
+        if isinstance(value, Mapping) and isinstance(merged.get(head), Mapping):
+            value = with_key_paths(merged[head], {k: v for k, v in value.items()})
+        elif isinstance(value, Mapping):
+            value = with_key_paths({}, value)
+        merged[head] = value
+    return merged
+
+
 def range_problem(value: float, minimum: float | None = None, maximum: float | None = None,
                   unit: str = "", positive: bool = False) -> str | None:
     """The one range message (None when ``value`` is in range)."""

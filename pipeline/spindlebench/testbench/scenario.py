@@ -13,7 +13,7 @@ import io
 import math
 import re
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import MISSING, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -779,6 +779,36 @@ def start_state(scenario: Scenario) -> EndState | None:
     return read_end_state(initial.from_file, where, missing)
 
 
+def scenario_table(value: Any) -> dict[str, Any]:
+    """The scenario table of one of the testbench's values (a speed or feed programme, an
+    ambient, a cooling, a sensor model, a fault): the table its reader above turns back into
+    ``value``, so a study can merge it into an experiment's scenario table by key path.
+
+    The one rule that makes this generic: **a field of a scenario dataclass is named as its
+    key** (``SensorModel.noise_C`` is ``[sensors] noise_C``). Fields at their default and
+    ``None`` are left out (the reader's default; ``None`` is "not given"), ``kind`` is always
+    written, a tuple of values is an array of tables (``[[steps]]``, ``[[faults]]``). A new
+    key a study can vary is then a field and its reader, nothing else.
+
+    >>> scenario_table(SpeedCycles(rpm=4000.0, on_s=600.0, off_s=300.0))
+    {'rpm': 4000.0, 'on_s': 600.0, 'off_s': 300.0, 'kind': 'cycles'}
+    >>> scenario_table(Cooling())
+    {}
+    """
+    table: dict[str, Any] = {}
+    for f in fields(value):
+        item = getattr(value, f.name)
+        if item is None or (f.name != "kind" and f.default is not MISSING
+                            and item == f.default):
+            continue
+        if isinstance(item, tuple):
+            item = [scenario_table(element) for element in item]
+            if not item:
+                continue
+        table[f.name] = item
+    return table
+
+
 def _read_outputs(top: Table) -> bool:
     """``[outputs] probes``: whether the recording carries the five-probe outputs."""
     t = top.table("outputs", required=False)
@@ -822,7 +852,13 @@ def _check_grid(top: Table, name: str, value: float, unit_name: str, unit_s: flo
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file; raise ``SpindlebenchError`` on any problem."""
     path = Path(path)
-    top = Table(load_toml(path, "scenario"), path)
+    return read_scenario(Table(load_toml(path, "scenario"), path), path)
+
+
+def read_scenario(top: Table, path: Path) -> Scenario:
+    """The one reader of a scenario table: a scenario file's, or the table a study merges
+    its experiment's key paths into (``studies.family.experiments.scenario_table``).
+    ``path`` is the scenario's file; relative files in the table are found beside it."""
     scenario_dir = path.resolve().parent
     name = top.string("name", path.stem)
     description = top.string("description", "")

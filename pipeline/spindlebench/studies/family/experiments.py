@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
+from spindlebench.formats.toml import Table, with_key_paths
 from spindlebench.studies.family.family_file import (
     NO_FAULT,
     AxisValue,
@@ -22,15 +24,15 @@ from spindlebench.studies.family.family_file import (
 from spindlebench.studies.family.seeds import derive_seed
 from spindlebench.testbench.scenario import (
     AmbientModel,
-    ConstantFeed,
-    FeedWithSpindle,
     InitialState,
     Scenario,
     SeasonAmbient,
     SensorFault,
     SensorModel,
     at_speed,
+    read_scenario,
 )
+from spindlebench.testbench.scenario import scenario_table as scenario_table_of
 
 
 @dataclass(frozen=True)
@@ -166,33 +168,52 @@ def initial_for(study: SweepStudy, experiment: Experiment) -> InitialState:
     return InitialState(kind="soak", days=study.soak_days, soak_ambient=cycle)
 
 
-def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Scenario:
-    """The runner's scenario of one experiment on one replica's day.
+def scenario_table(study: SweepStudy, replica: int, experiment: Experiment) -> dict[str, Any]:
+    """The scenario table of one experiment on one replica's day: the study's values merged
+    by key path into the table a scenario file would hold, each axis value the scenario table
+    of its testbench value (``testbench.scenario.scenario_table``).
 
     Its sensor model is the study's first noise level without faults, so the stored recording
     is an ordinary healthy recording; conditions re-measure its truth with the same seed.
     """
     programme = next(p for p in study.programmes if p.name == experiment.programme)
     cooling = next(c for c in study.cooling if c.name == experiment.cooling)
-    feed_cls = ConstantFeed if study.feed == "constant" else FeedWithSpindle
-    return Scenario(
-        path=study.path,
-        name=experiment.id,
-        description=f"{study.name}: {experiment.id}, replica {replica}",
-        duration_s=study.duration_s,
-        step_s=study.step_s,
-        sample_interval_s=study.sample_interval_s,
-        seed=sensor_seed(study, replica, experiment),
-        speed=at_speed(programme.value, experiment.speed_rpm),
-        feed=feed_cls(study.feed_x_mm_per_min, study.feed_y_mm_per_min),
-        ambient=ambient_for(study, replica, experiment),
-        cooling=cooling.value,
-        sensors=sensor_model(study.noise[0], None),
-        initial=initial_for(study, experiment),
-        parameters=dict(study.parameters),
-        machine=study.machine,
-        probes=study.probes,
-    )
+    initial = initial_for(study, experiment)
+    return with_key_paths({}, {
+        "name": experiment.id,
+        "description": f"{study.name}: {experiment.id}, replica {replica}",
+        "duration_s": study.duration_s,
+        "step_s": study.step_s,
+        "sample_interval_s": study.sample_interval_s,
+        "seed": sensor_seed(study, replica, experiment),
+        "speed": scenario_table_of(at_speed(programme.value, experiment.speed_rpm)),
+        "feed.kind": study.feed,
+        "feed.x_mm_per_min": study.feed_x_mm_per_min,
+        "feed.y_mm_per_min": study.feed_y_mm_per_min,
+        "ambient": scenario_table_of(ambient_for(study, replica, experiment)),
+        "cooling": scenario_table_of(cooling.value),
+        "sensors": scenario_table_of(sensor_model(study.noise[0], None)),
+        "initial": {"kind": initial.kind, "days": initial.days} if initial.kind == "soak" else {},
+        "parameters": dict(study.parameters),
+        "outputs.probes": study.probes,
+    })
+
+
+def scenario_for(study: SweepStudy, replica: int, experiment: Experiment) -> Scenario:
+    """The runner's scenario of one experiment on one replica's day: ``scenario_table`` read
+    by the one scenario reader, so it is checked as a scenario file is.
+
+    Two parts of a study's run have no scenario key and are set after the reader, here only:
+    ``machine`` (a study's machine may be drawn in memory, a population's, with no file for
+    ``machine = "..."`` to name) and ``initial.soak_ambient`` (the soak repeats the month's
+    *normal* day, not the replica's: a scenario's soak repeats its own ambient, so a scenario
+    file cannot say this). ``path`` is the study's file (errors name it)."""
+    table = scenario_table(study, replica, experiment)
+    scenario = read_scenario(Table(table, f"{study.path}: experiment {experiment.id}'s scenario"),
+                             study.path)
+    return replace(scenario, machine=study.machine,
+                   initial=replace(scenario.initial,
+                                   soak_ambient=initial_for(study, experiment).soak_ambient))
 
 
 # ----------------------------------------------------------------- targets other than drift_um
