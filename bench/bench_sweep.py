@@ -83,7 +83,9 @@ def main() -> int:
         if "--no-runs" not in flags and not given:
             rows.append(goal_row(bench_study(Path(folder), GOAL_REPLICAS, one_training_run=False)))
     goals = {"goal_row_wall_s": GOAL_S, "goal_over_floor": GOAL_FLOOR_RATIO}
-    print(f"wrote {record('bench_sweep', rows, goals)}")
+    # the goal row alone goes to its own file: the executor rows of bench_sweep.json stay
+    name = "bench_sweep_goal" if "--runs-only" in flags else None
+    print(f"wrote {record('bench_sweep', rows, goals, name=name)}")
     return 0
 
 
