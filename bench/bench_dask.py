@@ -21,6 +21,9 @@ quieted by the study's plugins. The results CSV of every run is compared with th
 first's, byte for byte.
 
 Run: .venv/bin/python bench/bench_dask.py  (writes bench/results/bench_dask.json)
+or   .venv/bin/python bench/bench_dask.py --compare OLD_CHECKOUT  (1 worker, the code of
+OLD_CHECKOUT, e.g. a ``git archive`` of main, then this checkout's, back to back: writes
+bench/results/bench_dask_compare.json)
 
 Keys of a ``sweep`` row: ``executor`` (local or dask), ``workers``, ``cpu_s`` (process tree,
 cluster included), ``command_wall_s`` (the sweep command), ``total_wall_s`` (with the
@@ -95,16 +98,16 @@ def free_port() -> int:
 class Cluster:
     """``dask scheduler`` and ``dask worker`` processes of our own, on 127.0.0.1."""
 
-    def __init__(self, workers: int) -> None:
+    def __init__(self, workers: int, env: dict | None = None) -> None:
         self.address = f"tcp://127.0.0.1:{free_port()}"
         port = self.address.rsplit(":", 1)[1]
         quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
         self.processes = [subprocess.Popen(
             [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", port,
-             "--no-dashboard"], env={**os.environ, **QUIET_SCHEDULER}, **quiet)]
+             "--no-dashboard"], env={**(env or os.environ), **QUIET_SCHEDULER}, **quiet)]
         self.processes.append(subprocess.Popen(
             [str(BIN / "dask"), "worker", self.address, "--nworkers", str(workers),
-             "--nthreads", "1", "--no-dashboard", "--memory-limit", "0"], **quiet))
+             "--nthreads", "1", "--no-dashboard", "--memory-limit", "0"], env=env, **quiet))
         self._wait_for(workers)
 
     def _wait_for(self, workers: int) -> None:
@@ -132,11 +135,12 @@ class Cluster:
         reap()
 
 
-def sweep(study: Path, out: Path, executor: list[str]) -> float:
-    """Run the sweep command; its wall seconds."""
+def sweep(study: Path, out: Path, executor: list[str], env: dict | None = None) -> float:
+    """Run the sweep command (with ``env``, else this process's environment); its wall
+    seconds."""
     start = time.perf_counter()
     subprocess.run([str(BIN / "spindlebench"), "sweep", str(study), "-o", str(out), "-q",
-                    *executor], check=True, stdout=subprocess.DEVNULL)
+                    *executor], check=True, stdout=subprocess.DEVNULL, env=env)
     return time.perf_counter() - start
 
 
@@ -144,18 +148,19 @@ def digest(out: Path) -> str:
     return hashlib.sha256((out / "results.csv").read_bytes()).hexdigest()
 
 
-def measure(study: Path, folder: Path, kind: str, workers: int) -> dict:
+def measure(study: Path, folder: Path, kind: str, workers: int,
+            env: dict | None = None) -> dict:
     out = folder / f"{kind}{workers}"
     reap()
     cpu, load = children_cpu(), list(os.getloadavg())
     start = time.perf_counter()
     if kind == "local":
-        wall = sweep(study, out, ["--workers", str(workers)])
+        wall = sweep(study, out, ["--workers", str(workers)], env)
     else:
-        cluster = Cluster(workers)
+        cluster = Cluster(workers, env)
         started = time.perf_counter() - start
         try:
-            wall = sweep(study, out, ["--dask-address", cluster.address])
+            wall = sweep(study, out, ["--dask-address", cluster.address], env)
         finally:
             cluster.stop()
     reap()
@@ -182,7 +187,43 @@ def idle(workers: int, seconds: float) -> dict:
             "cores_busy": used / wall}
 
 
+def compare(before: Path, workers: int = 1) -> None:
+    """Back to back, the sweep on the local pool and on Dask with the code of the checkout
+    ``before`` (its ``pipeline`` on PYTHONPATH, as for the workers) and with this one's:
+    before-local, before-dask, after-local, after-dask (``bench_dask_compare.json``). On a
+    shared machine only such back-to-back runs compare."""
+    subreaper()
+    here = Path(__file__).resolve().parents[1]
+    rows: list[dict] = []
+    with tempfile.TemporaryDirectory(prefix="bench-dask-compare-") as name:
+        folder = Path(name)
+        study = bench_study(folder)
+        for label, checkout in (("before", before.resolve()), ("after", here)):
+            env = {**os.environ, "PYTHONPATH": str(checkout / "pipeline")}
+            (folder / label).mkdir()
+            for kind in ("local", "dask"):
+                row = measure(study, folder / label, kind, workers, env)
+                rows.append({**row, "code": label, "checkout": str(checkout)})
+                print(f"{label:>6} {kind:>5} {workers} worker(s): {row['cpu_s']:6.1f} CPU-s, "
+                      f"command {row['command_wall_s']:5.1f} s wall, load "
+                      f"{row['load_before'][0]:.1f} -> {row['load_after'][0]:.1f}", flush=True)
+    if len({row["results_sha256"] for row in rows}) != 1:
+        raise SystemExit("results.csv differs between runs")
+    summary = {}
+    for label in ("before", "after"):
+        local, dask = (next(r["cpu_s"] for r in rows if r["code"] == label
+                            and r["executor"] == kind) for kind in ("local", "dask"))
+        summary[f"dask_over_local_cpu_{label}"] = dask / local
+        print(f"{label}: Dask / local pool CPU = {dask / local:.2f} (goal <= 1.2)")
+    rows.append({"row": "summary", **summary, "goal_ratio": 1.2})
+    path = record("bench_dask", rows, {"dask_over_local_cpu": 1.2}, name="bench_dask_compare")
+    print(f"wrote {path}")
+
+
 def main() -> None:
+    if sys.argv[1:2] == ["--compare"]:
+        compare(Path(sys.argv[2]))
+        return
     subreaper()
     print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
     rows: list[dict] = []

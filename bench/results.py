@@ -54,10 +54,11 @@ def machine() -> dict[str, Any]:
 
 
 def record(script: str, rows: list[dict], goals: dict | None = None,
-           folder: Path = RESULTS_DIR) -> Path:
+           folder: Path = RESULTS_DIR, name: str | None = None) -> Path:
     """Write ``<folder>/<script>.json`` with the machine, load average, UTC date, git commit,
     the goals and the rows; return its path. ``script`` is the bench script's stem
-    (``bench_startup``)."""
+    (``bench_startup``); ``name``, when given, the file's stem instead, for a second kind of
+    run of the same script (``bench_dask --compare`` writes ``bench_dask_compare.json``)."""
     document = {
         "script": script,
         "date_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -67,7 +68,7 @@ def record(script: str, rows: list[dict], goals: dict | None = None,
         "goals": goals or {},
         "rows": rows,
     }
-    path = folder / f"{script}.json"
+    path = folder / f"{name or script}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic.write_text(path, json.dumps(document, indent=2, sort_keys=True, default=float) + "\n")
     return path

@@ -30,3 +30,12 @@ def test_record_writes_the_rows_with_machine_load_date_and_commit(tmp_path):
     assert document["date_utc"].endswith("+00:00")
     assert document["git_commit"] is None or len(document["git_commit"].split("+")[0]) == 40
     assert [p.name for p in tmp_path.iterdir()] == ["bench_example.json"]  # no temporary left
+
+
+def test_a_second_kind_of_run_gets_its_own_file(tmp_path):
+    results = _results_module()
+    path = results.record("bench_example", [{"row": "x"}], folder=tmp_path,
+                          name="bench_example_b")
+    assert path == tmp_path / "bench_example_b.json"
+    assert json.loads(path.read_text(encoding="utf-8"))["script"] == "bench_example"
+    assert not (tmp_path / "bench_example.json").exists()

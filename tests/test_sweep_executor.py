@@ -182,3 +182,19 @@ def test_dask_workers_and_nannies_are_quieted():
         nanny_tick_ms = nanny.periodic_callbacks["tick"].callback_time
     assert not profiling
     assert (tick_ms, monitor_ms, nanny_tick_ms) == (1000, 5000, 1000)
+
+
+def test_dask_tasks_are_not_hashed_into_shared_keys():
+    """``dask_executor`` submits impure tasks: Dask's default hashes every argument (a whole
+    evaluation job's truths) in the coordinator to make a key shared by identical calls, so
+    two identical calls ran once. Here two identical calls run twice."""
+    import time
+
+    from spindlebench.studies.running.executor import dask_executor
+
+    with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                   protocol="tcp://", dashboard_address=None) as cluster,
+          dask_executor(cluster.scheduler_address) as executor):
+        first = executor.submit(time.perf_counter_ns).result()
+        second = executor.submit(time.perf_counter_ns).result()
+    assert second > first

@@ -149,7 +149,7 @@ def bench_table(path: Path, key: str | None = None) -> str:
         goals = document.get("goals") or {}
         return markdown_table(["goal", "value"], [[k, v] for k, v in sorted(goals.items())])
     rows = document.get("rows") or []
-    columns = BENCH_COLUMNS.get(document.get("script", path.stem))
+    columns = BENCH_COLUMNS.get(path.stem)  # a script's second file has its own keys
     if columns is None:
         keys: list[str] = []
         for row in rows:

@@ -269,7 +269,11 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
 
         client.register_plugin(OneBlasThread(), name=OneBlasThread.name)
         client.register_plugin(QuietNanny(), name=QuietNanny.name)
-        yield client.get_executor()
+        # pure=False: each task's key a fresh id. The default (pure) hashes every argument
+        # to make the key, a whole evaluation job's truths included, in this process for
+        # each task, to share results between identical calls that a study never makes
+        # (and a task rerun after a lost worker must not get the first call's key back).
+        yield client.get_executor(pure=False)
     finally:
         client.close()
 
