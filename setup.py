@@ -14,7 +14,7 @@ from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
 #: (folder, file patterns) copied into the wheel's spindlebench/_data.
-DATA = (("fmus", ("SpindleBench.fmu",)), ("models", ("*.mo",)),
+DATA = (("fmus", ("SpindleBench.fmu",)), ("models", ("*.mo", "*.csv")),
         ("scenarios", ("*.toml", "*.csv", "*.md")), ("benchmarks", ("*.toml",)))
 
 
