@@ -35,8 +35,9 @@ class Simulations:
     """The runs of one study in one results folder: what is done, what failed, the tasks."""
 
     def __init__(self, store: ResultStore, study: SweepStudy, family: list[Experiment],
-                 fmu: Path) -> None:
+                 fmu: Path, command: str) -> None:
         self.store = store
+        self.command = command
         self.study = study
         self.family = family
         self.fmu = fmu
@@ -44,7 +45,8 @@ class Simulations:
 
     def claim(self) -> bool:
         """Pin the study's content and the FMU (True: resuming a folder pinned to them)."""
-        return self.store.claim(pinned_content(self.study), {"fmu_sha256": sha256_file(self.fmu)})
+        return self.store.claim(pinned_content(self.study), {"fmu_sha256": sha256_file(self.fmu)},
+                                command=self.command)
 
     def runs(self) -> list[tuple[int, Experiment]]:
         """Every (replica, experiment) run of the study."""
