@@ -9,6 +9,7 @@ line every study shares is ``commands.arguments.register_study_command``.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from spindlebench.core.provenance import sha256_file
@@ -17,6 +18,7 @@ from spindlebench.studies.family.family_file import SweepStudy, pinned_content
 from spindlebench.studies.running.executor import Outcome, Task
 from spindlebench.studies.running.jobs import simulate_job
 from spindlebench.studies.running.store import ResultStore
+from spindlebench.testbench.scenario import MeasuredAmbient, Scenario
 
 
 def run_dir(replica: int) -> str:
@@ -29,6 +31,20 @@ def recording_path(replica: int, experiment: Experiment) -> str:
 
 def failure_path(replica: int, experiment: Experiment) -> str:
     return f"{run_dir(replica)}/{experiment.id}.error.json"
+
+
+def on_any_worker(scenario: Scenario) -> Scenario:
+    """``scenario`` with every file it names made absolute here, before it is submitted: a
+    Dask worker started in another folder read ``scenarios/studies/x.toml`` relative to its
+    own folder and every simulation failed with ``FileNotFoundError``. The same for the
+    local pool, so a recording's sidecar reads the same on every backend."""
+    if isinstance(scenario.ambient, MeasuredAmbient):
+        scenario = replace(scenario, ambient=replace(scenario.ambient,
+                                                     file=scenario.ambient.file.resolve()))
+    if scenario.initial.from_file is not None:
+        scenario = replace(scenario, initial=replace(
+            scenario.initial, from_file=scenario.initial.from_file.resolve()))
+    return replace(scenario, path=Path(scenario.path).resolve())
 
 
 class Simulations:
@@ -69,8 +85,8 @@ class Simulations:
         """The task that simulates one run (in a worker; the result comes back here)."""
         key = f"simulate r{replica} {experiment.id}"
         self._keys[key] = (replica, experiment)
-        scenario = scenario_for(self.study, replica, experiment)
-        return Task(key, simulate_job, (scenario, self.fmu), kind="simulation")
+        scenario = on_any_worker(scenario_for(self.study, replica, experiment))
+        return Task(key, simulate_job, (scenario, self.fmu.resolve()), kind="simulation")
 
     def store_outcome(self, outcome: Outcome) -> tuple[int, Experiment]:
         """Write a simulation's recording (or its error); return which run it was."""
