@@ -662,3 +662,29 @@ def test_calibrate_says_what_is_wrong_instead_of_did_not_converge(tmp_path, caps
     line = one_error_line(capsys.readouterr().err)
     assert expected in line and "rec.csv" in line and "converge" not in line
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_a_signal_right_after_the_part_file_is_made_leaves_no_part_file(tmp_path, monkeypatch):
+    """Ctrl-C between ``mkstemp`` and the ``try`` that removes the part file left
+    ``.manifest.json.<pid>.<random>.part`` in a study folder."""
+    import tempfile
+
+    from spindlebench.core import atomic, interrupts
+
+    made = tempfile.mkstemp
+
+    def mkstemp_then_signal(*args, **kwargs):
+        handle = made(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)  # lands at the next bytecode, here
+        return handle
+
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", mkstemp_then_signal)
+    interrupts.install()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            atomic.write_text(tmp_path / "manifest.json", "{}\n")
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        interrupts._pending.clear()
+    assert list(tmp_path.iterdir()) == []

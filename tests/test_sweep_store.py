@@ -142,3 +142,16 @@ def test_another_commands_folder_is_refused_naming_both(tmp_path):
     with pytest.raises(SpindlebenchError, match=r"holds the results of 'spindlebench sweep', "
                                                 r"not of 'place'; use a new output folder"):
         store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="place")
+
+
+def test_a_sidecar_missing_from_the_manifest_is_recorded_as_a_whole_run_would(tmp_path):
+    """A run stopped between a recording and the manifest write: resumed, its manifest had
+    one entry fewer than an uninterrupted run's."""
+    stored_study(tmp_path)
+    path = tmp_path / "manifest.json"
+    whole = path.read_bytes()
+    entries = json.loads(whole)
+    del entries["runs/r001/Jan.json"]
+    path.write_text(json.dumps(entries, indent=1) + "\n", encoding="utf-8")
+    assert ResultStore(tmp_path).has_recording("runs/r001/Jan.csv")
+    assert path.read_bytes() == whole
