@@ -21,8 +21,9 @@ from conftest import REPO
 DASK = Path(sys.executable).parent / "dask"
 TINY = Path("scenarios") / "studies" / "tiny_sweep.toml"  # relative: run from REPO
 #: What differs between two correct runs on different executors: provenance.json and the
-#: README (which quotes it) name the executor (in-process vs the cluster's address).
-EXECUTOR_NAMED = ("provenance.json", "README.md")
+#: README (which quotes it) name the executor (in-process vs the cluster's address), and
+#: manifest.json holds provenance.json's hash.
+EXECUTOR_NAMED = ("provenance.json", "README.md", "manifest.json")
 
 
 def spindlebench(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess | subprocess.Popen:
