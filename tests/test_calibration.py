@@ -57,12 +57,36 @@ def test_map_reads_columns_constants_and_model_names(tmp_path):
      "inputs.spindle_speed_rpm"),
     (('feed_y_mm_per_min = "feed_y_mm_per_min"\n', ""), "inputs.feed_y_mm_per_min"),
     (("[error]", "[ambient]\nknot_h = 1\n[error]"), "ambient.knot_h"),
+    # issue 25: knots 0 h apart, a table that maps nothing, a constant input out of range
+    (('ambient_C = "ambient_C"', 'ambient_C = "unknown"\n[ambient]\nknot_h = 0'),
+     "ambient.knot_h"),
+    (('T1 = "T1"\nT4 = "T4"\nT6 = "T6"\nT8 = "T8"', ""), "temperatures"),
+    (('spindle_speed_rpm = "spindle_speed_rpm"', "spindle_speed_rpm = -500"),
+     "inputs.spindle_speed_rpm"),
 ])
 def test_bad_map_is_one_line_naming_the_key(tmp_path, change, key):
     with pytest.raises(SpindlebenchError) as info:
         read_map(_map(tmp_path, TWIN_MAP.replace(*change)), OUTPUTS)
     message = str(info.value)
     assert "\n" not in message and f"key '{key}'" in message and "map.toml" in message
+
+
+def test_a_recording_with_a_negative_speed_is_one_line_naming_column_and_key(tmp_path):
+    from spindlebench.calibration.series import load_series
+
+    recording = tmp_path / "logger.csv"
+    rows = [f"{60 * i},{-1200 if i == 3 else 1200},0,0,21.0,{21 + 0.1 * i},{0.5 * i * i}"
+            for i in range(6)]
+    recording.write_text("time_s,rpm,feed_x_mm_per_min,feed_y_mm_per_min,ambient_C,T1,drift_um\n"
+                         + "\n".join(rows) + "\n", encoding="utf-8")
+    m = read_map(_map(tmp_path, recording_map_text(["T1"]).replace(
+        'spindle_speed_rpm = "spindle_speed_rpm"', 'spindle_speed_rpm = "rpm"')), OUTPUTS)
+    with pytest.raises(SpindlebenchError) as info:
+        load_series(recording, m, None)
+    assert str(info.value) == (
+        f"recording {recording}: column 'rpm' (map.toml key 'inputs.spindle_speed_rpm') is "
+        "-1200 at time_s = 180; the model's spindle_speed_rpm is 0 … 30000 rev/min (for a "
+        "reversed spindle give the magnitude)")
 
 
 def test_map_column_missing_from_recording_names_key(tmp_path):

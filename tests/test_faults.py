@@ -551,6 +551,42 @@ def test_a_second_signal_while_unwinding_is_recorded_and_a_third_raises():
         interrupts._pending.clear()
 
 
+class _SignalsInItsDestructor:
+    """Sends a signal to this process from ``__del__`` (as FMPy's ``CVodeSolver.__del__``,
+    run by the garbage collector, was running when a sweep's Ctrl-C arrived)."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+
+    def __del__(self) -> None:
+        os.kill(os.getpid(), self.signum)
+        self.sent = True  # a bytecode after the signal: its handler runs here, in __del__
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_landing_in_a_destructor_is_not_swallowed(signum):
+    """Python prints an exception raised in ``__del__`` as "Exception ignored" and goes on:
+    the sweep lost its Ctrl-C and ended with status 0. It is delivered again and raises in
+    the code that runs next."""
+    from spindlebench.core import interrupts
+
+    hook = sys.unraisablehook
+    interrupts.install()
+    try:
+        with pytest.raises(interrupts.Interrupted) as raised:
+            victim = _SignalsInItsDestructor(signum)
+            del victim
+            deadline = time.monotonic() + 30  # a safety net: it raises within milliseconds
+            while time.monotonic() < deadline:  # ordinary code after the destructor
+                time.sleep(0.01)
+        assert raised.value.signum == signum
+    finally:
+        sys.unraisablehook = hook
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        interrupts._pending.clear()
+
+
 def test_a_test_recording_with_its_columns_reordered_is_evaluated_the_same(tmp_path, capsys):
     import json
 
@@ -626,3 +662,29 @@ def test_calibrate_says_what_is_wrong_instead_of_did_not_converge(tmp_path, caps
     line = one_error_line(capsys.readouterr().err)
     assert expected in line and "rec.csv" in line and "converge" not in line
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_a_signal_right_after_the_part_file_is_made_leaves_no_part_file(tmp_path, monkeypatch):
+    """Ctrl-C between ``mkstemp`` and the ``try`` that removes the part file left
+    ``.manifest.json.<pid>.<random>.part`` in a study folder."""
+    import tempfile
+
+    from spindlebench.core import atomic, interrupts
+
+    made = tempfile.mkstemp
+
+    def mkstemp_then_signal(*args, **kwargs):
+        handle = made(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)  # lands at the next bytecode, here
+        return handle
+
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", mkstemp_then_signal)
+    interrupts.install()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            atomic.write_text(tmp_path / "manifest.json", "{}\n")
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        interrupts._pending.clear()
+    assert list(tmp_path.iterdir()) == []

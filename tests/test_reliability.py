@@ -11,6 +11,7 @@ import os
 import re
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -426,6 +427,45 @@ def test_a_second_study_process_in_a_locked_folder_is_refused_naming_the_holder(
         holder.wait()
     # the lock ends with its process, even a killed one
     ResultStore(out).lock()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ["sweep", "place"])
+def test_a_second_command_on_a_busy_folder_is_refused_and_the_first_finishes_intact(
+        tmp_path, tiny_sweep, command):
+    """Issue 25: two commands on one output folder at once. The first is paused (SIGSTOP)
+    inside its work, so the second surely starts while the first holds the folder; it is
+    refused in one line naming the first, writes nothing, and the first finishes with
+    the bytes of an undisturbed run."""
+    if command == "place":
+        study = mini_placement(tmp_path)
+        reference = tmp_path / "reference"
+        assert place(study, reference) == 0
+    else:
+        study, reference = TINY, tiny_sweep
+    out = tmp_path / "busy"
+    first = spindlebench(command, str(study), "-o", str(out), "--workers", "0", "--no-progress")
+    deadline = time.monotonic() + 300
+    while not finished_recordings(out):
+        assert first.poll() is None and time.monotonic() < deadline, first.communicate()
+        time.sleep(0.02)
+    first.send_signal(signal.SIGSTOP)
+    try:
+        before = files_of(out)
+        second = spindlebench(command, str(study), "-o", str(out), "--workers", "0",
+                              "--no-progress")
+        _, stderr = second.communicate(timeout=300)
+        assert second.returncode == 2, stderr
+        assert one_error_line(stderr) == (
+            f"error: {out}: in use by process {first.pid} on {socket.gethostname()} "
+            f"(spindlebench {command} {study}); wait for it to finish or use another output "
+            "folder")
+        assert files_of(out) == before
+    finally:
+        first.send_signal(signal.SIGCONT)
+    _, stderr = first.communicate(timeout=600)
+    assert first.returncode == 0, stderr
+    assert files_of(out) == files_of(reference)
 
 
 # --------------------------------------------------------------------------- case 9: kill -9

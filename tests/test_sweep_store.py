@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import pandas as pd
 import pytest
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.studies.running.store import ResultStore, canonical, content_sha256, differences
+from spindlebench.studies.running.store import (
+    DamagedResultWarning,
+    ResultStore,
+    canonical,
+    content_sha256,
+    differences,
+)
 
 STUDY = {"study file": {"study": {"seed": 7, "replicas": 2}, "axes": {"speeds_rpm": [2000.0]}},
          "climate file": {"months": {"Jan": {"low_C": 5.8, "high_C": 9.8}}}}
@@ -53,3 +61,97 @@ def test_a_broken_state_file_is_one_line(tmp_path):
     (tmp_path / "state.json").write_text('{"inputs": [1]}')
     with pytest.raises(SpindlebenchError, match=r"state\.json: not a study state file"):
         ResultStore(tmp_path).claim(STUDY, {})
+
+
+# ----------------------------------------------------------------- issue 25: resume integrity
+
+
+def stored_study(root: Path) -> ResultStore:
+    """A study folder as a sweep leaves it: state, one recording with its sidecar, one
+    evaluation; returned as a fresh store (a new process resuming)."""
+    store = ResultStore(root)
+    store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="sweep")
+    store.write_recording("runs/r001/Jan.csv", pd.DataFrame({"time_s": [0.0, 60.0],
+                                                            "T1_C": [20.0, 20.5]}), {"run": 1})
+    store.write_frame("evals/r001/lab/Jan.csv", pd.DataFrame({"k": [2], "rmse_um": [1.5]}))
+    store.unlock()
+    return ResultStore(root)
+
+
+def edit(path: Path) -> None:
+    path.write_text(path.read_text(encoding="utf-8").replace("1.5", "0.1"), encoding="utf-8")
+
+
+@pytest.mark.parametrize("manifest", ["deleted", "truncated", "a list"])
+def test_a_lost_manifest_redoes_what_only_it_vouched_for_and_keeps_the_recordings(
+        tmp_path, manifest):
+    """Deleted, truncated or replaced manifest and an edited evaluation: the evaluation was
+    resumed as if valid. Recordings keep their own checksum (their sidecar's) and are kept:
+    they are the expensive part."""
+    store = stored_study(tmp_path)
+    path = tmp_path / "manifest.json"
+    if manifest == "deleted":
+        path.unlink()
+    elif manifest == "truncated":
+        path.write_text(path.read_text(encoding="utf-8")[:40], encoding="utf-8")
+    else:
+        path.write_text("[1, 2]\n", encoding="utf-8")
+    edit(tmp_path / "evals/r001/lab/Jan.csv")
+    with pytest.warns(DamagedResultWarning) as warned:
+        assert store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="sweep") is True
+        assert not store.exists("evals/r001/lab/Jan.csv")
+        assert store.has_recording("runs/r001/Jan.csv")
+    assert [str(w.message).split(":")[0] for w in warned] == [str(path)]  # said once
+    assert ("is missing" if manifest == "deleted" else "is damaged") in str(warned[0].message)
+
+
+def test_a_piece_the_manifest_does_not_name_or_an_edited_sidecar_is_redone(tmp_path):
+    stored_study(tmp_path)
+    (tmp_path / "evals/r001/lab/Feb.csv").write_text("k,rmse_um\n2,0.1\n", encoding="utf-8")
+    sidecar = tmp_path / "runs/r001/Jan.json"
+    sidecar.write_text(sidecar.read_text(encoding="utf-8").replace('"run": 1', '"run": 2'),
+                       encoding="utf-8")
+    store = ResultStore(tmp_path)
+    with pytest.warns(DamagedResultWarning, match=r"Feb\.csv: not in manifest\.json"):
+        assert not store.exists("evals/r001/lab/Feb.csv")
+    with pytest.warns(DamagedResultWarning, match=r"Jan\.json: damaged \(sha256"):
+        assert not store.has_recording("runs/r001/Jan.csv")
+    assert store.exists("evals/r001/lab/Jan.csv")
+
+
+@pytest.mark.parametrize("text", ["[" * 100_000 + "]" * 100_000, "[1]", '"x"', "null", "7",
+                                  '{"inputs": {"study_content_sha256": "0"}, "content": {}}'])
+def test_a_hostile_state_file_is_one_line_and_leaves_nothing(tmp_path, text):
+    (tmp_path / "state.json").write_text(text, encoding="utf-8")
+    with pytest.raises(SpindlebenchError) as refused:
+        ResultStore(tmp_path).claim(STUDY, {})
+    assert str(refused.value).startswith(f"{tmp_path / 'state.json'}: ")
+    assert "\n" not in str(refused.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["state.json"]  # no lock file left
+
+
+def test_a_deeply_nested_manifest_is_damaged_not_a_traceback(tmp_path):
+    store = stored_study(tmp_path)
+    (tmp_path / "manifest.json").write_text("{" * 50_000, encoding="utf-8")
+    with pytest.warns(DamagedResultWarning, match="is damaged"):
+        assert not store.exists("evals/r001/lab/Jan.csv")
+
+
+def test_another_commands_folder_is_refused_naming_both(tmp_path):
+    store = stored_study(tmp_path)
+    with pytest.raises(SpindlebenchError, match=r"holds the results of 'spindlebench sweep', "
+                                                r"not of 'place'; use a new output folder"):
+        store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="place")
+
+
+def test_a_sidecar_missing_from_the_manifest_is_recorded_as_a_whole_run_would(tmp_path):
+    """A run stopped between a recording and the manifest write: resumed, its manifest had
+    one entry fewer than an uninterrupted run's."""
+    stored_study(tmp_path)
+    path = tmp_path / "manifest.json"
+    whole = path.read_bytes()
+    entries = json.loads(whole)
+    del entries["runs/r001/Jan.json"]
+    path.write_text(json.dumps(entries, indent=1) + "\n", encoding="utf-8")
+    assert ResultStore(tmp_path).has_recording("runs/r001/Jan.csv")
+    assert path.read_bytes() == whole

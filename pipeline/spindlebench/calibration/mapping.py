@@ -11,7 +11,8 @@ feed_y_mm_per_min = 0.0
 ambient_C = "unknown"               # or a column, or a number; "unknown": estimated
 
 [ambient]                           # only with ambient_C = "unknown"
-knot_h = 4.0                        # piecewise-linear ambient, a knot every 4 h (0: constant)
+knot_h = 4.0                        # piecewise-linear ambient, a knot every 4 h (> 0; a
+                                    # knot_h longer than the recording: one constant)
 
 [error]                             # optional: the measured thermal error
 column = "ch3_um"
@@ -51,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.limits import MAX_FEED_MM_PER_MIN, MAX_RPM
 from spindlebench.formats.recording import (
     AMBIENT_COLUMN,
     DRIFT_COLUMN,
@@ -147,6 +149,13 @@ def _output_name(table: Table, column: str, value: Any, outputs: set[str]) -> st
     raise table.error(column, f"{value!r} is not a model sensor (T1 … T20) or node ({hint})")
 
 
+#: The range of each operating input the model declares (its Modelica ``min``/``max``, the
+#: limits a scenario is checked against); the ambient has its own check (kelvin, far too cold).
+INPUT_RANGES = {"spindle_speed_rpm": (0.0, MAX_RPM, "rev/min"),
+                "feed_x_mm_per_min": (0.0, MAX_FEED_MM_PER_MIN, "mm/min"),
+                "feed_y_mm_per_min": (0.0, MAX_FEED_MM_PER_MIN, "mm/min")}
+
+
 def _column_or_constant(table: Table, key: str, allow_unknown: bool) -> str | float:
     value = table.raw(key)
     if isinstance(value, bool) or not isinstance(value, str | int | float):
@@ -157,7 +166,8 @@ def _column_or_constant(table: Table, key: str, allow_unknown: bool) -> str | fl
         if not value:
             raise table.error(key, "empty column name")
         return value
-    return table.number(key)
+    low, high, unit = INPUT_RANGES.get(key, (None, None, ""))
+    return table.number(key, minimum=low, maximum=high, unit=unit)
 
 
 def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
@@ -172,6 +182,10 @@ def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
     if ambient.data and inputs[AMBIENT_COLUMN] != UNKNOWN:
         raise ambient.error(next(ambient.names()), "only with inputs.ambient_C = \"unknown\"")
     knot_h = ambient.number("knot_h", 4.0, minimum=0.0, unit="h")
+    if knot_h == 0.0:  # knots 0 h apart: no ambient at all, not "constant" (say so)
+        raise ambient.error("knot_h", "must be > 0 h (hours between the estimated ambient's "
+                            "knots); for a constant ambient give a knot_h longer than the "
+                            "recording")
     ambient.finish()
     error = top.table("error", required=False)
     error_column = error.string("column", None)
@@ -180,6 +194,10 @@ def read_map(path: str | Path, outputs: Iterable[str]) -> RecordingMap:
         raise error.error("sign", f"must be +1 or -1, got {sign:g}")
     error.finish()
     temperatures_table = top.table("temperatures", required=False)
+    if "temperatures" in top.data and not temperatures_table.data:
+        raise top.error("temperatures", "the table is empty: map at least one column to a "
+                        "model sensor (t1_C = \"T1\"), or leave the table out to calibrate "
+                        "on the error column alone")
     temperatures = {
         str(column): _output_name(temperatures_table, str(column),
                                   temperatures_table.raw(column), outputs)

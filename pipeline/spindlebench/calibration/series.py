@@ -14,6 +14,7 @@ import numpy as np
 
 from spindlebench.calibration.mapping import (
     DRIFT_OUTPUT,
+    INPUT_RANGES,
     INPUTS,
     UNKNOWN,
     RecordingMap,
@@ -68,7 +69,7 @@ class Series:
     def ambient_basis(self) -> np.ndarray:
         """(N + 1, knots): the estimated ambient at each sample is ``basis @ knots``.
 
-        Knots are ``knot_h`` apart, piecewise linear between them; ``knot_h = 0`` or a recording
+        Knots are ``knot_h`` apart (> 0, the map checks), piecewise linear between them; a recording
         shorter than one knot interval gives one constant.
         """
         t = self.time_s - self.time_s[0]
@@ -141,6 +142,22 @@ def _refuse_implausible_ambient(values: np.ndarray, source: object, path: Path) 
                                 f"{KELVIN_SUSPECT_C:g}] °C (kelvin?); give °C")
 
 
+def _refuse_out_of_range(values: np.ndarray, name: str, column: str, time_s: np.ndarray,
+                         path: Path, map_path: Path) -> None:
+    """An input column outside the model's declared range (a negative speed: a spindle
+    turning backwards is not a slower one) is one line naming the column and the map key."""
+    if name not in INPUT_RANGES:
+        return
+    low, high, unit = INPUT_RANGES[name]
+    bad = np.flatnonzero((values < low) | (values > high))
+    if bad.size:
+        row = int(bad[0])
+        raise SpindlebenchError(f"recording {path}: column {column!r} ({map_path.name} key "
+                                f"'inputs.{name}') is {values[row]:g} at time_s = "
+                                f"{time_s[row]:g}; the model's {name} is {low:g} … {high:g} "
+                                f"{unit} (for a reversed spindle give the magnitude)")
+
+
 def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | None,
                 roles: ColumnRoles | None = None) -> Series:
     """Read ``path`` with ``recording_map``; thin it to every ``step_s`` seconds if given.
@@ -188,6 +205,7 @@ def load_series(path: str | Path, recording_map: RecordingMap, step_s: float | N
                 row = int(np.flatnonzero(~np.isfinite(column))[0])
                 raise SpindlebenchError(f"recording {path}: input column {source!r} has a gap "
                                         f"at time_s = {time_s[row]:g}; inputs must be complete")
+            _refuse_out_of_range(column, name, source, time_s, path, recording_map.path)
             inputs[i] = column
         else:
             inputs[i] = source

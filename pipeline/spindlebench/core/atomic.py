@@ -16,6 +16,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from spindlebench.core import interrupts
 from spindlebench.core.paths import refuse_shipped
 
 
@@ -36,13 +37,18 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     refuse_shipped(target)  # never a shipped file, unless --overwrite-shipped says so
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_parts(target)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{_part_stem(target.name)}.{os.getpid()}.",
-                                    suffix=".part", dir=target.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    # mkstemp makes the file private (0600); give it the mode a plain open() would.
-    os.chmod(tmp, 0o666 & ~_current_umask())
+    tmp: Path | None = None
     try:
+        # a signal between making the part file and knowing its name left it behind (seen
+        # with Ctrl-C during a study's manifest write): made with signals deferred, so once
+        # one raises (at the end of this block at the latest) ``tmp`` names the file to remove
+        with interrupts.deferred():
+            fd, tmp_name = tempfile.mkstemp(prefix=f".{_part_stem(target.name)}.{os.getpid()}.",
+                                            suffix=".part", dir=target.parent)
+            tmp = Path(tmp_name)
+            os.close(fd)
+        # mkstemp makes the file private (0600); give it the mode a plain open() would.
+        os.chmod(tmp, 0o666 & ~_current_umask())
         yield tmp
         os.replace(tmp, target)
     except OSError as exc:
@@ -50,7 +56,7 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
             exc.filename = str(target)  # say which file: "No space left on device" alone
         raise
     finally:
-        if tmp.exists():
+        if tmp is not None and tmp.exists():
             tmp.unlink()
 
 

@@ -10,10 +10,19 @@ written, and the command line turns :class:`Interrupted` into one line and exit 
 
 Outside ``deferred()``, ``install()`` makes SIGTERM behave like Ctrl-C (Python's default
 for SIGTERM ends the process without running ``finally`` blocks, leaving part files).
+
+A signal can also land while a destructor runs: the garbage collector calls FMPy's
+``CVodeSolver.__del__`` at any bytecode, and Python prints an exception raised there as
+"Exception ignored in ..." and goes on. A sweep under load lost its Ctrl-C that way and
+finished with status 0. So the handler does not raise inside a ``__del__``: it delivers the
+signal again (``_redeliver``), and it raises at the first bytecode of ordinary code. Any
+other place Python swallows it (a weakref callback, a ctypes callback outside
+``deferred()``) reaches ``sys.unraisablehook``, which ``install()`` sets to do the same.
 """
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import functools
 import signal
@@ -60,9 +69,13 @@ def _raise(signum: int, frame: FrameType | None) -> None:
     """Raise the signal as :class:`Interrupted`; while the run is unwinding from one, a
     second signal is only recorded (SIGTERM then SIGINT 1 ms later raised again inside the
     ``finally`` that was removing a part file, and left it) and a third raises (the user
-    insists)."""
+    insists). Inside a destructor, where Python would swallow it, it is delivered again at
+    the next bytecode instead (:func:`_swallowed_here`)."""
     if _ending[0]:
         _pending.append(signum)
+        return
+    if _swallowed_here(frame):
+        _redeliver(signum)
         return
     if _unwinding():
         _pending.append(signum)
@@ -70,6 +83,20 @@ def _raise(signum: int, frame: FrameType | None) -> None:
             return
     _pending.clear()
     raise Interrupted(signum)
+
+
+#: Functions an exception raised in is printed and dropped by Python, not propagated.
+_SWALLOWING = frozenset({"__del__", "_redelivering_hook"})
+
+
+def _swallowed_here(frame: FrameType | None) -> bool:
+    """Whether ``frame`` runs inside a destructor (or the hook below): an exception raised
+    there never reaches the run."""
+    while frame is not None:
+        if frame.f_code.co_name in _SWALLOWING:
+            return True
+        frame = frame.f_back
+    return False
 
 
 def ending() -> None:
@@ -84,12 +111,46 @@ def _record(signum: int, frame: FrameType | None) -> None:
 
 
 def install() -> None:
-    """SIGINT and SIGTERM raise :class:`Interrupted` (main thread only; elsewhere a no-op)."""
+    """SIGINT and SIGTERM raise :class:`Interrupted` (main thread only; elsewhere a no-op),
+    also when they land in a destructor (``_redeliver``)."""
     if _in_main_thread():
         _pending.clear()  # a signal left from an earlier run in this process is not this one's
         _ending[0] = False
         for signum in SIGNALS:
             signal.signal(signum, _raise)
+        if getattr(sys.unraisablehook, "__wrapped__", None) is None:
+            sys.unraisablehook = _redelivering(sys.unraisablehook)
+
+
+def _redelivering(previous: Callable[[object], object]) -> Callable[[object], object]:
+    """``sys.unraisablehook`` that gives a swallowed :class:`Interrupted` back to the main
+    thread and passes everything else to ``previous``."""
+
+    @functools.wraps(previous)
+    def _redelivering_hook(unraisable: object) -> object:
+        exc = getattr(unraisable, "exc_value", None)
+        if isinstance(exc, Interrupted) and _in_main_thread():
+            _redeliver(exc.signum)
+            return None
+        return previous(unraisable)
+
+    return _redelivering_hook
+
+
+#: How long after a swallowed signal it is delivered again (the destructor is then done).
+REDELIVER_AFTER_S = 0.001
+
+
+def _redeliver(signum: int) -> None:
+    """Signal ``signum`` to the main thread again, a moment from now and from another
+    thread: Python runs its handler at the main thread's next bytecode then, no longer inside
+    the destructor that would swallow it (if it still is, or in another one, this repeats).
+    Not from this thread: a handler that re-signals itself at once runs again at once, inside
+    the same destructor. ``interrupt_main`` only calls a Python-level handler, never the
+    default action."""
+    timer = threading.Timer(REDELIVER_AFTER_S, _thread.interrupt_main, (signum,))
+    timer.daemon = True
+    timer.start()
 
 
 @contextlib.contextmanager

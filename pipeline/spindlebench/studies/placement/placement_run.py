@@ -84,7 +84,8 @@ class PlacementStudyRun:
         self.family = experiments(study.family)
         self.trains = training_experiments(study.family, self.family)
         self.fmu = check_fmu(study.family)
-        self.simulations = Simulations(self.store, study.family, self.family, self.fmu)
+        self.simulations = Simulations(self.store, study.family, self.family, self.fmu,
+                                       "place")
 
     def simulate(self, runner: TaskRunner) -> tuple[RunStats, bool]:
         resumed = self.simulations.claim()

@@ -260,6 +260,7 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
     try:
         client = distributed.Client(address, timeout=f"{timeout_s}s", set_as_default=False)
     except Exception as exc:  # OSError, TimeoutError, a non-Dask peer's protocol error ...
+        _discard_half_made_clients(exc, distributed.Client)
         raise SpindlebenchError(
             f"--dask-address {address}: cannot connect to a Dask scheduler ({one_line_error(exc)})"
         ) from None
@@ -276,6 +277,21 @@ def dask_executor(address: str, timeout_s: float = 10.0) -> Iterator[cf.Executor
         yield client.get_executor(pure=False)
     finally:
         client.close()
+
+
+def _discard_half_made_clients(exc: BaseException, client_type: type) -> None:
+    """Mark the client whose constructor raised ``exc`` as closed: its ``__del__`` otherwise
+    tries to close a connection that never opened, waits twice the timeout and prints a
+    traceback at exit ("Exception ignored in Client.__del__ ... TimeoutError", seen with a
+    ``tls://`` address and no TLS configuration) after the one-line error."""
+    trace = exc.__traceback__
+    while trace is not None:
+        client = trace.tb_frame.f_locals.get("self")
+        if isinstance(client, client_type):
+            with contextlib.suppress(Exception):
+                client.close(timeout=1)
+            client.status = "closed"
+        trace = trace.tb_next
 
 
 #: The variables that fix the BLAS/OpenMP libraries' thread counts (read when they load).

@@ -9,6 +9,7 @@ line every study shares is ``commands.arguments.register_study_command``.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from spindlebench.core.provenance import sha256_file
@@ -17,6 +18,7 @@ from spindlebench.studies.family.family_file import SweepStudy, pinned_content
 from spindlebench.studies.running.executor import Outcome, Task
 from spindlebench.studies.running.jobs import simulate_job
 from spindlebench.studies.running.store import ResultStore
+from spindlebench.testbench.scenario import MeasuredAmbient, Scenario
 
 
 def run_dir(replica: int) -> str:
@@ -31,12 +33,27 @@ def failure_path(replica: int, experiment: Experiment) -> str:
     return f"{run_dir(replica)}/{experiment.id}.error.json"
 
 
+def on_any_worker(scenario: Scenario) -> Scenario:
+    """``scenario`` with every file it names made absolute here, before it is submitted: a
+    Dask worker started in another folder read ``scenarios/studies/x.toml`` relative to its
+    own folder and every simulation failed with ``FileNotFoundError``. The same for the
+    local pool, so a recording's sidecar reads the same on every backend."""
+    if isinstance(scenario.ambient, MeasuredAmbient):
+        scenario = replace(scenario, ambient=replace(scenario.ambient,
+                                                     file=scenario.ambient.file.resolve()))
+    if scenario.initial.from_file is not None:
+        scenario = replace(scenario, initial=replace(
+            scenario.initial, from_file=scenario.initial.from_file.resolve()))
+    return replace(scenario, path=Path(scenario.path).resolve())
+
+
 class Simulations:
     """The runs of one study in one results folder: what is done, what failed, the tasks."""
 
     def __init__(self, store: ResultStore, study: SweepStudy, family: list[Experiment],
-                 fmu: Path) -> None:
+                 fmu: Path, command: str) -> None:
         self.store = store
+        self.command = command
         self.study = study
         self.family = family
         self.fmu = fmu
@@ -44,7 +61,8 @@ class Simulations:
 
     def claim(self) -> bool:
         """Pin the study's content and the FMU (True: resuming a folder pinned to them)."""
-        return self.store.claim(pinned_content(self.study), {"fmu_sha256": sha256_file(self.fmu)})
+        return self.store.claim(pinned_content(self.study), {"fmu_sha256": sha256_file(self.fmu)},
+                                command=self.command)
 
     def runs(self) -> list[tuple[int, Experiment]]:
         """Every (replica, experiment) run of the study."""
@@ -67,8 +85,8 @@ class Simulations:
         """The task that simulates one run (in a worker; the result comes back here)."""
         key = f"simulate r{replica} {experiment.id}"
         self._keys[key] = (replica, experiment)
-        scenario = scenario_for(self.study, replica, experiment)
-        return Task(key, simulate_job, (scenario, self.fmu), kind="simulation")
+        scenario = on_any_worker(scenario_for(self.study, replica, experiment))
+        return Task(key, simulate_job, (scenario, self.fmu.resolve()), kind="simulation")
 
     def store_outcome(self, outcome: Outcome) -> tuple[int, Experiment]:
         """Write a simulation's recording (or its error); return which run it was."""

@@ -46,6 +46,7 @@ STATE_FILE = "state.json"
 MANIFEST_FILE = "manifest.json"
 LOCK_FILE = ".lock"
 CONTENT_KEY = "study_content_sha256"
+COMMAND_KEY = "command"
 #: How a refusal names each pinned input.
 _LABELS = {CONTENT_KEY: "study", "fmu_sha256": "FMU"}
 _MAX_NAMED = 3
@@ -107,6 +108,16 @@ def differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
     return out
 
 
+def read_json_file(path: Path) -> Any:
+    """The JSON value in ``path``; ``ValueError`` for anything that is not one readable JSON
+    document (bad UTF-8, bad syntax, or nested so deep that the parser runs out of stack:
+    a ``RecursionError`` was a traceback)."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(f"{type(exc).__name__}") from None
+
+
 class DamagedResultWarning(UserWarning):
     """A stored piece of a study no longer matches what was written; it is redone."""
 
@@ -124,6 +135,9 @@ class ResultStore:
         self._manifest: dict[str, str] | None = None
         self._verified: dict[str, bool] = {}
         self._lock: int | None = None
+        #: the folder's manifest was lost: a piece it does not name is redone without a
+        #: warning per piece (the loss is said once)
+        self._manifest_lost = False
 
     def path(self, relative: str | Path) -> Path:
         """``root / relative``, refused in one line if a link inside the folder is on the way:
@@ -158,7 +172,14 @@ class ResultStore:
         key = Path(relative).as_posix()
         sidecar = self.path(key).with_suffix(".json")
         if sidecar.is_file():
-            return True
+            if self.intact(Path(key).with_suffix(".json")):
+                if Path(key).with_suffix(".json").as_posix() not in self.manifest():
+                    # vouched for by its CSV; unrecorded when the run stopped between the
+                    # recording and the manifest write: recorded now, as a whole run would
+                    self._written(Path(key).with_suffix(".json"))
+                return True
+            self._verified[key] = False
+            return False
         warnings.warn(f"{self.path(key)}: incomplete (its sidecar {sidecar.name} is missing); "
                       "redoing it", DamagedResultWarning, stacklevel=2)
         self._verified[key] = False
@@ -170,6 +191,10 @@ class ResultStore:
         key = Path(relative).as_posix()
         if key not in self._verified:
             problem = self._damage(key)
+            if problem is None and self._manifest_lost and key not in self.manifest() and \
+                    not self._self_checked(key):
+                self._verified[key] = False  # said once, in manifest()
+                return False
             if problem:
                 warnings.warn(f"{self.path(key)}: {problem}; redoing it",
                               DamagedResultWarning, stacklevel=3)
@@ -177,28 +202,71 @@ class ResultStore:
         return self._verified[key]
 
     def _damage(self, key: str) -> str | None:
+        """What is wrong with the piece ``key`` (None: intact).
+
+        Its SHA-256 must be the manifest's; a recording's CSV is checked against its
+        sidecar's ``recording_sha256`` (so recordings, the expensive part, survive a lost
+        manifest), and a sidecar the manifest does not know is vouched for by its CSV. Any
+        other piece the manifest does not vouch for is not taken on trust: an evaluation
+        edited after its manifest was deleted was resumed as if valid."""
         actual = sha256_file(self.path(key))
         expected = self.manifest().get(key)
         sidecar = self.path(key).with_suffix(".json")
         if expected is None and key.endswith(".csv") and sidecar.exists():  # a recording
             try:
-                expected = json.loads(sidecar.read_text(encoding="utf-8")).get(
-                    "recording_sha256")
-            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+                loaded = read_json_file(sidecar)
+                expected = loaded.get("recording_sha256") if isinstance(loaded, dict) else None
+            except (OSError, ValueError):
                 return f"damaged (its sidecar {sidecar.name} is unreadable)"
-        if expected is None or expected == actual:
+            if not isinstance(expected, str):
+                return f"damaged (its sidecar {sidecar.name} holds no recording_sha256)"
+        if expected is None and key.endswith(".json") and self.path(key).with_suffix(
+                ".csv").is_file():
+            return None  # a recording's sidecar: its CSV is checked against it
+        if expected is None and key.endswith(".csv") and key.startswith("runs/"):
+            return None  # a recording without its sidecar: has_recording says so and redoes it
+        if expected is None:
+            return None if self._manifest_lost else (
+                f"not in {MANIFEST_FILE} (written by a run that was killed before it could "
+                "record it, or the manifest was edited)")
+        if expected == actual:
             return None
         return (f"damaged (sha256 {actual[:12]}… is not the {expected[:12]}… it was "
                 "written with)")
 
+    def _self_checked(self, key: str) -> bool:
+        """Whether the piece carries its own check: a recording (CSV with a sidecar) or a
+        recording's sidecar."""
+        path = self.path(key)
+        twin = path.with_suffix(".json" if key.endswith(".csv") else ".csv")
+        return key.endswith((".csv", ".json")) and twin.is_file() and key.startswith("runs/")
+
     def manifest(self) -> dict[str, str]:
-        """Relative path → SHA-256 of every file this store wrote."""
+        """Relative path → SHA-256 of every file this store wrote.
+
+        A study folder (one with a ``state.json``) whose manifest is missing, unreadable or
+        not a table of hashes has lost its record of what is intact: that is said once, and
+        every piece that has no checksum of its own (all but the recordings) is redone."""
         if self._manifest is None:
+            path = self.path(MANIFEST_FILE)
+            problem = None
             try:
-                loaded = json.loads(self.path(MANIFEST_FILE).read_text(encoding="utf-8"))
-                self._manifest = {str(k): str(v) for k, v in loaded.items()}
-            except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError):
-                self._manifest = {}  # lost or damaged: every piece is taken on trust
+                loaded = read_json_file(path)
+                if not isinstance(loaded, dict) or not all(
+                        isinstance(v, str) for v in loaded.values()):
+                    raise ValueError("not a table of hashes")
+                self._manifest = {str(k): v for k, v in loaded.items()}
+            except FileNotFoundError:
+                problem = "is missing"
+                self._manifest = {}
+            except (OSError, ValueError) as exc:
+                problem = f"is damaged ({exc})"
+                self._manifest = {}
+            if problem and self.path(STATE_FILE).is_file():
+                self._manifest_lost = True
+                warnings.warn(f"{path}: {problem}; the pieces it vouched for cannot be checked "
+                              "and are redone (recordings are checked against their own "
+                              "sidecars and kept)", DamagedResultWarning, stacklevel=3)
         return self._manifest
 
     def _written(self, relative: str | Path) -> None:
@@ -222,6 +290,7 @@ class ResultStore:
         target = self.path(relative)
         write_recording(target, frame, sidecar)
         self._verified[Path(relative).as_posix()] = True
+        self._written(Path(relative).with_suffix(".json"))  # an edited sidecar is seen
         return target
 
     def remove(self, relative: str | Path) -> None:
@@ -238,7 +307,11 @@ class ResultStore:
         return target
 
     def read_json(self, relative: str | Path) -> Any:
-        return json.loads(self.path(relative).read_text(encoding="utf-8"))
+        try:
+            return read_json_file(self.path(relative))
+        except ValueError as exc:
+            raise SpindlebenchError(f"{self.path(relative)}: not readable JSON ({exc}); "
+                                    "remove it and run again") from None
 
     def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
         target = self.path(relative)
@@ -316,29 +389,31 @@ class ResultStore:
                 p.name != LOCK_FILE for p in self.root.iterdir()):
             raise SpindlebenchError(f"{self.root}: exists and is not a study results folder; "
                                     "choose an empty or new folder")
+        self._state()  # a damaged state.json: refused before the lock file is made
 
-    def claim(self, content: dict[str, Any], hashes: dict[str, str]) -> bool:
+    def claim(self, content: dict[str, Any], hashes: dict[str, str],
+              command: str | None = None) -> bool:
         """Start or resume: pin the inputs or check them against the pinned ones.
 
         ``content``: the study's canonical content (sections of tables, see
         :func:`differences`); its hash is pinned and the content itself is kept, so a refusal
         names the keys that changed. ``hashes``: other inputs pinned by hash (the FMU).
+        ``command``: the command whose folder this is (``sweep``, ``place``): another
+        command's results in it would be mixed with its own (a folder made before commands
+        were pinned is checked on its content only).
         Returns True when resuming existing work; refuses a folder made from other inputs.
         """
         content = canonical(content)
-        inputs = {CONTENT_KEY: content_sha256(content), **hashes}
-        state_path = self.path(STATE_FILE)
+        inputs = {**({COMMAND_KEY: command} if command else {}),
+                  CONTENT_KEY: content_sha256(content), **hashes}
         self.lock()  # held until unlock(), the end of ``locked()`` or of the process
-        if state_path.is_file():
-            try:
-                state = json.loads(state_path.read_text(encoding="utf-8"))
-                recorded = state["inputs"]
-                if not isinstance(recorded, dict) or CONTENT_KEY not in recorded:
-                    raise TypeError
-            except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError):
-                raise SpindlebenchError(f"{state_path}: not a study state file; "
-                                        "choose another output folder") from None
+        state = self._state()
+        self.manifest()  # before state.json is written: a new folder has lost nothing
+        if state is not None:
+            recorded = state["inputs"]
             for key, value in inputs.items():
+                if key == COMMAND_KEY and key not in recorded:
+                    continue
                 if recorded.get(key) != value:
                     raise self._refusal(key, recorded.get(key), value, state.get("content"),
                                         content)
@@ -346,8 +421,32 @@ class ResultStore:
         self.write_json(STATE_FILE, {"inputs": inputs, "content": content})
         return False
 
+    def _state(self) -> dict[str, Any] | None:
+        """The folder's ``state.json`` (None if there is none), refused in one line unless it
+        is a study state: an object whose ``inputs`` pin a content hash, and whose content,
+        when kept, still has that hash (an edited state would name the wrong differences)."""
+        state_path = self.path(STATE_FILE)
+        if not state_path.is_file():
+            return None
+        try:
+            state = read_json_file(state_path)
+            recorded = state["inputs"]
+            if not isinstance(recorded, dict) or not isinstance(recorded.get(CONTENT_KEY), str):
+                raise TypeError
+        except (OSError, ValueError, KeyError, TypeError, IndexError):
+            raise SpindlebenchError(f"{state_path}: not a study state file; "
+                                    "choose another output folder") from None
+        kept = state.get("content")
+        if kept is not None and content_sha256(kept) != recorded[CONTENT_KEY]:
+            raise SpindlebenchError(f"{state_path}: edited (its study content no longer has "
+                                    "the hash it pins); choose another output folder")
+        return state
+
     def _refusal(self, key: str, was: Any, now: str, old_content: Any,
                  new_content: dict[str, Any]) -> SpindlebenchError:
+        if key == COMMAND_KEY:
+            return SpindlebenchError(f"{self.root}: holds the results of 'spindlebench {was}', "
+                                     f"not of '{now}'; use a new output folder")
         label = _LABELS.get(key, key)
         named = differences(old_content, new_content) if (
             key == CONTENT_KEY and isinstance(old_content, dict)) else []

@@ -129,7 +129,8 @@ class Sweep:
             self.conditions.append(None)
         self.specs = tuple(method_specs(study.methods))
         self.fmu = check_fmu(study)
-        self.simulations = Simulations(self.store, study, self.family, self.fmu)
+        self.simulations = Simulations(self.store, study, self.family, self.fmu,
+                                       "sweep")
         self._truths: dict[tuple[int, str], pd.DataFrame] = {}
 
     # ----------------------------------------------------------------- planning
