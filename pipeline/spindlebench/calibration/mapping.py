@@ -57,7 +57,10 @@ from spindlebench.formats.recording import (
     AMBIENT_COLUMN,
     DRIFT_COLUMN,
     DRIVER_COLUMNS,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
     NODE_PREFIX,
+    SPEED_COLUMN,
     TEMPERATURE_SUFFIX,
     TIME_COLUMN,
     node_of_output,
@@ -151,9 +154,9 @@ def _output_name(table: Table, column: str, value: Any, outputs: set[str]) -> st
 
 #: The range of each operating input the model declares (its Modelica ``min``/``max``, the
 #: limits a scenario is checked against); the ambient has its own check (kelvin, far too cold).
-INPUT_RANGES = {"spindle_speed_rpm": (0.0, MAX_RPM, "rev/min"),
-                "feed_x_mm_per_min": (0.0, MAX_FEED_MM_PER_MIN, "mm/min"),
-                "feed_y_mm_per_min": (0.0, MAX_FEED_MM_PER_MIN, "mm/min")}
+INPUT_RANGES = {SPEED_COLUMN: (0.0, MAX_RPM, "rev/min"),
+                FEED_X_COLUMN: (0.0, MAX_FEED_MM_PER_MIN, "mm/min"),
+                FEED_Y_COLUMN: (0.0, MAX_FEED_MM_PER_MIN, "mm/min")}
 
 
 def _column_or_constant(table: Table, key: str, allow_unknown: bool) -> str | float:
