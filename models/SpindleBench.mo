@@ -1246,7 +1246,7 @@ package SpindleBench "Lumped thermal network of a vertical machining centre's sp
     // Each has an experiment annotation; its reference result is
     // models/Resources/Reference/SpindleBench/Examples/<name>.csv, written by
     //   python -m spindlebench.model.examples --write-references
-    // and compared by tests/test_model_examples.py (through the build's pymoca/CasADi path).
+    // and compared by tests/model/test_model_examples.py (through the build's pymoca/CasADi path).
 
     model TwoSegmentRod "A rod of two segments between a warm and a cool end: the steady state is the linear profile"
       import SpindleBench.HeatTransfer.Components.SegmentedSolid;

@@ -105,7 +105,7 @@ def machines_page() -> str:
     lines = ["# Machines", "",
              "Generated from `scenarios/machines/*.toml`. A machine is a named set of FMU "
              "parameter values on top of the model's defaults, with the fingerprint targets "
-             "its runs were checked against (`tests/test_machines.py`). Any command that "
+             "its runs were checked against (`tests/machines/test_machines.py`). Any command that "
              "simulates takes `--machine NAME` or a path to a machine file.", ""]
     for name in machine_names():
         machine = load_machine(name)

@@ -14,7 +14,7 @@ that file's provenance::
 
     | run | best_raw_psi | ...
 
-``tests/test_docs_tables.py`` finds every table of every page, reads its marker and calls
+``tests/repo/test_docs_tables.py`` finds every table of every page, reads its marker and calls
 ``regenerate(by, source, key)``, which must give the same table from that file: a table typed
 by hand has no marker and must be listed there with the reason it is typed.
 
@@ -734,7 +734,7 @@ def expand(markdown: str, sources: Sources | None = None) -> str:
 
 def regenerate(by: str, source: str, key: str | None, sources: Sources | None = None) -> str:
     """The table a marker says was made by ``by`` from ``source`` (with ``key``), made again
-    from that file alone (the check of ``tests/test_docs_tables.py``)."""
+    from that file alone (the check of ``tests/repo/test_docs_tables.py``)."""
     sources = sources or Sources()
     path = sources.path(source)
     if by == "bench":

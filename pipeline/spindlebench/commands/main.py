@@ -28,8 +28,8 @@ from spindlebench.core.paths import OVERWRITE_SHIPPED_FLAG, allow_shipped
 #: CasADi, dask ...) cost ``spindlebench --help`` 5.8 CPU-s. The home of each line is the
 #: command module's ``HELP`` (what its ``register`` passes as ``help=``); this is a copy,
 #: because reading it lazily would mean importing the module (the cost this avoids) or
-#: parsing its source (not there in a bytecode-only install). ``tests/test_cli_commands.py``
-#: fails when a line differs from its module's ``HELP``.
+#: parsing its source (not there in a bytecode-only install).
+#: ``tests/commands/test_cli_commands.py`` fails when a line differs from its module's ``HELP``.
 COMMAND_HELP: dict[str, str] = {
     "adapt": "convert a real data set into canonical recordings (one per run)",
     "benchmark": "score methods on a fixed, versioned task suite; write a leaderboard",

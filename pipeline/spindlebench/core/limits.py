@@ -3,7 +3,7 @@
 Scenarios (``testbench.scenario``) and study files (``studies.family``) check their values
 against these; the runner checks every driven input against the min/max the FMU declares in
 its model description. The limits here agree with those declarations (the Modelica source's
-``min``/``max`` of the inputs; ``tests/test_contracts.py`` reads the committed FMU's model
+``min``/``max`` of the inputs; ``tests/repo/test_contracts.py`` reads the committed FMU's model
 description and checks), so a value a scenario accepts is one the FMU accepts too.
 
 Examples

@@ -8,7 +8,7 @@ example would add only a compile. Its reference result (every output, one row pe
 
     python -m spindlebench.model.examples --write-references
 
-``tests/test_model_examples.py`` simulates each example again, compares it with its reference
+``tests/model/test_model_examples.py`` simulates each example again, compares it with its reference
 and, where there is one, with the analytical solution.
 """
 

@@ -11,7 +11,7 @@ the ambient interpolated in C from a table handed over once (``sb_cvode_table``)
 once). CVode here is the same library FMPy ships, set up as FMPy sets it up (BDF, dense
 linear solver with CVode's own difference-quotient Jacobian, absolute tolerance = nominal ×
 relative tolerance, the same step limits), so a run gives the same bytes as the Python
-callbacks (tests/test_native_cvode.py).
+callbacks (tests/testbench/test_native_cvode.py).
 
 An FMU without these symbols (a user's own FMU) or with event indicators (this solver does no
 root finding) runs through FMPy's ``CVodeSolver`` as before (``available``).

@@ -552,7 +552,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
     serialised FMU state whose states are ``start``'s: the soak's, ``soak.soak_start``, or
     the continued run's), an FMU that saves states restores it (``fmi3SetFMUState``: one warm
     state forked into many runs) instead of setting ``start``'s temperatures by name; the
-    bytes are the same (tests/test_fmu_cosim.py), and the check that the FMU starts from
+    bytes are the same (tests/testbench/test_fmu_cosim.py), and the check that the FMU starts from
     ``start`` still applies. ``save_end_state`` keeps the FMU's serialised end state in
     ``Simulation.end_fmu_state``.
 

@@ -29,7 +29,7 @@ from spindlebench.testbench.scenario import (
     scenario_table,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STUDIES = sorted([*ROOT.glob("scenarios/studies/*.toml"), *ROOT.glob("benchmarks/studies/*.toml")])
 
 

@@ -18,7 +18,7 @@ from spindlebench.commands import main as cli
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.formats.roles import ColumnRoles, choose, detect_dialect
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "other-logger"
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "other-logger"
 TARGET = "dz [um]"
 
 

@@ -81,7 +81,7 @@ def test_a_signal_during_simulate_ends_it_at_once_with_one_line_and_nothing_writ
     assert not any(unzip.iterdir())  # the extracted FMU is removed too
 
 
-TINY = Path(__file__).resolve().parents[1] / "scenarios" / "studies" / "tiny_sweep.toml"
+TINY = Path(__file__).resolve().parents[2] / "scenarios" / "studies" / "tiny_sweep.toml"
 
 
 @pytest.fixture(scope="module")
@@ -175,7 +175,7 @@ def test_a_second_signal_while_the_workers_stop_does_not_hang_the_sweep(tmp_path
     assert not list(out.rglob("*.part"))
 
 
-MINI_PLACEMENT = (Path(__file__).resolve().parents[1] / "scenarios" / "studies"
+MINI_PLACEMENT = (Path(__file__).resolve().parents[2] / "scenarios" / "studies"
                   / "tiny_placement.toml")
 
 
@@ -625,7 +625,7 @@ def test_warnings_from_sweep_workers_are_one_line_each(tmp_path):
 # --------------------------------------------------------------------------- case 6: units
 
 
-MODELS = Path(__file__).resolve().parents[1] / "models"
+MODELS = Path(__file__).resolve().parents[2] / "models"
 
 
 def edited_models(tmp_path: Path, old: str, new: str) -> Path:

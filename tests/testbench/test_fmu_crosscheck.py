@@ -12,7 +12,7 @@ from fmpy.util import read_ref_opt_file
 from spindlebench.commands import build
 from spindlebench.testbench.cross_check import write_cross_check
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXP1 = ROOT / "scenarios" / "paper" / "exp1.toml"
 
 

@@ -172,7 +172,7 @@ kind = "soak"
             scenario.ambient.weather_tau_h) == (0.5, 2.0, 2.0, 3.0, 36.0)
     assert scenario.sensors.noise_kind == "ar1" and scenario.sensors.noise_lag1 == 0.86
     assert scenario.initial == InitialState(kind="soak", days=7)
-    readme = (Path(__file__).parents[1] / "scenarios" / "README.md").read_text()
+    readme = (Path(__file__).parents[2] / "scenarios" / "README.md").read_text()
     for documented in ("attenuation = 0.5", "lag_h = 2", "building_offset_K = 2",
                        "weather_sd_K = 3", "weather_tau_h = 36", "noise_lag1 = 0.86",
                        "days = 7"):
@@ -282,7 +282,7 @@ def test_a_soaked_run_starts_from_the_history_reproducibly(tmp_path, soak_cache)
 def test_shipped_realistic_example_and_study_load():
     from spindlebench.studies.family.family_file import load_study
 
-    root = Path(__file__).parents[1]
+    root = Path(__file__).parents[2]
     study = load_study(root / "scenarios" / "studies" / "season_sweep_realistic.toml")
     assert study.soak_days == 7 and study.indoor is not None
     assert {level.value.noise_kind for level in study.noise} == {"ar1"}
@@ -296,7 +296,7 @@ def test_shipped_realistic_example_and_study_load():
 
 
 def _tiny(tmp_path: Path, old: str, new: str) -> Path:
-    text = (Path(__file__).parents[1] / "scenarios" / "studies" / "tiny_sweep.toml").read_text()
+    text = (Path(__file__).parents[2] / "scenarios" / "studies" / "tiny_sweep.toml").read_text()
     assert old in text
     path = tmp_path / "study.toml"
     path.write_text(text.replace(old, new), encoding="utf-8")

@@ -17,7 +17,7 @@ from spindlebench.testbench.cosim import co_simulate_cs
 from spindlebench.testbench.runner import extracted_fmu, inspect_fmu, restore_state, save_state
 from spindlebench.testbench.scenario import load_scenario
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: The issue's agreement between co-simulation and the runner's CVode on model exchange.
 TOLERANCE_K, TOLERANCE_UM = 1e-3, 1e-2
 

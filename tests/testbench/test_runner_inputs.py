@@ -15,7 +15,7 @@ from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.testbench.runner import co_simulate, solver_stops
 from spindlebench.testbench.scenario import InitialState, load_scenario
 
-SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 CASES = sorted((SCENARIOS / "paper").glob("exp*.toml")) + sorted(
     (SCENARIOS / "examples").glob("*.toml"))
 SHORT_S = 5400.0

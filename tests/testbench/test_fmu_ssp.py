@@ -24,7 +24,7 @@ from spindlebench.testbench import runner
 from spindlebench.testbench.scenario import InitialState, load_scenario
 from spindlebench.testbench.ssp import export_ssp
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXP1 = ROOT / "scenarios" / "paper" / "exp1.toml"
 DURATION_S = 1200.0
 

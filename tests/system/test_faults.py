@@ -2,7 +2,7 @@
 
 One test (at least) per item of the issue, each against the real code path that failed:
 data loss, hangs, silent wrong results, security and misleading messages. The hostile-input
-table (tests/test_hostile_inputs.py) holds the one-line refusals of the command line; this
+table (tests/system/test_hostile_inputs.py) holds the one-line refusals of the command line; this
 file holds what needs more than one command or a look at the bytes.
 """
 
@@ -262,7 +262,7 @@ def die_mid_send() -> None:
 
 HALF_SENT = """
 import sys
-sys.path.insert(0, {tests!r})
+sys.path[:0] = [{tests!r}, {root!r}]
 from test_faults import die_mid_send, nap
 from spindlebench.studies.running.executor import Task, TaskRunner
 if __name__ == "__main__":
@@ -281,7 +281,9 @@ def test_a_worker_killed_while_sending_its_result_does_not_hang_the_run(tmp_path
     the rest of the message), Ctrl-C then waited on its shutdown. Now the dead worker is
     seen, the manager unblocked, the task reported, the others done."""
     script = tmp_path / "half.py"
-    script.write_text(HALF_SENT.format(tests=str(Path(__file__).parent)), encoding="utf-8")
+    here = Path(__file__).resolve()
+    script.write_text(HALF_SENT.format(tests=str(here.parent), root=str(here.parents[1])),
+                      encoding="utf-8")
     child = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                            timeout=240)
     assert child.returncode == 0, child.stderr

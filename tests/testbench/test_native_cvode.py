@@ -25,7 +25,7 @@ from spindlebench.testbench import native_cvode, runner
 from spindlebench.testbench.runner import co_simulate
 from spindlebench.testbench.scenario import load_scenario
 
-SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def short(name: str, duration_s: float, **changes):
