@@ -35,7 +35,12 @@ Sources (``Sources``, the checkout's by default):
 - what ``make run`` writes under ``results/paper_study/`` and ``results/caiviac_study/``
   (``run-table FOLDER/FILE[@N]``: the N-th table of that file as written; ``paper-summary
   FOLDER``: the mean RMSE per k and group of its ``table6_rmse.csv``), or their committed
-  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run.
+  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run;
+- the season sweeps' ``summary/by_method.csv`` (``sweep-groups FOLDER[@iqr]``: the paper's
+  groups, the baselines and the oracle per k; ``sweep-methods FOLDER@GROUP``: every method on
+  one group's candidates) and the year placement's ``placements.csv`` (``placement-year``,
+  ``placement-year-af``), from ``results/`` or their snapshots (the runs take minutes, longer
+  than ``make docs``; ``make docs-snapshots`` copies them).
 """
 
 from __future__ import annotations
@@ -366,6 +371,8 @@ STUDY_FILES = {
     "compensation-population": ("compensate-stable-room/population",
                                 "population_compensation.csv"),
     "compensation-default": ("compensate-stable-room/default", "summary.csv"),
+    "placement-year": ("placement", "placements.csv"),
+    "placement-year-af": ("af-placement", "placements.csv"),
 }
 STUDY_COMMANDS = {
     "placement-population": "spindlebench place scenarios/studies/placement_stable_room.toml "
@@ -378,6 +385,10 @@ STUDY_COMMANDS = {
     "compensation-default": "spindlebench compensate "
                             "scenarios/studies/compensate_stable_room.toml --machine default "
                             "-o results/compensate-stable-room/default",
+    "placement-year": "spindlebench place scenarios/studies/placement.toml -o results/placement "
+                      "--workers 1",
+    "placement-year-af": "spindlebench place scenarios/studies/placement.toml "
+                         "-o results/af-placement --machine ambient-following --workers 1",
 }
 
 
@@ -424,8 +435,11 @@ def placement_population_table(path: Path, key: str | None = None) -> str:
 
 
 def placement_default_table(path: Path, key: str | None = None) -> str:
+    """Mean held-out RMSE per budget and placement method (a method that scored no budget,
+    such as an exhaustive search too large to run, has no column)."""
     rows = _csv(path)
-    labels = list(dict.fromkeys(r["label"] for r in rows))
+    labels = list(dict.fromkeys(r["label"] for r in rows
+                                if r["test_mean_rmse_um"] not in ("", "nan")))
     budgets = sorted({int(r["m"]) for r in rows})
     score = {(r["label"], int(r["m"])): r["test_mean_rmse_um"] for r in rows}
     return markdown_table(["m", *labels], [[m, *[_um(score.get((lb, m))) for lb in labels]]
@@ -470,6 +484,8 @@ STUDY_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "placement-default": placement_default_table,
     "compensation-population": compensation_population_table,
     "compensation-default": compensation_default_table,
+    "placement-year": placement_default_table,
+    "placement-year-af": placement_default_table,
 }
 
 
@@ -701,6 +717,120 @@ def fingerprint_section(key: str | None, sources: Sources) -> str:
                  fingerprint_medians_table(folder, key))
 
 
+# --------------------------------------------------------------------------- season sweeps
+
+#: Sweep folders under results/ and the command that writes each (the page names it too).
+SWEEP_FOLDERS = {
+    "season-sweep": "spindlebench sweep scenarios/studies/season_sweep.toml "
+                    "-o results/season-sweep --workers 1",
+    "season-sweep-methods": "spindlebench sweep scenarios/studies/season_sweep_methods.toml "
+                            "-o results/season-sweep-methods --workers 1",
+}
+SWEEP_FILE = "summary/by_method.csv"
+#: The groups table's columns: (method in by_method.csv, header).
+SWEEP_GROUPS = (("all_raw", "all_raw"), ("six_raw", "six_raw"), ("six_diff", "six_diff"),
+                ("top-k-correlated", "top-k-correlated"), ("ridge", "ridge (no k)"),
+                ("oracle", "oracle floor"))
+PAPER_GROUPS = ("all_raw", "six_raw", "six_diff")
+
+
+def sweep_file(folder: str, sources: Sources) -> Path | None:
+    """``results/<folder>/summary/by_method.csv`` if the sweep was run in this checkout, else
+    its committed copy under ``docs/snapshots/<folder>/``."""
+    if folder not in SWEEP_FOLDERS:
+        raise ValueError(f"{folder}: not a sweep folder ({', '.join(SWEEP_FOLDERS)})")
+    for base in (sources.results, sources.snapshots):
+        if (base / folder / SWEEP_FILE).is_file():
+            return base / folder / SWEEP_FILE
+    return None
+
+
+def _measured(path: Path) -> dict[tuple[str, str], dict[str, str]]:
+    """by_method.csv's measured rows by (method, k); k is '' for ridge and the oracle."""
+    return {(r["method"], r["k"].removesuffix(".0")): r for r in _csv(path)
+            if r["data"] == "measured"}
+
+
+def _ks(rows: Mapping[tuple[str, str], Any]) -> list[str]:
+    return sorted({k for _, k in rows if k}, key=int)
+
+
+def sweep_groups_table(path: Path, key: str | None = None) -> str:
+    """Median held-out RMSE (µm) of the measured data per k: the paper's three groups, the two
+    baselines and the oracle floor (``key`` ``iqr``: with the IQR in brackets and the lowest
+    of the paper's three groups in bold)."""
+    rows = _measured(path)
+    body = []
+    for index, k in enumerate(_ks(rows)):
+        best = min((float(rows[(g, k)]["median_um"]), g) for g in PAPER_GROUPS
+                   if (g, k) in rows)[1] if key == "iqr" else None
+        line: list[Any] = [k]
+        for method, _ in SWEEP_GROUPS:
+            row = rows.get((method, k)) or (rows.get((method, "")) if index == 0 else None)
+            if row is None:
+                line.append("")
+                continue
+            cell = _um(row["median_um"])
+            if key == "iqr":
+                cell = (f"**{cell}**" if method == best else cell) + f" ({_um(row['iqr_um'])})"
+            line.append(cell)
+        body.append(line)
+    return markdown_table(["k", *[header for _, header in SWEEP_GROUPS]], body)
+
+
+def sweep_methods_table(path: Path, key: str | None = None) -> str:
+    """Median / IQR / worst held-out RMSE (µm) of every method on one group's candidates
+    (``key``: ``all_raw``, ``six_raw`` or ``six_diff``; methods ``GROUP:METHOD``), per k."""
+    if key is None:
+        raise ValueError(f"{path}: the methods table needs a group (all_raw, six_raw, six_diff)")
+    rows = _measured(path)
+    methods = list(dict.fromkeys(m.split(":", 1)[1] for m, _ in rows
+                                 if m.startswith(f"{key}:")))
+    if not methods:
+        raise ValueError(f"{path}: no methods on the {key} candidates")
+    ks = _ks(rows)
+
+    def cell(method: str, k: str) -> str:
+        row = rows.get((f"{key}:{method}", k))
+        if row is None:
+            return "—"
+        return (f"{_um(row['median_um'])} / {_um(row['iqr_um'])} / "
+                f"{float(row['worst_um']):.1f}")
+
+    return markdown_table(["method", *[f"k = {k}" for k in ks]],
+                          [[m, *[cell(m, k) for k in ks]] for m in methods])
+
+
+SWEEP_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "sweep-groups": sweep_groups_table,
+    "sweep-methods": sweep_methods_table,
+}
+
+
+def sweep_provenance(path: Path, source: str, folder: str) -> str:
+    record = _read_json(path.parent.parent / "provenance.json") or {}
+    fmu = record.get("fmu") or {}
+    machine = record.get("machine") or {}
+    machine = machine.get("name", "?") if isinstance(machine, dict) else machine
+    versions = record.get("package_versions", {})
+    return (f"From `{source}`, written by `{SWEEP_FOLDERS[folder]}` (machine `{machine}`, "
+            f"FMU sha256 {str(fmu.get('sha256', '?'))[:12]}, spindlebench "
+            f"{versions.get('spindlebench', '?')})")
+
+
+def sweep_section(by: str, key: str | None, sources: Sources) -> str:
+    """``sweep-groups FOLDER[@iqr]`` or ``sweep-methods FOLDER@GROUP``."""
+    if key is None:
+        raise ValueError(f"<!-- generate: {by} -->: needs a sweep folder (e.g. season-sweep)")
+    folder, _, option = key.partition("@")
+    path = sweep_file(folder, sources)
+    if path is None:
+        return placeholder(f"`results/{folder}/{SWEEP_FILE}`", SWEEP_FOLDERS[folder])
+    source = sources.name(path)
+    return block(by, source, option or None, sweep_provenance(path, source, folder),
+                 SWEEP_TABLES[by](path, option or None))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -717,12 +847,14 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return study_section(by, sources)
     if by in RUN_TABLES:
         return run_section(by, key, sources)
+    if by in SWEEP_TABLES:
+        return sweep_section(by, key, sources)
     if by == "sensitivity":
         return sensitivity_section(key, sources)
     if by == "fingerprint-medians":
         return fingerprint_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, "
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians)")
 
 
@@ -747,6 +879,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
     if by in RUN_TABLES:
         return RUN_TABLES[by](path, key)
+    if by in SWEEP_TABLES:
+        return SWEEP_TABLES[by](path, key)
     if by == "sensitivity":
         return sensitivity_table(path, key)
     if by == "fingerprint-medians":
