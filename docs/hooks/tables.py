@@ -780,7 +780,8 @@ def sweep_groups_table(path: Path, key: str | None = None) -> str:
 
 def sweep_methods_table(path: Path, key: str | None = None) -> str:
     """Median / IQR / worst held-out RMSE (µm) of every method on one group's candidates
-    (``key``: ``all_raw``, ``six_raw`` or ``six_diff``; methods ``GROUP:METHOD``), per k."""
+    (``key``: ``all_raw``, ``six_raw`` or ``six_diff``; methods ``GROUP:METHOD``, and the
+    paper's max-min closure, the bare ``GROUP``, as ``closure``), per k."""
     if key is None:
         raise ValueError(f"{path}: the methods table needs a group (all_raw, six_raw, six_diff)")
     rows = _measured(path)
@@ -789,9 +790,11 @@ def sweep_methods_table(path: Path, key: str | None = None) -> str:
     if not methods:
         raise ValueError(f"{path}: no methods on the {key} candidates")
     ks = _ks(rows)
+    if any((key, k) in rows for k in ks):
+        methods.insert(0, "closure")
 
     def cell(method: str, k: str) -> str:
-        row = rows.get((f"{key}:{method}", k))
+        row = rows.get((key if method == "closure" else f"{key}:{method}", k))
         if row is None:
             return "—"
         return (f"{_um(row['median_um'])} / {_um(row['iqr_um'])} / "

@@ -78,22 +78,13 @@ HAND_TABLES: dict[tuple[str, str], str] = {
         "spindlebench.model.discretisation`, minutes of CPU)",
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
-    ("studies.md", "| k | all_raw | six_raw | six_diff | top-k-correlated | ridge | oracle "
-     "floor |"): STALE,
-    ("studies.md", "| m | fuzzy | greedy | exhaustive | fuzzy + differences | greedy + "
-     "differences |"): STALE,
     ("studies.md", "| model (k = 3) | healthy days | T1 stuck, never retrained | T1 stuck, "
      "retrained after detection |"): STALE,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
     ("study-placement.md", "| step | time | naive baseline in the same process |"): TIMING,
     ("study-placement.md", "| field | candidates | `place`'s fuzzy selection, m = 2..6 | "
      "before (full design matrix from DataFrames) |"): TIMING,
-    ("study-placement.md", "| m | fuzzy | greedy | exhaustive | fuzzy+diff | greedy+diff |"):
-        STALE,
     ("study-placement.md", "| method | m = 2 | m = 3 | m = 4 | m = 5 | m = 6 |"): STALE,
-    ("study-sweep.md", "| k | all_raw | six_raw | six_diff | top-k-correlated | ridge (no k) | "
-     "oracle floor |"): STALE,
-    ("study-sweep.md", "| method | k = 2 | k = 3 | k = 4 |"): STALE,
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
