@@ -82,6 +82,11 @@ docs-snapshots:
 	  mkdir -p docs/snapshots/$$place; \
 	  cp results/$$place/placements.csv results/$$place/README.md \
 	    results/$$place/provenance.json docs/snapshots/$$place/; done
+	if test -f results/tiny-compensate-five-probe/README.md; then \
+	  mkdir -p docs/snapshots/tiny-compensate-five-probe/drift_um; \
+	  cp results/tiny-compensate-five-probe/README.md docs/snapshots/tiny-compensate-five-probe/; \
+	  cp results/tiny-compensate-five-probe/drift_um/provenance.json \
+	    docs/snapshots/tiny-compensate-five-probe/drift_um/; fi
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

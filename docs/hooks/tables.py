@@ -40,7 +40,9 @@ Sources (``Sources``, the checkout's by default):
   groups, the baselines and the oracle per k; ``sweep-methods FOLDER@GROUP``: every method on
   one group's candidates) and the year placement's ``placements.csv`` (``placement-year``,
   ``placement-year-af``), from ``results/`` or their snapshots (the runs take minutes, longer
-  than ``make docs``; ``make docs-snapshots`` copies them).
+  than ``make docs``; ``make docs-snapshots`` copies them);
+- a multi-target compensation's ``README.md`` (``compensation-targets FOLDER[@RULE]``: its
+  per-target residual table, the rows of one retraining rule).
 """
 
 from __future__ import annotations
@@ -834,6 +836,64 @@ def sweep_section(by: str, key: str | None, sources: Sources) -> str:
                  SWEEP_TABLES[by](path, option or None))
 
 
+# --------------------------------------------------------------------------- several targets
+
+#: Multi-target compensation folders under results/ and the command that writes each.
+TARGET_FOLDERS = {
+    "tiny-compensate-five-probe": "spindlebench compensate "
+                                  "scenarios/studies/tiny_compensate_five_probe.toml "
+                                  "-o results/tiny-compensate-five-probe",
+}
+
+
+def targets_file(folder: str, sources: Sources) -> Path | None:
+    """The folder's ``README.md`` (its side-by-side table of every target) in ``results/`` if
+    the study was run here, else its committed copy under ``docs/snapshots/``."""
+    if folder not in TARGET_FOLDERS:
+        raise ValueError(f"{folder}: not a multi-target folder ({', '.join(TARGET_FOLDERS)})")
+    for base in (sources.results, sources.snapshots):
+        if (base / folder / "README.md").is_file():
+            return base / folder / "README.md"
+    return None
+
+
+def compensation_targets_table(path: Path, key: str | None = None) -> str:
+    """The residual RMS of every model and target under one retraining rule (``key``,
+    ``after-fault`` by default): the rows of that rule from the README's first table, which
+    ``compensate`` writes from each target's ``summary.csv``."""
+    rule = key or "after-fault"
+    found = tables(path.read_text(encoding="utf-8"))
+    if not found:
+        raise ValueError(f"{path}: has no table")
+    lines = found[0][2].splitlines()
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    if header[:2] != ["retrain", "model"]:
+        raise ValueError(f"{path}: the first table is not the per-target residual table")
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in lines[2:]]
+    kept = [row[1:] for row in rows if row[0] == rule]
+    if not kept:
+        raise ValueError(f"{path}: no rows retrained {rule!r}")
+    return markdown_table(header[1:], kept)
+
+
+def targets_section(key: str | None, sources: Sources) -> str:
+    """``compensation-targets FOLDER[@RULE]``."""
+    if key is None:
+        raise ValueError("<!-- generate: compensation-targets -->: needs a folder")
+    folder, _, rule = key.partition("@")
+    path = targets_file(folder, sources)
+    if path is None:
+        return placeholder(f"`results/{folder}/README.md`", TARGET_FOLDERS[folder])
+    source = sources.name(path)
+    record = _read_json(path.parent / "drift_um" / "provenance.json") or {}
+    fmu = record.get("fmu") or {}
+    provenance = (f"From `{source}`, written by `{TARGET_FOLDERS[folder]}` (FMU sha256 "
+                  f"{str(fmu.get('sha256', '?'))[:12]}, spindlebench "
+                  f"{record.get('package_versions', {}).get('spindlebench', '?')})")
+    return block("compensation-targets", source, rule or None, provenance,
+                 compensation_targets_table(path, rule or None))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -852,13 +912,15 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return run_section(by, key, sources)
     if by in SWEEP_TABLES:
         return sweep_section(by, key, sources)
+    if by == "compensation-targets":
+        return targets_section(key, sources)
     if by == "sensitivity":
         return sensitivity_section(key, sources)
     if by == "fingerprint-medians":
         return fingerprint_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
-                     "sensitivity, fingerprint-medians)")
+                     "sensitivity, fingerprint-medians, compensation-targets)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -884,6 +946,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return RUN_TABLES[by](path, key)
     if by in SWEEP_TABLES:
         return SWEEP_TABLES[by](path, key)
+    if by == "compensation-targets":
+        return compensation_targets_table(path, key)
     if by == "sensitivity":
         return sensitivity_table(path, key)
     if by == "fingerprint-medians":

@@ -48,9 +48,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("compensation.md", "| model | healthy days, never retrained | fault days, never retrained "
      "| fault days, retrained after the fault | fault days, retrained weekly | healthy days, "
      "retrained weekly: RMS |"): STALE,
-    ("compensation.md", "| model | drift_um | drift_x_um | drift_y_um | tilt_a_urad | "
-     "tilt_b_urad |"): "a result of the tiny five-probe compensate study (issue 21), quoted "
-        "from its summary when it landed: to become a generate: line reading that summary",
     ("contracts.md", "| name | unit | meaning |"): PROSE,
     ("fmu.md", "| symbol | what it does |"): PROSE,
     ("fmu.md", "| run | Python callbacks | C right-hand side | ratio | same bytes | C, forward "
