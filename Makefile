@@ -78,7 +78,7 @@ docs-snapshots:
 	  mkdir -p docs/snapshots/$$sweep/summary; \
 	  cp results/$$sweep/summary/by_method.csv docs/snapshots/$$sweep/summary/; \
 	  cp results/$$sweep/README.md results/$$sweep/provenance.json docs/snapshots/$$sweep/; done
-	for place in placement af-placement; do test -f results/$$place/placements.csv || continue; \
+	for place in placement af-placement placement-methods; do test -f results/$$place/placements.csv || continue; \
 	  mkdir -p docs/snapshots/$$place; \
 	  cp results/$$place/placements.csv results/$$place/README.md \
 	    results/$$place/provenance.json docs/snapshots/$$place/; done

@@ -375,6 +375,10 @@ STUDY_FILES = {
     "compensation-default": ("compensate-stable-room/default", "summary.csv"),
     "placement-year": ("placement", "placements.csv"),
     "placement-year-af": ("af-placement", "placements.csv"),
+    "placement-methods": ("placement-methods", "placements.csv"),
+    "compensation-month": ("compensate-month", "summary.csv"),
+    "compensation-month-short": ("compensate-month", "summary.csv"),
+    "compensation-month-cold": ("compensate-month-cold", "summary.csv"),
 }
 STUDY_COMMANDS = {
     "placement-population": "spindlebench place scenarios/studies/placement_stable_room.toml "
@@ -391,6 +395,16 @@ STUDY_COMMANDS = {
                       "--workers 1",
     "placement-year-af": "spindlebench place scenarios/studies/placement.toml "
                          "-o results/af-placement --machine ambient-following --workers 1",
+    "placement-methods": "spindlebench place scenarios/studies/placement_methods.toml "
+                         "-o results/placement-methods --workers 1",
+    "compensation-month": "spindlebench compensate scenarios/studies/compensate_month.toml "
+                          "-o results/compensate-month",
+    "compensation-month-short": "spindlebench compensate "
+                                "scenarios/studies/compensate_month.toml "
+                                "-o results/compensate-month",
+    "compensation-month-cold": "spindlebench compensate "
+                               "scenarios/studies/compensate_month.toml "
+                               "-o results/compensate-month-cold --days cold-starts",
 }
 
 
@@ -481,6 +495,78 @@ def compensation_default_table(path: Path, key: str | None = None) -> str:
                             f"{100.0 * float(r['within_tolerance']):.0f} %"] for r in rows])
 
 
+def placement_methods_table(path: Path, key: str | None = None) -> str:
+    """Mean held-out RMSE (worst test run in brackets) per method and budget, on the nodes
+    alone (``key`` ``raw``) or with their differences (``diff``: the ``+diff`` labels)."""
+    if key not in ("raw", "diff"):
+        raise ValueError(f"{path}: the placement-methods table needs raw or diff, not {key!r}")
+    rows = [r for r in _csv(path) if (r["differences"] == "True") == (key == "diff")
+            and r["test_mean_rmse_um"] not in ("", "nan")]
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    budgets = sorted({int(r["m"]) for r in rows})
+    score = {(r["method"], int(r["m"])): r for r in rows}
+
+    def cell(method: str, m: int) -> str:
+        row = score.get((method, m))
+        if row is None:
+            return "—"
+        return f"{_um(row['test_mean_rmse_um'])} ({float(row['test_worst_rmse_um']):.1f})"
+
+    return markdown_table(["method", *[f"m = {m}" for m in budgets]],
+                          [[method, *[cell(method, m) for m in budgets]] for method in methods])
+
+
+def _month_cells(path: Path) -> tuple[list[str], dict[tuple[str, str, str], dict[str, str]]]:
+    rows = _csv(path)
+    models = list(dict.fromkeys(r["model"] for r in rows))
+    models = [m for m in models if m != "uncompensated"] + \
+        [m for m in models if m == "uncompensated"]
+    return models, {(r["retrain"], r["part"], r["model"]): r for r in rows}
+
+
+def _month_cell(row: dict[str, str] | None) -> str:
+    if row is None:
+        return "—"
+    return (f"{float(row['rms_um']):.1f} / {float(row['peak_um']):.1f} / "
+            f"{100.0 * float(row['within_tolerance']):.0f} %")
+
+
+#: The month table's columns: (retrain, part, header); the last one shows the RMS only.
+MONTH_COLUMNS = (("never", "healthy days", "healthy days, never retrained"),
+                 ("never", "fault days", "fault days, never retrained"),
+                 ("after-fault", "fault days", "fault days, retrained after the fault"),
+                 ("weekly", "fault days", "fault days, retrained weekly"),
+                 ("weekly", "healthy days", "healthy days, retrained weekly: RMS"))
+
+
+def compensation_month_table(path: Path, key: str | None = None) -> str:
+    """Residual RMS / peak (µm) / time within tolerance per model, on healthy and fault days
+    under each retraining rule, from a month's ``summary.csv``."""
+    models, cells = _month_cells(path)
+    body = []
+    for model in models:
+        line: list[Any] = [f"`{model}`" if model != "uncompensated" else model]
+        for index, (rule, part, _) in enumerate(MONTH_COLUMNS):
+            row = cells.get((rule, part, model))
+            line.append(_month_cell(row) if index < len(MONTH_COLUMNS) - 1 else
+                        ("—" if row is None else f"{float(row['rms_um']):.1f}"))
+        body.append(line)
+    return markdown_table(["model", *[header for _, _, header in MONTH_COLUMNS]], body)
+
+
+def compensation_month_short_table(path: Path, key: str | None = None) -> str:
+    """The month's residual RMS (µm) only: healthy days, and fault days never retrained or
+    retrained after the fault (the overview on docs/studies.md)."""
+    models, cells = _month_cells(path)
+    columns = (("never", "healthy days"), ("never", "fault days"), ("after-fault", "fault days"))
+    return markdown_table(
+        ["model (k = 3)", "healthy days", "T1 stuck, never retrained",
+         "T1 stuck, retrained after detection"],
+        [[f"`{model}`" if model != "uncompensated" else model,
+          *["—" if (row := cells.get((rule, part, model))) is None else
+            f"{float(row['rms_um']):.1f}" for rule, part in columns]] for model in models])
+
+
 STUDY_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "placement-population": placement_population_table,
     "placement-default": placement_default_table,
@@ -488,6 +574,10 @@ STUDY_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "compensation-default": compensation_default_table,
     "placement-year": placement_default_table,
     "placement-year-af": placement_default_table,
+    "placement-methods": placement_methods_table,
+    "compensation-month": compensation_month_table,
+    "compensation-month-short": compensation_month_short_table,
+    "compensation-month-cold": compensation_month_table,
 }
 
 
@@ -500,13 +590,13 @@ def study_provenance(path: Path, source: str, by: str) -> str:
             f"spindlebench {versions.get('spindlebench', '?')})")
 
 
-def study_section(by: str, sources: Sources) -> str:
+def study_section(by: str, sources: Sources, key: str | None = None) -> str:
     path = study_file(by, sources)
     if path is None:
         return placeholder(f"The {by} table", STUDY_COMMANDS[by])
     source = sources.name(path)
-    text = block(by, source, None, study_provenance(path, source, by),
-                 STUDY_TABLES[by](path, None))
+    text = block(by, source, key, study_provenance(path, source, by),
+                 STUDY_TABLES[by](path, key))
     if by == "placement-population":
         text += "\n" + placement_verdict(path) + "\n"
     return text
@@ -907,7 +997,7 @@ def section(by: str, key: str | None, sources: Sources) -> str:
     if by in MACHINE_TABLES:
         return machine_section(by, key, sources)
     if by in STUDY_TABLES:
-        return study_section(by, sources)
+        return study_section(by, sources, key)
     if by in RUN_TABLES:
         return run_section(by, key, sources)
     if by in SWEEP_TABLES:

@@ -81,7 +81,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("study-placement.md", "| step | time | naive baseline in the same process |"): TIMING,
     ("study-placement.md", "| field | candidates | `place`'s fuzzy selection, m = 2..6 | "
      "before (full design matrix from DataFrames) |"): TIMING,
-    ("study-placement.md", "| method | m = 2 | m = 3 | m = 4 | m = 5 | m = 6 |"): STALE,
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
