@@ -82,6 +82,10 @@ docs-snapshots:
 	  mkdir -p docs/snapshots/$$place; \
 	  cp results/$$place/placements.csv results/$$place/README.md \
 	    results/$$place/provenance.json docs/snapshots/$$place/; done
+	for month in compensate-month compensate-month-cold; do \
+	  test -f results/$$month/summary.csv || continue; mkdir -p docs/snapshots/$$month; \
+	  cp results/$$month/summary.csv results/$$month/README.md \
+	    results/$$month/provenance.json docs/snapshots/$$month/; done
 	if test -f results/tiny-compensate-five-probe/README.md; then \
 	  mkdir -p docs/snapshots/tiny-compensate-five-probe/drift_um; \
 	  cp results/tiny-compensate-five-probe/README.md docs/snapshots/tiny-compensate-five-probe/; \

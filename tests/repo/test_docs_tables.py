@@ -33,9 +33,6 @@ tables = _module("tables")
 QUOTED = "quoted from a source outside the repository (the paper, issue 20's recordings)"
 PROSE = "words, not numbers: names, homes, keys or where to read"
 KEYS = "a file format's keys and defaults: arguments, typed where the format is defined"
-STALE = ("a result of a run longer than make docs (a sweep, a placement or benchmark study, "
-         "20 to 40 min) quoted before the tables were generated, from an older FMU: to become "
-         "a generate: line when the run is repeated and snapshotted under docs/snapshots/")
 NO_FILE = ("a result of a command that writes no file (it prints its numbers): to become a "
            "generate: line when the command writes one")
 RUNS = ("a result of `spindlebench paper` runs that make run does not do (other phases, "
@@ -45,9 +42,6 @@ TIMING = "a timing quoted from a bench script that does not write bench/results/
 #: Tables typed by hand: (page, header line) -> why. Every other table must be generated, and
 #: every table listed here must still be in the docs.
 HAND_TABLES: dict[tuple[str, str], str] = {
-    ("compensation.md", "| model | healthy days, never retrained | fault days, never retrained "
-     "| fault days, retrained after the fault | fault days, retrained weekly | healthy days, "
-     "retrained weekly: RMS |"): STALE,
     ("contracts.md", "| name | unit | meaning |"): PROSE,
     ("fmu.md", "| symbol | what it does |"): PROSE,
     ("fmu.md", "| run | Python callbacks | C right-hand side | ratio | same bytes | C, forward "
@@ -75,8 +69,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
         "spindlebench.model.discretisation`, minutes of CPU)",
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
-    ("studies.md", "| model (k = 3) | healthy days | T1 stuck, never retrained | T1 stuck, "
-     "retrained after detection |"): STALE,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
     ("study-placement.md", "| step | time | naive baseline in the same process |"): TIMING,
     ("study-placement.md", "| field | candidates | `place`'s fuzzy selection, m = 2..6 | "
