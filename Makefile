@@ -73,6 +73,24 @@ docs-snapshots:
 	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
 	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
 	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
+	for sweep in season-sweep season-sweep-methods; do \
+	  test -f results/$$sweep/summary/by_method.csv || continue; \
+	  mkdir -p docs/snapshots/$$sweep/summary; \
+	  cp results/$$sweep/summary/by_method.csv docs/snapshots/$$sweep/summary/; \
+	  cp results/$$sweep/README.md results/$$sweep/provenance.json docs/snapshots/$$sweep/; done
+	for place in placement af-placement placement-methods; do test -f results/$$place/placements.csv || continue; \
+	  mkdir -p docs/snapshots/$$place; \
+	  cp results/$$place/placements.csv results/$$place/README.md \
+	    results/$$place/provenance.json docs/snapshots/$$place/; done
+	for month in compensate-month compensate-month-cold; do \
+	  test -f results/$$month/summary.csv || continue; mkdir -p docs/snapshots/$$month; \
+	  cp results/$$month/summary.csv results/$$month/README.md \
+	    results/$$month/provenance.json docs/snapshots/$$month/; done
+	if test -f results/tiny-compensate-five-probe/README.md; then \
+	  mkdir -p docs/snapshots/tiny-compensate-five-probe/drift_um; \
+	  cp results/tiny-compensate-five-probe/README.md docs/snapshots/tiny-compensate-five-probe/; \
+	  cp results/tiny-compensate-five-probe/drift_um/provenance.json \
+	    docs/snapshots/tiny-compensate-five-probe/drift_um/; fi
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

@@ -35,7 +35,14 @@ Sources (``Sources``, the checkout's by default):
 - what ``make run`` writes under ``results/paper_study/`` and ``results/caiviac_study/``
   (``run-table FOLDER/FILE[@N]``: the N-th table of that file as written; ``paper-summary
   FOLDER``: the mean RMSE per k and group of its ``table6_rmse.csv``), or their committed
-  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run.
+  copies under ``docs/snapshots/`` in a checkout where ``make run`` has not been run;
+- the season sweeps' ``summary/by_method.csv`` (``sweep-groups FOLDER[@iqr]``: the paper's
+  groups, the baselines and the oracle per k; ``sweep-methods FOLDER@GROUP``: every method on
+  one group's candidates) and the year placement's ``placements.csv`` (``placement-year``,
+  ``placement-year-af``), from ``results/`` or their snapshots (the runs take minutes, longer
+  than ``make docs``; ``make docs-snapshots`` copies them);
+- a multi-target compensation's ``README.md`` (``compensation-targets FOLDER[@RULE]``: its
+  per-target residual table, the rows of one retraining rule).
 """
 
 from __future__ import annotations
@@ -366,6 +373,12 @@ STUDY_FILES = {
     "compensation-population": ("compensate-stable-room/population",
                                 "population_compensation.csv"),
     "compensation-default": ("compensate-stable-room/default", "summary.csv"),
+    "placement-year": ("placement", "placements.csv"),
+    "placement-year-af": ("af-placement", "placements.csv"),
+    "placement-methods": ("placement-methods", "placements.csv"),
+    "compensation-month": ("compensate-month", "summary.csv"),
+    "compensation-month-short": ("compensate-month", "summary.csv"),
+    "compensation-month-cold": ("compensate-month-cold", "summary.csv"),
 }
 STUDY_COMMANDS = {
     "placement-population": "spindlebench place scenarios/studies/placement_stable_room.toml "
@@ -378,6 +391,20 @@ STUDY_COMMANDS = {
     "compensation-default": "spindlebench compensate "
                             "scenarios/studies/compensate_stable_room.toml --machine default "
                             "-o results/compensate-stable-room/default",
+    "placement-year": "spindlebench place scenarios/studies/placement.toml -o results/placement "
+                      "--workers 1",
+    "placement-year-af": "spindlebench place scenarios/studies/placement.toml "
+                         "-o results/af-placement --machine ambient-following --workers 1",
+    "placement-methods": "spindlebench place scenarios/studies/placement_methods.toml "
+                         "-o results/placement-methods --workers 1",
+    "compensation-month": "spindlebench compensate scenarios/studies/compensate_month.toml "
+                          "-o results/compensate-month",
+    "compensation-month-short": "spindlebench compensate "
+                                "scenarios/studies/compensate_month.toml "
+                                "-o results/compensate-month",
+    "compensation-month-cold": "spindlebench compensate "
+                               "scenarios/studies/compensate_month.toml "
+                               "-o results/compensate-month-cold --days cold-starts",
 }
 
 
@@ -424,8 +451,11 @@ def placement_population_table(path: Path, key: str | None = None) -> str:
 
 
 def placement_default_table(path: Path, key: str | None = None) -> str:
+    """Mean held-out RMSE per budget and placement method (a method that scored no budget,
+    such as an exhaustive search too large to run, has no column)."""
     rows = _csv(path)
-    labels = list(dict.fromkeys(r["label"] for r in rows))
+    labels = list(dict.fromkeys(r["label"] for r in rows
+                                if r["test_mean_rmse_um"] not in ("", "nan")))
     budgets = sorted({int(r["m"]) for r in rows})
     score = {(r["label"], int(r["m"])): r["test_mean_rmse_um"] for r in rows}
     return markdown_table(["m", *labels], [[m, *[_um(score.get((lb, m))) for lb in labels]]
@@ -465,11 +495,89 @@ def compensation_default_table(path: Path, key: str | None = None) -> str:
                             f"{100.0 * float(r['within_tolerance']):.0f} %"] for r in rows])
 
 
+def placement_methods_table(path: Path, key: str | None = None) -> str:
+    """Mean held-out RMSE (worst test run in brackets) per method and budget, on the nodes
+    alone (``key`` ``raw``) or with their differences (``diff``: the ``+diff`` labels)."""
+    if key not in ("raw", "diff"):
+        raise ValueError(f"{path}: the placement-methods table needs raw or diff, not {key!r}")
+    rows = [r for r in _csv(path) if (r["differences"] == "True") == (key == "diff")
+            and r["test_mean_rmse_um"] not in ("", "nan")]
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    budgets = sorted({int(r["m"]) for r in rows})
+    score = {(r["method"], int(r["m"])): r for r in rows}
+
+    def cell(method: str, m: int) -> str:
+        row = score.get((method, m))
+        if row is None:
+            return "—"
+        return f"{_um(row['test_mean_rmse_um'])} ({float(row['test_worst_rmse_um']):.1f})"
+
+    return markdown_table(["method", *[f"m = {m}" for m in budgets]],
+                          [[method, *[cell(method, m) for m in budgets]] for method in methods])
+
+
+def _month_cells(path: Path) -> tuple[list[str], dict[tuple[str, str, str], dict[str, str]]]:
+    rows = _csv(path)
+    models = list(dict.fromkeys(r["model"] for r in rows))
+    models = [m for m in models if m != "uncompensated"] + \
+        [m for m in models if m == "uncompensated"]
+    return models, {(r["retrain"], r["part"], r["model"]): r for r in rows}
+
+
+def _month_cell(row: dict[str, str] | None) -> str:
+    if row is None:
+        return "—"
+    return (f"{float(row['rms_um']):.1f} / {float(row['peak_um']):.1f} / "
+            f"{100.0 * float(row['within_tolerance']):.0f} %")
+
+
+#: The month table's columns: (retrain, part, header); the last one shows the RMS only.
+MONTH_COLUMNS = (("never", "healthy days", "healthy days, never retrained"),
+                 ("never", "fault days", "fault days, never retrained"),
+                 ("after-fault", "fault days", "fault days, retrained after the fault"),
+                 ("weekly", "fault days", "fault days, retrained weekly"),
+                 ("weekly", "healthy days", "healthy days, retrained weekly: RMS"))
+
+
+def compensation_month_table(path: Path, key: str | None = None) -> str:
+    """Residual RMS / peak (µm) / time within tolerance per model, on healthy and fault days
+    under each retraining rule, from a month's ``summary.csv``."""
+    models, cells = _month_cells(path)
+    body = []
+    for model in models:
+        line: list[Any] = [f"`{model}`" if model != "uncompensated" else model]
+        for index, (rule, part, _) in enumerate(MONTH_COLUMNS):
+            row = cells.get((rule, part, model))
+            line.append(_month_cell(row) if index < len(MONTH_COLUMNS) - 1 else
+                        ("—" if row is None else f"{float(row['rms_um']):.1f}"))
+        body.append(line)
+    return markdown_table(["model", *[header for _, _, header in MONTH_COLUMNS]], body)
+
+
+def compensation_month_short_table(path: Path, key: str | None = None) -> str:
+    """The month's residual RMS (µm) only: healthy days, and fault days never retrained or
+    retrained after the fault (the overview on docs/studies.md)."""
+    models, cells = _month_cells(path)
+    columns = (("never", "healthy days"), ("never", "fault days"), ("after-fault", "fault days"))
+    return markdown_table(
+        ["model (k = 3)", "healthy days", "T1 stuck, never retrained",
+         "T1 stuck, retrained after detection"],
+        [[f"`{model}`" if model != "uncompensated" else model,
+          *["—" if (row := cells.get((rule, part, model))) is None else
+            f"{float(row['rms_um']):.1f}" for rule, part in columns]] for model in models])
+
+
 STUDY_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "placement-population": placement_population_table,
     "placement-default": placement_default_table,
     "compensation-population": compensation_population_table,
     "compensation-default": compensation_default_table,
+    "placement-year": placement_default_table,
+    "placement-year-af": placement_default_table,
+    "placement-methods": placement_methods_table,
+    "compensation-month": compensation_month_table,
+    "compensation-month-short": compensation_month_short_table,
+    "compensation-month-cold": compensation_month_table,
 }
 
 
@@ -482,13 +590,13 @@ def study_provenance(path: Path, source: str, by: str) -> str:
             f"spindlebench {versions.get('spindlebench', '?')})")
 
 
-def study_section(by: str, sources: Sources) -> str:
+def study_section(by: str, sources: Sources, key: str | None = None) -> str:
     path = study_file(by, sources)
     if path is None:
         return placeholder(f"The {by} table", STUDY_COMMANDS[by])
     source = sources.name(path)
-    text = block(by, source, None, study_provenance(path, source, by),
-                 STUDY_TABLES[by](path, None))
+    text = block(by, source, key, study_provenance(path, source, by),
+                 STUDY_TABLES[by](path, key))
     if by == "placement-population":
         text += "\n" + placement_verdict(path) + "\n"
     return text
@@ -701,6 +809,181 @@ def fingerprint_section(key: str | None, sources: Sources) -> str:
                  fingerprint_medians_table(folder, key))
 
 
+# --------------------------------------------------------------------------- season sweeps
+
+#: Sweep folders under results/ and the command that writes each (the page names it too).
+SWEEP_FOLDERS = {
+    "season-sweep": "spindlebench sweep scenarios/studies/season_sweep.toml "
+                    "-o results/season-sweep --workers 1",
+    "season-sweep-methods": "spindlebench sweep scenarios/studies/season_sweep_methods.toml "
+                            "-o results/season-sweep-methods --workers 1",
+}
+SWEEP_FILE = "summary/by_method.csv"
+#: The groups table's columns: (method in by_method.csv, header).
+SWEEP_GROUPS = (("all_raw", "all_raw"), ("six_raw", "six_raw"), ("six_diff", "six_diff"),
+                ("top-k-correlated", "top-k-correlated"), ("ridge", "ridge (no k)"),
+                ("oracle", "oracle floor"))
+PAPER_GROUPS = ("all_raw", "six_raw", "six_diff")
+
+
+def sweep_file(folder: str, sources: Sources) -> Path | None:
+    """``results/<folder>/summary/by_method.csv`` if the sweep was run in this checkout, else
+    its committed copy under ``docs/snapshots/<folder>/``."""
+    if folder not in SWEEP_FOLDERS:
+        raise ValueError(f"{folder}: not a sweep folder ({', '.join(SWEEP_FOLDERS)})")
+    for base in (sources.results, sources.snapshots):
+        if (base / folder / SWEEP_FILE).is_file():
+            return base / folder / SWEEP_FILE
+    return None
+
+
+def _measured(path: Path) -> dict[tuple[str, str], dict[str, str]]:
+    """by_method.csv's measured rows by (method, k); k is '' for ridge and the oracle."""
+    return {(r["method"], r["k"].removesuffix(".0")): r for r in _csv(path)
+            if r["data"] == "measured"}
+
+
+def _ks(rows: Mapping[tuple[str, str], Any]) -> list[str]:
+    return sorted({k for _, k in rows if k}, key=int)
+
+
+def sweep_groups_table(path: Path, key: str | None = None) -> str:
+    """Median held-out RMSE (µm) of the measured data per k: the paper's three groups, the two
+    baselines and the oracle floor (``key`` ``iqr``: with the IQR in brackets and the lowest
+    of the paper's three groups in bold)."""
+    rows = _measured(path)
+    body = []
+    for index, k in enumerate(_ks(rows)):
+        best = min((float(rows[(g, k)]["median_um"]), g) for g in PAPER_GROUPS
+                   if (g, k) in rows)[1] if key == "iqr" else None
+        line: list[Any] = [k]
+        for method, _ in SWEEP_GROUPS:
+            row = rows.get((method, k)) or (rows.get((method, "")) if index == 0 else None)
+            if row is None:
+                line.append("")
+                continue
+            cell = _um(row["median_um"])
+            if key == "iqr":
+                cell = (f"**{cell}**" if method == best else cell) + f" ({_um(row['iqr_um'])})"
+            line.append(cell)
+        body.append(line)
+    return markdown_table(["k", *[header for _, header in SWEEP_GROUPS]], body)
+
+
+def sweep_methods_table(path: Path, key: str | None = None) -> str:
+    """Median / IQR / worst held-out RMSE (µm) of every method on one group's candidates
+    (``key``: ``all_raw``, ``six_raw`` or ``six_diff``; methods ``GROUP:METHOD``, and the
+    paper's max-min closure, the bare ``GROUP``, as ``closure``), per k."""
+    if key is None:
+        raise ValueError(f"{path}: the methods table needs a group (all_raw, six_raw, six_diff)")
+    rows = _measured(path)
+    methods = list(dict.fromkeys(m.split(":", 1)[1] for m, _ in rows
+                                 if m.startswith(f"{key}:")))
+    if not methods:
+        raise ValueError(f"{path}: no methods on the {key} candidates")
+    ks = _ks(rows)
+    if any((key, k) in rows for k in ks):
+        methods.insert(0, "closure")
+
+    def cell(method: str, k: str) -> str:
+        row = rows.get((key if method == "closure" else f"{key}:{method}", k))
+        if row is None:
+            return "—"
+        return (f"{_um(row['median_um'])} / {_um(row['iqr_um'])} / "
+                f"{float(row['worst_um']):.1f}")
+
+    return markdown_table(["method", *[f"k = {k}" for k in ks]],
+                          [[m, *[cell(m, k) for k in ks]] for m in methods])
+
+
+SWEEP_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "sweep-groups": sweep_groups_table,
+    "sweep-methods": sweep_methods_table,
+}
+
+
+def sweep_provenance(path: Path, source: str, folder: str) -> str:
+    record = _read_json(path.parent.parent / "provenance.json") or {}
+    fmu = record.get("fmu") or {}
+    machine = record.get("machine") or {}
+    machine = machine.get("name", "?") if isinstance(machine, dict) else machine
+    versions = record.get("package_versions", {})
+    return (f"From `{source}`, written by `{SWEEP_FOLDERS[folder]}` (machine `{machine}`, "
+            f"FMU sha256 {str(fmu.get('sha256', '?'))[:12]}, spindlebench "
+            f"{versions.get('spindlebench', '?')})")
+
+
+def sweep_section(by: str, key: str | None, sources: Sources) -> str:
+    """``sweep-groups FOLDER[@iqr]`` or ``sweep-methods FOLDER@GROUP``."""
+    if key is None:
+        raise ValueError(f"<!-- generate: {by} -->: needs a sweep folder (e.g. season-sweep)")
+    folder, _, option = key.partition("@")
+    path = sweep_file(folder, sources)
+    if path is None:
+        return placeholder(f"`results/{folder}/{SWEEP_FILE}`", SWEEP_FOLDERS[folder])
+    source = sources.name(path)
+    return block(by, source, option or None, sweep_provenance(path, source, folder),
+                 SWEEP_TABLES[by](path, option or None))
+
+
+# --------------------------------------------------------------------------- several targets
+
+#: Multi-target compensation folders under results/ and the command that writes each.
+TARGET_FOLDERS = {
+    "tiny-compensate-five-probe": "spindlebench compensate "
+                                  "scenarios/studies/tiny_compensate_five_probe.toml "
+                                  "-o results/tiny-compensate-five-probe",
+}
+
+
+def targets_file(folder: str, sources: Sources) -> Path | None:
+    """The folder's ``README.md`` (its side-by-side table of every target) in ``results/`` if
+    the study was run here, else its committed copy under ``docs/snapshots/``."""
+    if folder not in TARGET_FOLDERS:
+        raise ValueError(f"{folder}: not a multi-target folder ({', '.join(TARGET_FOLDERS)})")
+    for base in (sources.results, sources.snapshots):
+        if (base / folder / "README.md").is_file():
+            return base / folder / "README.md"
+    return None
+
+
+def compensation_targets_table(path: Path, key: str | None = None) -> str:
+    """The residual RMS of every model and target under one retraining rule (``key``,
+    ``after-fault`` by default): the rows of that rule from the README's first table, which
+    ``compensate`` writes from each target's ``summary.csv``."""
+    rule = key or "after-fault"
+    found = tables(path.read_text(encoding="utf-8"))
+    if not found:
+        raise ValueError(f"{path}: has no table")
+    lines = found[0][2].splitlines()
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    if header[:2] != ["retrain", "model"]:
+        raise ValueError(f"{path}: the first table is not the per-target residual table")
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in lines[2:]]
+    kept = [row[1:] for row in rows if row[0] == rule]
+    if not kept:
+        raise ValueError(f"{path}: no rows retrained {rule!r}")
+    return markdown_table(header[1:], kept)
+
+
+def targets_section(key: str | None, sources: Sources) -> str:
+    """``compensation-targets FOLDER[@RULE]``."""
+    if key is None:
+        raise ValueError("<!-- generate: compensation-targets -->: needs a folder")
+    folder, _, rule = key.partition("@")
+    path = targets_file(folder, sources)
+    if path is None:
+        return placeholder(f"`results/{folder}/README.md`", TARGET_FOLDERS[folder])
+    source = sources.name(path)
+    record = _read_json(path.parent / "drift_um" / "provenance.json") or {}
+    fmu = record.get("fmu") or {}
+    provenance = (f"From `{source}`, written by `{TARGET_FOLDERS[folder]}` (FMU sha256 "
+                  f"{str(fmu.get('sha256', '?'))[:12]}, spindlebench "
+                  f"{record.get('package_versions', {}).get('spindlebench', '?')})")
+    return block("compensation-targets", source, rule or None, provenance,
+                 compensation_targets_table(path, rule or None))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -714,16 +997,20 @@ def section(by: str, key: str | None, sources: Sources) -> str:
     if by in MACHINE_TABLES:
         return machine_section(by, key, sources)
     if by in STUDY_TABLES:
-        return study_section(by, sources)
+        return study_section(by, sources, key)
     if by in RUN_TABLES:
         return run_section(by, key, sources)
+    if by in SWEEP_TABLES:
+        return sweep_section(by, key, sources)
+    if by == "compensation-targets":
+        return targets_section(key, sources)
     if by == "sensitivity":
         return sensitivity_section(key, sources)
     if by == "fingerprint-medians":
         return fingerprint_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
-                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES])}, "
-                     "sensitivity, fingerprint-medians)")
+                     f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
+                     "sensitivity, fingerprint-medians, compensation-targets)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -747,6 +1034,10 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return MACHINE_TABLES[by][0](json.loads(path.read_text(encoding="utf-8")), key)
     if by in RUN_TABLES:
         return RUN_TABLES[by](path, key)
+    if by in SWEEP_TABLES:
+        return SWEEP_TABLES[by](path, key)
+    if by == "compensation-targets":
+        return compensation_targets_table(path, key)
     if by == "sensitivity":
         return sensitivity_table(path, key)
     if by == "fingerprint-medians":

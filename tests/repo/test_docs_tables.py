@@ -33,9 +33,6 @@ tables = _module("tables")
 QUOTED = "quoted from a source outside the repository (the paper, issue 20's recordings)"
 PROSE = "words, not numbers: names, homes, keys or where to read"
 KEYS = "a file format's keys and defaults: arguments, typed where the format is defined"
-STALE = ("a result of a run longer than make docs (a sweep, a placement or benchmark study, "
-         "20 to 40 min) quoted before the tables were generated, from an older FMU: to become "
-         "a generate: line when the run is repeated and snapshotted under docs/snapshots/")
 NO_FILE = ("a result of a command that writes no file (it prints its numbers): to become a "
            "generate: line when the command writes one")
 RUNS = ("a result of `spindlebench paper` runs that make run does not do (other phases, "
@@ -45,12 +42,6 @@ TIMING = "a timing quoted from a bench script that does not write bench/results/
 #: Tables typed by hand: (page, header line) -> why. Every other table must be generated, and
 #: every table listed here must still be in the docs.
 HAND_TABLES: dict[tuple[str, str], str] = {
-    ("compensation.md", "| model | healthy days, never retrained | fault days, never retrained "
-     "| fault days, retrained after the fault | fault days, retrained weekly | healthy days, "
-     "retrained weekly: RMS |"): STALE,
-    ("compensation.md", "| model | drift_um | drift_x_um | drift_y_um | tilt_a_urad | "
-     "tilt_b_urad |"): "a result of the tiny five-probe compensate study (issue 21), quoted "
-        "from its summary when it landed: to become a generate: line reading that summary",
     ("contracts.md", "| name | unit | meaning |"): PROSE,
     ("fmu.md", "| symbol | what it does |"): PROSE,
     ("fmu.md", "| run | Python callbacks | C right-hand side | ratio | same bytes | C, forward "
@@ -78,22 +69,10 @@ HAND_TABLES: dict[tuple[str, str], str] = {
         "spindlebench.model.discretisation`, minutes of CPU)",
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
-    ("studies.md", "| k | all_raw | six_raw | six_diff | top-k-correlated | ridge | oracle "
-     "floor |"): STALE,
-    ("studies.md", "| m | fuzzy | greedy | exhaustive | fuzzy + differences | greedy + "
-     "differences |"): STALE,
-    ("studies.md", "| model (k = 3) | healthy days | T1 stuck, never retrained | T1 stuck, "
-     "retrained after detection |"): STALE,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
     ("study-placement.md", "| step | time | naive baseline in the same process |"): TIMING,
     ("study-placement.md", "| field | candidates | `place`'s fuzzy selection, m = 2..6 | "
      "before (full design matrix from DataFrames) |"): TIMING,
-    ("study-placement.md", "| m | fuzzy | greedy | exhaustive | fuzzy+diff | greedy+diff |"):
-        STALE,
-    ("study-placement.md", "| method | m = 2 | m = 3 | m = 4 | m = 5 | m = 6 |"): STALE,
-    ("study-sweep.md", "| k | all_raw | six_raw | six_diff | top-k-correlated | ridge (no k) | "
-     "oracle floor |"): STALE,
-    ("study-sweep.md", "| method | k = 2 | k = 3 | k = 4 |"): STALE,
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
@@ -125,21 +104,25 @@ HAND_TABLES.update({
         "| `--method` / `--regressor` (k) | run1 | run2 | run4 | run5 | run6 | **mean** | CPU |",
         "| model | fit on train (vs truth) | heldout | exp1 | exp3 |")},
 })
-#: Pages another helper is rewriting while this list was made (the benchmark, issue 23):
-#: every table there without a marker is allowed, until it lands and its tables can be listed
-#: one by one.
-IN_FLUX = {"benchmark.md": STALE}
+LEADERBOARD = ("written into the page, between its `<!-- leaderboard: start -->` and `<!-- "
+               "leaderboard: end -->` lines, by the `spindlebench benchmark ... --doc "
+               "docs/benchmark.md` run its header names (a copy of that run's leaderboard.md; "
+               "the run's folder is not committed: the suite takes about 10 min): to be checked "
+               "against a snapshot of leaderboard.md once one is committed")
+HAND_TABLES.update({
+    ("benchmark.md", "| task | what trains | what is predicted | folds |"):
+        "the suite's tasks in words, with the arguments of benchmarks/default.toml and its "
+        "studies",
+    ("benchmark.md", "| # | method | mean rank | mean RMSE µm | worse than C / R / O (tasks) | "
+     "failed |"): LEADERBOARD,
+    ("benchmark.md", "| rank | method | RMSE µm | sd over folds | max abs µm | within ±5 µm | "
+     "sensors | stability | rollout µm | worse than |"): LEADERBOARD + " (one per task)",
+})
 
 
 def _hand_tables() -> dict[tuple[str, str], str]:
-    """The hand-typed tables: the list above, and those of the pages in flux as they stand."""
-    listed = dict(HAND_TABLES)
-    for page in sorted((REPO / "docs").glob("*.md")):
-        if page.name in IN_FLUX:
-            for marker, header, _ in tables.tables(page.read_text(encoding="utf-8")):
-                if marker is None:
-                    listed[(page.name, header)] = IN_FLUX[page.name]
-    return listed
+    """The hand-typed tables, each listed with why it is typed."""
+    return dict(HAND_TABLES)
 
 
 def _pages() -> dict[str, str]:
