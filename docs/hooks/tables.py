@@ -1070,8 +1070,56 @@ def iso_section(by: str, key: str | None, sources: Sources) -> str:
     return block(by, source, test, provenance, iso_comparison_table(path, test))
 
 
+#: Multi-target evaluations (``spindlebench evaluate ... --target A B ... --json F``) the page
+#: reads, files under ``iso230-3/`` of results/ or the snapshots: name -> the command.
+_CAIVIAC_EVALUATE = (
+    "spindlebench evaluate --train results/iso230-3/caiviac_cycles/run4_5000rpm.csv --test "
+    + " ".join(f"results/iso230-3/caiviac_cycles/{run}.csv" for run in (
+        "run1_1250rpm", "run2_2500rpm", "run3_3750rpm", "run5_3500rpm", "run6_stepped"))
+    + " --target ch1_um ch2_um ch3_um ch4_um ch5_um --clusters 3")
+ISO_EVALUATIONS = {
+    "caiviac_targets_raw": _CAIVIAC_EVALUATE + " --json results/iso230-3/caiviac_targets_raw.json",
+    "caiviac_targets_diff": _CAIVIAC_EVALUATE + " --differences --json "
+                            "results/iso230-3/caiviac_targets_diff.json",
+}
+
+
+def iso_targets_table(path: Path, key: str | None = None) -> str:
+    """Mean RMSE per target over the test recordings: each target's own selection (its
+    sensors together) and every joint selection, as ``evaluate --json`` holds them."""
+    document = json.loads(path.read_text(encoding="utf-8"))
+    targets = document["targets"]
+
+    def sensors(names: list[str]) -> str:
+        short = ", ".join(name.removesuffix("_C") for name in names)
+        return f"{len(names)} ({short})" if len(names) <= 4 else str(len(names))
+
+    rows: list[list[Any]] = [["per-target", sensors(document["per_target_sensors"])] +
+                             [f"{document['per_target'][t]['mean_rmse_um']:.2f}"
+                              for t in targets]]
+    for name, joint in document["joint"].items():
+        rows.append([name, sensors(joint["sensors"])] +
+                    [f"{joint['mean_rmse'][t]:.2f}" for t in targets])
+    return markdown_table(["selection", "sensors", *targets], rows)
+
+
+def iso_targets_section(by: str, key: str | None, sources: Sources) -> str:
+    if key not in ISO_EVALUATIONS:
+        raise ValueError(f"<!-- generate: {by} {key} -->: no such evaluation (have: "
+                         f"{', '.join(ISO_EVALUATIONS)})")
+    path = next((base / "iso230-3" / f"{key}.json" for base in (sources.results,
+                 sources.snapshots) if (base / "iso230-3" / f"{key}.json").is_file()), None)
+    if path is None:
+        return placeholder(f"The {by} {key} table", ISO_EVALUATIONS[key])
+    source = sources.name(path)
+    provenance = (f"From `{source}`, written by `{ISO_EVALUATIONS[key]}`; mean RMSE (µm) "
+                  "over the five test runs")
+    return block(by, source, key, provenance, iso_targets_table(path, key))
+
+
 ISO_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "iso230-3-comparison": iso_comparison_table,
+    "iso230-3-targets": iso_targets_table,
 }
 
 
@@ -1099,6 +1147,8 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return sensitivity_section(key, sources)
     if by == "fingerprint-medians":
         return fingerprint_section(key, sources)
+    if by == "iso230-3-targets":
+        return iso_targets_section(by, key, sources)
     if by in ISO_TABLES:
         return iso_section(by, key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "

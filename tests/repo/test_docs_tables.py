@@ -48,9 +48,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
      "Jacobian | C, coloured differences |"): TIMING,
     ("index.md", "| you want to | read |"): PROSE,
     ("iso230-3.md", "| test | scenario | programme | start | air |"): PROSE,
-    ("iso230-3.md", "| k = 3, raw sensors | sensors | ch1 | ch2 | ch3 | ch4 | ch5 |"): NO_FILE,
-    ("iso230-3.md", "| k = 3, with differences | sensors | ch1 | ch2 | ch3 | ch4 | ch5 |"):
-        NO_FILE,
     ("iso230-3.md", "| k = 3, raw sensors | sensors | Z | X | Y | A (µrad) | B (µrad) |"):
         NO_FILE,
     ("iso230-3.md", "| k = 3, with differences | sensors | Z | X | Y | A (µrad) | B (µrad) |"):
