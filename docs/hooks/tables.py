@@ -1077,7 +1077,14 @@ _CAIVIAC_EVALUATE = (
     + " ".join(f"results/iso230-3/caiviac_cycles/{run}.csv" for run in (
         "run1_1250rpm", "run2_2500rpm", "run3_3750rpm", "run5_3500rpm", "run6_stepped"))
     + " --target ch1_um ch2_um ch3_um ch4_um ch5_um --clusters 3")
+_PROBES_EVALUATE = (
+    "spindlebench evaluate --train results/iso230-3/probes_rec/exp1.csv --test "
+    + " ".join(f"results/iso230-3/probes_rec/exp{i}.csv" for i in (2, 3, 4, 5))
+    + " --target drift_um drift_x_um drift_y_um tilt_a_urad tilt_b_urad --clusters 3")
 ISO_EVALUATIONS = {
+    "probes_targets_raw": _PROBES_EVALUATE + " --json results/iso230-3/probes_targets_raw.json",
+    "probes_targets_diff": _PROBES_EVALUATE + " --differences --json "
+                           "results/iso230-3/probes_targets_diff.json",
     "caiviac_targets_raw": _CAIVIAC_EVALUATE + " --json results/iso230-3/caiviac_targets_raw.json",
     "caiviac_targets_diff": _CAIVIAC_EVALUATE + " --differences --json "
                             "results/iso230-3/caiviac_targets_diff.json",
@@ -1112,8 +1119,8 @@ def iso_targets_section(by: str, key: str | None, sources: Sources) -> str:
     if path is None:
         return placeholder(f"The {by} {key} table", ISO_EVALUATIONS[key])
     source = sources.name(path)
-    provenance = (f"From `{source}`, written by `{ISO_EVALUATIONS[key]}`; mean RMSE (µm) "
-                  "over the five test runs")
+    provenance = (f"From `{source}`, written by `{ISO_EVALUATIONS[key]}`; mean RMSE over "
+                  "the test recordings, each target in its own unit (µm, tilts µrad)")
     return block(by, source, key, provenance, iso_targets_table(path, key))
 
 
