@@ -91,6 +91,13 @@ docs-snapshots:
 	  cp results/tiny-compensate-five-probe/README.md docs/snapshots/tiny-compensate-five-probe/; \
 	  cp results/tiny-compensate-five-probe/drift_um/provenance.json \
 	    docs/snapshots/tiny-compensate-five-probe/drift_um/; fi
+	for report in spindle caiviac_spindle; do test -f results/iso230-3/$$report/spindle.json || \
+	  continue; mkdir -p docs/snapshots/iso230-3/$$report; \
+	  cp results/iso230-3/$$report/spindle.json docs/snapshots/iso230-3/$$report/; done
+	for evaluation in caiviac_targets_raw caiviac_targets_diff probes_targets_raw \
+	    probes_targets_diff; do \
+	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \
+	  cp results/iso230-3/$$evaluation.json docs/snapshots/iso230-3/; done
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

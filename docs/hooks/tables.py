@@ -42,7 +42,10 @@ Sources (``Sources``, the checkout's by default):
   ``placement-year-af``), from ``results/`` or their snapshots (the runs take minutes, longer
   than ``make docs``; ``make docs-snapshots`` copies them);
 - a multi-target compensation's ``README.md`` (``compensation-targets FOLDER[@RULE]``: its
-  per-target residual table, the rows of one retraining rule).
+  per-target residual table, the rows of one retraining rule);
+- the ISO 230-3 reports ``spindlebench iso230-3 TEST ... -o DIR`` writes as ``DIR/TEST.json``
+  (``iso230-3-comparison TEST``: the default machine's spindle-on phase beside CAIVIAC run
+  3's, from ``results/iso230-3/`` or its snapshot).
 """
 
 from __future__ import annotations
@@ -984,6 +987,149 @@ def targets_section(key: str | None, sources: Sources) -> str:
                  compensation_targets_table(path, rule or None))
 
 
+# --------------------------------------------------------------------------- ISO 230-3 reports
+
+#: The two reports the comparison reads, folders under ``iso230-3/`` of results/ or the
+#: snapshots, and what writes each (the commands docs/iso230-3.md names).
+ISO_DEFAULT = "spindle"
+ISO_RECORDING = "caiviac_spindle"
+ISO_COMMANDS = {
+    ISO_DEFAULT: "spindlebench iso230-3 spindle --machine default -o results/iso230-3/spindle",
+    ISO_RECORDING: "spindlebench adapt caiviac --phase cycle --out results/iso230-3/"
+                   "caiviac_cycles; spindlebench iso230-3 spindle --recording results/iso230-3/"
+                   "caiviac_cycles/run3_3750rpm.csv --map results/iso230-3/caiviac_cycles/"
+                   "iso230_3_map.toml -o results/iso230-3/caiviac_spindle",
+}
+
+
+def iso_file(test: str, sources: Sources) -> Path | None:
+    """The default machine's ``TEST.json`` from results/ if both reports of the comparison
+    were written here, else from the snapshot (both from one place, never mixed)."""
+    for base in (sources.results, sources.snapshots):
+        folder = base / "iso230-3"
+        if all((folder / run / f"{test}.json").is_file()
+               for run in (ISO_DEFAULT, ISO_RECORDING)):
+            return folder / ISO_DEFAULT / f"{test}.json"
+    return None
+
+
+def _stability(report: Mapping[str, Any]) -> str:
+    stability = report["stability"]
+    if stability["met"]:
+        verdict = f"met at {number(stability['met_at_h'])} h"
+    else:
+        verdict = f"not met in {number(stability['time_limit_h'])} h"
+    alone = sorted(((h, d) for d, h in stability["per_direction_met_at_h"].items()
+                    if h is not None))
+    return verdict + " (alone: " + ", ".join(f"{d} {h:.1f} h" for h, d in alone) + ")"
+
+
+def _hottest(report: Mapping[str, Any]) -> str:
+    sensor, rise = max(report["temperature_range_K"].items(), key=lambda item: item[1])
+    return f"{sensor} {rise:.1f} K"
+
+
+def iso_comparison_table(path: Path, key: str | None = None) -> str:
+    """The spindle-on phase of the default machine's report (``path``) beside the recording's
+    (``../caiviac_spindle/`` next to it): ranges per direction and tilt (``heating_range_um``,
+    ``heating_range_urad``), the largest temperature range, the stability criterion."""
+    default = json.loads(path.read_text(encoding="utf-8"))
+    recording = json.loads((path.parent.parent / ISO_RECORDING / path.name)
+                           .read_text(encoding="utf-8"))
+    end = number(default["spindle_on_end_h"])
+    rows: list[list[Any]] = []
+    for direction in ("X", "Y", "Z"):
+        rows.append([f"{direction} range (µm)"] + [
+            f"{report['heating_range_um'][direction]['range']:.1f} "
+            f"({report['channels'][direction]})" for report in (default, recording)])
+    for tilt in ("A", "B"):
+        rows.append([f"tilt {tilt} range (µrad)"] + [
+            f"{report['heating_range_urad'][tilt]['range']:.1f} "
+            f"({report['channels'][tilt]})" for report in (default, recording)])
+    rows.append(["largest temperature range over the test"] +
+                [_hottest(report) for report in (default, recording)])
+    rows.append(["stability criterion"] + [_stability(report) for report in (default,
+                                                                             recording)])
+    return markdown_table([f"spindle-on phase (0–{end} h)", f"default machine "
+                           f"({default['provenance'].get('machine', '?')})",
+                           f"recording {Path(recording['provenance']['recording']['path']).name}"],
+                          rows)
+
+
+def iso_section(by: str, key: str | None, sources: Sources) -> str:
+    test = key or "spindle"
+    path = iso_file(test, sources)
+    if path is None:
+        return placeholder(f"The {by} table", "; ".join(ISO_COMMANDS.values()))
+    source = sources.name(path)
+    recording = sources.name(path.parent.parent / ISO_RECORDING / path.name)
+    fmu = json.loads(path.read_text(encoding="utf-8"))["provenance"].get("fmu", {})
+    provenance = (f"From `{source}` and `{recording}`, written by `{ISO_COMMANDS[ISO_DEFAULT]}` "
+                  f"(FMU sha256 {str(fmu.get('sha256', '?'))[:12]}) and "
+                  f"`{ISO_COMMANDS[ISO_RECORDING]}`")
+    return block(by, source, test, provenance, iso_comparison_table(path, test))
+
+
+#: Multi-target evaluations (``spindlebench evaluate ... --target A B ... --json F``) the page
+#: reads, files under ``iso230-3/`` of results/ or the snapshots: name -> the command.
+_CAIVIAC_EVALUATE = (
+    "spindlebench evaluate --train results/iso230-3/caiviac_cycles/run4_5000rpm.csv --test "
+    + " ".join(f"results/iso230-3/caiviac_cycles/{run}.csv" for run in (
+        "run1_1250rpm", "run2_2500rpm", "run3_3750rpm", "run5_3500rpm", "run6_stepped"))
+    + " --target ch1_um ch2_um ch3_um ch4_um ch5_um --clusters 3")
+_PROBES_EVALUATE = (
+    "spindlebench evaluate --train results/iso230-3/probes_rec/exp1.csv --test "
+    + " ".join(f"results/iso230-3/probes_rec/exp{i}.csv" for i in (2, 3, 4, 5))
+    + " --target drift_um drift_x_um drift_y_um tilt_a_urad tilt_b_urad --clusters 3")
+ISO_EVALUATIONS = {
+    "probes_targets_raw": _PROBES_EVALUATE + " --json results/iso230-3/probes_targets_raw.json",
+    "probes_targets_diff": _PROBES_EVALUATE + " --differences --json "
+                           "results/iso230-3/probes_targets_diff.json",
+    "caiviac_targets_raw": _CAIVIAC_EVALUATE + " --json results/iso230-3/caiviac_targets_raw.json",
+    "caiviac_targets_diff": _CAIVIAC_EVALUATE + " --differences --json "
+                            "results/iso230-3/caiviac_targets_diff.json",
+}
+
+
+def iso_targets_table(path: Path, key: str | None = None) -> str:
+    """Mean RMSE per target over the test recordings: each target's own selection (its
+    sensors together) and every joint selection, as ``evaluate --json`` holds them."""
+    document = json.loads(path.read_text(encoding="utf-8"))
+    targets = document["targets"]
+
+    def sensors(names: list[str]) -> str:
+        short = ", ".join(name.removesuffix("_C") for name in names)
+        return f"{len(names)} ({short})" if len(names) <= 4 else str(len(names))
+
+    rows: list[list[Any]] = [["per-target", sensors(document["per_target_sensors"])] +
+                             [f"{document['per_target'][t]['mean_rmse_um']:.2f}"
+                              for t in targets]]
+    for name, joint in document["joint"].items():
+        rows.append([name, sensors(joint["sensors"])] +
+                    [f"{joint['mean_rmse'][t]:.2f}" for t in targets])
+    return markdown_table(["selection", "sensors", *targets], rows)
+
+
+def iso_targets_section(by: str, key: str | None, sources: Sources) -> str:
+    if key not in ISO_EVALUATIONS:
+        raise ValueError(f"<!-- generate: {by} {key} -->: no such evaluation (have: "
+                         f"{', '.join(ISO_EVALUATIONS)})")
+    path = next((base / "iso230-3" / f"{key}.json" for base in (sources.results,
+                 sources.snapshots) if (base / "iso230-3" / f"{key}.json").is_file()), None)
+    if path is None:
+        return placeholder(f"The {by} {key} table", ISO_EVALUATIONS[key])
+    source = sources.name(path)
+    provenance = (f"From `{source}`, written by `{ISO_EVALUATIONS[key]}`; mean RMSE over "
+                  "the test recordings, each target in its own unit (µm, tilts µrad)")
+    return block(by, source, key, provenance, iso_targets_table(path, key))
+
+
+ISO_TABLES: dict[str, Callable[[Path, Any], str]] = {
+    "iso230-3-comparison": iso_comparison_table,
+    "iso230-3-targets": iso_targets_table,
+}
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1008,9 +1154,14 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return sensitivity_section(key, sources)
     if by == "fingerprint-medians":
         return fingerprint_section(key, sources)
+    if by == "iso230-3-targets":
+        return iso_targets_section(by, key, sources)
+    if by in ISO_TABLES:
+        return iso_section(by, key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
-                     "sensitivity, fingerprint-medians, compensation-targets)")
+                     "sensitivity, fingerprint-medians, compensation-targets, "
+                     f"{', '.join(ISO_TABLES)})")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1042,6 +1193,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return sensitivity_table(path, key)
     if by == "fingerprint-medians":
         return fingerprint_medians_table(path, key)
+    if by in ISO_TABLES:
+        return ISO_TABLES[by](path, key)
     return STUDY_TABLES[by](path, key)
 
 

@@ -48,15 +48,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
      "Jacobian | C, coloured differences |"): TIMING,
     ("index.md", "| you want to | read |"): PROSE,
     ("iso230-3.md", "| test | scenario | programme | start | air |"): PROSE,
-    ("iso230-3.md", "| spindle-on phase (0–4 h) | default machine, 4000 rpm | CAIVIAC run 3, "
-     "3750 rpm |"): NO_FILE,
-    ("iso230-3.md", "| k = 3, raw sensors | sensors | ch1 | ch2 | ch3 | ch4 | ch5 |"): NO_FILE,
-    ("iso230-3.md", "| k = 3, with differences | sensors | ch1 | ch2 | ch3 | ch4 | ch5 |"):
-        NO_FILE,
-    ("iso230-3.md", "| k = 3, raw sensors | sensors | Z | X | Y | A (µrad) | B (µrad) |"):
-        NO_FILE,
-    ("iso230-3.md", "| k = 3, with differences | sensors | Z | X | Y | A (µrad) | B (µrad) |"):
-        NO_FILE,
     ("model.md", "| part | nodes (default build) | heat in | heat out |"): PROSE,
     ("model.md", "| term (output) | span | material | sign |"): PROSE,
     ("model.md", "| node (state) | '+' half | what puts heat into it more than into the other "
