@@ -45,7 +45,10 @@ Sources (``Sources``, the checkout's by default):
   per-target residual table, the rows of one retraining rule);
 - the ISO 230-3 reports ``spindlebench iso230-3 TEST ... -o DIR`` writes as ``DIR/TEST.json``
   (``iso230-3-comparison TEST``: the default machine's spindle-on phase beside CAIVIAC run
-  3's, from ``results/iso230-3/`` or its snapshot).
+  3's, from ``results/iso230-3/`` or its snapshot);
+- ``results/caiviac_identification/*/caiviac.json`` (or their snapshots), written by
+  ``python -m spindlebench.identification.validation --splits ... --out ...``
+  (``identification-split C``: that split's table, as the script prints it).
 """
 
 from __future__ import annotations
@@ -1130,6 +1133,57 @@ ISO_TABLES: dict[str, Callable[[Path, Any], str]] = {
 }
 
 
+# --------------------------------------------------------------------------- identification
+
+IDENTIFICATION = "caiviac_identification"
+IDENTIFICATION_COMMAND = ("python -m spindlebench.identification.validation --splits SPLITS "
+                          "--out results/caiviac_identification/NAME")
+
+
+def identification_file(split: str, sources: Sources) -> Path | None:
+    """The ``caiviac.json`` holding ``split`` (a letter): the first of
+    ``results/caiviac_identification/*/caiviac.json`` (one folder per run, named by its splits),
+    else of their snapshots under ``docs/snapshots/``."""
+    for base in (sources.results, sources.snapshots):
+        for path in sorted((base / IDENTIFICATION).glob("*/caiviac.json")):
+            splits = (_read_json(path) or {}).get("splits", {})
+            if any(n.split(":", 1)[0] == split for n in splits):
+                return path
+    return None
+
+
+def identification_split_table(path: Path, key: str | None = None) -> str:
+    """One CAIVIAC split of ``caiviac.json`` (``key``: its letter, ``C``), as the validation
+    script prints it (``identification.validation.markdown``, without its heading)."""
+    from spindlebench.identification.validation import markdown
+
+    splits = json.loads(path.read_text(encoding="utf-8"))["splits"]
+    name = next((n for n in splits if n.split(":", 1)[0] == key), None)
+    if name is None:
+        raise ValueError(f"{path}: has no split {key!r} (has {', '.join(splits)})")
+    text = markdown(name, splits[name])
+    return text[text.index("\n| model |") + 1:]
+
+
+def identification_section(key: str | None, sources: Sources) -> str:
+    if not key:
+        raise ValueError("<!-- generate: identification-split -->: needs the split (e.g. C)")
+    path = identification_file(key, sources)
+    if path is None:
+        return placeholder(f"The identification table of split {key}", IDENTIFICATION_COMMAND)
+    source = sources.name(path)
+    document = _read_json(path) or {}
+    versions = document.get("provenance", {}).get("package_versions", {})
+    command = IDENTIFICATION_COMMAND.replace("SPLITS", ",".join(
+        n.split(":", 1)[0] for n in document.get("splits", {}))).replace("NAME",
+                                                                        path.parent.name)
+    provenance = (f"From `{source}`, written by `{command}` (spindlebench "
+                  f"{versions.get('spindlebench', '?')}, its provenance names the recording "
+                  "and its sha256)")
+    return block("identification-split", source, key, provenance,
+                 identification_split_table(path, key))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1158,10 +1212,12 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return iso_targets_section(by, key, sources)
     if by in ISO_TABLES:
         return iso_section(by, key, sources)
+    if by == "identification-split":
+        return identification_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
-                     f"{', '.join(ISO_TABLES)})")
+                     f"{', '.join(ISO_TABLES)}, identification-split)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1195,6 +1251,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return fingerprint_medians_table(path, key)
     if by in ISO_TABLES:
         return ISO_TABLES[by](path, key)
+    if by == "identification-split":
+        return identification_split_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

@@ -39,3 +39,23 @@ def test_a_second_kind_of_run_gets_its_own_file(tmp_path):
     assert path == tmp_path / "bench_example_b.json"
     assert json.loads(path.read_text(encoding="utf-8"))["script"] == "bench_example"
     assert not (tmp_path / "bench_example.json").exists()
+
+
+def test_the_calibration_twin_perturbs_exactly_the_parameters_it_fits():
+    """bench_calibration's true factors are keyed by name and cover its fit set (a positional
+    tuple of 10 stopped matching when the default fit set gained the heat capacities)."""
+    import sys
+
+    sys.path.insert(0, str(REPO / "bench"))
+    try:
+        spec = importlib.util.spec_from_file_location(
+            "bench_calibration", REPO / "bench" / "bench_calibration.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(REPO / "bench"))
+    from spindlebench.calibration.fitset import DEFAULT_FIT
+
+    assert sorted(module.FACTORS) == sorted(module.FIT)
+    assert set(module.FIT) == set(DEFAULT_FIT) - {"table_L", "c_y_motor"}
+    assert all(0.7 <= f <= 1.35 and f != 1.0 for f in module.FACTORS.values())

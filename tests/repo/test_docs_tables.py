@@ -80,10 +80,6 @@ HAND_TABLES.update({
         "bench/results/bench_identification.json and on the speed page; this page keeps its "
         "typed copy until it reads that file",
     **{("twin.md", header): TWIN for header in (
-        "| model | run4_5000rpm | run5_3500rpm | run6_stepped | **mean** |",
-        "| model | run1_1250rpm | run2_2500rpm | run3_3750rpm | **mean** |",
-        "| model | run2_2500rpm | run4_5000rpm | run6_stepped | **mean** |",
-        "| model | run1_1250rpm | run3_3750rpm | run5_3500rpm | **mean** |",
         "| split | MLR, 16 sensors | network from speed | ratio | observer, 4 sensors | "
         "observer, 16 sensors | observer 16 vs MLR 16 |",
         "| run | rpm | starts at (h) | ch3 change over heating (um) | mean rise of t1-t3, "

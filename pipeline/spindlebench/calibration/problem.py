@@ -52,6 +52,8 @@ AMBIENT_LEVEL_SD_K = 10.0
 AMBIENT_STEP_SD_K = 1.0
 NEWTON_TOL_K = 1e-7
 MAX_CHORD_ITERATIONS = 30
+#: Newton iterations (Jacobian refreshed each time) when the chord iterations fail.
+MAX_NEWTON_ITERATIONS = 30
 #: (n / n_ref)^(2/3) has an infinite partial at n = 0, which numeric AD multiplies by a zero
 #: seed into NaN: a standing spindle is given as this speed (no heat to speak of).
 MIN_SPEED_RPM = 1e-3
@@ -301,8 +303,7 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
                 break
             (r,) = d._residual(z, z1, u, h[k], s)
         else:
-            raise StepFailedError(f"{series.path}: the step at time_s = "
-                             f"{series.time_s[k]:g} did not converge")
+            z1, lu, (A, B, C, a) = _newton_step(d, series, k, z, u, h[k], s)
         states[:, k + 1] = z1
         if S is not None:
             rhs = B @ S[k]
@@ -311,6 +312,29 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
                 rhs[:, n_s + 1:] += a @ basis[k][None, :]
             S[k + 1] = -scipy.linalg.lu_solve(lu, rhs, check_finite=False)
     return states, S
+
+
+def _newton_step(d: Discretisation, series: Series, k: int, z: np.ndarray, u: np.ndarray,
+                 h: float, s: np.ndarray) -> tuple[np.ndarray, tuple, tuple]:
+    """Step ``k`` by Newton's method, the Jacobian refreshed at every iterate, from the last
+    state: the fallback when the chord iterations (Jacobian at the predictor) do not converge.
+    That happens where the predictor is far off, e.g. at a speed switched on at a speed the
+    fit never saw (the friction's viscosity makes the heat input depend on the oil's
+    temperature); a fit's trial point or a prediction over new runs must not abort for it.
+    Returns the state, the factorised Jacobian and the partial derivatives at the solution."""
+    z1 = z.copy()
+    for _ in range(MAX_NEWTON_ITERATIONS):
+        r, A, B, C, a = d._jacobians(z, z1, u, h, s)
+        lu = scipy.linalg.lu_factor(A, check_finite=False)
+        dz = scipy.linalg.lu_solve(lu, r.ravel(), check_finite=False)
+        z1 = z1 - dz
+        if not np.all(np.isfinite(z1)):
+            break
+        if np.max(np.abs(dz)) < NEWTON_TOL_K:
+            _, A, B, C, a = d._jacobians(z, z1, u, h, s)
+            return z1, scipy.linalg.lu_factor(A, check_finite=False), (A, B, C, a)
+    raise StepFailedError(f"{series.path}: the step at time_s = {series.time_s[k]:g} did not "
+                          "converge")
 
 
 @dataclass
