@@ -44,8 +44,6 @@ TIMING = "a timing quoted from a bench script that does not write bench/results/
 HAND_TABLES: dict[tuple[str, str], str] = {
     ("contracts.md", "| name | unit | meaning |"): PROSE,
     ("fmu.md", "| symbol | what it does |"): PROSE,
-    ("fmu.md", "| run | Python callbacks | C right-hand side | ratio | same bytes | C, forward "
-     "Jacobian | C, coloured differences |"): TIMING,
     ("index.md", "| you want to | read |"): PROSE,
     ("iso230-3.md", "| test | scenario | programme | start | air |"): PROSE,
     ("model.md", "| part | nodes (default build) | heat in | heat out |"): PROSE,
