@@ -22,10 +22,15 @@ from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import AMBIENT_COLUMN, TIME_COLUMN
 
 
+def _beside(machine_file: Path, suffix: str) -> Path:
+    """``NAME<suffix>`` in the machine file's folder (``NAME.toml`` → ``NAME.state.json``)."""
+    stem = machine_file.with_suffix("")
+    return stem.with_name(stem.name + suffix)
+
+
 def state_path(machine_file: Path) -> Path:
     """The fitted states written beside ``machine_file``: ``NAME.state.json``."""
-    stem = machine_file.with_suffix("")
-    return stem.with_name(stem.name + ".state.json")
+    return _beside(machine_file, ".state.json")
 
 
 def state_record(fit: Fit, series_list: Sequence, provenance: Mapping[str, Any]
@@ -58,9 +63,7 @@ def _kelvin(names: Sequence[str], state_C: np.ndarray) -> dict[str, float]:
 
 def report_paths(machine_file: Path) -> tuple[Path, Path]:
     """The report (JSON) and the figure (PNG) written beside ``machine_file``."""
-    stem = machine_file.with_suffix("")
-    return stem.with_name(stem.name + ".calibration.json"), stem.with_name(
-        stem.name + ".calibration.png")
+    return _beside(machine_file, ".calibration.json"), _beside(machine_file, ".calibration.png")
 
 
 def _toml_string(text: str) -> str:
