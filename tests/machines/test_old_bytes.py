@@ -18,7 +18,8 @@ Why the truth is not byte for byte (docs/model.md, "Old recordings"): the five-p
 bitwise those of before), which CVode's error norm and Newton iteration see; and the model's
 split into sub-assemblies changed the algebraic blocks the causaliser solves. Both move the
 truth by solver-level amounts (here at most 7e-5 K); the measured columns, rounded to the
-logger's resolution, keep their bytes.
+logger's resolution, keep their bytes here (in 4 of the 14 scenarios of 262d5e4 one or two
+cells are one logger step off, where the moved truth crosses a rounding boundary).
 """
 
 from __future__ import annotations
