@@ -112,3 +112,19 @@ def test_utf8_byte_order_mark_is_not_part_of_the_first_name(tmp_path, body):
     assert default_sensors(frame, "drift_um") == ["T1", "T2"]
     assert list(read_recording(path, allow_missing=True, columns=["T1"]).columns) == [
         "time_s", "T1"]
+
+
+def test_recorded_outputs_leave_out_probes_unless_asked_and_mechanisms_that_are_off():
+    from spindlebench.formats.recording import recorded_outputs
+
+    names = ("T1_C", "drift_um", "probe_X1_um", "node_column_front_C", "Q_jacket_W",
+             "jacket_outlet_C", "Q_rotor_W", "front_preload_thermal_N")
+    off = {"jacket_enabled": 0.0, "rotor_loss_fraction": 0.0, "front_preload_N_per_K": 0.0}
+    assert recorded_outputs(names, probes=False, switches=off) == ("T1_C", "drift_um")
+    assert recorded_outputs(names, probes=True, switches={**off, "jacket_enabled": 1.0}) == (
+        "T1_C", "drift_um", "probe_X1_um", "node_column_front_C", "Q_jacket_W",
+        "jacket_outlet_C")
+    # an FMU without a mechanism's switch parameter: its output, if any, is recorded
+    assert recorded_outputs(names, probes=False, switches={}) == (
+        "T1_C", "drift_um", "Q_jacket_W", "jacket_outlet_C", "Q_rotor_W",
+        "front_preload_thermal_N")

@@ -210,6 +210,25 @@ def test_tunable_parameter_from_the_scenario_reaches_the_fmu(tmp_path):
     assert co_simulate(scenario, FMU).parameters["T_ref"] == float(T_ref.start) + 5.0
 
 
+def test_a_mechanism_s_outputs_are_recorded_only_when_it_is_switched_on(tmp_path):
+    """issue 20: the default machine has the bearing air and the thermal preload on, the rotor
+    losses and the jacket off; a scenario's [parameters] switching the jacket on adds its
+    three outputs; ambient-following (every mechanism off) records none of the six."""
+    from spindlebench.formats.recording import MECHANISM_SWITCHES
+    from spindlebench.testbench.scenario import with_machine
+
+    base = load_scenario(write(tmp_path, "b.toml", scenario_text(minutes=5)))
+    jacket = load_scenario(write(tmp_path, "j.toml", scenario_text(
+        minutes=5, extra="[parameters]\njacket_enabled = 1.0\n")))
+    recorded = {name: set(MECHANISM_SWITCHES) & set(co_simulate(scenario, FMU).outputs)
+                for name, scenario in (("default", base), ("jacket", jacket),
+                                       ("following", with_machine(base, "ambient-following")))}
+    assert recorded["default"] == {"Q_bearing_air_W", "front_preload_thermal_N"}
+    assert recorded["jacket"] == recorded["default"] | {"Q_jacket_W", "jacket_inlet_C",
+                                                        "jacket_outlet_C"}
+    assert recorded["following"] == set()
+
+
 def test_faster_spindle_warms_more_and_drifts_more(tmp_path):
     runs = {}
     for rpm in (2000, 4000):

@@ -5,8 +5,10 @@ A newcomer who renames or adds a recording column edits this module only.
 **Columns.** ``time_s``; the measured sensors ``T1`` … ``T20``; the measured thermal error
 ``drift_um``; the driver inputs; then the noise-free FMU outputs, each as ``true_<output>``:
 sensors (``true_T1_C``), drift (``true_drift_um``), the temperature field
-(``true_node_<node>_C``) and heat flows (``true_Q_<part>_W``). ``default_sensors`` says which
-columns of any recording (also a real one) count as sensors when none are named.
+(``true_node_<node>_C``) and heat flows (``true_Q_<part>_W``); the outputs of the five-probe
+model and of a spindle mechanism that is off are left out (``recorded_outputs``).
+``default_sensors`` says which columns of any recording (also a real one) count as sensors
+when none are named.
 
 **Reading** (synthetic or real recordings, one CSV per experiment). A canonical recording
 is a CSV with a header line and one numeric row per sample: ``time_s``, sensor temperatures,
@@ -112,6 +114,37 @@ def is_probe_output(output_name: str) -> bool:
     """Whether an FMU output belongs to the five-probe model (recorded only when a scenario
     asks with ``[outputs] probes = true``, so older scenarios keep their columns)."""
     return output_name in PROBE_OUTPUTS or node_of_output(output_name) in PROBE_NODES
+
+
+#: Issue 20's spindle-driven mechanisms: each FMU output only one of them makes, and the FMU
+#: parameter that switches that mechanism on (off at 0). With its switch at 0 such an output
+#: says nothing (a heat flow or preload of 0, the coolant temperatures of a jacket that is not
+#: there), so a run records it only when its switch is non-zero in that run: a machine with a
+#: mechanism off keeps the columns it had before the mechanism existed (``ambient-following``,
+#: every mechanism off, keeps the columns and bytes of its recordings from before version 3).
+MECHANISM_SWITCHES: dict[str, str] = {
+    "Q_bearing_air_W": "G_bearing_air_ref",       # air stream through the front bearing
+    "Q_rotor_W": "rotor_loss_fraction",           # built-in motor: losses in the rotor
+    "Q_jacket_W": "jacket_enabled",               # chiller jacket
+    "jacket_inlet_C": "jacket_enabled",
+    "jacket_outlet_C": "jacket_enabled",
+    "front_preload_thermal_N": "front_preload_N_per_K",  # thermally induced preload
+}
+
+
+def recorded_outputs(output_names: Iterable[str], *, probes: bool,
+                     switches: Mapping[str, float]) -> tuple[str, ...]:
+    """The FMU outputs a run records (FMU order): the five-probe model's only with
+    ``probes`` (a scenario's ``[outputs] probes = true``), a mechanism's (``MECHANISM_SWITCHES``)
+    only when ``switches`` (its switch parameters' values in the run) has it non-zero. An
+    output whose switch is not in ``switches`` (an FMU without that parameter) is recorded."""
+    def recorded(name: str) -> bool:
+        if is_probe_output(name):
+            return probes
+        switch = MECHANISM_SWITCHES.get(name)
+        return switch is None or switches.get(switch, 1.0) != 0.0
+
+    return tuple(name for name in output_names if recorded(name))
 
 
 def true_column(output_name: str) -> str:

@@ -55,10 +55,11 @@ from spindlebench.formats.recording import (
     DRIFT_COLUMN,
     FEED_X_COLUMN,
     FEED_Y_COLUMN,
+    MECHANISM_SWITCHES,
     SENSOR_OUTPUTS,
     SPEED_COLUMN,
     EndState,
-    is_probe_output,
+    recorded_outputs,
 )
 from spindlebench.machines.variants import Machine
 from spindlebench.testbench import fmu_archive, native_cvode
@@ -622,6 +623,7 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         finally:
             stepper.free()
         end_values = fmu.getFloat64(list(fmu_info.state_vrs))
+        switches = mechanism_switches(fmu, fmu_info)
         end_fmu_state = save_state(fmu) if save_end_state else None
         fmu.terminate()
     except (RuntimeError, FMICallException) as exc:  # CVode or the FMU gave up
@@ -635,13 +637,15 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         if instantiated:  # the library stays loaded for the next run (``_loaded_model``)
             fmu.fmi3FreeInstance(fmu.component)
 
+    recorded = set(recorded_outputs(fmu_info.output_names, probes=scenario.probes,
+                                    switches=switches))
     sample_rows = np.arange(n_samples) * every
     sampled = DriverSignals(*(getattr(signals, f)[sample_rows]
                               for f in DriverSignals.__dataclass_fields__))
     return Simulation(
         time_s=sampled.time_s,
         outputs={name: samples[:, i] for i, name in enumerate(fmu_info.output_names)
-                 if scenario.probes or not is_probe_output(name)},
+                 if name in recorded},
         drivers=sampled,
         initial_state_K=x0,
         end_state_K=dict(zip(fmu_info.state_names, end_values, strict=True)),
@@ -660,6 +664,17 @@ def co_simulate(scenario: Scenario, fmu_path: str | Path | None = None, *,
         },
         end_fmu_state=end_fmu_state,
     )
+
+
+def mechanism_switches(fmu: Any, info: FmuInterface) -> dict[str, float]:
+    """The values in this run of the parameters that switch issue 20's mechanisms on, read
+    from the instance (so machine file, scenario, FMU default and a restored start all
+    count), for ``recorded_outputs``."""
+    names = sorted({name for name in MECHANISM_SWITCHES.values() if name in info.parameters})
+    if not names:
+        return {}
+    values = fmu.getFloat64([info.parameters[name].valueReference for name in names])
+    return dict(zip(names, (float(v) for v in values), strict=True))
 
 
 def save_state(fmu: Any) -> bytes:
