@@ -58,9 +58,11 @@ docs: notebooks
 	test -f results/README.md || $(MAKE) run
 	SPINDLEBENCH_DOCS_RUN=1 NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
-## After a model change and a rerun (make run, the studies of docs/validation.md): copy the
-## files the docs' tables read from results/ to their committed copies in docs/snapshots/
-## (what a checkout without results/ shows), only those that results/ has.
+## After a model change and a rerun (make run, the studies of docs/validation.md, `python -m
+## spindlebench.model.discretisation --out results/discretisation/discretisation.json`, the
+## benchmark run docs/benchmark.md names): copy the files the docs' tables read from results/
+## to their committed copies in docs/snapshots/ (what a checkout without results/ shows), only
+## those that results/ has.
 SNAPSHOT_FILES := README.md table6_rmse.csv provenance.json
 docs-snapshots:
 	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study \
@@ -98,6 +100,9 @@ docs-snapshots:
 	    probes_targets_diff; do \
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \
 	  cp results/iso230-3/$$evaluation.json docs/snapshots/iso230-3/; done
+	for file in discretisation/discretisation.json benchmark/mine/leaderboard.json; do \
+	  test -f results/$$file || continue; mkdir -p docs/snapshots/$$(dirname $$file); \
+	  cp results/$$file docs/snapshots/$$file; done
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

@@ -48,7 +48,10 @@ Sources (``Sources``, the checkout's by default):
   3's, from ``results/iso230-3/`` or its snapshot);
 - ``results/caiviac_identification/*/caiviac.json`` (or their snapshots), written by
   ``python -m spindlebench.identification.validation --splits ... --out ...``
-  (``identification-split C``: that split's table, as the script prints it).
+  (``identification-split C``: that split's table, as the script prints it);
+- ``results/discretisation/discretisation.json`` (or its snapshot), written by ``python -m
+  spindlebench.model.discretisation --out ...`` (``discretisation``: the drift rise per segment
+  count; its provenance line says when the model source has changed since).
 """
 
 from __future__ import annotations
@@ -1192,6 +1195,47 @@ def identification_section(key: str | None, sources: Sources) -> str:
                  identification_split_table(path, key))
 
 
+# --------------------------------------------------------------------------- model
+
+DISCRETISATION = "discretisation/discretisation.json"
+DISCRETISATION_COMMAND = ("python -m spindlebench.model.discretisation --out "
+                          f"results/{DISCRETISATION}")
+
+
+def _results_or_snapshot(name: str, sources: Sources) -> Path | None:
+    """``results/NAME`` where a command wrote it in this checkout, else its committed copy
+    ``docs/snapshots/NAME``, else None."""
+    return next((base / name for base in (sources.results, sources.snapshots)
+                 if (base / name).is_file()), None)
+
+
+def discretisation_table(path: Path, key: str | None = None) -> str:
+    """The drift rise per segment count, as ``model.discretisation`` prints it."""
+    from spindlebench.model.discretisation import markdown
+
+    return markdown(json.loads(path.read_text(encoding="utf-8")))
+
+
+def discretisation_section(sources: Sources) -> str:
+    path = _results_or_snapshot(DISCRETISATION, sources)
+    if path is None:
+        return placeholder("The discretisation table", DISCRETISATION_COMMAND)
+    from spindlebench.core.provenance import sha256_file
+
+    source = sources.name(path)
+    record = json.loads(path.read_text(encoding="utf-8"))["provenance"]
+    model = record["model"]
+    current = sources.root / model["path"]
+    changed = "" if current.is_file() and sha256_file(current) == model["sha256"] else (
+        f"; `{model['path']}` has changed since: rerun it")
+    provenance = (f"From `{source}`, written by `{record['command']}` (`{model['path']}` "
+                  f"sha256 {model['sha256'][:12]}{changed}; {record['ambient_C']:g} °C soak, "
+                  f"{record['speed_rpm']:g} rpm, feed {record['feed_mm_per_min']:g} mm/min; "
+                  f"{record['solver']}; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("discretisation", source, None, provenance, discretisation_table(path))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1222,10 +1266,12 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return iso_section(by, key, sources)
     if by == "identification-split":
         return identification_section(key, sources)
+    if by == "discretisation":
+        return discretisation_section(sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
-                     f"{', '.join(ISO_TABLES)}, identification-split)")
+                     f"{', '.join(ISO_TABLES)}, identification-split, discretisation)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1261,6 +1307,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return ISO_TABLES[by](path, key)
     if by == "identification-split":
         return identification_split_table(path, key)
+    if by == "discretisation":
+        return discretisation_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

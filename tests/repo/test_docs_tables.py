@@ -54,8 +54,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
         "are the .mo's defaults (the generated parameters table covers those a machine sets)",
     ("model.md", "| sensor | part | mounted on | surroundings |"): PROSE,
     ("model.md", "| statistic | real spindles, min–max (issue 20) |"): QUOTED,
-    ("model.md", "| segments | 1 h | 2 h | 4 h |"): NO_FILE + " (`python -m "
-        "spindlebench.model.discretisation`, minutes of CPU)",
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
@@ -261,3 +259,56 @@ def test_the_run_tables_come_from_results_first_then_the_snapshot_and_average_wh
     assert "| run1 | t1, t2 | 1.0 |" in page and "| **mean over training runs** |  | 2.5 |" in page
     for marker, _, table in tables.tables(page):
         assert tables.regenerate(*marker.groups(), sources) == table
+
+
+def _disagrees(page: str, sources, path, change) -> None:
+    """Every table of ``page`` matches its file; after ``change`` edits that file, the check of
+    ``test_every_table_is_generated_from_its_file_or_listed_as_typed`` no longer passes."""
+    import json
+
+    found = [(marker, table) for marker, _, table in tables.tables(page)]
+    assert found and all(marker is not None for marker, _ in found)
+    for marker, table in found:
+        assert tables.regenerate(*marker.groups(), sources) == table
+    document = json.loads(path.read_text(encoding="utf-8"))
+    change(document)
+    path.write_text(json.dumps(document), encoding="utf-8")
+    assert any(tables.regenerate(*marker.groups(), sources) != table for marker, table in found)
+
+
+def test_the_discretisation_table_comes_from_its_json_and_fails_when_they_disagree(tmp_path):
+    """docs/model.md's discretisation table: from ``model.discretisation --out``'s JSON (the
+    results copy first, else the snapshot), with the model's hash; an edited number fails."""
+    import json
+
+    from spindlebench.core.provenance import provenance, sha256_file
+    from spindlebench.model import discretisation
+
+    model = tmp_path / "models" / "SpindleBench.mo"
+    model.parent.mkdir()
+    model.write_text("package SpindleBench end SpindleBench;\n", encoding="utf-8")
+    document = {"hours": [1.0, 2.0], "default_segments": 12,
+                "rows": [{"segments": 6, "drift_rise_um": [21.0, 24.0]},
+                         {"segments": 12, "drift_rise_um": [20.0, 25.0]}],
+                "provenance": provenance(command="python -m x", solver="BDF", ambient_C=8.0,
+                                         speed_rpm=4000.0, feed_mm_per_min=1500.0,
+                                         model={"path": "models/SpindleBench.mo",
+                                                "sha256": sha256_file(model)})}
+    path = tmp_path / "snapshots" / tables.DISCRETISATION
+    discretisation.write(path, document)
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: discretisation -->\n", sources)
+    assert "source=snapshots/discretisation/discretisation.json" in page
+    assert "| **12 (default)** | 20.0 | 25.0 | 0.0 % |" in page and "| 6 | 21.0 | 24.0 | 5.0 % |" \
+        in page and "has changed since" not in page
+    model.write_text("package SpindleBench /* edited */ end SpindleBench;\n", encoding="utf-8")
+    assert "`models/SpindleBench.mo` has changed since" in tables.expand(
+        "<!-- generate: discretisation -->\n", sources)
+    assert json.loads(path.read_text(encoding="utf-8")) == document  # what write() wrote
+
+    def change(d):
+        d["rows"][0]["drift_rise_um"][1] = 24.5
+
+    _disagrees(page, sources, path, change)
+
