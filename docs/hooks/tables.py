@@ -51,7 +51,10 @@ Sources (``Sources``, the checkout's by default):
   (``identification-split C``: that split's table, as the script prints it);
 - ``results/discretisation/discretisation.json`` (or its snapshot), written by ``python -m
   spindlebench.model.discretisation --out ...`` (``discretisation``: the drift rise per segment
-  count; its provenance line says when the model source has changed since).
+  count; its provenance line says when the model source has changed since);
+- a benchmark run's ``leaderboard.json`` (``leaderboard benchmark/mine``: the run's suite and
+  command, the overall table and one table per task, as ``leaderboard.md`` has them), from
+  ``results/`` or its snapshot.
 """
 
 from __future__ import annotations
@@ -1195,7 +1198,7 @@ def identification_section(key: str | None, sources: Sources) -> str:
                  identification_split_table(path, key))
 
 
-# --------------------------------------------------------------------------- model
+# --------------------------------------------------------------------------- model, benchmark
 
 DISCRETISATION = "discretisation/discretisation.json"
 DISCRETISATION_COMMAND = ("python -m spindlebench.model.discretisation --out "
@@ -1236,6 +1239,53 @@ def discretisation_section(sources: Sources) -> str:
     return block("discretisation", source, None, provenance, discretisation_table(path))
 
 
+#: The leaderboard run the benchmark page shows (folder under results/ or docs/snapshots/).
+LEADERBOARD_RUN = "benchmark/mine"
+LEADERBOARD_COMMAND = ("PYTHONPATH=docs/examples/user-method spindlebench benchmark --method "
+                       "my_selector:DecorrelatedSelector -o results/benchmark/mine")
+
+
+def leaderboard_table(path: Path, key: str | None = None) -> str:
+    """One table of a ``leaderboard.json``: ``overall`` or a task's (the key is its name), as
+    ``leaderboard.md`` has it (``studies.benchmark.benchmark_report``)."""
+    from spindlebench.studies.benchmark import benchmark_report
+
+    document = json.loads(path.read_text(encoding="utf-8"))
+    if key == "overall":
+        return benchmark_report.overall_table(document["overall"])
+    return benchmark_report.task_table(document["rows"], str(key),
+                                       document["suite"]["band_um"])
+
+
+def leaderboard_section(key: str | None, sources: Sources) -> str:
+    """``<!-- generate: leaderboard FOLDER -->``: the run's suite and command, then the overall
+    table and one table per task under a heading of its own, each with its marker."""
+    folder = key or LEADERBOARD_RUN
+    path = _results_or_snapshot(f"{folder}/leaderboard.json", sources)
+    if path is None:
+        return placeholder(f"The leaderboard of `{folder}`", LEADERBOARD_COMMAND)
+    from spindlebench.studies.benchmark import benchmark_report
+
+    source = sources.name(path)
+    document = json.loads(path.read_text(encoding="utf-8"))
+    suite, record = document["suite"], document["provenance"]
+    fmu = record.get("fmu_sha256")
+    head = (f"*From `{source}`, written by `{record['command']}`: suite `{suite['name']}` "
+            f"version {suite['version']}, tasks SHA-256 `{suite['tasks_sha256'][:12]}…`, "
+            f"k = {suite['k']} sensors per selection method, seed {suite['seed']}, FMU sha256 "
+            f"{str(fmu)[:12]}, spindlebench "
+            f"{record['package_versions'].get('spindlebench', '?')}"
+            + ("; a partial run (`--tasks`)" if record.get("partial") else "") + ".*\n\n"
+            f"{benchmark_report.MARKS_TEXT}\n")
+    parts = [head, "### Overall (mean rank over tasks)\n",
+             block("leaderboard", source, "overall", "Mean rank over the tasks",
+                   leaderboard_table(path, "overall"))]
+    for task in benchmark_report.tasks_of(document["rows"]):
+        parts += [f"### {task}\n", block("leaderboard", source, task, f"Task `{task}`",
+                                         leaderboard_table(path, task))]
+    return "\n".join(parts)
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1268,10 +1318,13 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return identification_section(key, sources)
     if by == "discretisation":
         return discretisation_section(sources)
+    if by == "leaderboard":
+        return leaderboard_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
-                     f"{', '.join(ISO_TABLES)}, identification-split, discretisation)")
+                     f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
+                     "leaderboard)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1309,6 +1362,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return identification_split_table(path, key)
     if by == "discretisation":
         return discretisation_table(path, key)
+    if by == "leaderboard":
+        return leaderboard_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

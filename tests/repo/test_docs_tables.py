@@ -87,19 +87,10 @@ HAND_TABLES.update({
         "| `--method` / `--regressor` (k) | run1 | run2 | run4 | run5 | run6 | **mean** | CPU |",
         "| model | fit on train (vs truth) | heldout | exp1 | exp3 |")},
 })
-LEADERBOARD = ("written into the page, between its `<!-- leaderboard: start -->` and `<!-- "
-               "leaderboard: end -->` lines, by the `spindlebench benchmark ... --doc "
-               "docs/benchmark.md` run its header names (a copy of that run's leaderboard.md; "
-               "the run's folder is not committed: the suite takes about 10 min): to be checked "
-               "against a snapshot of leaderboard.md once one is committed")
 HAND_TABLES.update({
     ("benchmark.md", "| task | what trains | what is predicted | folds |"):
         "the suite's tasks in words, with the arguments of benchmarks/default.toml and its "
         "studies",
-    ("benchmark.md", "| # | method | mean rank | mean RMSE µm | worse than C / R / O (tasks) | "
-     "failed |"): LEADERBOARD,
-    ("benchmark.md", "| rank | method | RMSE µm | sd over folds | max abs µm | within ±5 µm | "
-     "sensors | stability | rollout µm | worse than |"): LEADERBOARD + " (one per task)",
 })
 
 
@@ -309,6 +300,50 @@ def test_the_discretisation_table_comes_from_its_json_and_fails_when_they_disagr
 
     def change(d):
         d["rows"][0]["drift_rise_um"][1] = 24.5
+
+    _disagrees(page, sources, path, change)
+
+
+def test_the_leaderboard_tables_come_from_leaderboard_json_and_fail_when_they_disagree(
+        tmp_path):
+    """docs/benchmark.md's leaderboard: the overall table and one per task, in the suite's
+    order, from a run's leaderboard.json; a changed RMSE there fails the check."""
+    row = {"rank": 1.0, "rmse_um": 2.5, "rmse_sd_um": 0.1, "max_abs_error_um": 7.0,
+           "within_band": 0.9, "n_sensors": 3.0, "stability": 1.0, "rollout_rmse_um": 2.5,
+           "worse_than": "", "folds": 3, "error": ""}
+    document = {
+        "provenance": {"command": "spindlebench benchmark -o x", "partial": False,
+                       "fmu_sha256": "ab" * 32, "package_versions": {"spindlebench": "0.1.0"}},
+        "suite": {"name": "tiny", "version": "0.1", "tasks_sha256": "cd" * 32, "k": 3,
+                  "band_um": 5.0, "seed": 0},
+        "overall": [{"overall_rank": 1, "method": "lasso", "mean_rank": 1.5,
+                     "mean_rmse_um": 3.0, "failed": 0, "worse_than_constant": 0,
+                     "worse_than_replay": 1, "worse_than_ols_all": 0},
+                    {"overall_rank": 2, "method": "baseline:replay", "mean_rank": 1.5,
+                     "mean_rmse_um": 3.2, "failed": 0, "worse_than_constant": 0,
+                     "worse_than_replay": 0, "worse_than_ols_all": 0}],
+        "rows": [{**row, "task": "b/second", "method": "lasso", "rank": 2.0, "rmse_um": 3.5,
+                  "worse_than": "baseline:replay"},
+                 {**row, "task": "b/second", "method": "baseline:replay"},
+                 {**row, "task": "a/first", "method": "lasso"},
+                 {**row, "task": "a/first", "method": "baseline:replay", "rank": None,
+                  "rmse_um": None, "error": "no data"}]}
+    path = tmp_path / "results" / "benchmark" / "mine" / "leaderboard.json"
+    path.parent.mkdir(parents=True)
+    import json
+
+    path.write_text(json.dumps(document), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: leaderboard benchmark/mine -->\n", sources)
+    assert page.index("### b/second") < page.index("### a/first")  # the suite's order
+    assert "| 1 | `lasso` | 1.50 | 3.00 | 0 / 1 / 0 | 0 |" in page
+    assert "| 2.0 | `lasso` | 3.50 | 0.10 | 7.00 | 0.90 | 3.0 | 1.00 | 2.50 | R |" in page
+    assert "| – | `baseline:replay` | failed: no data |" in page  # a failed entrant last
+    assert "written by `spindlebench benchmark -o x`" in page
+
+    def change(d):
+        d["rows"][0]["rmse_um"] = 3.6
 
     _disagrees(page, sources, path, change)
 
