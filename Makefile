@@ -59,7 +59,8 @@ docs: notebooks
 	SPINDLEBENCH_DOCS_RUN=1 NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
 ## After a model change and a rerun (make run, the studies of docs/validation.md, `python -m
-## spindlebench.model.discretisation --out results/discretisation/discretisation.json`, the
+## spindlebench.model.discretisation --out results/discretisation/discretisation.json`,
+## `python -m spindlebench.model.cold_start --json results/cold_start/cold_start.json`, the
 ## benchmark run docs/benchmark.md names): copy the files the docs' tables read from results/
 ## to their committed copies in docs/snapshots/ (what a checkout without results/ shows), only
 ## those that results/ has.
@@ -100,7 +101,8 @@ docs-snapshots:
 	    probes_targets_diff; do \
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \
 	  cp results/iso230-3/$$evaluation.json docs/snapshots/iso230-3/; done
-	for file in discretisation/discretisation.json benchmark/mine/leaderboard.json; do \
+	for file in discretisation/discretisation.json cold_start/cold_start.json \
+	    benchmark/mine/leaderboard.json; do \
 	  test -f results/$$file || continue; mkdir -p docs/snapshots/$$(dirname $$file); \
 	  cp results/$$file docs/snapshots/$$file; done
 

@@ -52,6 +52,9 @@ Sources (``Sources``, the checkout's by default):
 - ``results/discretisation/discretisation.json`` (or its snapshot), written by ``python -m
   spindlebench.model.discretisation --out ...`` (``discretisation``: the drift rise per segment
   count; its provenance line says when the model source has changed since);
+- ``results/cold_start/cold_start.json`` (or its snapshot), written by ``python -m
+  spindlebench.model.cold_start --json ...`` (``cold-start``: the sensors' and the drift's
+  rises of the cold-start runs; its provenance line says when the FMU has changed since);
 - a benchmark run's ``leaderboard.json`` (``leaderboard benchmark/mine``: the run's suite and
   command, the overall table and one table per task, as ``leaderboard.md`` has them), from
   ``results/`` or its snapshot.
@@ -1239,6 +1242,36 @@ def discretisation_section(sources: Sources) -> str:
     return block("discretisation", source, None, provenance, discretisation_table(path))
 
 
+COLD_START = "cold_start/cold_start.json"
+COLD_START_COMMAND = f"python -m spindlebench.model.cold_start --json results/{COLD_START}"
+
+
+def cold_start_table(path: Path, key: str | None = None) -> str:
+    """The cold-start runs' rises and the drift's peak, as ``model.cold_start`` prints them."""
+    from spindlebench.model.cold_start import markdown
+
+    return markdown(json.loads(path.read_text(encoding="utf-8")))
+
+
+def cold_start_section(sources: Sources) -> str:
+    path = _results_or_snapshot(COLD_START, sources)
+    if path is None:
+        return placeholder("The cold-start table", COLD_START_COMMAND)
+    from spindlebench.core.provenance import sha256_file
+
+    source = sources.name(path)
+    record = json.loads(path.read_text(encoding="utf-8"))["provenance"]
+    fmu = record["fmu"]["sha256"]
+    changed = "" if sources.fmu.is_file() and sha256_file(sources.fmu) == fmu else (
+        f"; `{sources.name(sources.fmu)}` has changed since: rerun it")
+    provenance = (f"From `{source}`, written by `{record['command']}` (FMU sha256 {fmu[:12]}"
+                  f"{changed}; {record['ambient_C']:g} °C soak, feed "
+                  f"{record['feed_mm_per_min']:g} mm/min, {record['hours']:g} h; "
+                  f"{record['solver']}; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("cold-start", source, None, provenance, cold_start_table(path))
+
+
 #: The leaderboard run the benchmark page shows (folder under results/ or docs/snapshots/).
 LEADERBOARD_RUN = "benchmark/mine"
 LEADERBOARD_COMMAND = ("PYTHONPATH=docs/examples/user-method spindlebench benchmark --method "
@@ -1318,13 +1351,15 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return identification_section(key, sources)
     if by == "discretisation":
         return discretisation_section(sources)
+    if by == "cold-start":
+        return cold_start_section(sources)
     if by == "leaderboard":
         return leaderboard_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
                      f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
-                     "leaderboard)")
+                     "cold-start, leaderboard)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1362,6 +1397,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return identification_split_table(path, key)
     if by == "discretisation":
         return discretisation_table(path, key)
+    if by == "cold-start":
+        return cold_start_table(path, key)
     if by == "leaderboard":
         return leaderboard_table(path, key)
     return STUDY_TABLES[by](path, key)

@@ -347,3 +347,34 @@ def test_the_leaderboard_tables_come_from_leaderboard_json_and_fail_when_they_di
 
     _disagrees(page, sources, path, change)
 
+
+def test_the_cold_start_table_comes_from_its_json_and_says_when_the_fmu_changed(tmp_path):
+    """docs/model.md's magnitudes table: from ``model.cold_start --json``'s file, with the
+    FMU's hash (another FMU is said beside the table); an edited rise fails the check."""
+    from spindlebench.core.provenance import file_entry, provenance
+    from spindlebench.model import cold_start
+
+    fmu = tmp_path / "SpindleBench.fmu"
+    fmu.write_bytes(b"not an fmu")
+    run = {"sensor_rise_K": {"T10_C": [0.0, 0.1], "T2_C": [11.0, 15.2]},
+           "drift_rise_um": [20.6, 20.6], "drift_peak_um": 24.7, "drift_peak_h": 2.1}
+    document = {"read_at_min": [50.0, 300.0], "runs": {"4000": run},
+                "provenance": provenance(command="python -m x --json y", fmu=file_entry(fmu),
+                                         ambient_C=8.0, hours=5.0, feed_mm_per_min=1500.0,
+                                         solver="CVode")}
+    path = cold_start.write_json(tmp_path / "results" / tables.COLD_START, document)
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots", fmu=fmu)
+    page = tables.expand("<!-- generate: cold-start -->\n", sources)
+    assert "| rise since the start | 4000 rpm, 50 min | 4000 rpm, 5 h |" in page
+    assert page.index("| T2 (K) | +11.0 | +15.2 |") < page.index("| T10 (K) | +0.0 | +0.1 |")
+    assert "| drift's peak (µm; when) | 24.7 | at 2.1 h |" in page
+    assert "has changed since" not in page
+    fmu.write_bytes(b"another fmu")
+    assert "`SpindleBench.fmu` has changed since" in tables.expand(
+        "<!-- generate: cold-start -->\n", sources)
+
+    def change(d):
+        d["runs"]["4000"]["sensor_rise_K"]["T2_C"][0] = 11.2
+
+    _disagrees(page, sources, path, change)
