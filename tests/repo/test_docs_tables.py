@@ -50,8 +50,9 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("model.md", "| term (output) | span | material | sign |"): PROSE,
     ("model.md", "| node (state) | '+' half | what puts heat into it more than into the other "
      "half |"): PROSE,
-    ("model.md", "| parameter | default | source |"): "cites a source per parameter; the values "
-        "are the .mo's defaults (the generated parameters table covers those a machine sets)",
+    ("model.md", "| parameter | default | source |"): "arguments: the .mo's defaults, typed "
+        "beside the source each cites, and checked against the FMU's model description by "
+        "test_the_typed_parameter_defaults_are_the_fmus",
     ("model.md", "| sensor | part | mounted on | surroundings |"): PROSE,
     ("model.md", "| statistic | real spindles, min–max (issue 20) |"): QUOTED,
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
@@ -378,3 +379,30 @@ def test_the_cold_start_table_comes_from_its_json_and_says_when_the_fmu_changed(
         d["runs"]["4000"]["sensor_rise_K"]["T2_C"][0] = 11.2
 
     _disagrees(page, sources, path, change)
+
+
+def test_the_typed_parameter_defaults_are_the_fmus():
+    """docs/model.md's typed parameter table (arguments, each with its source) states the
+    committed FMU's start values: a changed default in the model fails here, not silently."""
+    import re
+
+    from spindlebench.testbench.runner import inspect_fmu
+
+    known = inspect_fmu(REPO / "fmus" / "SpindleBench.fmu").parameters
+    header = "| parameter | default | source |"
+    page = (REPO / "docs" / "model.md").read_text(encoding="utf-8")
+    (table,) = [t for _, h, t in tables.tables(page) if h == header]
+    checked = 0
+    for line in table.splitlines()[2:]:
+        names_cell, values_cell = [c.strip() for c in line.strip("|").split("|")][:2]
+        names = re.findall(r"`([^`]+)`", names_cell)
+        values = [float(v) for v in re.findall(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?",
+                                                values_cell)]
+        values = values * len(names) if len(values) == 1 else values
+        assert len(values) == len(names), line
+        for name, value in zip(names, values, strict=True):
+            assert name in known, f"model.md: {name} is not a parameter of the FMU"
+            assert float(known[name].start) == pytest.approx(value), \
+                f"model.md: {name} = {value}, the FMU's default is {known[name].start}"
+            checked += 1
+    assert checked >= 10
