@@ -61,9 +61,10 @@ docs: notebooks
 ## After a model change and a rerun (make run, the studies of docs/validation.md, `python -m
 ## spindlebench.model.discretisation --out results/discretisation/discretisation.json`,
 ## `python -m spindlebench.model.cold_start --json results/cold_start/cold_start.json`, the
-## benchmark run docs/benchmark.md names): copy the files the docs' tables read from results/
-## to their committed copies in docs/snapshots/ (what a checkout without results/ shows), only
-## those that results/ has.
+## benchmark run docs/benchmark.md names, the evaluate runs of docs/hooks/tables.py's
+## EVALUATE_RUNS): copy the files the docs' tables read from results/ to their committed
+## copies in docs/snapshots/ (what a checkout without results/ shows), only those that
+## results/ has.
 SNAPSHOT_FILES := README.md table6_rmse.csv provenance.json
 docs-snapshots:
 	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study \
@@ -102,7 +103,8 @@ docs-snapshots:
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \
 	  cp results/iso230-3/$$evaluation.json docs/snapshots/iso230-3/; done
 	for file in discretisation/discretisation.json cold_start/cold_start.json \
-	    benchmark/mine/leaderboard.json; do \
+	    benchmark/mine/leaderboard.json caiviac-six-correlated/k2.json \
+	    caiviac-six-correlated/k3.json; do \
 	  test -f results/$$file || continue; mkdir -p docs/snapshots/$$(dirname $$file); \
 	  cp results/$$file docs/snapshots/$$file; done
 

@@ -55,6 +55,8 @@ Sources (``Sources``, the checkout's by default):
 - ``results/cold_start/cold_start.json`` (or its snapshot), written by ``python -m
   spindlebench.model.cold_start --json ...`` (``cold-start``: the sensors' and the drift's
   rises of the cold-start runs; its provenance line says when the FMU has changed since);
+- ``evaluate --json`` runs of one comparison at several k (``evaluate-runs NAME``: a folder of
+  ``kN.json``, from ``results/NAME`` or its snapshot; the commands in ``EVALUATE_RUNS``);
 - a benchmark run's ``leaderboard.json`` (``leaderboard benchmark/mine``: the run's suite and
   command, the overall table and one table per task, as ``leaderboard.md`` has them), from
   ``results/`` or its snapshot.
@@ -1272,6 +1274,52 @@ def cold_start_section(sources: Sources) -> str:
     return block("cold-start", source, None, provenance, cold_start_table(path))
 
 
+#: Folders of ``evaluate --json`` runs that differ only in ``--clusters`` (one ``kN.json`` per
+#: k), under results/ or docs/snapshots/: name -> the command (``K``: the budget).
+EVALUATE_RUNS = {
+    "caiviac-six-correlated": (
+        "spindlebench evaluate --train results/caiviac/run4_5000rpm.csv --test "
+        + " ".join(f"results/caiviac/{run}.csv" for run in (
+            "run1_1250rpm", "run2_2500rpm", "run3_3750rpm", "run5_3500rpm", "run6_stepped"))
+        + " --target ch3_um --sensors t1_C,t8_C,t2_C,t13_C,t7_C,t12_C --differences "
+        "--clusters K --json results/caiviac-six-correlated/kK.json"),
+}
+
+
+def _evaluate_folder(name: str, sources: Sources) -> Path | None:
+    return next((base / name for base in (sources.results, sources.snapshots)
+                 if any((base / name).glob("k*.json"))), None)
+
+
+def evaluate_runs_table(path: Path, key: str | None = None) -> str:
+    """One row per ``kN.json`` of the folder ``path``: k, the selected terms, the RMSE on each
+    test recording (its file's stem) and their mean, as ``evaluate`` prints them."""
+    documents = [json.loads(p.read_text(encoding="utf-8")) for p in path.glob("k*.json")]
+    documents.sort(key=lambda d: d["provenance"]["clusters"])
+    tests = list(documents[0]["rmse_um"])
+    rows = [[d["provenance"]["clusters"], ", ".join(f"`{t}`" for t in d["selected"]),
+             *[f"{d['rmse_um'][t]:.2f}" for t in tests], f"**{d['mean_rmse_um']:.2f}**"]
+            for d in documents]
+    return markdown_table(["k", "selected", *[Path(t).stem for t in tests], "mean"], rows)
+
+
+def evaluate_runs_section(key: str | None, sources: Sources) -> str:
+    if key not in EVALUATE_RUNS:
+        raise ValueError(f"<!-- generate: evaluate-runs {key} -->: no such folder (have: "
+                         f"{', '.join(EVALUATE_RUNS)})")
+    folder = _evaluate_folder(key, sources)
+    if folder is None:
+        return placeholder(f"The evaluate-runs {key} table", EVALUATE_RUNS[key])
+    source = sources.name(folder)
+    first = json.loads(sorted(folder.glob("k*.json"))[0].read_text(encoding="utf-8"))
+    record = first["provenance"]
+    provenance = (f"From `{source}/k*.json`, written by `{EVALUATE_RUNS[key]}` for each k "
+                  f"(training file sha256 {record['train']['sha256'][:12]}; RMSE in µm of "
+                  f"`{record['target']}` on each test run; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("evaluate-runs", source, key, provenance, evaluate_runs_table(folder))
+
+
 #: The leaderboard run the benchmark page shows (folder under results/ or docs/snapshots/).
 LEADERBOARD_RUN = "benchmark/mine"
 LEADERBOARD_COMMAND = ("PYTHONPATH=docs/examples/user-method spindlebench benchmark --method "
@@ -1353,13 +1401,15 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return discretisation_section(sources)
     if by == "cold-start":
         return cold_start_section(sources)
+    if by == "evaluate-runs":
+        return evaluate_runs_section(key, sources)
     if by == "leaderboard":
         return leaderboard_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
                      f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
-                     "cold-start, leaderboard)")
+                     "cold-start, evaluate-runs, leaderboard)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1399,6 +1449,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return discretisation_table(path, key)
     if by == "cold-start":
         return cold_start_table(path, key)
+    if by == "evaluate-runs":
+        return evaluate_runs_table(path, key)
     if by == "leaderboard":
         return leaderboard_table(path, key)
     return STUDY_TABLES[by](path, key)

@@ -406,3 +406,30 @@ def test_the_typed_parameter_defaults_are_the_fmus():
                 f"model.md: {name} = {value}, the FMU's default is {known[name].start}"
             checked += 1
     assert checked >= 10
+
+
+def test_the_evaluate_runs_table_has_a_row_per_k_and_fails_when_a_file_disagrees(tmp_path):
+    """docs/results.md's notebook-6 comparison: one row per ``kN.json`` that ``evaluate --json``
+    wrote (k from each file's provenance), per-test RMSE and the mean; an edit fails."""
+    import json
+
+    folder = tmp_path / "snapshots" / "caiviac-six-correlated"
+    folder.mkdir(parents=True)
+    for k, rmse in ((3, {"a/run1.csv": 2.0, "a/run2.csv": 4.0}),
+                    (2, {"a/run1.csv": 6.0, "a/run2.csv": 8.0})):
+        (folder / f"k{k}.json").write_text(json.dumps({
+            "selected": ["t1_C", "t1_C-t2_C"][:k], "rmse_um": rmse,
+            "mean_rmse_um": sum(rmse.values()) / 2,
+            "provenance": {"clusters": k, "target": "ch3_um", "train": {"sha256": "ab" * 32},
+                           "package_versions": {"spindlebench": "0.1.0"}}}), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: evaluate-runs caiviac-six-correlated -->\n", sources)
+    assert "| k | selected | run1 | run2 | mean |" in page
+    assert page.index("| 2 | `t1_C`, `t1_C-t2_C` | 6.00 | 8.00 | **7.00** |") < \
+        page.index("| 3 |")
+
+    def change(d):
+        d["rmse_um"]["a/run1.csv"] = 2.5
+
+    _disagrees(page, sources, folder / "k3.json", change)
