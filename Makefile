@@ -77,7 +77,7 @@ docs-snapshots:
 	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
 	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
 	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
-	for sweep in season-sweep season-sweep-methods; do \
+	for sweep in season-sweep season-sweep-methods af-sweep; do \
 	  test -f results/$$sweep/summary/by_method.csv || continue; \
 	  mkdir -p docs/snapshots/$$sweep/summary; \
 	  cp results/$$sweep/summary/by_method.csv docs/snapshots/$$sweep/summary/; \

@@ -842,6 +842,8 @@ SWEEP_FOLDERS = {
                     "-o results/season-sweep --workers 1",
     "season-sweep-methods": "spindlebench sweep scenarios/studies/season_sweep_methods.toml "
                             "-o results/season-sweep-methods --workers 1",
+    "af-sweep": "spindlebench sweep scenarios/studies/season_sweep.toml -o results/af-sweep "
+                "--machine ambient-following --workers 1",
 }
 SWEEP_FILE = "summary/by_method.csv"
 #: The groups table's columns: (method in by_method.csv, header).
