@@ -36,7 +36,7 @@ HOURS = (1.0, 2.0, 4.0)
 COUNTS = (3, 4, 6, 8, 12, 24)
 #: The cold start every count is integrated from (what the docs' sentence above the table
 #: says), recorded in the file.
-CONDITIONS = {"ambient_C": 8.0, "speed_rpm": 4000.0, "feed_mm_per_min": 1500.0}
+AMBIENT_C, SPEED_RPM, FEED_MM_PER_MIN = 8.0, 4000.0, 1500.0
 COMMAND = "python -m spindlebench.model.discretisation"
 
 
@@ -69,13 +69,15 @@ def study(counts: Sequence[int], command: str = COMMAND,
     provenance (model source, conditions, solver, packages)."""
     rows = []
     for n in counts:
-        rows.append({"segments": int(n), "drift_rise_um": drift_rise(int(n), **CONDITIONS)})
+        rows.append({"segments": int(n), "drift_rise_um": drift_rise(
+            int(n), ambient_C=AMBIENT_C, speed_rpm=SPEED_RPM, feed_mm_per_min=FEED_MM_PER_MIN)})
         say(f"{n} segments: drift rise " + ", ".join(
             f"{v:.1f} um at {h:g} h" for v, h in zip(rows[-1]["drift_rise_um"], HOURS,
                                                       strict=True)))
     model = file_entry(MODELS_DIR / MODEL_FILE)
     model["path"] = f"models/{MODEL_FILE}"
-    record = provenance(command=command, model=model, **CONDITIONS,
+    record = provenance(command=command, model=model, ambient_C=AMBIENT_C, speed_rpm=SPEED_RPM,
+                        feed_mm_per_min=FEED_MM_PER_MIN,
                         solver="scipy.integrate.solve_ivp BDF, rtol = atol = 1e-8, the "
                         "build's explicit equations (model.equations.explicit_ode)")
     return {"provenance": record, "hours": list(HOURS), "default_segments": DEFAULT_SEGMENTS,
