@@ -98,6 +98,9 @@ docs-snapshots:
 	for report in spindle caiviac_spindle; do test -f results/iso230-3/$$report/spindle.json || \
 	  continue; mkdir -p docs/snapshots/iso230-3/$$report; \
 	  cp results/iso230-3/$$report/spindle.json docs/snapshots/iso230-3/$$report/; done
+	for test in etve spectrum axis; do test -f results/iso230-3/$$test/$$test.json || continue; \
+	  mkdir -p docs/snapshots/iso230-3/$$test; \
+	  cp results/iso230-3/$$test/$$test.json docs/snapshots/iso230-3/$$test/; done
 	for evaluation in caiviac_targets_raw caiviac_targets_diff probes_targets_raw \
 	    probes_targets_diff; do \
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \

@@ -45,7 +45,8 @@ Sources (``Sources``, the checkout's by default):
   per-target residual table, the rows of one retraining rule);
 - the ISO 230-3 reports ``spindlebench iso230-3 TEST ... -o DIR`` writes as ``DIR/TEST.json``
   (``iso230-3-comparison TEST``: the default machine's spindle-on phase beside CAIVIAC run
-  3's, from ``results/iso230-3/`` or its snapshot);
+  3's, from ``results/iso230-3/`` or its snapshot; ``iso230-3-report TEST[@steps]``: one
+  report of the default machine, per direction and tilt, or the speed spectrum's steps);
 - ``results/caiviac_identification/*/caiviac.json`` (or their snapshots), written by
   ``python -m spindlebench.identification.validation --splits ... --out ...``
   (``identification-split C``: that split's table, as the script prints it);
@@ -1148,8 +1149,74 @@ def iso_targets_section(by: str, key: str | None, sources: Sources) -> str:
     return block(by, source, key, provenance, iso_targets_table(path, key))
 
 
+#: The default machine's four reports the ISO page describes (``iso230-3-report TEST``, or
+#: ``TEST@steps`` for the speed spectrum's steps), each ``iso230-3/TEST/TEST.json``.
+ISO_REPORTS = ("spindle", "spectrum", "etve", "axis")
+
+
+def iso_report_file(test: str, sources: Sources) -> Path | None:
+    return _results_or_snapshot(f"iso230-3/{test}/{test}.json", sources)
+
+
+def _iso_rows(report: Mapping[str, Any], unit: str) -> list[list[Any]]:
+    whole = report[f"range_{unit}"]
+    heating = report.get(f"heating_range_{unit}")
+    etve = report.get(f"etve_{unit}")
+    label = "µm" if unit == "um" else "µrad"
+    rows = []
+    for channel, r in whole.items():
+        row = [f"{channel} ({label})", f"{r['range']:.1f}",
+               f"{r['max']:.1f} at {r['at_max_h']:.1f} h", f"{r['min']:.1f}", f"{r['final']:.1f}"]
+        if heating is not None:
+            row.append(f"{heating[channel]['range']:.1f}")
+        if etve is not None:
+            row.append(f"{etve[channel]:.1f}")
+        rows.append(row)
+    return rows
+
+
+def iso_report_table(path: Path, key: str | None = None) -> str:
+    """One report of the default machine: per direction and tilt, the whole test's range, its
+    maximum and when, minimum and final value (``range_um``, ``range_urad``), with the
+    spindle-on phase's range (``heating_range_*``) or the ETVE (``etve_*``) where the test has
+    them; ``TEST@steps``: the speed spectrum's value at the end of each speed step."""
+    report = json.loads(path.read_text(encoding="utf-8"))
+    if key is not None and key.endswith("@steps"):
+        channels = [*report["steps"][0]["end_um"], *report["steps"][0]["end_urad"]]
+        return markdown_table(
+            ["speed (rpm)", "from–to (h)", *[f"{c} at the end ({'µrad' if c in 'AB' else 'µm'})"
+                                              for c in channels]],
+            [[f"{st['speed_rpm']:g}", f"{st['from_h']:.2f}–{st['to_h']:.2f}",
+              *[f"{v:.1f}" for v in [*st["end_um"].values(), *st["end_urad"].values()]]]
+             for st in report["steps"]])
+    header = ["channel", "range", "max (when)", "min", "final"]
+    if "heating_range_um" in report:
+        header.append(f"range, spindle on (0–{report['spindle_on_end_h']:g} h)")
+    if "etve_um" in report:
+        header.append("ETVE")
+    return markdown_table(header, _iso_rows(report, "um") + _iso_rows(report, "urad"))
+
+
+def iso_report_section(key: str | None, sources: Sources) -> str:
+    test = (key or "").split("@")[0]
+    if test not in ISO_REPORTS:
+        raise ValueError(f"<!-- generate: iso230-3-report {key} -->: no such test (have: "
+                         f"{', '.join(ISO_REPORTS)})")
+    command = f"spindlebench iso230-3 {test} --machine default -o results/iso230-3/{test}"
+    path = iso_report_file(test, sources)
+    if path is None:
+        return placeholder(f"The {test} report table", command)
+    source = sources.name(path)
+    fmu = json.loads(path.read_text(encoding="utf-8"))["provenance"].get("fmu", {})
+    provenance = (f"From `{source}`, written by `{command}` (FMU sha256 "
+                  f"{str(fmu.get('sha256', '?'))[:12]}); values in µm and µrad, times in h "
+                  "from the test's start")
+    return block("iso230-3-report", source, key, provenance, iso_report_table(path, key))
+
+
 ISO_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "iso230-3-comparison": iso_comparison_table,
+    "iso230-3-report": iso_report_table,
     "iso230-3-targets": iso_targets_table,
 }
 
@@ -1395,6 +1462,8 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return fingerprint_section(key, sources)
     if by == "iso230-3-targets":
         return iso_targets_section(by, key, sources)
+    if by == "iso230-3-report":
+        return iso_report_section(key, sources)
     if by in ISO_TABLES:
         return iso_section(by, key, sources)
     if by == "identification-split":

@@ -433,3 +433,37 @@ def test_the_evaluate_runs_table_has_a_row_per_k_and_fails_when_a_file_disagrees
         d["rmse_um"]["a/run1.csv"] = 2.5
 
     _disagrees(page, sources, folder / "k3.json", change)
+
+
+def test_the_iso_report_tables_come_from_the_report_json_and_fail_when_they_disagree(tmp_path):
+    """docs/iso230-3.md's tables of the default machine's reports: every direction and tilt
+    of ``TEST.json`` (whole test, spindle-on phase where the test has one, the spectrum's
+    steps); an edited value fails the check."""
+    import json
+
+    def channel(range_, at_h):
+        return {"range": range_, "max": range_, "min": 0.0, "final": 1.0, "at_max_h": at_h}
+
+    report = {"range_um": {"Z": channel(20.85, 4.3667)}, "range_urad": {"A": channel(23.5, 4.2)},
+              "heating_range_um": {"Z": channel(19.4, 1.9)},
+              "heating_range_urad": {"A": channel(23.0, 3.9)}, "spindle_on_end_h": 4.0,
+              "steps": [{"speed_rpm": 2000.0, "from_h": 0.0, "to_h": 0.9833,
+                         "end_um": {"Z": 9.55}, "end_urad": {"A": 1.5}}],
+              "provenance": {"fmu": {"sha256": "ab" * 32}}}
+    path = tmp_path / "snapshots" / "iso230-3" / "spectrum" / "spectrum.json"
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps(report), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: iso230-3-report spectrum -->\n\n"
+                         "<!-- generate: iso230-3-report spectrum@steps -->\n", sources)
+    assert "| Z (µm) | 20.9 | 20.9 at 4.4 h | 0.0 | 1.0 | 19.4 |" in page
+    assert "| A (µrad) | 23.5 | 23.5 at 4.2 h | 0.0 | 1.0 | 23.0 |" in page
+    assert "| 2000 | 0.00–0.98 | 9.6 | 1.5 |" in page
+    with pytest.raises(ValueError, match="no such test"):
+        tables.expand("<!-- generate: iso230-3-report nothing -->\n", sources)
+
+    def change(d):
+        d["steps"][0]["end_um"]["Z"] = 9.75
+
+    _disagrees(page, sources, path, change)
