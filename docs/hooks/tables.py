@@ -314,11 +314,47 @@ def ambient_step_table(document: Mapping[str, Any], key: str | None = None) -> s
                                                        for n, s in steps.items()])
 
 
+#: The heating runs' outputs docs/model.md quotes: (output, what of it, header).
+HEATING_OUTPUT_COLUMNS = (
+    ("drift_um", "peak", "drift peak (µm, when)"), ("drift_um", "end", "drift at 8 h (µm)"),
+    ("column_growth_um", "end", "column growth at 8 h (µm)"),
+    ("front_preload_thermal_N", "peak", "induced preload peak (N, when)"),
+    ("front_preload_thermal_N", "end", "at 8 h (N)"),
+    ("Q_bearing_air_W", "end", "bearing air at 8 h (W)"),
+    ("Q_jacket_W", "end", "jacket at 8 h (W)"),
+    ("jacket_outlet_C", "rise", "jacket outlet − inlet at 8 h (K)"))
+
+
+def _heating_cell(outputs: Mapping[str, Any], name: str, what: str) -> str:
+    if what == "rise":
+        inlet, outlet = outputs.get("jacket_inlet_C"), outputs.get(name)
+        return "" if inlet is None or outlet is None else f"{outlet['end'] - inlet['end']:.1f}"
+    value = outputs.get(name)
+    if value is None:
+        return ""
+    if what == "peak":
+        return f"{value['peak']:.1f} at {value['peak_h']:.2f} h"
+    return f"{value['end']:.1f}"
+
+
+def heating_outputs_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    """Every machine's heating runs (8 h at constant speed in a 20 °C room): the drift's peak
+    and end, and the issue-20 mechanisms' outputs (``machine_check``'s ``heating_outputs``;
+    an empty cell: the machine has no such output or it stays 0)."""
+    rows = []
+    for name, machine in document["machines"].items():
+        for run, outputs in machine.get("heating_outputs", {}).items():
+            rows.append([f"`{name}`", run, *[_heating_cell(outputs, o, w)
+                                            for o, w, _ in HEATING_OUTPUT_COLUMNS]])
+    return markdown_table(["machine", "run", *[h for _, _, h in HEATING_OUTPUT_COLUMNS]], rows)
+
+
 MACHINE_TABLES: dict[str, tuple[Callable[[Mapping[str, Any], Any], str], str]] = {
     "fingerprints": (fingerprints_table, "fingerprints"),
     "mechanisms": (mechanisms_table, "mechanisms"),
     "targets": (targets_table, "fingerprints"),
     "heating": (heating_table, "heating_fingerprints"),
+    "heating-outputs": (heating_outputs_table, "heating_outputs"),
     "levels": (levels_table, "levels"),
     "ambient-step": (ambient_step_table, "ambient_step_um_per_K"),
 }

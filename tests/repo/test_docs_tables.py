@@ -467,3 +467,21 @@ def test_the_iso_report_tables_come_from_the_report_json_and_fail_when_they_disa
         d["steps"][0]["end_um"]["Z"] = 9.75
 
     _disagrees(page, sources, path, change)
+
+
+def test_the_heating_outputs_table_reads_machine_checks_heating_outputs():
+    """docs/model.md's heating outputs table: every machine's heating runs from
+    ``machine_check``'s ``heating_outputs`` (peak and when, the value at 8 h, the jacket's
+    outlet minus inlet); a machine record without them gives no row."""
+    document = {"machines": {
+        "m": {"heating_outputs": {"heating/room20_4000": {
+            "drift_um": {"start": 0.0, "peak": 20.14, "peak_h": 2.1, "end": 14.3},
+            "front_preload_thermal_N": {"start": 0.0, "peak": 244.8, "peak_h": 0.15,
+                                        "end": 0.0},
+            "jacket_inlet_C": {"start": 20.0, "peak": 20.0, "peak_h": 0.0, "end": 20.0},
+            "jacket_outlet_C": {"start": 20.0, "peak": 23.2, "peak_h": 8.0, "end": 23.2}}}},
+        "old": {}}}
+    table = tables.heating_outputs_table(document)
+    assert table.count("\n") == 2  # header, rule, one row
+    assert "| `m` | heating/room20_4000 | 20.1 at 2.10 h | 14.3 |  | 244.8 at 0.15 h | 0.0 |" \
+        "  |  | 3.2 |" in table
