@@ -318,9 +318,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="print bearing rises of the heating runs and the column's "
                         "time constant to the room")
     parser.add_argument("--json", type=Path, metavar="OUT.json", default=None,
-                        help="write fingerprints, targets, ambient step, levels and "
-                        "mechanisms of every machine named to OUT.json (the model page's "
-                        "source) instead of printing")
+                        help="write fingerprints, targets, ambient step, levels, the "
+                        "heating runs' outputs and mechanisms of every machine named to "
+                        "OUT.json (the model page's source) instead of printing")
     parser.add_argument("--fingerprints-only", action="store_true",
                         help="with --json: only the fingerprints and targets (seconds)")
     args = parser.parse_args(argv)
