@@ -58,9 +58,13 @@ docs: notebooks
 	test -f results/README.md || $(MAKE) run
 	SPINDLEBENCH_DOCS_RUN=1 NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
-## After a model change and a rerun (make run, the studies of docs/validation.md): copy the
-## files the docs' tables read from results/ to their committed copies in docs/snapshots/
-## (what a checkout without results/ shows), only those that results/ has.
+## After a model change and a rerun (make run, the studies of docs/validation.md, `python -m
+## spindlebench.model.discretisation --out results/discretisation/discretisation.json`,
+## `python -m spindlebench.model.cold_start --json results/cold_start/cold_start.json`, the
+## benchmark run docs/benchmark.md names, the evaluate runs of docs/hooks/tables.py's
+## EVALUATE_RUNS): copy the files the docs' tables read from results/ to their committed
+## copies in docs/snapshots/ (what a checkout without results/ shows), only those that
+## results/ has.
 SNAPSHOT_FILES := README.md table6_rmse.csv provenance.json
 docs-snapshots:
 	for study in paper_study caiviac_study caiviac_cycle_study ambient_following_study \
@@ -73,7 +77,7 @@ docs-snapshots:
 	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
 	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
 	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
-	for sweep in season-sweep season-sweep-methods; do \
+	for sweep in season-sweep season-sweep-methods af-sweep; do \
 	  test -f results/$$sweep/summary/by_method.csv || continue; \
 	  mkdir -p docs/snapshots/$$sweep/summary; \
 	  cp results/$$sweep/summary/by_method.csv docs/snapshots/$$sweep/summary/; \
@@ -94,10 +98,18 @@ docs-snapshots:
 	for report in spindle caiviac_spindle; do test -f results/iso230-3/$$report/spindle.json || \
 	  continue; mkdir -p docs/snapshots/iso230-3/$$report; \
 	  cp results/iso230-3/$$report/spindle.json docs/snapshots/iso230-3/$$report/; done
+	for test in etve spectrum axis; do test -f results/iso230-3/$$test/$$test.json || continue; \
+	  mkdir -p docs/snapshots/iso230-3/$$test; \
+	  cp results/iso230-3/$$test/$$test.json docs/snapshots/iso230-3/$$test/; done
 	for evaluation in caiviac_targets_raw caiviac_targets_diff probes_targets_raw \
 	    probes_targets_diff; do \
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \
 	  cp results/iso230-3/$$evaluation.json docs/snapshots/iso230-3/; done
+	for file in discretisation/discretisation.json cold_start/cold_start.json \
+	    benchmark/mine/leaderboard.json caiviac-six-correlated/k2.json \
+	    caiviac-six-correlated/k3.json; do \
+	  test -f results/$$file || continue; mkdir -p docs/snapshots/$$(dirname $$file); \
+	  cp results/$$file docs/snapshots/$$file; done
 
 bench: compile
 	for script in bench/*.py; do $(PY) $$script || exit 1; done

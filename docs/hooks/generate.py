@@ -44,9 +44,18 @@ RESULT_FOLDERS = {
                                                 / "population",
     "generated/results/compensate-stable-room": ROOT / "results" / "compensate-stable-room"
                                                  / "population",
+    "generated/results/season-sweep": ROOT / "results" / "season-sweep",
+    "generated/results/season-sweep-methods": ROOT / "results" / "season-sweep-methods",
+    "generated/results/af-sweep": ROOT / "results" / "af-sweep",
 }
+#: A results folder's committed copy (``make docs-snapshots``), shown when the folder is not in
+#: this checkout's results/: the same path under docs/snapshots/.
+SNAPSHOTS = ROOT / "docs" / "snapshots"
 #: What writes each results folder (for the page shown when it is not there).
 RESULT_COMMANDS = {
+    "season-sweep": tables.SWEEP_FOLDERS["season-sweep"],
+    "season-sweep-methods": tables.SWEEP_FOLDERS["season-sweep-methods"],
+    "af-sweep": tables.SWEEP_FOLDERS["af-sweep"],
     "placement-stable-room": tables.STUDY_COMMANDS["placement-population"],
     "compensate-stable-room": tables.STUDY_COMMANDS["compensation-population"],
 }
@@ -190,6 +199,9 @@ def result_pages(files: Files, config) -> dict[str, str]:
     for uri, folder in RESULT_FOLDERS.items():
         readme = folder / "README.md"
         name = uri.rsplit("/", 1)[1]
+        snapshot = SNAPSHOTS / folder.relative_to(ROOT / "results") / "README.md"
+        if not readme.is_file() and snapshot.is_file():
+            folder, readme = snapshot.parent, snapshot  # its committed copy (no figures)
         if not readme.is_file():  # a page all the same, so the links to it hold
             command = RESULT_COMMANDS.get(name)
             pages[f"{uri}/index.md"] = (
@@ -204,25 +216,32 @@ def result_pages(files: Files, config) -> dict[str, str]:
                 files.append(File.generated(config, f"{uri}/{item.name}",
                                             abs_src_path=str(item)))
         text = readme.read_text(encoding="utf-8")
-        pages[f"{uri}/index.md"] = (f"<!-- tables copied from {tables.Sources().name(readme)} "
-                                    "-->\n\n" + _links_to_files(text, folder))
-        index.append(f"- [{name}]({name}/index.md)")
+        source = tables.Sources().name(readme)
+        copy = readme.is_relative_to(SNAPSHOTS)
+        note = (f"*The committed snapshot `{source}` (`make docs-snapshots` copies it from "
+                "`results/`; this checkout has not run it).*\n\n" if copy else "")
+        pages[f"{uri}/index.md"] = (f"<!-- tables copied from {source} -->\n\n" + note
+                                    + _links_to_files(text, folder))
+        index.append(f"- [{name}]({name}/index.md)" + (" (committed snapshot)" if copy else ""))
     pages["generated/results/index.md"] = "\n".join(index) + "\n"
     return pages
 
 
 def _links_to_files(text: str, folder: Path) -> str:
-    """A README's links to sub-folders or files the site does not carry become plain text
-    (mkdocs --strict refuses a link to a file that is not in the site)."""
+    """A README's links to sub-folders or files the site does not carry become plain text, and
+    so do its images that are not there (a snapshot keeps the README, not its figures): mkdocs
+    --strict refuses a link to a file that is not in the site."""
     import re
 
     def keep(match: re.Match) -> str:
-        target = match.group(2).split("#")[0]
+        target = match.group(3).split("#")[0]
         if target.startswith(("http://", "https://")) or not target:
             return match.group(0)
         path = folder / target
-        if path.is_file() and path.suffix in (".png", ".csv", ".json", ".md"):
+        if path.is_file() and path.parent == folder and \
+                path.suffix in (".png", ".csv", ".json", ".md"):  # the files result_pages copies
             return match.group(0)
-        return f"{match.group(1)} (`{target}`)"
+        what = "figure not in this build: " if match.group(1) else ""
+        return f"{match.group(2)} ({what}`{target}`)"
 
-    return re.sub(r"(?<!!)\[([^\]]+)\]\(([^)]+)\)", keep, text)
+    return re.sub(r"(!?)\[([^\]]*)\]\(([^)]+)\)", keep, text)

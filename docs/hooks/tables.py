@@ -45,10 +45,22 @@ Sources (``Sources``, the checkout's by default):
   per-target residual table, the rows of one retraining rule);
 - the ISO 230-3 reports ``spindlebench iso230-3 TEST ... -o DIR`` writes as ``DIR/TEST.json``
   (``iso230-3-comparison TEST``: the default machine's spindle-on phase beside CAIVIAC run
-  3's, from ``results/iso230-3/`` or its snapshot);
+  3's, from ``results/iso230-3/`` or its snapshot; ``iso230-3-report TEST[@steps]``: one
+  report of the default machine, per direction and tilt, or the speed spectrum's steps);
 - ``results/caiviac_identification/*/caiviac.json`` (or their snapshots), written by
   ``python -m spindlebench.identification.validation --splits ... --out ...``
-  (``identification-split C``: that split's table, as the script prints it).
+  (``identification-split C``: that split's table, as the script prints it);
+- ``results/discretisation/discretisation.json`` (or its snapshot), written by ``python -m
+  spindlebench.model.discretisation --out ...`` (``discretisation``: the drift rise per segment
+  count; its provenance line says when the model source has changed since);
+- ``results/cold_start/cold_start.json`` (or its snapshot), written by ``python -m
+  spindlebench.model.cold_start --json ...`` (``cold-start``: the sensors' and the drift's
+  rises of the cold-start runs; its provenance line says when the FMU has changed since);
+- ``evaluate --json`` runs of one comparison at several k (``evaluate-runs NAME``: a folder of
+  ``kN.json``, from ``results/NAME`` or its snapshot; the commands in ``EVALUATE_RUNS``);
+- a benchmark run's ``leaderboard.json`` (``leaderboard benchmark/mine``: the run's suite and
+  command, the overall table and one table per task, as ``leaderboard.md`` has them), from
+  ``results/`` or its snapshot.
 """
 
 from __future__ import annotations
@@ -302,11 +314,47 @@ def ambient_step_table(document: Mapping[str, Any], key: str | None = None) -> s
                                                        for n, s in steps.items()])
 
 
+#: The heating runs' outputs docs/model.md quotes: (output, what of it, header).
+HEATING_OUTPUT_COLUMNS = (
+    ("drift_um", "peak", "drift peak (µm, when)"), ("drift_um", "end", "drift at 8 h (µm)"),
+    ("column_growth_um", "end", "column growth at 8 h (µm)"),
+    ("front_preload_thermal_N", "peak", "induced preload peak (N, when)"),
+    ("front_preload_thermal_N", "end", "at 8 h (N)"),
+    ("Q_bearing_air_W", "end", "bearing air at 8 h (W)"),
+    ("Q_jacket_W", "end", "jacket at 8 h (W)"),
+    ("jacket_outlet_C", "rise", "jacket outlet − inlet at 8 h (K)"))
+
+
+def _heating_cell(outputs: Mapping[str, Any], name: str, what: str) -> str:
+    if what == "rise":
+        inlet, outlet = outputs.get("jacket_inlet_C"), outputs.get(name)
+        return "" if inlet is None or outlet is None else f"{outlet['end'] - inlet['end']:.1f}"
+    value = outputs.get(name)
+    if value is None:
+        return ""
+    if what == "peak":
+        return f"{value['peak']:.1f} at {value['peak_h']:.2f} h"
+    return f"{value['end']:.1f}"
+
+
+def heating_outputs_table(document: Mapping[str, Any], key: str | None = None) -> str:
+    """Every machine's heating runs (8 h at constant speed in a 20 °C room): the drift's peak
+    and end, and the issue-20 mechanisms' outputs (``machine_check``'s ``heating_outputs``;
+    an empty cell: the machine has no such output or it stays 0)."""
+    rows = []
+    for name, machine in document["machines"].items():
+        for run, outputs in machine.get("heating_outputs", {}).items():
+            rows.append([f"`{name}`", run, *[_heating_cell(outputs, o, w)
+                                            for o, w, _ in HEATING_OUTPUT_COLUMNS]])
+    return markdown_table(["machine", "run", *[h for _, _, h in HEATING_OUTPUT_COLUMNS]], rows)
+
+
 MACHINE_TABLES: dict[str, tuple[Callable[[Mapping[str, Any], Any], str], str]] = {
     "fingerprints": (fingerprints_table, "fingerprints"),
     "mechanisms": (mechanisms_table, "mechanisms"),
     "targets": (targets_table, "fingerprints"),
     "heating": (heating_table, "heating_fingerprints"),
+    "heating-outputs": (heating_outputs_table, "heating_outputs"),
     "levels": (levels_table, "levels"),
     "ambient-step": (ambient_step_table, "ambient_step_um_per_K"),
 }
@@ -831,6 +879,8 @@ SWEEP_FOLDERS = {
                     "-o results/season-sweep --workers 1",
     "season-sweep-methods": "spindlebench sweep scenarios/studies/season_sweep_methods.toml "
                             "-o results/season-sweep-methods --workers 1",
+    "af-sweep": "spindlebench sweep scenarios/studies/season_sweep.toml -o results/af-sweep "
+                "--machine ambient-following --workers 1",
 }
 SWEEP_FILE = "summary/by_method.csv"
 #: The groups table's columns: (method in by_method.csv, header).
@@ -1135,8 +1185,74 @@ def iso_targets_section(by: str, key: str | None, sources: Sources) -> str:
     return block(by, source, key, provenance, iso_targets_table(path, key))
 
 
+#: The default machine's four reports the ISO page describes (``iso230-3-report TEST``, or
+#: ``TEST@steps`` for the speed spectrum's steps), each ``iso230-3/TEST/TEST.json``.
+ISO_REPORTS = ("spindle", "spectrum", "etve", "axis")
+
+
+def iso_report_file(test: str, sources: Sources) -> Path | None:
+    return _results_or_snapshot(f"iso230-3/{test}/{test}.json", sources)
+
+
+def _iso_rows(report: Mapping[str, Any], unit: str) -> list[list[Any]]:
+    whole = report[f"range_{unit}"]
+    heating = report.get(f"heating_range_{unit}")
+    etve = report.get(f"etve_{unit}")
+    label = "µm" if unit == "um" else "µrad"
+    rows = []
+    for channel, r in whole.items():
+        row = [f"{channel} ({label})", f"{r['range']:.1f}",
+               f"{r['max']:.1f} at {r['at_max_h']:.1f} h", f"{r['min']:.1f}", f"{r['final']:.1f}"]
+        if heating is not None:
+            row.append(f"{heating[channel]['range']:.1f}")
+        if etve is not None:
+            row.append(f"{etve[channel]:.1f}")
+        rows.append(row)
+    return rows
+
+
+def iso_report_table(path: Path, key: str | None = None) -> str:
+    """One report of the default machine: per direction and tilt, the whole test's range, its
+    maximum and when, minimum and final value (``range_um``, ``range_urad``), with the
+    spindle-on phase's range (``heating_range_*``) or the ETVE (``etve_*``) where the test has
+    them; ``TEST@steps``: the speed spectrum's value at the end of each speed step."""
+    report = json.loads(path.read_text(encoding="utf-8"))
+    if key is not None and key.endswith("@steps"):
+        channels = [*report["steps"][0]["end_um"], *report["steps"][0]["end_urad"]]
+        return markdown_table(
+            ["speed (rpm)", "from–to (h)", *[f"{c} at the end ({'µrad' if c in 'AB' else 'µm'})"
+                                              for c in channels]],
+            [[f"{st['speed_rpm']:g}", f"{st['from_h']:.2f}–{st['to_h']:.2f}",
+              *[f"{v:.1f}" for v in [*st["end_um"].values(), *st["end_urad"].values()]]]
+             for st in report["steps"]])
+    header = ["channel", "range", "max (when)", "min", "final"]
+    if "heating_range_um" in report:
+        header.append(f"range, spindle on (0–{report['spindle_on_end_h']:g} h)")
+    if "etve_um" in report:
+        header.append("ETVE")
+    return markdown_table(header, _iso_rows(report, "um") + _iso_rows(report, "urad"))
+
+
+def iso_report_section(key: str | None, sources: Sources) -> str:
+    test = (key or "").split("@")[0]
+    if test not in ISO_REPORTS:
+        raise ValueError(f"<!-- generate: iso230-3-report {key} -->: no such test (have: "
+                         f"{', '.join(ISO_REPORTS)})")
+    command = f"spindlebench iso230-3 {test} --machine default -o results/iso230-3/{test}"
+    path = iso_report_file(test, sources)
+    if path is None:
+        return placeholder(f"The {test} report table", command)
+    source = sources.name(path)
+    fmu = json.loads(path.read_text(encoding="utf-8"))["provenance"].get("fmu", {})
+    provenance = (f"From `{source}`, written by `{command}` (FMU sha256 "
+                  f"{str(fmu.get('sha256', '?'))[:12]}); values in µm and µrad, times in h "
+                  "from the test's start")
+    return block("iso230-3-report", source, key, provenance, iso_report_table(path, key))
+
+
 ISO_TABLES: dict[str, Callable[[Path, Any], str]] = {
     "iso230-3-comparison": iso_comparison_table,
+    "iso230-3-report": iso_report_table,
     "iso230-3-targets": iso_targets_table,
 }
 
@@ -1192,6 +1308,170 @@ def identification_section(key: str | None, sources: Sources) -> str:
                  identification_split_table(path, key))
 
 
+# --------------------------------------------------------------------------- model, benchmark
+
+DISCRETISATION = "discretisation/discretisation.json"
+DISCRETISATION_COMMAND = ("python -m spindlebench.model.discretisation --out "
+                          f"results/{DISCRETISATION}")
+
+
+def _results_or_snapshot(name: str, sources: Sources) -> Path | None:
+    """``results/NAME`` where a command wrote it in this checkout, else its committed copy
+    ``docs/snapshots/NAME``, else None."""
+    return next((base / name for base in (sources.results, sources.snapshots)
+                 if (base / name).is_file()), None)
+
+
+def discretisation_table(path: Path, key: str | None = None) -> str:
+    """The drift rise per segment count, as ``model.discretisation`` prints it."""
+    from spindlebench.model.discretisation import markdown
+
+    return markdown(json.loads(path.read_text(encoding="utf-8")))
+
+
+def discretisation_section(sources: Sources) -> str:
+    path = _results_or_snapshot(DISCRETISATION, sources)
+    if path is None:
+        return placeholder("The discretisation table", DISCRETISATION_COMMAND)
+    from spindlebench.core.provenance import sha256_file
+
+    source = sources.name(path)
+    record = json.loads(path.read_text(encoding="utf-8"))["provenance"]
+    model = record["model"]
+    current = sources.root / model["path"]
+    changed = "" if current.is_file() and sha256_file(current) == model["sha256"] else (
+        f"; `{model['path']}` has changed since: rerun it")
+    provenance = (f"From `{source}`, written by `{record['command']}` (`{model['path']}` "
+                  f"sha256 {model['sha256'][:12]}{changed}; {record['ambient_C']:g} °C soak, "
+                  f"{record['speed_rpm']:g} rpm, feed {record['feed_mm_per_min']:g} mm/min; "
+                  f"{record['solver']}; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("discretisation", source, None, provenance, discretisation_table(path))
+
+
+COLD_START = "cold_start/cold_start.json"
+COLD_START_COMMAND = f"python -m spindlebench.model.cold_start --json results/{COLD_START}"
+
+
+def cold_start_table(path: Path, key: str | None = None) -> str:
+    """The cold-start runs' rises and the drift's peak, as ``model.cold_start`` prints them."""
+    from spindlebench.model.cold_start import markdown
+
+    return markdown(json.loads(path.read_text(encoding="utf-8")))
+
+
+def cold_start_section(sources: Sources) -> str:
+    path = _results_or_snapshot(COLD_START, sources)
+    if path is None:
+        return placeholder("The cold-start table", COLD_START_COMMAND)
+    from spindlebench.core.provenance import sha256_file
+
+    source = sources.name(path)
+    record = json.loads(path.read_text(encoding="utf-8"))["provenance"]
+    fmu = record["fmu"]["sha256"]
+    changed = "" if sources.fmu.is_file() and sha256_file(sources.fmu) == fmu else (
+        f"; `{sources.name(sources.fmu)}` has changed since: rerun it")
+    provenance = (f"From `{source}`, written by `{record['command']}` (FMU sha256 {fmu[:12]}"
+                  f"{changed}; {record['ambient_C']:g} °C soak, feed "
+                  f"{record['feed_mm_per_min']:g} mm/min, {record['hours']:g} h; "
+                  f"{record['solver']}; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("cold-start", source, None, provenance, cold_start_table(path))
+
+
+#: Folders of ``evaluate --json`` runs that differ only in ``--clusters`` (one ``kN.json`` per
+#: k), under results/ or docs/snapshots/: name -> the command (``K``: the budget).
+EVALUATE_RUNS = {
+    "caiviac-six-correlated": (
+        "spindlebench evaluate --train results/caiviac/run4_5000rpm.csv --test "
+        + " ".join(f"results/caiviac/{run}.csv" for run in (
+            "run1_1250rpm", "run2_2500rpm", "run3_3750rpm", "run5_3500rpm", "run6_stepped"))
+        + " --target ch3_um --sensors t1_C,t8_C,t2_C,t13_C,t7_C,t12_C --differences "
+        "--clusters K --json results/caiviac-six-correlated/kK.json"),
+}
+
+
+def _evaluate_folder(name: str, sources: Sources) -> Path | None:
+    return next((base / name for base in (sources.results, sources.snapshots)
+                 if any((base / name).glob("k*.json"))), None)
+
+
+def evaluate_runs_table(path: Path, key: str | None = None) -> str:
+    """One row per ``kN.json`` of the folder ``path``: k, the selected terms, the RMSE on each
+    test recording (its file's stem) and their mean, as ``evaluate`` prints them."""
+    documents = [json.loads(p.read_text(encoding="utf-8")) for p in path.glob("k*.json")]
+    documents.sort(key=lambda d: d["provenance"]["clusters"])
+    tests = list(documents[0]["rmse_um"])
+    rows = [[d["provenance"]["clusters"], ", ".join(f"`{t}`" for t in d["selected"]),
+             *[f"{d['rmse_um'][t]:.2f}" for t in tests], f"**{d['mean_rmse_um']:.2f}**"]
+            for d in documents]
+    return markdown_table(["k", "selected", *[Path(t).stem for t in tests], "mean"], rows)
+
+
+def evaluate_runs_section(key: str | None, sources: Sources) -> str:
+    if key not in EVALUATE_RUNS:
+        raise ValueError(f"<!-- generate: evaluate-runs {key} -->: no such folder (have: "
+                         f"{', '.join(EVALUATE_RUNS)})")
+    folder = _evaluate_folder(key, sources)
+    if folder is None:
+        return placeholder(f"The evaluate-runs {key} table", EVALUATE_RUNS[key])
+    source = sources.name(folder)
+    first = json.loads(sorted(folder.glob("k*.json"))[0].read_text(encoding="utf-8"))
+    record = first["provenance"]
+    provenance = (f"From `{source}/k*.json`, written by `{EVALUATE_RUNS[key]}` for each k "
+                  f"(training file sha256 {record['train']['sha256'][:12]}; RMSE in µm of "
+                  f"`{record['target']}` on each test run; spindlebench "
+                  f"{record['package_versions'].get('spindlebench', '?')})")
+    return block("evaluate-runs", source, key, provenance, evaluate_runs_table(folder))
+
+
+#: The leaderboard run the benchmark page shows (folder under results/ or docs/snapshots/).
+LEADERBOARD_RUN = "benchmark/mine"
+LEADERBOARD_COMMAND = ("PYTHONPATH=docs/examples/user-method spindlebench benchmark --method "
+                       "my_selector:DecorrelatedSelector -o results/benchmark/mine")
+
+
+def leaderboard_table(path: Path, key: str | None = None) -> str:
+    """One table of a ``leaderboard.json``: ``overall`` or a task's (the key is its name), as
+    ``leaderboard.md`` has it (``studies.benchmark.benchmark_report``)."""
+    from spindlebench.studies.benchmark import benchmark_report
+
+    document = json.loads(path.read_text(encoding="utf-8"))
+    if key == "overall":
+        return benchmark_report.overall_table(document["overall"])
+    return benchmark_report.task_table(document["rows"], str(key),
+                                       document["suite"]["band_um"])
+
+
+def leaderboard_section(key: str | None, sources: Sources) -> str:
+    """``<!-- generate: leaderboard FOLDER -->``: the run's suite and command, then the overall
+    table and one table per task under a heading of its own, each with its marker."""
+    folder = key or LEADERBOARD_RUN
+    path = _results_or_snapshot(f"{folder}/leaderboard.json", sources)
+    if path is None:
+        return placeholder(f"The leaderboard of `{folder}`", LEADERBOARD_COMMAND)
+    from spindlebench.studies.benchmark import benchmark_report
+
+    source = sources.name(path)
+    document = json.loads(path.read_text(encoding="utf-8"))
+    suite, record = document["suite"], document["provenance"]
+    fmu = record.get("fmu_sha256")
+    head = (f"*From `{source}`, written by `{record['command']}`: suite `{suite['name']}` "
+            f"version {suite['version']}, tasks SHA-256 `{suite['tasks_sha256'][:12]}…`, "
+            f"k = {suite['k']} sensors per selection method, seed {suite['seed']}, FMU sha256 "
+            f"{str(fmu)[:12]}, spindlebench "
+            f"{record['package_versions'].get('spindlebench', '?')}"
+            + ("; a partial run (`--tasks`)" if record.get("partial") else "") + ".*\n\n"
+            f"{benchmark_report.MARKS_TEXT}\n")
+    parts = [head, "### Overall (mean rank over tasks)\n",
+             block("leaderboard", source, "overall", "Mean rank over the tasks",
+                   leaderboard_table(path, "overall"))]
+    for task in benchmark_report.tasks_of(document["rows"]):
+        parts += [f"### {task}\n", block("leaderboard", source, task, f"Task `{task}`",
+                                         leaderboard_table(path, task))]
+    return "\n".join(parts)
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1218,14 +1498,25 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return fingerprint_section(key, sources)
     if by == "iso230-3-targets":
         return iso_targets_section(by, key, sources)
+    if by == "iso230-3-report":
+        return iso_report_section(key, sources)
     if by in ISO_TABLES:
         return iso_section(by, key, sources)
     if by == "identification-split":
         return identification_section(key, sources)
+    if by == "discretisation":
+        return discretisation_section(sources)
+    if by == "cold-start":
+        return cold_start_section(sources)
+    if by == "evaluate-runs":
+        return evaluate_runs_section(key, sources)
+    if by == "leaderboard":
+        return leaderboard_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
-                     f"{', '.join(ISO_TABLES)}, identification-split)")
+                     f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
+                     "cold-start, evaluate-runs, leaderboard)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1261,6 +1552,14 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return ISO_TABLES[by](path, key)
     if by == "identification-split":
         return identification_split_table(path, key)
+    if by == "discretisation":
+        return discretisation_table(path, key)
+    if by == "cold-start":
+        return cold_start_table(path, key)
+    if by == "evaluate-runs":
+        return evaluate_runs_table(path, key)
+    if by == "leaderboard":
+        return leaderboard_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

@@ -50,12 +50,11 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("model.md", "| term (output) | span | material | sign |"): PROSE,
     ("model.md", "| node (state) | '+' half | what puts heat into it more than into the other "
      "half |"): PROSE,
-    ("model.md", "| parameter | default | source |"): "cites a source per parameter; the values "
-        "are the .mo's defaults (the generated parameters table covers those a machine sets)",
+    ("model.md", "| parameter | default | source |"): "arguments: the .mo's defaults, typed "
+        "beside the source each cites, and checked against the FMU's model description by "
+        "test_the_typed_parameter_defaults_are_the_fmus",
     ("model.md", "| sensor | part | mounted on | surroundings |"): PROSE,
     ("model.md", "| statistic | real spindles, min–max (issue 20) |"): QUOTED,
-    ("model.md", "| segments | 1 h | 2 h | 4 h |"): NO_FILE + " (`python -m "
-        "spindlebench.model.discretisation`, minutes of CPU)",
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
@@ -89,19 +88,10 @@ HAND_TABLES.update({
         "| `--method` / `--regressor` (k) | run1 | run2 | run4 | run5 | run6 | **mean** | CPU |",
         "| model | fit on train (vs truth) | heldout | exp1 | exp3 |")},
 })
-LEADERBOARD = ("written into the page, between its `<!-- leaderboard: start -->` and `<!-- "
-               "leaderboard: end -->` lines, by the `spindlebench benchmark ... --doc "
-               "docs/benchmark.md` run its header names (a copy of that run's leaderboard.md; "
-               "the run's folder is not committed: the suite takes about 10 min): to be checked "
-               "against a snapshot of leaderboard.md once one is committed")
 HAND_TABLES.update({
     ("benchmark.md", "| task | what trains | what is predicted | folds |"):
         "the suite's tasks in words, with the arguments of benchmarks/default.toml and its "
         "studies",
-    ("benchmark.md", "| # | method | mean rank | mean RMSE µm | worse than C / R / O (tasks) | "
-     "failed |"): LEADERBOARD,
-    ("benchmark.md", "| rank | method | RMSE µm | sd over folds | max abs µm | within ±5 µm | "
-     "sensors | stability | rollout µm | worse than |"): LEADERBOARD + " (one per task)",
 })
 
 
@@ -261,3 +251,237 @@ def test_the_run_tables_come_from_results_first_then_the_snapshot_and_average_wh
     assert "| run1 | t1, t2 | 1.0 |" in page and "| **mean over training runs** |  | 2.5 |" in page
     for marker, _, table in tables.tables(page):
         assert tables.regenerate(*marker.groups(), sources) == table
+
+
+def _disagrees(page: str, sources, path, change) -> None:
+    """Every table of ``page`` matches its file; after ``change`` edits that file, the check of
+    ``test_every_table_is_generated_from_its_file_or_listed_as_typed`` no longer passes."""
+    import json
+
+    found = [(marker, table) for marker, _, table in tables.tables(page)]
+    assert found and all(marker is not None for marker, _ in found)
+    for marker, table in found:
+        assert tables.regenerate(*marker.groups(), sources) == table
+    document = json.loads(path.read_text(encoding="utf-8"))
+    change(document)
+    path.write_text(json.dumps(document), encoding="utf-8")
+    assert any(tables.regenerate(*marker.groups(), sources) != table for marker, table in found)
+
+
+def test_the_discretisation_table_comes_from_its_json_and_fails_when_they_disagree(tmp_path):
+    """docs/model.md's discretisation table: from ``model.discretisation --out``'s JSON (the
+    results copy first, else the snapshot), with the model's hash; an edited number fails."""
+    import json
+
+    from spindlebench.core.provenance import provenance, sha256_file
+    from spindlebench.model import discretisation
+
+    model = tmp_path / "models" / "SpindleBench.mo"
+    model.parent.mkdir()
+    model.write_text("package SpindleBench end SpindleBench;\n", encoding="utf-8")
+    document = {"hours": [1.0, 2.0], "default_segments": 12,
+                "rows": [{"segments": 6, "drift_rise_um": [21.0, 24.0]},
+                         {"segments": 12, "drift_rise_um": [20.0, 25.0]}],
+                "provenance": provenance(command="python -m x", solver="BDF", ambient_C=8.0,
+                                         speed_rpm=4000.0, feed_mm_per_min=1500.0,
+                                         model={"path": "models/SpindleBench.mo",
+                                                "sha256": sha256_file(model)})}
+    path = tmp_path / "snapshots" / tables.DISCRETISATION
+    discretisation.write(path, document)
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: discretisation -->\n", sources)
+    assert "source=snapshots/discretisation/discretisation.json" in page
+    assert "| **12 (default)** | 20.0 | 25.0 | 0.0 % |" in page and "| 6 | 21.0 | 24.0 | 5.0 % |" \
+        in page and "has changed since" not in page
+    model.write_text("package SpindleBench /* edited */ end SpindleBench;\n", encoding="utf-8")
+    assert "`models/SpindleBench.mo` has changed since" in tables.expand(
+        "<!-- generate: discretisation -->\n", sources)
+    assert json.loads(path.read_text(encoding="utf-8")) == document  # what write() wrote
+
+    def change(d):
+        d["rows"][0]["drift_rise_um"][1] = 24.5
+
+    _disagrees(page, sources, path, change)
+
+
+def test_the_leaderboard_tables_come_from_leaderboard_json_and_fail_when_they_disagree(
+        tmp_path):
+    """docs/benchmark.md's leaderboard: the overall table and one per task, in the suite's
+    order, from a run's leaderboard.json; a changed RMSE there fails the check."""
+    row = {"rank": 1.0, "rmse_um": 2.5, "rmse_sd_um": 0.1, "max_abs_error_um": 7.0,
+           "within_band": 0.9, "n_sensors": 3.0, "stability": 1.0, "rollout_rmse_um": 2.5,
+           "worse_than": "", "folds": 3, "error": ""}
+    document = {
+        "provenance": {"command": "spindlebench benchmark -o x", "partial": False,
+                       "fmu_sha256": "ab" * 32, "package_versions": {"spindlebench": "0.1.0"}},
+        "suite": {"name": "tiny", "version": "0.1", "tasks_sha256": "cd" * 32, "k": 3,
+                  "band_um": 5.0, "seed": 0},
+        "overall": [{"overall_rank": 1, "method": "lasso", "mean_rank": 1.5,
+                     "mean_rmse_um": 3.0, "failed": 0, "worse_than_constant": 0,
+                     "worse_than_replay": 1, "worse_than_ols_all": 0},
+                    {"overall_rank": 2, "method": "baseline:replay", "mean_rank": 1.5,
+                     "mean_rmse_um": 3.2, "failed": 0, "worse_than_constant": 0,
+                     "worse_than_replay": 0, "worse_than_ols_all": 0}],
+        "rows": [{**row, "task": "b/second", "method": "lasso", "rank": 2.0, "rmse_um": 3.5,
+                  "worse_than": "baseline:replay"},
+                 {**row, "task": "b/second", "method": "baseline:replay"},
+                 {**row, "task": "a/first", "method": "lasso"},
+                 {**row, "task": "a/first", "method": "baseline:replay", "rank": None,
+                  "rmse_um": None, "error": "no data"}]}
+    path = tmp_path / "results" / "benchmark" / "mine" / "leaderboard.json"
+    path.parent.mkdir(parents=True)
+    import json
+
+    path.write_text(json.dumps(document), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: leaderboard benchmark/mine -->\n", sources)
+    assert page.index("### b/second") < page.index("### a/first")  # the suite's order
+    assert "| 1 | `lasso` | 1.50 | 3.00 | 0 / 1 / 0 | 0 |" in page
+    assert "| 2.0 | `lasso` | 3.50 | 0.10 | 7.00 | 0.90 | 3.0 | 1.00 | 2.50 | R |" in page
+    assert "| – | `baseline:replay` | failed: no data |" in page  # a failed entrant last
+    assert "written by `spindlebench benchmark -o x`" in page
+
+    def change(d):
+        d["rows"][0]["rmse_um"] = 3.6
+
+    _disagrees(page, sources, path, change)
+
+
+def test_the_cold_start_table_comes_from_its_json_and_says_when_the_fmu_changed(tmp_path):
+    """docs/model.md's magnitudes table: from ``model.cold_start --json``'s file, with the
+    FMU's hash (another FMU is said beside the table); an edited rise fails the check."""
+    from spindlebench.core.provenance import file_entry, provenance
+    from spindlebench.model import cold_start
+
+    fmu = tmp_path / "SpindleBench.fmu"
+    fmu.write_bytes(b"not an fmu")
+    run = {"sensor_rise_K": {"T10_C": [0.0, 0.1], "T2_C": [11.0, 15.2]},
+           "drift_rise_um": [20.6, 20.6], "drift_peak_um": 24.7, "drift_peak_h": 2.1}
+    document = {"read_at_min": [50.0, 300.0], "runs": {"4000": run},
+                "provenance": provenance(command="python -m x --json y", fmu=file_entry(fmu),
+                                         ambient_C=8.0, hours=5.0, feed_mm_per_min=1500.0,
+                                         solver="CVode")}
+    path = cold_start.write_json(tmp_path / "results" / tables.COLD_START, document)
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots", fmu=fmu)
+    page = tables.expand("<!-- generate: cold-start -->\n", sources)
+    assert "| rise since the start | 4000 rpm, 50 min | 4000 rpm, 5 h |" in page
+    assert page.index("| T2 (K) | +11.0 | +15.2 |") < page.index("| T10 (K) | +0.0 | +0.1 |")
+    assert "| drift's peak (µm; when) | 24.7 | at 2.1 h |" in page
+    assert "has changed since" not in page
+    fmu.write_bytes(b"another fmu")
+    assert "`SpindleBench.fmu` has changed since" in tables.expand(
+        "<!-- generate: cold-start -->\n", sources)
+
+    def change(d):
+        d["runs"]["4000"]["sensor_rise_K"]["T2_C"][0] = 11.2
+
+    _disagrees(page, sources, path, change)
+
+
+def test_the_typed_parameter_defaults_are_the_fmus():
+    """docs/model.md's typed parameter table (arguments, each with its source) states the
+    committed FMU's start values: a changed default in the model fails here, not silently."""
+    import re
+
+    from spindlebench.testbench.runner import inspect_fmu
+
+    known = inspect_fmu(REPO / "fmus" / "SpindleBench.fmu").parameters
+    header = "| parameter | default | source |"
+    page = (REPO / "docs" / "model.md").read_text(encoding="utf-8")
+    (table,) = [t for _, h, t in tables.tables(page) if h == header]
+    checked = 0
+    for line in table.splitlines()[2:]:
+        names_cell, values_cell = [c.strip() for c in line.strip("|").split("|")][:2]
+        names = re.findall(r"`([^`]+)`", names_cell)
+        values = [float(v) for v in re.findall(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?",
+                                                values_cell)]
+        values = values * len(names) if len(values) == 1 else values
+        assert len(values) == len(names), line
+        for name, value in zip(names, values, strict=True):
+            assert name in known, f"model.md: {name} is not a parameter of the FMU"
+            assert float(known[name].start) == pytest.approx(value), \
+                f"model.md: {name} = {value}, the FMU's default is {known[name].start}"
+            checked += 1
+    assert checked >= 10
+
+
+def test_the_evaluate_runs_table_has_a_row_per_k_and_fails_when_a_file_disagrees(tmp_path):
+    """docs/results.md's notebook-6 comparison: one row per ``kN.json`` that ``evaluate --json``
+    wrote (k from each file's provenance), per-test RMSE and the mean; an edit fails."""
+    import json
+
+    folder = tmp_path / "snapshots" / "caiviac-six-correlated"
+    folder.mkdir(parents=True)
+    for k, rmse in ((3, {"a/run1.csv": 2.0, "a/run2.csv": 4.0}),
+                    (2, {"a/run1.csv": 6.0, "a/run2.csv": 8.0})):
+        (folder / f"k{k}.json").write_text(json.dumps({
+            "selected": ["t1_C", "t1_C-t2_C"][:k], "rmse_um": rmse,
+            "mean_rmse_um": sum(rmse.values()) / 2,
+            "provenance": {"clusters": k, "target": "ch3_um", "train": {"sha256": "ab" * 32},
+                           "package_versions": {"spindlebench": "0.1.0"}}}), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: evaluate-runs caiviac-six-correlated -->\n", sources)
+    assert "| k | selected | run1 | run2 | mean |" in page
+    assert page.index("| 2 | `t1_C`, `t1_C-t2_C` | 6.00 | 8.00 | **7.00** |") < \
+        page.index("| 3 |")
+
+    def change(d):
+        d["rmse_um"]["a/run1.csv"] = 2.5
+
+    _disagrees(page, sources, folder / "k3.json", change)
+
+
+def test_the_iso_report_tables_come_from_the_report_json_and_fail_when_they_disagree(tmp_path):
+    """docs/iso230-3.md's tables of the default machine's reports: every direction and tilt
+    of ``TEST.json`` (whole test, spindle-on phase where the test has one, the spectrum's
+    steps); an edited value fails the check."""
+    import json
+
+    def channel(range_, at_h):
+        return {"range": range_, "max": range_, "min": 0.0, "final": 1.0, "at_max_h": at_h}
+
+    report = {"range_um": {"Z": channel(20.85, 4.3667)}, "range_urad": {"A": channel(23.5, 4.2)},
+              "heating_range_um": {"Z": channel(19.4, 1.9)},
+              "heating_range_urad": {"A": channel(23.0, 3.9)}, "spindle_on_end_h": 4.0,
+              "steps": [{"speed_rpm": 2000.0, "from_h": 0.0, "to_h": 0.9833,
+                         "end_um": {"Z": 9.55}, "end_urad": {"A": 1.5}}],
+              "provenance": {"fmu": {"sha256": "ab" * 32}}}
+    path = tmp_path / "snapshots" / "iso230-3" / "spectrum" / "spectrum.json"
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps(report), encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("<!-- generate: iso230-3-report spectrum -->\n\n"
+                         "<!-- generate: iso230-3-report spectrum@steps -->\n", sources)
+    assert "| Z (µm) | 20.9 | 20.9 at 4.4 h | 0.0 | 1.0 | 19.4 |" in page
+    assert "| A (µrad) | 23.5 | 23.5 at 4.2 h | 0.0 | 1.0 | 23.0 |" in page
+    assert "| 2000 | 0.00–0.98 | 9.6 | 1.5 |" in page
+    with pytest.raises(ValueError, match="no such test"):
+        tables.expand("<!-- generate: iso230-3-report nothing -->\n", sources)
+
+    def change(d):
+        d["steps"][0]["end_um"]["Z"] = 9.75
+
+    _disagrees(page, sources, path, change)
+
+
+def test_the_heating_outputs_table_reads_machine_checks_heating_outputs():
+    """docs/model.md's heating outputs table: every machine's heating runs from
+    ``machine_check``'s ``heating_outputs`` (peak and when, the value at 8 h, the jacket's
+    outlet minus inlet); a machine record without them gives no row."""
+    document = {"machines": {
+        "m": {"heating_outputs": {"heating/room20_4000": {
+            "drift_um": {"start": 0.0, "peak": 20.14, "peak_h": 2.1, "end": 14.3},
+            "front_preload_thermal_N": {"start": 0.0, "peak": 244.8, "peak_h": 0.15,
+                                        "end": 0.0},
+            "jacket_inlet_C": {"start": 20.0, "peak": 20.0, "peak_h": 0.0, "end": 20.0},
+            "jacket_outlet_C": {"start": 20.0, "peak": 23.2, "peak_h": 8.0, "end": 23.2}}}},
+        "old": {}}}
+    table = tables.heating_outputs_table(document)
+    assert table.count("\n") == 2  # header, rule, one row
+    assert "| `m` | heating/room20_4000 | 20.1 at 2.10 h | 14.3 |  | 244.8 at 0.15 h | 0.0 |" \
+        "  |  | 3.2 |" in table

@@ -105,6 +105,21 @@ def test_leaderboard_files_and_suite_identity(board, tiny_suite):
     assert frame["error"].isna().all()
 
 
+def test_leaderboard_md_tables_are_those_the_docs_make_from_leaderboard_json(board):
+    """docs/benchmark.md's tables are rendered from leaderboard.json (docs/hooks/tables.py)
+    by the same functions that write leaderboard.md: the two agree table for table."""
+    out, _ = board
+    record = json.loads((out / "leaderboard.json").read_text())
+    text = (out / "leaderboard.md").read_text()
+    assert leaderboard.overall_table(record["overall"]) in text
+    tasks = leaderboard.tasks_of(record["rows"])
+    assert tasks == list(dict.fromkeys(pd.read_csv(out / "leaderboard.csv")["task"]))
+    for task in tasks:
+        assert f"## {task}\n\n" + leaderboard.task_table(record["rows"], task,
+                                                     record["suite"]["band_um"]) in text
+    assert record["provenance"]["command"].startswith("spindlebench benchmark")
+
+
 def test_leaderboard_numbers_equal_evaluate(board, tiny_suite):
     """The test the issue asks for: a built-in method's leaderboard RMSE is the mean over
     folds of what evaluate gives on the same recordings."""

@@ -59,10 +59,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "beside the checkout)")
     parser.add_argument("-o", "--out", type=Path, default=None, metavar="DIR",
                         help=f"output folder (default: {DEFAULT_OUT}/SUITE)")
-    parser.add_argument("--doc", type=Path, default=None, metavar="FILE.md",
-                        help="also write the leaderboard's tables between the '<!-- "
-                        "leaderboard: start -->' and '<!-- leaderboard: end -->' lines of "
-                        "FILE.md (docs/benchmark.md)")
     parser.set_defaults(func=run)
 
 
@@ -77,5 +73,5 @@ def run(args: argparse.Namespace) -> int:
         suite=args.suite, methods=args.method, method_params=args.method_param,
         only=args.only, tasks=args.tasks, recordings=args.recordings, target=args.target,
         roles=ColumnRoles.from_args(args), recordings_root=args.recordings_root,
-        out=args.out, doc=args.doc, command=command))
+        out=args.out, command=command))
     return 0

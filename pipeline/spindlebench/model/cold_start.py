@@ -4,14 +4,20 @@ From a machine soaked at a constant ambient, the spindle runs at a constant spee
 feed axes reciprocating. The issue's expectations (spindle-near sensors rise several degC in
 ~50 min and level off, feed-axis and structure sensors keep rising, drift of tens of um in a few
 hours, less at 2000 rpm) are checked on these runs by the tests and shown in
-``docs/figures/model_cold_start.png`` (``python -m spindlebench.model.cold_start``).
+``docs/figures/model_cold_start.png`` (``python -m spindlebench.model.cold_start``); their
+numbers (each sensor's rise at 50 min and 5 h, the drift's rise, peak and end) are written as
+JSON with their provenance by ``python -m spindlebench.model.cold_start --json FILE``, the file
+docs/model.md's magnitudes table is generated from (``docs/hooks/tables.py``, ``cold-start``).
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
+import json
+import re
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -19,6 +25,7 @@ import pandas as pd
 from spindlebench.core import atomic
 from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.core.paths import DATA_ROOT, DEFAULT_FMU
+from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import DRIFT_COLUMN, TIME_COLUMN
 
 DEFAULT_FIGURE = DATA_ROOT / "docs" / "figures" / "model_cold_start.png"
@@ -128,6 +135,82 @@ def plot(fmu_path: str | Path = DEFAULT_FMU, out_path: str | Path = DEFAULT_FIGU
     return Path(out_path)
 
 
+#: The runs of the figure and of the docs' table: a soak at 8 degC, X/Y at 1500 mm/min, 5 h.
+SPEEDS_RPM = (4000.0, 2000.0)
+AMBIENT_C = 8.0
+HOURS = 5.0
+#: When the sensors' and the drift's rises are read (min): the issue's 50 min and the end.
+READ_AT_MIN = (50.0, HOURS * 60.0)
+COMMAND = "python -m spindlebench.model.cold_start"
+
+
+def numbers(fmu_path: str | Path = DEFAULT_FMU, command: str = COMMAND) -> dict[str, Any]:
+    """The cold-start runs' numbers, as ``--json`` writes them: per speed, every sensor's rise
+    (K) and the drift's rise (um) at ``READ_AT_MIN``, the drift's peak rise and its time; the
+    provenance names the FMU by its SHA-256."""
+    runs = {}
+    for speed in SPEEDS_RPM:
+        frame = cold_start(fmu_path, speed_rpm=speed, hours=HOURS, ambient_C=AMBIENT_C)
+        drift = frame[DRIFT_COLUMN].to_numpy() - frame[DRIFT_COLUMN].iloc[0]
+        peak = int(np.argmax(drift))
+        sensors = [c for c in frame.columns if re.fullmatch(r"T\d+_C", c)]
+        runs[f"{speed:g}"] = {
+            "sensor_rise_K": {s: [rise(frame, s, m) for m in READ_AT_MIN] for s in sensors},
+            "drift_rise_um": [rise(frame, DRIFT_COLUMN, m) for m in READ_AT_MIN],
+            "drift_peak_um": float(drift[peak]),
+            "drift_peak_h": float(frame[TIME_COLUMN].iloc[peak] / 3600.0)}
+    fmu = file_entry(fmu_path)
+    record = provenance(command=command, fmu=fmu, ambient_C=AMBIENT_C, hours=HOURS,
+                        feed_mm_per_min=1500.0, output_interval_s=60.0,
+                        solver="FMPy CVode, model exchange, relative tolerance 1e-6")
+    return {"provenance": record, "read_at_min": list(READ_AT_MIN), "runs": runs}
+
+
+def markdown(document: Mapping[str, Any]) -> str:
+    """docs/model.md's table: one row per sensor (rise in K) and one for the drift (um), a
+    column per speed and reading time, then the drift's peak (um, and when) per speed (two
+    reading times per speed: the peak's value under the first, its time under the second)."""
+    runs = document["runs"]
+    times = [f"{m:g} min" if m < 60 else f"{m / 60:g} h" for m in document["read_at_min"]]
+    header = ["rise since the start"] + [f"{speed} rpm, {t}" for speed in runs for t in times]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    first = next(iter(runs.values()))
+    for sensor in sorted(first["sensor_rise_K"], key=lambda s: int(s[1:-2])):
+        cells = [f"{v:+.1f}" for run in runs.values() for v in run["sensor_rise_K"][sensor]]
+        lines.append(f"| {sensor.removesuffix('_C')} (K) | " + " | ".join(cells) + " |")
+    lines.append("| **drift (µm)** | " + " | ".join(
+        f"**{v:.1f}**" for run in runs.values() for v in run["drift_rise_um"]) + " |")
+    lines.append("| drift's peak (µm; when) | " + " | ".join(
+        f"{run['drift_peak_um']:.1f} | at {run['drift_peak_h']:.1f} h" for run in runs.values())
+        + " |")
+    return "\n".join(lines)
+
+
+def write_json(path: Path, document: Mapping[str, Any]) -> Path:
+    """The numbers as JSON (sorted keys), written atomically."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(path, json.dumps(document, indent=2, sort_keys=True) + "\n")
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog=COMMAND, description=__doc__.split("\n\n")[0])
+    parser.add_argument("figure", nargs="?", type=Path, default=DEFAULT_FIGURE,
+                        help="the figure to draw (default: docs/figures/model_cold_start.png)")
+    parser.add_argument("--json", type=Path, default=None, metavar="FILE.json",
+                        help="write the runs' numbers with their provenance instead of the "
+                        "figure")
+    args = parser.parse_args(argv)
+    if args.json is not None:
+        document = numbers(DEFAULT_FMU, " ".join([COMMAND, *(argv or [])]))
+        print(markdown(document))
+        print(write_json(args.json, document))
+    else:
+        print(plot(DEFAULT_FMU, args.figure))
+    return 0
+
+
 if __name__ == "__main__":
-    target = Path(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_FIGURE
-    print(plot(DEFAULT_FMU, target))
+    import sys
+
+    raise SystemExit(main(sys.argv[1:]))

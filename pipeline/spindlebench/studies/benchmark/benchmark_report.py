@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +34,12 @@ COLUMNS = ("task", "method", "rank", "rmse_um", "rmse_sd_um", "max_abs_error_um"
            "error")
 #: Short marks of the baselines in the Markdown tables.
 MARKS = {"baseline:constant": "C", "baseline:replay": "R", "baseline:ols-all": "O"}
+#: What the marks and the rollout column mean (above the tables, in leaderboard.md and docs).
+MARKS_TEXT = ("Marks: C, R, O = worse (higher RMSE) than the constant training-mean predictor, "
+              "the replay of the training run's error, OLS on all sensors. Rollout: the RMSE of "
+              "the prediction over each whole held-out run from its start, no resets (a static "
+              "model's is its RMSE; a dynamic model's differs when its ordinary prediction "
+              "corrects itself with the run's measurements).")
 
 
 def rows(entries: Sequence[Entry], band_um: float) -> pd.DataFrame:
@@ -107,44 +113,67 @@ def _cell(value: Any, digits: int = 2) -> str:
     return str(value)
 
 
+def overall_table(records: Sequence[Mapping[str, Any]]) -> str:
+    """The overall table (one row per entrant, in rank order) from the ``overall`` records of
+    ``leaderboard.json``: the one rendering of it (``leaderboard.md`` and the docs' table)."""
+    lines = ["| # | method | mean rank | mean RMSE µm | worse than C / R / O (tasks) | failed |",
+             "|---|---|---|---|---|---|"]
+    for row in records:
+        lines.append(f"| {row['overall_rank']} | `{row['method']}` | {row['mean_rank']:.2f} | "
+                     f"{_cell(row['mean_rmse_um'])} | {row['worse_than_constant']} / "
+                     f"{row['worse_than_replay']} / {row['worse_than_ols_all']} | "
+                     f"{row['failed']} |")
+    return "\n".join(lines)
+
+
+def tasks_of(records: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The tasks of the ``rows`` records of ``leaderboard.json``, in the suite's order."""
+    return list(dict.fromkeys(row["task"] for row in records))
+
+
+def task_table(records: Sequence[Mapping[str, Any]], task: str, band_um: float) -> str:
+    """One task's table (entrants by rank, a failed one last) from the ``rows`` records of
+    ``leaderboard.json``: the one rendering of it (``leaderboard.md`` and the docs' table)."""
+    part = [row for row in records if row["task"] == task]
+    if not part:
+        raise ValueError(f"the leaderboard has no task {task!r} (has "
+                         f"{', '.join(tasks_of(records))})")
+    lines = [f"| rank | method | RMSE µm | sd over folds | max abs µm | within ±{band_um:g} µm "
+             "| sensors | stability | rollout µm | worse than |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for row in sorted(part, key=lambda r: (_missing(r["rank"]), r["rank"] or 0.0, r["method"])):
+        marks = "".join(MARKS[b] for b in row["worse_than"].split(";") if b)
+        shown = f"failed: {row['error']}" if row["error"] else _cell(row["rmse_um"])
+        lines.append(
+            f"| {_cell(row['rank'], 1)} | `{row['method']}` | {shown} | "
+            f"{_cell(row['rmse_sd_um'])} | {_cell(row['max_abs_error_um'])} | "
+            f"{_cell(row['within_band'])} | {_cell(row['n_sensors'], 1)} | "
+            f"{_cell(row['stability'])} | {_cell(row['rollout_rmse_um'])} | {marks} |")
+    return "\n".join(lines)
+
+
+def _missing(value: Any) -> bool:
+    return value is None or (isinstance(value, float) and math.isnan(value))
+
+
 def markdown(suite: Suite, frame: pd.DataFrame, table: pd.DataFrame,
              command: str) -> str:
     """The leaderboard as Markdown: the overall table, then one table per task."""
-    band = f"{suite.band_um:g}"
     lines = [
         f"# Leaderboard: suite `{suite.name}` version {suite.version}",
         "",
         f"Tasks SHA-256 `{suite.tasks_sha256}`; k = {suite.k} sensors per selection method; "
         f"seed {suite.seed}. Made by `{command}`.",
         "",
-        "Marks: C, R, O = worse (higher RMSE) than the constant training-mean predictor, "
-        "the replay of the training run's error, OLS on all sensors. Rollout: the RMSE of "
-        "the prediction over each whole held-out run from its start, no resets (a static "
-        "model's is its RMSE; a dynamic model's differs when its ordinary prediction "
-        "corrects itself with the run's measurements).",
+        MARKS_TEXT,
         "",
         "## Overall (mean rank over tasks)",
         "",
-        "| # | method | mean rank | mean RMSE µm | worse than C / R / O (tasks) | failed |",
-        "|---|---|---|---|---|---|",
+        overall_table(_records(table)),
     ]
-    for row in table.itertuples():
-        lines.append(f"| {row.overall_rank} | `{row.method}` | {row.mean_rank:.2f} | "
-                     f"{_cell(row.mean_rmse_um)} | {row.worse_than_constant} / "
-                     f"{row.worse_than_replay} / {row.worse_than_ols_all} | {row.failed} |")
-    for task, part in frame.groupby("task", sort=False):
-        lines += ["", f"## {task}", "",
-                  f"| rank | method | RMSE µm | sd over folds | max abs µm | within ±{band} µm "
-                  "| sensors | stability | rollout µm | worse than |",
-                  "|---|---|---|---|---|---|---|---|---|---|"]
-        for row in part.sort_values(["rank", "method"], na_position="last").itertuples():
-            marks = "".join(MARKS[b] for b in row.worse_than.split(";") if b)
-            shown = f"failed: {row.error}" if row.error else _cell(row.rmse_um)
-            lines.append(
-                f"| {_cell(row.rank, 1)} | `{row.method}` | {shown} | {_cell(row.rmse_sd_um)} | "
-                f"{_cell(row.max_abs_error_um)} | {_cell(row.within_band)} | "
-                f"{_cell(row.n_sensors, 1)} | {_cell(row.stability)} | "
-                f"{_cell(row.rollout_rmse_um)} | {marks} |")
+    records = _records(frame)
+    for task in tasks_of(records):
+        lines += ["", f"## {task}", "", task_table(records, task, suite.band_um)]
     return "\n".join(lines) + "\n"
 
 
@@ -184,9 +213,9 @@ def figure(frame: pd.DataFrame, path: Path) -> Path:
 
 
 def write(out: Path, suite: Suite, entries: Sequence[Entry], record: dict[str, Any],
-          command: str, doc: Path | None = None) -> list[Path]:
-    """Write the leaderboard's files into ``out`` (and its tables into the marked section of
-    ``doc``); return their paths."""
+          command: str) -> list[Path]:
+    """Write the leaderboard's files into ``out``; return their paths (docs/benchmark.md's
+    tables are generated from ``leaderboard.json``, committed under docs/snapshots/)."""
     out.mkdir(parents=True, exist_ok=True)
     frame = rows(entries, suite.band_um)
     table = overall(frame)
@@ -203,9 +232,6 @@ def write(out: Path, suite: Suite, entries: Sequence[Entry], record: dict[str, A
     atomic.write_text(written[3], json.dumps(document, indent=2, allow_nan=False,
                                              default=str) + "\n")
     figure(frame, written[4])
-    if doc is not None:
-        update_doc(doc, board)
-        written.append(doc)
     return written
 
 
@@ -216,23 +242,3 @@ def _records(frame: pd.DataFrame) -> list[dict[str, Any]]:
                           value.item() if hasattr(value, "item") else value)
                     for key, value in record.items()})
     return out
-
-
-#: The markers of the section ``--doc`` rewrites.
-DOC_START, DOC_END = "<!-- leaderboard: start -->", "<!-- leaderboard: end -->"
-
-
-def update_doc(path: Path, board_markdown: str) -> None:
-    """Put ``board_markdown`` (headings one level down) between the markers of ``path``."""
-    from spindlebench.core.errors import SpindlebenchError
-
-    text = path.read_text(encoding="utf-8")
-    if text.count(DOC_START) != 1 or text.count(DOC_END) != 1 or \
-            text.index(DOC_START) > text.index(DOC_END):
-        raise SpindlebenchError(f"--doc {path}: needs one '{DOC_START}' line and one "
-                                f"'{DOC_END}' line after it, where the leaderboard goes")
-    body = "\n".join("#" + line if line.startswith("#") else line
-                      for line in board_markdown.splitlines())
-    head, rest = text.split(DOC_START)
-    _, tail = rest.split(DOC_END)
-    atomic.write_text(path, f"{head}{DOC_START}\n{body}\n{DOC_END}{tail}")

@@ -35,7 +35,6 @@ class BenchmarkRequest:
     roles: object = None
     recordings_root: Path | None = None
     out: Path | None = None
-    doc: Path | None = None
     command: str = "spindlebench benchmark"
 
 
@@ -100,14 +99,6 @@ def run_benchmark(args: BenchmarkRequest) -> list[Path]:
                                     f"({', '.join(t.name for t in specs)})")
         specs = [t for t in specs if t.name in args.tasks]
     out = args.out if args.out is not None else DEFAULT_OUT / suite.name
-    if args.doc is not None:  # checked before the work, not after it
-        if not args.doc.is_file():
-            raise SpindlebenchError(f"--doc {args.doc}: no such file")
-        text = args.doc.read_text(encoding="utf-8")
-        if leaderboard.DOC_START not in text or leaderboard.DOC_END not in text:
-            raise SpindlebenchError(f"--doc {args.doc}: has no '{leaderboard.DOC_START}' / "
-                                    f"'{leaderboard.DOC_END}' lines to put the leaderboard "
-                                    "between")
     if out.exists() and not out.is_dir():
         raise SpindlebenchError(f"-o {out}: exists and is not a folder")
     started = time.perf_counter()
@@ -133,7 +124,7 @@ def run_benchmark(args: BenchmarkRequest) -> list[Path]:
               f"{slowest.seconds:.1f} s)" + (f"; failed: {', '.join(failed)}" if failed else ""))
     command = args.command
     record = {"provenance": provenance.provenance(
-        command="benchmark",
+        command=command,
         partial=bool(args.tasks),
         entrants={choice.label: choice.to_dict() for choice in choices},
         baselines=list(BASELINES),
@@ -143,7 +134,7 @@ def run_benchmark(args: BenchmarkRequest) -> list[Path]:
                           for f in t.folds], **t.provenance} for t in tasks],
         fmu_sha256=_fmu_sha(specs),
     )}
-    written = leaderboard.write(out, suite, entries, record, command, args.doc)
+    written = leaderboard.write(out, suite, entries, record, command)
     print(f"done in {time.perf_counter() - started:.1f} s")
     for path in written:
         print(f"wrote {path}")

@@ -84,10 +84,11 @@ def simulate_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
     return frame
 
 
-def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU
-                          ) -> dict[str, np.ndarray]:
+def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEFAULT_FMU,
+                          extra: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
     """Noise-free outputs of a non-paper run (a scenario under ``scenarios/``) on ``machine``,
-    from the testbench's runner (so a soak or continued start is what ``simulate`` does)."""
+    from the testbench's runner (so a soak or continued start is what ``simulate`` does): the
+    sensors, the error and those of the ``extra`` outputs the FMU has."""
     from dataclasses import replace
 
     from spindlebench.testbench.runner import co_simulate
@@ -95,8 +96,8 @@ def simulate_scenario_run(machine: Machine, run: str, fmu_path: str | Path = DEF
 
     scenario = replace(load_scenario(run_scenario_path(run)), machine=machine)
     simulation = co_simulate(scenario, fmu_path, start=run_start(scenario, Path(fmu_path)))
-    frame = {name: np.asarray(simulation.outputs[name], dtype=float)
-             for name in [*SENSOR_OUTPUTS, ERROR]}
+    names = [*SENSOR_OUTPUTS, ERROR, *(n for n in extra if n in simulation.outputs)]
+    frame = {name: np.asarray(simulation.outputs[name], dtype=float) for name in names}
     frame[TIME_COLUMN] = np.asarray(simulation.time_s, dtype=float)
     return frame
 
@@ -190,6 +191,26 @@ def mechanism_fingerprints(name: str, fmu_path: str | Path = DEFAULT_FMU
 
 LEVEL_RUNS = ("heating/room20_2000", "heating/room20_4000", "heating/room20_8000",
               "heating/room20_12000")
+#: FMU outputs of the issue-20 mechanisms whose course docs/model.md describes on the heating
+#: runs (the thermally induced preload, the air through the front bearing, the column, the
+#: motor spindle's jacket): ``heating_outputs`` keeps each one's peak, when, and end.
+MECHANISM_OUTPUTS = ("front_preload_thermal_N", "Q_bearing_air_W", "column_growth_um",
+                     "Q_jacket_W", "jacket_inlet_C", "jacket_outlet_C")
+
+
+def heating_outputs(frame: Mapping[str, np.ndarray]) -> dict[str, dict[str, float]]:
+    """The error's and each mechanism output's start, peak, the peak's time (h) and end value
+    on one heating run (the outputs the FMU has)."""
+    hours = np.asarray(frame[TIME_COLUMN]) / 3600.0
+    out = {}
+    for name in (ERROR, *MECHANISM_OUTPUTS):
+        if name not in frame:
+            continue
+        values = np.asarray(frame[name], dtype=float)
+        peak = int(np.argmax(values))
+        out[name] = {"start": float(values[0]), "peak": float(values[peak]),
+                     "peak_h": float(hours[peak]), "end": float(values[-1])}
+    return out
 
 
 def levels(machine: Machine, fmu_path: str | Path = DEFAULT_FMU) -> dict[str, float]:
@@ -250,9 +271,10 @@ def machine_record(machine: Machine, fmu_path: str | Path = DEFAULT_FMU,
         record["ambient_step_um_per_K"] = {f"{h:g} h": v for h, v in
                                            ambient_step_response(machine, fmu_path).items()}
         record["levels"] = levels(machine, fmu_path)
-        record["heating_fingerprints"] = {
-            run: run_fingerprint(simulate_scenario_run(machine, run, fmu_path))
-            for run in LEVEL_RUNS}
+        frames = {run: simulate_scenario_run(machine, run, fmu_path, MECHANISM_OUTPUTS)
+                  for run in LEVEL_RUNS}
+        record["heating_fingerprints"] = {run: run_fingerprint(f) for run, f in frames.items()}
+        record["heating_outputs"] = {run: heating_outputs(f) for run, f in frames.items()}
         if machine.name in MECHANISMS and machine.path == load_machine(machine.name).path:
             record["mechanism_run"] = MECHANISM_RUN[machine.name]
             record["mechanisms"] = mechanism_fingerprints(machine.name, fmu_path)
@@ -296,9 +318,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="print bearing rises of the heating runs and the column's "
                         "time constant to the room")
     parser.add_argument("--json", type=Path, metavar="OUT.json", default=None,
-                        help="write fingerprints, targets, ambient step, levels and "
-                        "mechanisms of every machine named to OUT.json (the model page's "
-                        "source) instead of printing")
+                        help="write fingerprints, targets, ambient step, levels, the "
+                        "heating runs' outputs and mechanisms of every machine named to "
+                        "OUT.json (the model page's source) instead of printing")
     parser.add_argument("--fingerprints-only", action="store_true",
                         help="with --json: only the fingerprints and targets (seconds)")
     args = parser.parse_args(argv)
