@@ -4,6 +4,7 @@ whole wall time. ``build`` (162 s), and the post-processing after a study's prog
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 from conftest import REPO
@@ -70,3 +71,34 @@ def test_place_says_what_follows_its_bar_and_reports_the_whole_wall_time(tmp_pat
                      "-q"]) == 0
     out, err = capfd.readouterr()
     assert err == "" and "s in all" in out
+
+
+def test_no_bar_leaves_a_daemon_thread_to_crash_the_interpreters_exit():
+    """tqdm's monitor is a daemon thread; one alive at exit can abort the finalising
+    interpreter (an interrupted sweep died of SIGABRT after its error line). Disabled bars
+    start it too (in ``tqdm.__new__``), so every bar here must come without it."""
+    import threading
+
+    from spindlebench.core.progress import bar, tqdm_class
+
+    with tqdm_class()(total=3, disable=True), tqdm_class()(total=3, file=io.StringIO()) as shown:
+        shown.update(1)
+        made = bar(3, "test", "x")
+        made.close()
+        assert not [t for t in threading.enumerate() if t.daemon and t.name == "tqdm_monitor"]
+
+
+def test_a_redelivered_signal_is_sent_from_a_thread_the_interpreter_joins_at_exit(monkeypatch):
+    import threading
+
+    from spindlebench.core import interrupts
+
+    sent = []
+    monkeypatch.setattr(interrupts._thread, "interrupt_main", sent.append)
+    before = set(threading.enumerate())
+    interrupts._redeliver(2)
+    timers = [t for t in threading.enumerate() if t not in before]
+    for timer in timers:
+        assert not timer.daemon
+        timer.join(5)
+    assert sent == [2]

@@ -147,9 +147,9 @@ def _redeliver(signum: int) -> None:
     the destructor that would swallow it (if it still is, or in another one, this repeats).
     Not from this thread: a handler that re-signals itself at once runs again at once, inside
     the same destructor. ``interrupt_main`` only calls a Python-level handler, never the
-    default action."""
+    default action. Not a daemon thread: the interpreter joins it at exit (a millisecond),
+    where a daemon thread still alive can crash the finalising interpreter (gh-110052)."""
     timer = threading.Timer(REDELIVER_AFTER_S, _thread.interrupt_main, (signum,))
-    timer.daemon = True
     timer.start()
 
 

@@ -40,11 +40,28 @@ def for_terminal(quiet: bool) -> bool:
     return not quiet and sys.stderr.isatty()
 
 
+def tqdm_class() -> Any:
+    """tqdm's bar class, with its monitor thread switched off (the one home of that rule).
+
+    tqdm starts a daemon "tqdm_monitor" thread that lives until the process ends. A daemon
+    thread still alive while the interpreter finalises can crash it (CPython issue
+    gh-110052, unfixed in 3.9-3.12): an interrupted sweep printed its one error line and then
+    died of ``Fatal Python error: PyThreadState_Get`` with SIGABRT instead of exit 130. The
+    monitor only shortens a bar's refresh interval after a stall; no bar here needs that.
+    """
+    from tqdm.auto import tqdm
+    from tqdm.std import tqdm as std_tqdm
+
+    std_tqdm.monitor_interval = 0
+    if std_tqdm.monitor is not None:  # started by a bar made before this rule applied
+        std_tqdm.monitor.exit()
+        std_tqdm.monitor = None
+    return tqdm
+
+
 def bar(total: int | None, desc: str, unit: str, enabled: bool = True) -> Any:
     """A tqdm bar on stderr (counts, rate and an estimate), or None when off."""
     if not enabled:
         return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit=f" {unit}", file=sys.stderr, leave=False,
+    return tqdm_class()(total=total, desc=desc, unit=f" {unit}", file=sys.stderr, leave=False,
                 dynamic_ncols=True, delay=1.0)

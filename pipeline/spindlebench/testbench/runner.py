@@ -530,9 +530,9 @@ def _row_pointer(matrix: np.ndarray, row: int) -> Any:
 def _progress_bar(total_s: float, enabled: bool, label: str) -> Any:
     if not enabled:
         return None
-    from tqdm import tqdm
+    from spindlebench.core.progress import tqdm_class
 
-    return tqdm(total=round(total_s), unit=" sim-s", desc=label, delay=2.0, file=sys.stderr,
+    return tqdm_class()(total=round(total_s), unit=" sim-s", desc=label, delay=2.0, file=sys.stderr,
                 leave=False, dynamic_ncols=True)
 
 

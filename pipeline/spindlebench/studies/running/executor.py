@@ -33,11 +33,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
-from tqdm.auto import tqdm
-
 from spindlebench.core import interrupts
 from spindlebench.core.console import one_line_error
 from spindlebench.core.errors import SpindlebenchError
+from spindlebench.core.progress import tqdm_class
 
 #: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
 DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$")
@@ -384,7 +383,7 @@ class TaskRunner:
         stats = RunStats()
         start = time.perf_counter()
         queue = list(tasks)
-        bar = tqdm(total=len(queue) + expected_follow_ups, desc=self.desc, unit=self.unit,
+        bar = tqdm_class()(total=len(queue) + expected_follow_ups, desc=self.desc, unit=self.unit,
                    disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
         try:
             if self.dask_address:
