@@ -221,16 +221,19 @@ class ClusterSelector(_Selector):
             raise SelectionError(f"cannot make {k} clusters: only {kept.size} "
                                  "candidate(s) vary")
         kept_names = None if names is None else [names[i] for i in kept]
-        members = cluster_candidates(X[:, kept], k, self.clustering,
+        # every column kept (the usual case: select_with drops constant ones first): X
+        # itself, not three copies of it (the same C-ordered values, so the same bits)
+        X_kept = X if kept.size == X.shape[1] and X.flags.c_contiguous else X[:, kept]
+        members = cluster_candidates(X_kept, k, self.clustering,
                                      self.similarity, self.closure, self.random_state,
                                      kept_names)
         self.psi_ = np.full(X.shape[1], np.nan)
-        self.psi_[kept] = correlation_with(X[:, kept], y, kept_names)
+        self.psi_[kept] = correlation_with(X_kept, y, kept_names)
         self.scores_ = np.full(X.shape[1], np.nan)
         if self.within in ("psi", "ga"):
             self.scores_[kept] = np.abs(self.psi_[kept])
         else:
-            self.scores_[kept] = grey_relational_grade(X[:, kept], y, self.normalisation,
+            self.scores_[kept] = grey_relational_grade(X_kept, y, self.normalisation,
                                                        self.rho, kept_names)
         self.clusters_ = [kept[m] for m in members]
         self.selected_ = np.array([c[int(np.argmax(self.scores_[c]))] for c in self.clusters_],
