@@ -334,12 +334,8 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
     X, y = _check_inputs(X, y, k)
     kept, dropped = split_constant(constant_columns(X), names, k, making=f"select {k}")
     kept_names = None if names is None else [str(names[i]) for i in kept]
-    selector = make_selector(choice, k, similarity, random_state)
-    # the package's own selectors never write to X: given it itself when every column is
-    # kept (no copy); a user's selector gets its own copy, as before
-    own = type(selector).__module__.startswith("spindlebench.")
-    X_kept = X if own and kept.size == X.shape[1] and X.flags.c_contiguous else X[:, kept]
-    selector.fit(X_kept, y)
+    X_kept = X[:, kept]
+    selector = make_selector(choice, k, similarity, random_state).fit(X_kept, y)
     chosen = getattr(selector, "selected_", None)
     if chosen is None:  # a user's selector: its support mask, in column order
         chosen = np.flatnonzero(np.asarray(selector.get_support(), dtype=bool))

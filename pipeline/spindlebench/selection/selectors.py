@@ -221,9 +221,7 @@ class ClusterSelector(_Selector):
             raise SelectionError(f"cannot make {k} clusters: only {kept.size} "
                                  "candidate(s) vary")
         kept_names = None if names is None else [names[i] for i in kept]
-        # every column kept (the usual case: select_with drops constant ones first): X
-        # itself, not three copies of it (the same C-ordered values, so the same bits)
-        X_kept = X if kept.size == X.shape[1] and X.flags.c_contiguous else X[:, kept]
+        X_kept = _columns(X, kept)  # once, not once per use
         members = cluster_candidates(X_kept, k, self.clustering,
                                      self.similarity, self.closure, self.random_state,
                                      kept_names)
@@ -243,6 +241,16 @@ class ClusterSelector(_Selector):
                 X, y, self.clusters_, self.selected_, self.random_state, self.population,
                 self.generations)
         return self
+
+
+def _columns(X: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """``X[:, kept]``, or ``X`` itself where that gather would copy it unchanged (every
+    column kept of an F-ordered ``X``, as ``select_with`` passes it: ``X[:, kept]`` is
+    F-ordered too, so the same layout and the same bits of every column sum)."""
+    if kept.size == X.shape[1] and min(X.shape) > 1 and X.flags.f_contiguous and \
+            np.array_equal(kept, np.arange(X.shape[1])):
+        return X
+    return X[:, kept]
 
 
 class TopCorrelatedSelector(_Selector):
