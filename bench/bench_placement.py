@@ -100,9 +100,14 @@ def naive_greedy(train: Block, valid: Block, size: int) -> list[int]:
     return chosen
 
 
+#: CPU seconds of the last ``timed`` call (the steps table records them beside the wall time).
+LAST_CPU_S = [0.0]
+
+
 def timed(function, *args):
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     result = function(*args)
+    LAST_CPU_S[0] = time.process_time() - cpu
     return time.perf_counter() - start, result
 
 
@@ -316,58 +321,74 @@ def main() -> None:
     train, valid = blocks(N_NODES, differences=True)
     print(f"\n[fuzzy selection, k = 6] {train.X.shape[1]} candidates")
     t_fast, picked = timed(fuzzy, train, 6, "fast")
+    c_fast = LAST_CPU_S[0]
     print(f"  fast closure (spanning tree)           {t_fast:8.2f} s   "
           f"picks {[int(i) for i in picked]}")
     small, _ = blocks(40, differences=True, seed=1)
     t_small, fast_small = timed(fuzzy, small, 6, "fast")
+    c_small = LAST_CPU_S[0]
     t_square, square_small = timed(fuzzy, small, 6, "squaring")
+    c_square = LAST_CPU_S[0]
     assert list(fast_small) == list(square_small)
     print(f"  {small.X.shape[1]} candidates: fast {t_small:.3f} s, repeated squaring "
           f"{t_square:.2f} s -> ratio {t_square / t_small:6.0f}x (same picks)")
     steps.append(step_row(f"fuzzy selection, {train.X.shape[1]:,} candidates, k = 6 (fast "
-                          "closure)", t_fast, "repeated squaring: not feasible here", None))
+                          "closure)", (t_fast, c_fast), "repeated squaring: not feasible here",
+                          None))
     steps.append(step_row(f"fuzzy selection, {small.X.shape[1]:,} candidates (40 nodes), "
-                          "k = 6 (fast closure)", t_small, "repeated squaring", t_square,
-                          same=True))
+                          "k = 6 (fast closure)", (t_small, c_small), "repeated squaring",
+                          (t_square, c_square), same=True))
 
     print(f"\n[greedy forward selection to m = 6] {train.X.shape[1]} candidates")
     t_greedy, path = timed(greedy_forward, train, valid, 6)
+    c_greedy = LAST_CPU_S[0]
     t_naive, naive = timed(naive_greedy, train, valid, 6)
+    c_naive = LAST_CPU_S[0]
     assert path.chosen == naive, (path.chosen, naive)
     print(f"  incremental (Gram-Schmidt, vectorised) {t_greedy:8.2f} s")
     print(f"  naive (one lstsq per candidate/step)   {t_naive:8.2f} s   "
           f"ratio {t_naive / t_greedy:6.1f}x (same path)")
-    steps.append(step_row(f"greedy to m = 6, {train.X.shape[1]:,} candidates", t_greedy,
-                          "one lstsq per candidate and step", t_naive, same=True))
+    steps.append(step_row(f"greedy to m = 6, {train.X.shape[1]:,} candidates",
+                          (t_greedy, c_greedy), "one lstsq per candidate and step",
+                          (t_naive, c_naive), same=True))
 
     nodes_train, nodes_valid = blocks(N_NODES, differences=False)
     print(f"\n[exhaustive search] {N_NODES} nodes")
     t_ex2, ex2 = timed(exhaustive_search, nodes_train, nodes_valid, 2)
+    c_ex2 = LAST_CPU_S[0]
     pairs = list(itertools.combinations(range(N_NODES), 2))
     t_naive2, best = timed(lambda: min(pairs, key=lambda c: lstsq_score(nodes_train,
                                                                          nodes_valid, c)))
+    c_naive2 = LAST_CPU_S[0]
     assert tuple(ex2.chosen) == best
     print(f"  m = 2: batched Gram {t_ex2:6.2f} s, naive lstsq {t_naive2:6.2f} s   "
           f"ratio {t_naive2 / t_ex2:6.1f}x ({ex2.evaluated:,} subsets, same optimum)")
     t_ex3, ex3 = timed(exhaustive_search, nodes_train, nodes_valid, 3)
+    c_ex3 = LAST_CPU_S[0]
     print(f"  m = 3: batched Gram {t_ex3:6.2f} s ({ex3.evaluated:,} subsets, "
           f"{ex3.evaluated / t_ex3:,.0f} per s; naive would take ~"
           f"{t_naive2 / len(pairs) * ex3.evaluated:,.0f} s)")
     steps.append(step_row(f"exhaustive, {N_NODES} nodes, m = 2 ({ex2.evaluated:,} subsets)",
-                          t_ex2, "one lstsq per subset", t_naive2, same=True))
+                          (t_ex2, c_ex2), "one lstsq per subset", (t_naive2, c_naive2),
+                          same=True))
     steps.append(step_row(f"exhaustive, {N_NODES} nodes, m = 3 ({ex3.evaluated:,} subsets)",
-                          t_ex3, "one lstsq per subset (estimated from m = 2, not run)",
-                          t_naive2 / len(pairs) * ex3.evaluated))
+                          (t_ex3, c_ex3), "one lstsq per subset (estimated from m = 2, not run)",
+                          (t_naive2 / len(pairs) * ex3.evaluated,
+                           c_naive2 / len(pairs) * ex3.evaluated)))
     print(f"wrote {record('bench_placement', steps)}")
     print(f"wrote {record('bench_placement', fields, name='bench_placement_fields')}")
 
 
-def step_row(step: str, seconds: float, baseline: str, baseline_s: float | None,
-             same: bool | None = None) -> dict:
-    """One row of the steps table (wall seconds, measured in this process)."""
-    return {"row": "placement_step", "step": step, "s": seconds, "baseline": baseline,
-            "baseline_s": baseline_s,
-            "ratio": None if baseline_s is None else baseline_s / seconds, "same": same}
+def step_row(step: str, seconds: tuple[float, float], baseline: str,
+             baseline_s: tuple[float, float] | None, same: bool | None = None) -> dict:
+    """One row of the steps table: (wall, CPU) seconds of the step and of its baseline,
+    measured in this process; the ratio is of CPU seconds (wall follows the load)."""
+    return {"row": "placement_step", "step": step, "s": seconds[0], "cpu_s": seconds[1],
+            "baseline": baseline,
+            "baseline_s": None if baseline_s is None else baseline_s[0],
+            "baseline_cpu_s": None if baseline_s is None else baseline_s[1],
+            "ratio": None if baseline_s is None else baseline_s[1] / seconds[1],
+            "same": same}
 
 
 if __name__ == "__main__":

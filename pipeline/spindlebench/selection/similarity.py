@@ -51,7 +51,11 @@ def constant_columns(X: np.ndarray) -> np.ndarray:
     X = np.asarray(X, dtype=float)
     if X.shape[0] == 0:
         return np.ones(X.shape[1], dtype=bool)
-    return constant_by_range(np.ptp(X, axis=0), np.max(np.abs(X), axis=0))
+    # two reductions instead of np.ptp's two and a third over |X|: the range is max - min
+    # as np.ptp computes it, and max |x| is the larger of |max| and |min| (exact; NaN stays
+    # NaN), so the same mask
+    high, low = X.max(axis=0), X.min(axis=0)
+    return constant_by_range(high - low, np.maximum(np.abs(high), np.abs(low)))
 
 
 def constant_by_range(spread: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
