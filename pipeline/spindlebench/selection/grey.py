@@ -28,7 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from spindlebench.selection.errors import SelectionError, check_names, column_list
-from spindlebench.selection.similarity import constant_columns
+from spindlebench.selection.similarity import constant_by_range
 
 NORMALISATIONS: tuple[str, ...] = ("interval", "mean")
 #: Deng's usual distinguishing coefficient.
@@ -41,7 +41,9 @@ def normalised(X: np.ndarray, normalisation: str = "interval",
     X = np.asarray(X, dtype=float)
     if normalisation == "interval":
         low, high = X.min(axis=0), X.max(axis=0)
-        flat = np.flatnonzero(constant_columns(X))
+        # constant_columns' rule from these two reductions (its own two, not repeated)
+        flat = np.flatnonzero(constant_by_range(high - low,
+                                                np.maximum(np.abs(high), np.abs(low))))
         if flat.size:
             raise SelectionError(
                 f"grey grade: interval normalisation needs non-constant series; constant: "

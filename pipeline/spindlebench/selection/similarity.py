@@ -92,14 +92,18 @@ def standardized(X: np.ndarray, names: Sequence[str] | None = None) -> np.ndarra
         centred = X - X.mean(axis=0)
         centred -= centred.mean(axis=0)
         norms = np.sqrt(np.einsum("ij,ij->j", centred, centred))
-    overflow = np.flatnonzero(np.isfinite(X).all(axis=0) & ~np.isfinite(norms))
+    # finite values with a norm that is not: only the columns whose norm is not finite are
+    # looked at (the same columns as checking every one)
+    suspect = np.flatnonzero(~np.isfinite(norms))
+    overflow = suspect[np.isfinite(X[:, suspect]).all(axis=0)]
     if overflow.size:
         raise SelectionOverflowError(
             f"values too large to correlate (overflow) in {column_list(overflow, names)}"
         )
     if np.any(norms == 0) or np.any(constant_columns(X)):
         raise SelectionError("similarity needs non-constant columns; drop constant ones first")
-    return centred / norms
+    centred /= norms  # in place: the same quotients, one temporary fewer
+    return centred
 
 
 def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
