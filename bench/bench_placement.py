@@ -284,12 +284,18 @@ def cost_note(method: str, differences: bool, candidates: int, samples: int,
     from spindlebench.selection.clustering import KMEANS_STARTS
 
     pairs = candidates * (candidates - 1) // 2
-    fuzzy = f"the fuzzy method's {pairs:,} similarities"
+    fuzzy = (f"the fuzzy method's {pairs:,} similarities (one {samples}-sample dot product "
+             f"each: {pairs * samples / 1e6:.1f} M multiply-adds)")
     if method == "exhaustive":
         subsets = sum(math.comb(candidates, m) for m in budgets)
+        # per subset: the m x m solve (~m^3 / 3) and, per held-out run, the quadratic form
+        # (m^2) and the cross term (m)
+        work = sum(math.comb(candidates, m) * (m**3 / 3 + N_VALID * (m * m + m))
+                   for m in budgets)
         return (f"exception: its definition scores every subset, "
                 f"{' + '.join(f'C({candidates}, {m})' for m in budgets)} = {subsets:,} "
-                f"(each an m x m solve and {N_VALID} runs' quadratic forms) against {fuzzy}")
+                f"(each an m x m solve and {N_VALID} runs' quadratic forms: about "
+                f"{work / 1e6:.1f} M multiply-adds) against {fuzzy}")
     if method.startswith("kmeans"):
         coordinates = min(METHOD_NODES, samples) if differences else samples
         per_pass = " + ".join(f"{candidates * m * coordinates / 1e6:.1f} M"
