@@ -38,7 +38,6 @@ NO_FILE = ("a result of a command that writes no file (it prints its numbers): t
 RUNS = ("a result of `spindlebench paper` runs that make run does not do (other phases, "
         "training runs, machines or all methods): to become a generate: line when they are "
         "snapshotted under docs/snapshots/")
-TIMING = "a timing quoted from a bench script that does not write bench/results/ yet"
 #: Tables typed by hand: (page, header line) -> why. Every other table must be generated, and
 #: every table listed here must still be in the docs.
 HAND_TABLES: dict[tuple[str, str], str] = {
@@ -58,9 +57,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("sensors.md", "| sensors | location (Xu et al. 2023, Table 1) | sensors | location |"):
         QUOTED,
     ("study-placement.md", "| key | default | meaning |"): KEYS,
-    ("study-placement.md", "| step | time | naive baseline in the same process |"): TIMING,
-    ("study-placement.md", "| field | candidates | `place`'s fuzzy selection, m = 2..6 | "
-     "before (full design matrix from DataFrames) |"): TIMING,
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
     ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "

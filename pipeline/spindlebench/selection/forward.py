@@ -138,15 +138,17 @@ class _ValidationRuns:
 
     def __init__(self, valid: Block, pool: np.ndarray, x_mean: np.ndarray,
                  e: np.ndarray) -> None:
-        self.X = valid.X[:, pool] if pool.size < valid.X.shape[1] else valid.X
+        self.X = _pool_columns(valid.X, pool)
         self.x_mean = x_mean
         self.e = e.copy()
         self.bounds = list(itertools.pairwise(np.append(valid.starts, valid.X.shape[0])))
         self.lengths = valid.lengths.astype(float)
         self.xx = np.empty((len(self.bounds), pool.size))  # |x_j|^2 per run
         self.ex = np.empty((len(self.bounds), pool.size))  # e'x_j per run
+        longest = max((hi - lo for lo, hi in self.bounds), default=0)
+        buffer = np.empty((longest, pool.size))  # one run's centred block, reused
         for g, (lo, hi) in enumerate(self.bounds):
-            block = self.X[lo:hi] - x_mean
+            block = np.subtract(self.X[lo:hi], x_mean, out=buffer[:hi - lo])
             self.xx[g] = np.einsum("ij,ij->j", block, block)
             self.ex[g] = self.e[lo:hi] @ block
         self.Z: list[np.ndarray] = []  # validation counterparts of the basis vectors
@@ -188,6 +190,13 @@ class _ValidationRuns:
         self.ex -= step * b
         self.Z.append(z)
         self.B.append(b)
+
+
+def _pool_columns(X: np.ndarray, pool: np.ndarray) -> np.ndarray:
+    """The ``pool`` columns of the validation block, as before: ``X`` itself when the pool
+    is every column (its layout decides the bits of the sums; the training side keeps its
+    ``X[:, pool]`` gather, whose layout its sums were computed in)."""
+    return X[:, pool] if pool.size < X.shape[1] else X
 
 
 def _subtract_outer(M: np.ndarray, u: np.ndarray, v: np.ndarray, rows: int = 1024) -> None:

@@ -334,7 +334,8 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
     X, y = _check_inputs(X, y, k)
     kept, dropped = split_constant(constant_columns(X), names, k, making=f"select {k}")
     kept_names = None if names is None else [str(names[i]) for i in kept]
-    selector = make_selector(choice, k, similarity, random_state).fit(X[:, kept], y)
+    X_kept = X[:, kept]
+    selector = make_selector(choice, k, similarity, random_state).fit(X_kept, y)
     chosen = getattr(selector, "selected_", None)
     if chosen is None:  # a user's selector: its support mask, in column order
         chosen = np.flatnonzero(np.asarray(selector.get_support(), dtype=bool))
@@ -342,12 +343,30 @@ def select_with(choice: MethodChoice, X, y, k: int, similarity: str = DEFAULT_SI
         raise SelectionError(f"method {choice.method!r} selected no candidate")
     selected = kept[np.asarray(chosen, dtype=np.intp)]
     psi = np.full(X.shape[1], np.nan)
-    psi[kept] = correlation_with(X[:, kept], y, kept_names)
+    psi[kept] = _fitted_psi(selector, kept.size)
+    if np.isnan(psi[kept]).any():  # not a ClusterSelector's, or a column it left out
+        psi[kept] = correlation_with(X_kept, y, kept_names)
     clusters = [kept[c] for c in selector.clusters_] if choice.clustered else \
         [np.array([i]) for i in selected]
     empty = np.empty((0, 0))
     return Selection(kept=kept, dropped=dropped, similarity_source=empty, closure_source=empty,
                      eta=float("nan"), clusters=clusters, psi=psi, selected=selected)
+
+
+def _fitted_psi(selector, n_kept: int):
+    """A built-in ``ClusterSelector``'s ``psi_`` over the kept candidates it was fitted on:
+    ``correlation_with`` of the same columns (constant ones are already dropped, so the
+    selector keeps all of them), the same bits; NaN where another selector does not have
+    it, so the caller computes it (also where the selector's psi_ has a NaN, e.g. a
+    column it found constant among fewer)."""
+    import numpy as np
+
+    from spindlebench.selection.selectors import ClusterSelector
+
+    psi = getattr(selector, "psi_", None)
+    if type(selector) is ClusterSelector and psi is not None and psi.shape == (n_kept,):
+        return psi
+    return np.full(n_kept, np.nan)
 
 
 def select_each(choice: MethodChoice, X, y, ks, similarity: str = DEFAULT_SIMILARITY,

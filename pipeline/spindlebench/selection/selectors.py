@@ -221,16 +221,17 @@ class ClusterSelector(_Selector):
             raise SelectionError(f"cannot make {k} clusters: only {kept.size} "
                                  "candidate(s) vary")
         kept_names = None if names is None else [names[i] for i in kept]
-        members = cluster_candidates(X[:, kept], k, self.clustering,
+        X_kept = _columns(X, kept)  # once, not once per use
+        members = cluster_candidates(X_kept, k, self.clustering,
                                      self.similarity, self.closure, self.random_state,
                                      kept_names)
         self.psi_ = np.full(X.shape[1], np.nan)
-        self.psi_[kept] = correlation_with(X[:, kept], y, kept_names)
+        self.psi_[kept] = correlation_with(X_kept, y, kept_names)
         self.scores_ = np.full(X.shape[1], np.nan)
         if self.within in ("psi", "ga"):
             self.scores_[kept] = np.abs(self.psi_[kept])
         else:
-            self.scores_[kept] = grey_relational_grade(X[:, kept], y, self.normalisation,
+            self.scores_[kept] = grey_relational_grade(X_kept, y, self.normalisation,
                                                        self.rho, kept_names)
         self.clusters_ = [kept[m] for m in members]
         self.selected_ = np.array([c[int(np.argmax(self.scores_[c]))] for c in self.clusters_],
@@ -240,6 +241,16 @@ class ClusterSelector(_Selector):
                 X, y, self.clusters_, self.selected_, self.random_state, self.population,
                 self.generations)
         return self
+
+
+def _columns(X: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """``X[:, kept]``, or ``X`` itself where that gather would copy it unchanged (every
+    column kept of an F-ordered ``X``, as ``select_with`` passes it: ``X[:, kept]`` is
+    F-ordered too, so the same layout and the same bits of every column sum)."""
+    if kept.size == X.shape[1] and min(X.shape) > 1 and X.flags.f_contiguous and \
+            np.array_equal(kept, np.arange(X.shape[1])):
+        return X
+    return X[:, kept]
 
 
 class TopCorrelatedSelector(_Selector):
@@ -304,7 +315,7 @@ def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndar
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # convergence warnings at tiny alphas
         if l1_ratio == 1.0:  # the LASSO: LARS gives the exact path, kink by kink
-            _, _, coefs = lars_path(Z, y - y.mean(), method="lasso")
+            coefs = _lars_prefix(Z, y - y.mean(), k)
         else:
             _, coefs, _ = enet_path(Z, y - y.mean(), l1_ratio=l1_ratio, eps=PATH_EPS,
                                     alphas=PATH_ALPHAS)
@@ -314,9 +325,38 @@ def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndar
     reached = np.flatnonzero(counts >= k)
     step = int(reached[0]) if reached.size else active.shape[1] - 1
     magnitude = np.abs(coefs[:, step])
-    ranked = np.lexsort((-_abs_psi(X, y), -magnitude, entry))  # entry first, then |coef|
+    # |psi| only breaks ties of (entry, |coef|); where the path reaches k, the first k are
+    # among the candidates that entered by ``step`` (at least k of them), so only theirs
+    # is needed (the same order: lexsort is stable and every other key is the same).
+    among = np.flatnonzero((entry <= step) & varying) if reached.size else \
+        np.arange(X.shape[1])
+    psi = _abs_psi(X[:, among], y)
+    ranked = among[np.lexsort((-psi, -magnitude[among], entry[among]))]
     ranked = [int(i) for i in ranked if varying[i]]
     return np.asarray(ranked[:k], dtype=np.intp)
+
+
+#: LARS steps ``lars_path`` takes at most (its default ``max_iter``): the whole LASSO path.
+LARS_MAX_ITER = 500
+
+
+def _lars_prefix(Z: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+    """The LASSO path's coefficients (p x kinks) up to the first kink with ``k`` active
+    candidates, or the whole path (``LARS_MAX_ITER`` steps) if it never has k.
+
+    LARS is sequential: its first s steps do not depend on how many follow, so a path cut
+    at ``max_iter`` = s is the whole path's first s + 1 kinks, bit for bit. It starts at k
+    steps (k entries if nothing drops out) and doubles until k are active at once or the
+    path ends; on 3 321 candidates this is a handful of the whole path's ~360 steps, each
+    of which costs a pass over the data (issue 26's placement speed).
+    """
+    steps = min(k, LARS_MAX_ITER)
+    while True:
+        _, _, coefs = lars_path(Z, y, method="lasso", max_iter=steps)
+        ended = coefs.shape[1] < steps + 1  # stopped before max_iter: the path's end
+        if ended or steps >= LARS_MAX_ITER or ((coefs != 0).sum(axis=0) >= k).any():
+            return coefs
+        steps = min(2 * steps, LARS_MAX_ITER)
 
 
 class LassoPathSelector(_Selector):

@@ -51,7 +51,11 @@ def constant_columns(X: np.ndarray) -> np.ndarray:
     X = np.asarray(X, dtype=float)
     if X.shape[0] == 0:
         return np.ones(X.shape[1], dtype=bool)
-    return constant_by_range(np.ptp(X, axis=0), np.max(np.abs(X), axis=0))
+    # two reductions instead of np.ptp's two and a third over |X|: the range is max - min
+    # as np.ptp computes it, and max |x| is the larger of |max| and |min| (exact; NaN stays
+    # NaN), so the same mask
+    high, low = X.max(axis=0), X.min(axis=0)
+    return constant_by_range(high - low, np.maximum(np.abs(high), np.abs(low)))
 
 
 def constant_by_range(spread: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
@@ -88,14 +92,18 @@ def standardized(X: np.ndarray, names: Sequence[str] | None = None) -> np.ndarra
         centred = X - X.mean(axis=0)
         centred -= centred.mean(axis=0)
         norms = np.sqrt(np.einsum("ij,ij->j", centred, centred))
-    overflow = np.flatnonzero(np.isfinite(X).all(axis=0) & ~np.isfinite(norms))
+    # finite values with a norm that is not: only the columns whose norm is not finite are
+    # looked at (the same columns as checking every one)
+    suspect = np.flatnonzero(~np.isfinite(norms))
+    overflow = suspect[np.isfinite(X[:, suspect]).all(axis=0)]
     if overflow.size:
         raise SelectionOverflowError(
             f"values too large to correlate (overflow) in {column_list(overflow, names)}"
         )
     if np.any(norms == 0) or np.any(constant_columns(X)):
         raise SelectionError("similarity needs non-constant columns; drop constant ones first")
-    return centred / norms
+    centred /= norms  # in place: the same quotients, one temporary fewer
+    return centred
 
 
 def _symmetric_unit(matrix: np.ndarray) -> np.ndarray:
