@@ -76,11 +76,34 @@ class _Dense:
 
     def __call__(self, *args: np.ndarray | float) -> list[np.ndarray]:
         for target, value in zip(self.args, args, strict=True):
-            target[:] = value
+            # CasADi reads a matrix argument column-major
+            target[:] = value if np.ndim(value) < 2 else np.ravel(value, order="F")
         self.trigger()
         # CasADi stores column-major
         return [r.reshape(shape[1], shape[0]).T for r, shape in zip(self.results, self.shapes,
                                                                      strict=True)]
+
+
+def _lu_factor(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """LU factors of ``A`` by LAPACK's ``getrf`` directly: SciPy's ``lu_factor`` wraps it in
+    checks and conversions that cost as much as factorising the 105 x 105 step Jacobian, once
+    per step of every evaluation. A singular factor is kept (``lu_solve`` then gives inf/NaN,
+    which the step's convergence test rejects), as ``lu_factor`` only warns of it."""
+    lu, piv, info = _GETRF(A)
+    if info < 0:
+        raise ValueError(f"getrf: illegal argument {-info}")
+    return lu, piv
+
+
+def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` from ``_lu_factor(A)`` (LAPACK's ``getrs``)."""
+    x, info = _GETRS(lu[0], lu[1], b)
+    if info < 0:
+        raise ValueError(f"getrs: illegal argument {-info}")
+    return x
+
+
+_GETRF, _GETRS = scipy.linalg.lapack.get_lapack_funcs(("getrf", "getrs"), dtype=np.float64)
 
 
 @dataclass
@@ -125,6 +148,7 @@ class Discretisation:
         self.outputs = ca.Function("outputs", [z0, u, s], [y0])
         self.output_index = {name: i for i, name in enumerate(self.ode.outputs)}
         self._u, self._z, self._s, self._y = u, z0, s, y0
+        self._sampled: dict[tuple[tuple[str, ...], int], tuple[_Dense, np.ndarray]] = {}
 
     def output_derivatives(self, names: Sequence[str]) -> ca.Function:
         """``(x, u, s) -> (y, dy/dx, dy/ds, dy/d ambient)`` for the outputs ``names``."""
@@ -132,6 +156,28 @@ class Discretisation:
         return ca.Function("output_derivatives", [self._z, self._u, self._s],
                            [y, ca.jacobian(y, self._z), ca.jacobian(y, self._s),
                             ca.jacobian(y, self._u[AMBIENT])])
+
+    def sampled_outputs(self, names: Sequence[str], samples: int) -> tuple[_Dense, np.ndarray]:
+        """``(X (n_x, N), U (4, N), s) -> (Y, dY/dx[:, columns], dY/ds, dY/d ambient)`` at
+        ``samples`` samples at once, dense into reused buffers, and ``columns``: the states
+        any of the outputs ``names`` depends on (structurally). A sensor reads one state and
+        the drift a third of them, so the products with the state sensitivities only need
+        those columns. Built once per (names, samples) and kept: a calibration evaluates it
+        once per model evaluation."""
+        key = (tuple(names), samples)
+        if key not in self._sampled:
+            y = ca.vertcat(*[self._y[self.output_index[n]] for n in names])
+            dy_dz = ca.jacobian(y, self._z)
+            columns = np.array(sorted(set(dy_dz.sparsity().get_col())), dtype=int)
+            dense = ca.densify
+            function = ca.Function(
+                "sampled_outputs", [self._z, self._u, self._s],
+                [dense(y), dense(dy_dz[:, columns.tolist()]), dense(ca.jacobian(y, self._s)),
+                 dense(ca.jacobian(y, self._u[AMBIENT]))])
+            # s is the same at every sample: a non-repeated input of the map
+            self._sampled[key] = (_Dense(function.map("sampled", "serial", samples, [2], [])),
+                                  columns)
+        return self._sampled[key]
 
     def log_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of the log-factors: the factor range of ``fitset``, narrowed to the FMU's
@@ -295,9 +341,9 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
         z1 = z.copy() if k == 0 else 2 * z - states[:, k - 1]
         u = inputs[:, k]
         r, A, B, C, a = d._jacobians(z, z1, u, h[k], s)
-        lu = scipy.linalg.lu_factor(A, check_finite=False)
+        lu = _lu_factor(A)
         for _ in range(MAX_CHORD_ITERATIONS):
-            dz = scipy.linalg.lu_solve(lu, r.ravel(), check_finite=False)
+            dz = _lu_solve(lu, r.ravel())
             z1 = z1 - dz
             if np.max(np.abs(dz)) < NEWTON_TOL_K:
                 break
@@ -310,7 +356,7 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
             rhs[:, :n_s] += C
             if n_k:
                 rhs[:, n_s + 1:] += a @ basis[k][None, :]
-            S[k + 1] = -scipy.linalg.lu_solve(lu, rhs, check_finite=False)
+            S[k + 1] = -_lu_solve(lu, rhs)
     return states, S
 
 
@@ -325,14 +371,14 @@ def _newton_step(d: Discretisation, series: Series, k: int, z: np.ndarray, u: np
     z1 = z.copy()
     for _ in range(MAX_NEWTON_ITERATIONS):
         r, A, B, C, a = d._jacobians(z, z1, u, h, s)
-        lu = scipy.linalg.lu_factor(A, check_finite=False)
-        dz = scipy.linalg.lu_solve(lu, r.ravel(), check_finite=False)
+        lu = _lu_factor(A)
+        dz = _lu_solve(lu, r.ravel())
         z1 = z1 - dz
         if not np.all(np.isfinite(z1)):
             break
         if np.max(np.abs(dz)) < NEWTON_TOL_K:
             _, A, B, C, a = d._jacobians(z, z1, u, h, s)
-            return z1, scipy.linalg.lu_factor(A, check_finite=False), (A, B, C, a)
+            return z1, _lu_factor(A), (A, B, C, a)
     raise StepFailedError(f"{series.path}: the step at time_s = {series.time_s[k]:g} did not "
                           "converge")
 
@@ -365,10 +411,12 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
         inputs[AMBIENT] = ambient_series(series, theta[knots])
         names = [c.output for c in series.channels]
         n1 = series.intervals + 1
-        outputs = d.output_derivatives(names).map(n1)
-        Y, Dx, Ds, Da = (np.asarray(v) for v in outputs(states, inputs, s))
-        Dx = Dx.reshape(len(names), n1, d.n_x)  # column blocks of n_x per sample
+        outputs, columns = d.sampled_outputs(names, n1)
+        Y, Dx, Ds, Da = outputs(states, inputs, s)
+        Dx = Dx.reshape(len(names), n1, len(columns))  # column blocks per sample
         Ds = Ds.reshape(len(names), n1, n_s)
+        if jacobian:
+            S_used = S[:, columns, :]  # (n1, columns, n_s + 1 + n_k), gathered once
         basis = series.ambient_basis() if series.ambient_unknown else np.zeros((n1, 0))
         recording_models = []
         for c, channel in enumerate(series.channels):
@@ -381,7 +429,7 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
             if not jacobian:
                 continue
             block = np.zeros((len(valid), layout.size))
-            local = np.einsum("kx,kxt->kt", Dx[c, valid], S[valid])
+            local = np.einsum("kx,kxt->kt", Dx[c, valid], S_used[valid])
             local[:, :n_s] += Ds[c, valid]
             if basis.shape[1]:
                 local[:, n_s + 1:] += Da[c, valid][:, None] * basis[valid]
