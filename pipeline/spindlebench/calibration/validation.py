@@ -1,6 +1,6 @@
 """Calibration on the real CAIVIAC recording, validated on cycles it never saw.
 
-    python -m spindlebench.calibration.validation RUNS_DIR [--out docs/figures]
+    python -m spindlebench.calibration.validation RUNS_DIR [--out docs/figures] [--json FILE]
 
 ``RUNS_DIR`` is the output of ``spindlebench adapt caiviac --phase cycle --out RUNS_DIR``: six
 contiguous runs (five 4 h-on / 4 h-off cycles at 1250, 2500, 3750, 5000, 3500 rpm and a stepped
@@ -19,7 +19,14 @@ block). The fold: calibrate on the first three cycles, predict the other three.
   the choice matters is measured by calibrating again with every sensor on its second-best
   output, and once on the error alone (no temperature channel).
 
-Prints a markdown table (for docs/validation.md) and draws ``calibration_caiviac.png``.
+- **The fit-set variants** (``identifiability.VARIANTS``): the same fold with fewer effective
+  parameters, and the same protocol one level down (train on run1 and run2, predict run3) as
+  the choice a user could make without the held-out runs.
+
+Writes everything to ``results/caiviac_calibration/caiviac_calibration.json`` (``--json``),
+from which ``docs/validation.md``'s tables are generated (``heldout_table``,
+``variants_table``, ``runs_table``, through ``docs/hooks/tables.py``); prints the same tables
+and draws ``calibration_caiviac.png``.
 """
 
 from __future__ import annotations
@@ -245,7 +252,7 @@ def run(runs_dir: Path, out: Path, json_path: Path) -> dict:
         predicted = predict_error(d, fit, _load(runs_dir, TRAIN + TEST, error_only))[len(TRAIN):]
         temperature_rmse = [r["rmse"] for r in fit.channel_rmse if r["kind"] == "temperature"]
         fit_error = [r["rmse"] for r in fit.channel_rmse if r["kind"] == "error"]
-        rows.append({"method": f"calibrated model, {label} map", "map": label,
+        rows.append({"method": _calibrated_label(label), "map": label,
                      "heldout_rmse_um": [_rmse(p, m) for p, m in zip(predicted, measured,
                                                                      strict=True)],
                      "evaluations": fit.evaluations, "evaluation_limit": MAX_EVALUATIONS,
@@ -305,6 +312,13 @@ def run(runs_dir: Path, out: Path, json_path: Path) -> dict:
     return document
 
 
+def _calibrated_label(map_label: str) -> str:
+    """The table's name of a calibration with the sensor map ``map_label``."""
+    if map_label == "error only":
+        return "calibrated model, error only (no temperature channel)"
+    return f"calibrated model, {map_label} map (speed programme only)"
+
+
 def _cells(values: list[float]) -> str:
     return " | ".join(f"{v:.1f}" for v in values)
 
@@ -315,13 +329,14 @@ def heldout_table(document: dict) -> str:
     lines = [f"| method | {' | '.join(test)} | notes |", "|---|" + "---|" * len(test) + "---|",
              f"| error range (max − min) | {_cells(document['error_range_um'])} | |"]
     for row in document["rows"]:
-        note = ""
+        note, method = "", row["method"]
         if row.get("map") is not None:
+            method = _calibrated_label(row["map"])
             temperatures = row["training_temperature_rmse_K"]
             note = (f"{row['evaluations']} of at most {row['evaluation_limit']} evaluations; "
                     f"training fit: error {row['training_error_rmse_um']:.1f} µm, temperatures "
                     + (f"{temperatures:.1f} K" if temperatures is not None else "–"))
-        lines.append(f"| {row['method']} | {_cells(row['heldout_rmse_um'])} | {note} |")
+        lines.append(f"| {method} | {_cells(row['heldout_rmse_um'])} | {note} |")
     return "\n".join(lines)
 
 
@@ -341,8 +356,8 @@ def variants_table(document: dict) -> str:
     inner_name = ", ".join(inner["test"])
     lines = [f"| fit set | fitted | {' | '.join(test)} | mean | training error (µm) | at a bound "
              f"| inner fold: {inner_name} |", "|---|---|" + "---|" * len(test) + "---|---|---|---|"]
-    for variant, row in outer["variants"].items():
-        inner_row = inner["variants"][variant]
+    for variant in (v for v in identifiability.VARIANTS if v in outer["variants"]):
+        row, inner_row = outer["variants"][variant], inner["variants"][variant]
         rmse = [row["heldout_rmse_um"][n] for n in test]
         lines.append(f"| {VARIANT_LABELS[variant]} | {len(row['fitted'])} | {_cells(rmse)} | "
                      f"{row['mean_heldout_rmse_um']:.1f} | {row['training_error_rmse_um']:.1f} | "
