@@ -52,3 +52,30 @@ def test_nested_choice_is_the_lowest_inner_error_and_refuses_unknown_variants():
     assert identifiability.nested_choice({"full": 3.0, "pruned": 3.0}) == "full"
     with pytest.raises(ValueError, match="unknown variant 'tied'"):
         identifiability.fit_variant("tied", None, [], 1)
+
+
+@pytest.mark.slow
+def test_tied_capacities_move_together_as_one_factor():
+    """A tie (``Discretisation(ties=...)``) is the same model as fitting every tied parameter
+    with the same log-factor: the step residual and the reported values agree."""
+    from conftest import MODELS
+    from spindlebench.calibration.problem import Discretisation
+    from spindlebench.model.equations import explicit_ode
+
+    ode = explicit_ode(MODELS, segments=2)
+    first, *rest = identifiability.CAPACITIES
+    tied = Discretisation(ode, [first], ode.parameter_vector(), ties={first: tuple(rest)})
+    every = Discretisation(ode, list(identifiability.CAPACITIES), ode.parameter_vector())
+    rng = np.random.default_rng(3)
+    z0 = 20.0 + rng.random(tied.n_x)
+    z1 = z0 + 0.1 * rng.random(tied.n_x)
+    u, h, s = [3000.0, 0.0, 0.0, 21.0], 60.0, np.log(2.0)
+    residual = np.asarray(tied.step(z0, z1, u, h, [s])).ravel()
+    assert np.allclose(residual, np.asarray(every.step(z0, z1, u, h, [s] * 3)).ravel(),
+                       rtol=1e-12, atol=1e-12)
+    # and it is not the untied model with only the first moved
+    alone = Discretisation(ode, [first], ode.parameter_vector())
+    assert not np.allclose(residual, np.asarray(alone.step(z0, z1, u, h, [s])).ravel())
+    values = tied.parameters(np.array([s]))
+    defaults = dict(zip(ode.parameters, ode.parameter_vector(), strict=True))
+    assert values == pytest.approx({n: 2.0 * defaults[n] for n in identifiability.CAPACITIES})

@@ -114,6 +114,9 @@ class Discretisation:
     ode: ExplicitOde
     fit: list[str]
     base: np.ndarray  # every tunable parameter, ode order
+    #: Fitted name -> parameters moved by the same log-factor (a tie: one unknown for several
+    #: parameters the data cannot separate, ``calibration.identifiability``).
+    ties: dict[str, tuple[str, ...]] = field(default_factory=dict)
     step: ca.Function = field(init=False)
     outputs: ca.Function = field(init=False)
 
@@ -129,6 +132,8 @@ class Discretisation:
         p = ca.SX(ca.DM(self.base))
         for k, i in enumerate(self.fit_index):
             p[i] = self.base[i] * ca.exp(s[k])
+            for other in self.ties.get(self.fit[k], ()):
+                p[index[other]] = self.base[index[other]] * ca.exp(s[k])
         u_model = ca.vertcat(ca.fmax(ca.fabs(u[0]), MIN_SPEED_RPM), u[1:])
         f0, y0 = self.ode.ode(z0 + KELVIN_OFFSET, u_model, p)
         f1 = self.ode.ode(z1 + KELVIN_OFFSET, u_model, p)[0]
@@ -201,9 +206,14 @@ class Discretisation:
         return len(self.ode.states)
 
     def parameters(self, s: np.ndarray) -> dict[str, float]:
-        """Fitted parameter values for log-factors ``s``."""
-        return {name: float(self.base[i] * np.exp(s[k]))
-                for k, (name, i) in enumerate(zip(self.fit, self.fit_index, strict=True))}
+        """Fitted parameter values for log-factors ``s`` (and those tied to them)."""
+        index = {name: i for i, name in enumerate(self.ode.parameters)}
+        values = {}
+        for k, (name, i) in enumerate(zip(self.fit, self.fit_index, strict=True)):
+            values[name] = float(self.base[i] * np.exp(s[k]))
+            for other in self.ties.get(name, ()):
+                values[other] = float(self.base[index[other]] * np.exp(s[k]))
+        return values
 
     def sensed_states(self, outputs: Sequence[str]) -> dict[int, str]:
         """State index -> the mapped output that reads it (node outputs, sensor probes)."""

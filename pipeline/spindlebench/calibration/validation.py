@@ -211,7 +211,7 @@ def variant_fold(d: Discretisation, runs_dir: Path, train: tuple[str, ...],
                 [r["rmse"] for r in fit.channel_rmse if r["kind"] == "error"])),
             "fitted": list(fit.fit), "fixed": list(result.fixed),
             "at_bound": identifiability.at_bound(result.discretisation, fit),
-            "estimates": fit.values,
+            "estimates": result.discretisation.parameters(fit.log_factors),
             "strongest_correlation": _strongest(fit),
             "evaluations": result.evaluations, "fit_s": result.seconds,
             "chi2_reduced": fit.chi2_reduced,
@@ -343,6 +343,7 @@ def heldout_table(document: dict) -> str:
 VARIANT_LABELS = {
     "full": "default set (13 fitted)",
     "no-capacities": "without the heat capacities (10)",
+    "tied-capacities": "default set, the three capacities by one common factor",
     "regularised": "default set, refitted with the noise at the misfit",
     "pruned": "default set, then those at a bound left at their start value",
 }
