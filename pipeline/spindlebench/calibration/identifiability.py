@@ -31,14 +31,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
+from spindlebench.calibration import problem
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate
 from spindlebench.calibration.series import Series
 
 #: The heat capacities of the default set (``fitset.DEFAULT_FIT``), which ``no-capacities``
 #: leaves out.
 CAPACITIES = ("spindle_shaft_C", "housing_C", "column_C")
-#: A log-factor within this of its bound counts as at the bound (a factor 1.01).
-AT_BOUND_LN = 0.01
 
 
 @dataclass(frozen=True)
@@ -58,10 +57,7 @@ class VariantFit:
 
 def at_bound(d: Discretisation, fit: Fit) -> list[str]:
     """The fitted parameters whose estimate sits at a bound of its factor range."""
-    lower, upper = d.log_bounds()
-    s = fit.log_factors
-    return [name for name, v, lo, hi in zip(d.fit, s, lower, upper, strict=True)
-            if v - lo < AT_BOUND_LN or hi - v < AT_BOUND_LN]
+    return problem.at_bound(d, fit.log_factors)
 
 
 def misfit_weighted(series_list: Sequence[Series], fit: Fit) -> list[Series]:

@@ -393,6 +393,19 @@ def _newton_step(d: Discretisation, series: Series, k: int, z: np.ndarray, u: np
                           "converge")
 
 
+#: A log-factor within this of its bound counts as at the bound (a factor 1.01).
+AT_BOUND_LN = 0.01
+
+
+def at_bound(d: Discretisation, s: np.ndarray) -> list[str]:
+    """The fitted parameters whose log-factor in ``s`` sits at a bound of its range
+    (``Discretisation.log_bounds``): there the fit compensates for what the model's structure
+    cannot do rather than measuring the parameter (``calibration.identifiability``)."""
+    lower, upper = d.log_bounds()
+    return [name for name, v, lo, hi in zip(d.fit, s, lower, upper, strict=True)
+            if v - lo < AT_BOUND_LN or hi - v < AT_BOUND_LN]
+
+
 @dataclass
 class Evaluation:
     """Residuals (whitened: data, then priors) and their Jacobian at one ``theta``."""
@@ -482,6 +495,8 @@ class Fit:
     end_states: list[np.ndarray] = field(default_factory=list)
     #: The model's state names (``ode.states``: the FMU's), the order of the states above.
     state_names: list[str] = field(default_factory=list)
+    #: The fitted parameters whose estimate sits at a bound of its range (``at_bound``).
+    at_bound: list[str] = field(default_factory=list)
 
     @property
     def log_factors(self) -> np.ndarray:
@@ -625,5 +640,5 @@ def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit
         chi2_reduced=chi2_reduced, channel_rmse=channel_rmse, trajectories=trajectories,
         evaluations=evaluations, status=status, seconds=time.perf_counter() - started,
         method=method, initial_states=final.initial_states, end_states=final.end_states,
-        state_names=list(d.ode.states),
+        state_names=list(d.ode.states), at_bound=at_bound(d, theta[: layout.n_s]),
     )
