@@ -101,6 +101,9 @@ docs-snapshots:
 	for test in etve spectrum axis; do test -f results/iso230-3/$$test/$$test.json || continue; \
 	  mkdir -p docs/snapshots/iso230-3/$$test; \
 	  cp results/iso230-3/$$test/$$test.json docs/snapshots/iso230-3/$$test/; done
+	if test -f results/caiviac_calibration/caiviac_calibration.json; then \
+	  mkdir -p docs/snapshots/caiviac_calibration; cp \
+	  results/caiviac_calibration/caiviac_calibration.json docs/snapshots/caiviac_calibration/; fi
 	for evaluation in caiviac_targets_raw caiviac_targets_diff probes_targets_raw \
 	    probes_targets_diff; do \
 	  test -f results/iso230-3/$$evaluation.json || continue; mkdir -p docs/snapshots/iso230-3; \

@@ -60,7 +60,10 @@ Sources (``Sources``, the checkout's by default):
   ``kN.json``, from ``results/NAME`` or its snapshot; the commands in ``EVALUATE_RUNS``);
 - a benchmark run's ``leaderboard.json`` (``leaderboard benchmark/mine``: the run's suite and
   command, the overall table and one table per task, as ``leaderboard.md`` has them), from
-  ``results/`` or its snapshot.
+  ``results/`` or its snapshot;
+- ``results/caiviac_calibration/caiviac_calibration.json`` (or its snapshot), written by
+  ``python -m spindlebench.calibration.validation`` (``calibration heldout|variants|runs``:
+  the calibration table, the fit-set variants, the runs as the adapter cut them).
 """
 
 from __future__ import annotations
@@ -1487,6 +1490,51 @@ def leaderboard_section(key: str | None, sources: Sources) -> str:
     return "\n".join(parts)
 
 
+# --------------------------------------------------------------------------- calibration
+
+CALIBRATION = "caiviac_calibration"
+CALIBRATION_FILE = "caiviac_calibration.json"
+#: RUNS_DIR: what ``spindlebench adapt caiviac --phase cycle --out RUNS_DIR`` writes.
+CALIBRATION_COMMAND = "python -m spindlebench.calibration.validation RUNS_DIR --out docs/figures"
+#: ``calibration KEY``: the tables of the CAIVIAC calibration's validation, each made by the
+#: script's own function from the JSON it writes (``calibration.validation``).
+CALIBRATION_KEYS = ("heldout", "variants", "runs")
+
+
+def calibration_file(sources: Sources) -> Path | None:
+    """``results/caiviac_calibration/caiviac_calibration.json``, else its snapshot."""
+    return next((base / CALIBRATION / CALIBRATION_FILE for base in (sources.results,
+                 sources.snapshots) if (base / CALIBRATION / CALIBRATION_FILE).is_file()), None)
+
+
+def calibration_table(path: Path, key: str | None = None) -> str:
+    """One table of the calibration validation's JSON (``key`` in ``CALIBRATION_KEYS``)."""
+    from spindlebench.calibration import validation
+
+    document = json.loads(path.read_text(encoding="utf-8"))
+    makers = {"heldout": validation.heldout_table, "variants": validation.variants_table,
+              "runs": validation.runs_table}
+    if key not in makers:
+        raise ValueError(f"<!-- generate: calibration {key} -->: no such table (have: "
+                         f"{', '.join(CALIBRATION_KEYS)})")
+    return makers[key](document)
+
+
+def calibration_section(key: str | None, sources: Sources) -> str:
+    if key not in CALIBRATION_KEYS:
+        raise ValueError(f"<!-- generate: calibration {key} -->: no such table (have: "
+                         f"{', '.join(CALIBRATION_KEYS)})")
+    path = calibration_file(sources)
+    if path is None:
+        return placeholder(f"The calibration {key} table", CALIBRATION_COMMAND)
+    source = sources.name(path)
+    versions = (_read_json(path) or {}).get("provenance", {}).get("package_versions", {})
+    provenance = (f"From `{source}`, written by `{CALIBRATION_COMMAND}` (spindlebench "
+                  f"{versions.get('spindlebench', '?')}; its provenance names the recording, "
+                  "each run and the model with their sha256)")
+    return block("calibration", source, key, provenance, calibration_table(path, key))
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1527,11 +1575,13 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return evaluate_runs_section(key, sources)
     if by == "leaderboard":
         return leaderboard_section(key, sources)
+    if by == "calibration":
+        return calibration_section(key, sources)
     raise ValueError(f"<!-- generate: {by} -->: no such table (have: speed, bench, parameters, "
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
                      f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
-                     "cold-start, evaluate-runs, leaderboard)")
+                     "cold-start, evaluate-runs, leaderboard, calibration)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1575,6 +1625,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return evaluate_runs_table(path, key)
     if by == "leaderboard":
         return leaderboard_table(path, key)
+    if by == "calibration":
+        return calibration_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

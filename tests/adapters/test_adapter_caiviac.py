@@ -198,3 +198,24 @@ def test_iso_map_beside_the_runs_names_all_five_channels(tmp_path):
     assert sorted(displacement) == list(caiviac.DISPLACEMENTS)
     assert set(caiviac.DISPLACEMENT_CHANNELS) == set(caiviac.DISPLACEMENTS)
     assert set(mapping.temperatures) <= set(caiviac.TEMPERATURES)
+
+
+def test_run_summary_matches_the_written_runs(written):
+    """The runs table of docs/validation.md (``run_summary``) says what the adapter wrote: each
+    run's source rows and its re-zeroed ch3 over heating and at the end of the cycle."""
+    summary = {row["run"]: row for row in caiviac.run_summary()}
+    for phase in caiviac.PHASES:
+        _, paths = written[phase]
+        assert sorted(summary) == sorted(p.stem for p in paths)
+        for path in paths:
+            row = summary[path.stem]
+            sidecar = json.loads(path.with_suffix(".json").read_text(encoding="utf-8"))
+            rows = row["heating_rows"] if phase == "heating" else row["cycle_rows"]
+            assert rows == [sidecar["source_rows"]["first"], sidecar["source_rows"]["last"]]
+            error = read_recording(path)[caiviac.AXIAL_TARGET].to_numpy()
+            if phase == "heating":
+                assert row["heating_min_um"] == pytest.approx(error.min(), abs=1e-6)
+                assert row["heating_max_um"] == pytest.approx(error.max(), abs=1e-6)
+                assert row["end_of_heating_um"] == pytest.approx(error[-1], abs=1e-6)
+            else:
+                assert row["end_of_cycle_um"] == pytest.approx(error[-1], abs=1e-6)

@@ -135,6 +135,8 @@ def test_twin_recovery_and_held_out_prediction(twin):
     assert report["provenance"]["recordings"][0]["sha256"]
     assert report["evaluation_limit"] == 50  # the default --max-iter
     assert report["stop_reason"].startswith("converged") and "stopped: converged" in out
+    # the twin's structure is right: nothing runs to a bound (a real machine's fit does)
+    assert report["at_bound"] == [] and "at a bound of the factor range" not in out
     for row in report["parameters"]:
         lo, hi = row["ci95"]
         assert lo <= TRUE[row["name"]] <= hi, row

@@ -59,10 +59,6 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("study-placement.md", "| key | default | meaning |"): KEYS,
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
-    ("validation.md", "| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) "
-     "| ch3_um at end of heating | at end of cycle |"): NO_FILE + " (the adapter's cut)",
-    ("validation.md", "| method | run4_5000rpm | run5_3500rpm | run6_stepped |"): NO_FILE +
-        " (the calibration script of that section)",
 }
 TWIN = ("a result of `identify` / `evaluate --regressor` runs on the CAIVIAC splits (issue "
         "22) quoted from their output: to become a generate: line when those runs write a "

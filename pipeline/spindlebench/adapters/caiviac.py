@@ -33,7 +33,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -274,6 +274,31 @@ def usable_runs(schedule: Schedule, source_path: Path | str = "source") -> Sched
             continue
         kept.append(run)
     return Schedule(n_rows=schedule.n_rows, baseline=schedule.baseline, runs=tuple(kept))
+
+
+def run_summary(source_path: str | Path | None = None) -> list[dict[str, Any]]:
+    """Each usable run of the source as the adapter cuts it: its speeds, 0-based source rows
+    of both phases, and the axial error re-zeroed at the run's start (its range over the
+    heating phase, its value at the end of heating and of the cycle), in µm. What
+    ``docs/validation.md``'s table of the runs shows; the calibration's validation script
+    records it (``calibration.validation``)."""
+    source_path = Path(source_path) if source_path is not None else default_source()
+    source = read_source(source_path)
+    schedule = usable_runs(find_schedule(source["spindle_rpm"].to_numpy()), source_path)
+    error = source[AXIAL_TARGET].to_numpy()
+    rows = []
+    for run in schedule.runs:
+        zero = error[run.start]
+        heating = error[run.start:run.heating_stop] - zero
+        rows.append({
+            "run": run.name, "speeds_rpm": list(run.speeds_rpm),
+            "heating_rows": [run.start, run.heating_stop - 1],
+            "cycle_rows": [run.start, run.stop - 1],
+            "heating_min_um": float(heating.min()), "heating_max_um": float(heating.max()),
+            "end_of_heating_um": float(heating[-1]),
+            "end_of_cycle_um": float(error[run.stop - 1] - zero),
+        })
+    return rows
 
 
 def write_runs(

@@ -114,6 +114,7 @@ def report_dict(fit: Fit, provenance: Mapping[str, Any], ignored: Mapping[str, S
              "ci95": list(intervals[name]), "sd_ln": float(sd)}
             for name, sd in zip(fit.fit, fit.sd_ln, strict=True)
         ],
+        "at_bound": list(fit.at_bound),
         "correlation": {"names": fit.fit, "matrix": np.round(fit.correlation, 4).tolist()},
         "residuals": fit.channel_rmse,
         AMBIENT_COLUMN: [np.round(t[AMBIENT_COLUMN], 3).tolist() for t in fit.trajectories],

@@ -76,11 +76,34 @@ class _Dense:
 
     def __call__(self, *args: np.ndarray | float) -> list[np.ndarray]:
         for target, value in zip(self.args, args, strict=True):
-            target[:] = value
+            # CasADi reads a matrix argument column-major
+            target[:] = value if np.ndim(value) < 2 else np.ravel(value, order="F")
         self.trigger()
         # CasADi stores column-major
         return [r.reshape(shape[1], shape[0]).T for r, shape in zip(self.results, self.shapes,
                                                                      strict=True)]
+
+
+def _lu_factor(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """LU factors of ``A`` by LAPACK's ``getrf`` directly: SciPy's ``lu_factor`` wraps it in
+    checks and conversions that cost as much as factorising the 105 x 105 step Jacobian, once
+    per step of every evaluation. A singular factor is kept (``lu_solve`` then gives inf/NaN,
+    which the step's convergence test rejects), as ``lu_factor`` only warns of it."""
+    lu, piv, info = _GETRF(A)
+    if info < 0:
+        raise ValueError(f"getrf: illegal argument {-info}")
+    return lu, piv
+
+
+def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
+    """``A^-1 b`` from ``_lu_factor(A)`` (LAPACK's ``getrs``)."""
+    x, info = _GETRS(lu[0], lu[1], b)
+    if info < 0:
+        raise ValueError(f"getrs: illegal argument {-info}")
+    return x
+
+
+_GETRF, _GETRS = scipy.linalg.lapack.get_lapack_funcs(("getrf", "getrs"), dtype=np.float64)
 
 
 @dataclass
@@ -91,6 +114,9 @@ class Discretisation:
     ode: ExplicitOde
     fit: list[str]
     base: np.ndarray  # every tunable parameter, ode order
+    #: Fitted name -> parameters moved by the same log-factor (a tie: one unknown for several
+    #: parameters the data cannot separate, ``calibration.identifiability``).
+    ties: dict[str, tuple[str, ...]] = field(default_factory=dict)
     step: ca.Function = field(init=False)
     outputs: ca.Function = field(init=False)
 
@@ -106,6 +132,8 @@ class Discretisation:
         p = ca.SX(ca.DM(self.base))
         for k, i in enumerate(self.fit_index):
             p[i] = self.base[i] * ca.exp(s[k])
+            for other in self.ties.get(self.fit[k], ()):
+                p[index[other]] = self.base[index[other]] * ca.exp(s[k])
         u_model = ca.vertcat(ca.fmax(ca.fabs(u[0]), MIN_SPEED_RPM), u[1:])
         f0, y0 = self.ode.ode(z0 + KELVIN_OFFSET, u_model, p)
         f1 = self.ode.ode(z1 + KELVIN_OFFSET, u_model, p)[0]
@@ -125,6 +153,7 @@ class Discretisation:
         self.outputs = ca.Function("outputs", [z0, u, s], [y0])
         self.output_index = {name: i for i, name in enumerate(self.ode.outputs)}
         self._u, self._z, self._s, self._y = u, z0, s, y0
+        self._sampled: dict[tuple[tuple[str, ...], int], tuple[_Dense, np.ndarray]] = {}
 
     def output_derivatives(self, names: Sequence[str]) -> ca.Function:
         """``(x, u, s) -> (y, dy/dx, dy/ds, dy/d ambient)`` for the outputs ``names``."""
@@ -132,6 +161,28 @@ class Discretisation:
         return ca.Function("output_derivatives", [self._z, self._u, self._s],
                            [y, ca.jacobian(y, self._z), ca.jacobian(y, self._s),
                             ca.jacobian(y, self._u[AMBIENT])])
+
+    def sampled_outputs(self, names: Sequence[str], samples: int) -> tuple[_Dense, np.ndarray]:
+        """``(X (n_x, N), U (4, N), s) -> (Y, dY/dx[:, columns], dY/ds, dY/d ambient)`` at
+        ``samples`` samples at once, dense into reused buffers, and ``columns``: the states
+        any of the outputs ``names`` depends on (structurally). A sensor reads one state and
+        the drift a third of them, so the products with the state sensitivities only need
+        those columns. Built once per (names, samples) and kept: a calibration evaluates it
+        once per model evaluation."""
+        key = (tuple(names), samples)
+        if key not in self._sampled:
+            y = ca.vertcat(*[self._y[self.output_index[n]] for n in names])
+            dy_dz = ca.jacobian(y, self._z)
+            columns = np.array(sorted(set(dy_dz.sparsity().get_col())), dtype=int)
+            dense = ca.densify
+            function = ca.Function(
+                "sampled_outputs", [self._z, self._u, self._s],
+                [dense(y), dense(dy_dz[:, columns.tolist()]), dense(ca.jacobian(y, self._s)),
+                 dense(ca.jacobian(y, self._u[AMBIENT]))])
+            # s is the same at every sample: a non-repeated input of the map
+            self._sampled[key] = (_Dense(function.map("sampled", "serial", samples, [2], [])),
+                                  columns)
+        return self._sampled[key]
 
     def log_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of the log-factors: the factor range of ``fitset``, narrowed to the FMU's
@@ -155,9 +206,14 @@ class Discretisation:
         return len(self.ode.states)
 
     def parameters(self, s: np.ndarray) -> dict[str, float]:
-        """Fitted parameter values for log-factors ``s``."""
-        return {name: float(self.base[i] * np.exp(s[k]))
-                for k, (name, i) in enumerate(zip(self.fit, self.fit_index, strict=True))}
+        """Fitted parameter values for log-factors ``s`` (and those tied to them)."""
+        index = {name: i for i, name in enumerate(self.ode.parameters)}
+        values = {}
+        for k, (name, i) in enumerate(zip(self.fit, self.fit_index, strict=True)):
+            values[name] = float(self.base[i] * np.exp(s[k]))
+            for other in self.ties.get(name, ()):
+                values[other] = float(self.base[index[other]] * np.exp(s[k]))
+        return values
 
     def sensed_states(self, outputs: Sequence[str]) -> dict[int, str]:
         """State index -> the mapped output that reads it (node outputs, sensor probes)."""
@@ -295,9 +351,9 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
         z1 = z.copy() if k == 0 else 2 * z - states[:, k - 1]
         u = inputs[:, k]
         r, A, B, C, a = d._jacobians(z, z1, u, h[k], s)
-        lu = scipy.linalg.lu_factor(A, check_finite=False)
+        lu = _lu_factor(A)
         for _ in range(MAX_CHORD_ITERATIONS):
-            dz = scipy.linalg.lu_solve(lu, r.ravel(), check_finite=False)
+            dz = _lu_solve(lu, r.ravel())
             z1 = z1 - dz
             if np.max(np.abs(dz)) < NEWTON_TOL_K:
                 break
@@ -310,7 +366,7 @@ def trajectory(d: Discretisation, series: Series, z0: np.ndarray, s: np.ndarray,
             rhs[:, :n_s] += C
             if n_k:
                 rhs[:, n_s + 1:] += a @ basis[k][None, :]
-            S[k + 1] = -scipy.linalg.lu_solve(lu, rhs, check_finite=False)
+            S[k + 1] = -_lu_solve(lu, rhs)
     return states, S
 
 
@@ -325,16 +381,29 @@ def _newton_step(d: Discretisation, series: Series, k: int, z: np.ndarray, u: np
     z1 = z.copy()
     for _ in range(MAX_NEWTON_ITERATIONS):
         r, A, B, C, a = d._jacobians(z, z1, u, h, s)
-        lu = scipy.linalg.lu_factor(A, check_finite=False)
-        dz = scipy.linalg.lu_solve(lu, r.ravel(), check_finite=False)
+        lu = _lu_factor(A)
+        dz = _lu_solve(lu, r.ravel())
         z1 = z1 - dz
         if not np.all(np.isfinite(z1)):
             break
         if np.max(np.abs(dz)) < NEWTON_TOL_K:
             _, A, B, C, a = d._jacobians(z, z1, u, h, s)
-            return z1, scipy.linalg.lu_factor(A, check_finite=False), (A, B, C, a)
+            return z1, _lu_factor(A), (A, B, C, a)
     raise StepFailedError(f"{series.path}: the step at time_s = {series.time_s[k]:g} did not "
                           "converge")
+
+
+#: A log-factor within this of its bound counts as at the bound (a factor 1.01).
+AT_BOUND_LN = 0.01
+
+
+def at_bound(d: Discretisation, s: np.ndarray) -> list[str]:
+    """The fitted parameters whose log-factor in ``s`` sits at a bound of its range
+    (``Discretisation.log_bounds``): there the fit compensates for what the model's structure
+    cannot do rather than measuring the parameter (``calibration.identifiability``)."""
+    lower, upper = d.log_bounds()
+    return [name for name, v, lo, hi in zip(d.fit, s, lower, upper, strict=True)
+            if v - lo < AT_BOUND_LN or hi - v < AT_BOUND_LN]
 
 
 @dataclass
@@ -365,10 +434,12 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
         inputs[AMBIENT] = ambient_series(series, theta[knots])
         names = [c.output for c in series.channels]
         n1 = series.intervals + 1
-        outputs = d.output_derivatives(names).map(n1)
-        Y, Dx, Ds, Da = (np.asarray(v) for v in outputs(states, inputs, s))
-        Dx = Dx.reshape(len(names), n1, d.n_x)  # column blocks of n_x per sample
+        outputs, columns = d.sampled_outputs(names, n1)
+        Y, Dx, Ds, Da = outputs(states, inputs, s)
+        Dx = Dx.reshape(len(names), n1, len(columns))  # column blocks per sample
         Ds = Ds.reshape(len(names), n1, n_s)
+        if jacobian:
+            S_used = S[:, columns, :]  # (n1, columns, n_s + 1 + n_k), gathered once
         basis = series.ambient_basis() if series.ambient_unknown else np.zeros((n1, 0))
         recording_models = []
         for c, channel in enumerate(series.channels):
@@ -381,7 +452,7 @@ def evaluate(d: Discretisation, series_list: Sequence[Series], layout: Layout,
             if not jacobian:
                 continue
             block = np.zeros((len(valid), layout.size))
-            local = np.einsum("kx,kxt->kt", Dx[c, valid], S[valid])
+            local = np.einsum("kx,kxt->kt", Dx[c, valid], S_used[valid])
             local[:, :n_s] += Ds[c, valid]
             if basis.shape[1]:
                 local[:, n_s + 1:] += Da[c, valid][:, None] * basis[valid]
@@ -424,6 +495,8 @@ class Fit:
     end_states: list[np.ndarray] = field(default_factory=list)
     #: The model's state names (``ode.states``: the FMU's), the order of the states above.
     state_names: list[str] = field(default_factory=list)
+    #: The fitted parameters whose estimate sits at a bound of its range (``at_bound``).
+    at_bound: list[str] = field(default_factory=list)
 
     @property
     def log_factors(self) -> np.ndarray:
@@ -567,5 +640,5 @@ def _calibrate(d, series_list, method, max_iter, verbose, progress=False) -> Fit
         chi2_reduced=chi2_reduced, channel_rmse=channel_rmse, trajectories=trajectories,
         evaluations=evaluations, status=status, seconds=time.perf_counter() - started,
         method=method, initial_states=final.initial_states, end_states=final.end_states,
-        state_names=list(d.ode.states),
+        state_names=list(d.ode.states), at_bound=at_bound(d, theta[: layout.n_s]),
     )

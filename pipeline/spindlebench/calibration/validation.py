@@ -1,6 +1,6 @@
 """Calibration on the real CAIVIAC recording, validated on cycles it never saw.
 
-    python -m spindlebench.calibration.validation RUNS_DIR [--out docs/figures]
+    python -m spindlebench.calibration.validation RUNS_DIR [--out docs/figures] [--json FILE]
 
 ``RUNS_DIR`` is the output of ``spindlebench adapt caiviac --phase cycle --out RUNS_DIR``: six
 contiguous runs (five 4 h-on / 4 h-off cycles at 1250, 2500, 3750, 5000, 3500 rpm and a stepped
@@ -19,12 +19,20 @@ block). The fold: calibrate on the first three cycles, predict the other three.
   the choice matters is measured by calibrating again with every sensor on its second-best
   output, and once on the error alone (no temperature channel).
 
-Prints a markdown table (for docs/validation.md) and draws ``calibration_caiviac.png``.
+- **The fit-set variants** (``identifiability.VARIANTS``): the same fold with fewer effective
+  parameters, and the same protocol one level down (train on run1 and run2, predict run3) as
+  the choice a user could make without the held-out runs.
+
+Writes everything to ``results/caiviac_calibration/caiviac_calibration.json`` (``--json``),
+from which ``docs/validation.md``'s tables are generated (``heldout_table``,
+``variants_table``, ``runs_table``, through ``docs/hooks/tables.py``); prints the same tables
+and draws ``calibration_caiviac.png``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -34,12 +42,14 @@ from matplotlib.figure import Figure
 from sklearn.linear_model import LinearRegression
 
 from spindlebench.adapters import caiviac
+from spindlebench.calibration import identifiability
 from spindlebench.calibration.fitset import DEFAULT_FIT
 from spindlebench.calibration.mapping import RecordingMap
 from spindlebench.calibration.problem import Discretisation, Fit, calibrate, trajectory
 from spindlebench.calibration.series import Series, load_series
 from spindlebench.core import atomic
 from spindlebench.core.paths import MODELS_DIR
+from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import (
     AMBIENT_COLUMN,
     DRIFT_COLUMN,
@@ -49,6 +59,7 @@ from spindlebench.formats.recording import (
     TIME_COLUMN,
     read_recording,
 )
+from spindlebench.model import MODEL_FILE
 from spindlebench.model.equations import explicit_ode
 
 TRAIN = ("run1_1250rpm", "run2_2500rpm", "run3_3750rpm")
@@ -63,6 +74,8 @@ ERROR_SIGN = -1.0
 STEP_S = 120.0
 SEGMENTS = 4
 MAX_EVALUATIONS = 30
+#: Where the results go (the docs' tables read it, or its copy under docs/snapshots/).
+DEFAULT_JSON = "results/caiviac_calibration/caiviac_calibration.json"
 #: No feed axis moves in this recording: the feed losses cannot be fitted.
 FIT = [name for name in DEFAULT_FIT if name not in ("c_x_motor", "c_y_motor")]
 
@@ -164,8 +177,64 @@ def _rmse(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean((a - b) ** 2)))
 
 
-def run(runs_dir: Path, out: Path) -> None:
+def _measured_error(runs_dir: Path, names: tuple[str, ...]) -> list[np.ndarray]:
+    """The (signed) error of each run on the calibration grid, relative to its first sample."""
+    measured = [load_series(runs_dir / f"{n}.csv", _map({}, runs_dir), STEP_S).channels[0].values
+                for n in names]
+    return [m - m[0] for m in measured]
+
+
+def variant_fold(d: Discretisation, runs_dir: Path, train: tuple[str, ...],
+                 test: tuple[str, ...], first: Fit | None = None) -> dict:
+    """Every fit-set variant (``identifiability.VARIANTS``) calibrated on ``train`` with the
+    best-correlated map chosen on ``train``, and its held-out RMSE (µm) on each of ``test``
+    predicted from the speed programme alone (as ``run``'s table)."""
+    probe = _load(runs_dir, train, _map({c: "T1_C" for c in TEMPERATURES}, runs_dir))
+    recording_map = _map(choose_map(d, probe, 0), runs_dir)
+    series = _load(runs_dir, train, recording_map)
+    every = _load(runs_dir, train + test, _map({}, runs_dir))
+    measured = _measured_error(runs_dir, test)
+
+    def score(result: identifiability.VariantFit) -> list[float]:
+        predicted = predict_error(result.discretisation, result.fit, every)[len(train):]
+        return [_rmse(p, m) for p, m in zip(predicted, measured, strict=True)]
+
+    results = identifiability.evaluate_variants(d, series, MAX_EVALUATIONS, score,
+                                                first=first)
+    rows = {}
+    for variant, (result, rmse) in results.items():
+        fit = result.fit
+        rows[variant] = {
+            "heldout_rmse_um": dict(zip(test, rmse, strict=True)),
+            "mean_heldout_rmse_um": float(np.mean(rmse)),
+            "training_error_rmse_um": float(np.mean(
+                [r["rmse"] for r in fit.channel_rmse if r["kind"] == "error"])),
+            "fitted": list(fit.fit), "fixed": list(result.fixed),
+            "at_bound": identifiability.at_bound(result.discretisation, fit),
+            "estimates": result.discretisation.parameters(fit.log_factors),
+            "strongest_correlation": _strongest(fit),
+            "evaluations": result.evaluations, "fit_s": result.seconds,
+            "chi2_reduced": fit.chi2_reduced,
+        }
+    return {"train": list(train), "test": list(test), "variants": rows}
+
+
+def _strongest(fit: Fit) -> dict:
+    """The most correlated pair of estimates."""
+    n = len(fit.fit)
+    if n < 2:
+        return {}
+    i, j = max(((i, j) for i in range(n) for j in range(i)),
+               key=lambda ij: abs(fit.correlation[ij]))
+    return {"pair": [fit.fit[i], fit.fit[j]], "r": float(fit.correlation[i, j])}
+
+
+def run(runs_dir: Path, out: Path, json_path: Path) -> dict:
+    """The validation: the calibration table, the fit-set variants on the same fold and one
+    level down (``identifiability.nested_choice``), the runs as the adapter cut them; written
+    to ``json_path`` (what the docs' tables are generated from) and printed as Markdown."""
     started = time.perf_counter()
+    cpu_started = time.process_time()
     ode = explicit_ode(MODELS_DIR, segments=SEGMENTS)
     d = Discretisation(ode, FIT, ode.parameter_vector())
     error_only = _map({}, runs_dir)
@@ -173,9 +242,7 @@ def run(runs_dir: Path, out: Path) -> None:
     maps = {"best-correlated": choose_map(d, probe, 0),
             "second-best": choose_map(d, probe, 1), "error only": {}}
     print("sensor map (best-correlated):\n" + map_text(maps["best-correlated"]))
-    measured = [load_series(runs_dir / f"{n}.csv", error_only, STEP_S).channels[0].values
-                for n in TEST]
-    measured = [m - m[0] for m in measured]
+    measured = _measured_error(runs_dir, TEST)
     rows, fits = [], {}
     for label, temperatures in maps.items():
         recording_map = _map(temperatures, runs_dir)
@@ -185,34 +252,132 @@ def run(runs_dir: Path, out: Path) -> None:
         predicted = predict_error(d, fit, _load(runs_dir, TRAIN + TEST, error_only))[len(TRAIN):]
         temperature_rmse = [r["rmse"] for r in fit.channel_rmse if r["kind"] == "temperature"]
         fit_error = [r["rmse"] for r in fit.channel_rmse if r["kind"] == "error"]
-        rows.append((f"calibrated model, {label} map",
-                     [_rmse(p, m) for p, m in zip(predicted, measured, strict=True)],
-                     f"{fit.evaluations} evaluations, {fit.seconds:.0f} s; training fit: "
-                     f"error {np.mean(fit_error):.2f} um, temperatures "
-                     + (f"{np.mean(temperature_rmse):.2f} K" if temperature_rmse else "-")))
+        rows.append({"method": _calibrated_label(label), "map": label,
+                     "heldout_rmse_um": [_rmse(p, m) for p, m in zip(predicted, measured,
+                                                                     strict=True)],
+                     "evaluations": fit.evaluations, "evaluation_limit": MAX_EVALUATIONS,
+                     "fit_s": fit.seconds,
+                     "training_error_rmse_um": float(np.mean(fit_error)),
+                     "training_temperature_rmse_K": (float(np.mean(temperature_rmse))
+                                                     if temperature_rmse else None)})
         if label == "best-correlated":
             best_predicted = predicted
     mlr = mlr_predictions(runs_dir)
-    rows.append(("MLR on all 16 sensors (measured at prediction time)",
-                 [_rmse(p, m) for p, m in zip(mlr, measured, strict=True)], ""))
-    ranges = [float(np.ptp(m)) for m in measured]
-    print(f"| method | {' | '.join(TEST)} | notes |")
-    print("|---|" + "---|" * len(TEST) + "---|")
-    print(f"| error range (max - min) | {' | '.join(f'{r:.1f}' for r in ranges)} | |")
-    for label, values, note in rows:
-        print(f"| {label} | {' | '.join(f'{v:.1f}' for v in values)} | {note} |")
+    rows.append({"method": "MLR on all 16 sensors (measured at prediction time)", "map": None,
+                 "heldout_rmse_um": [_rmse(p, m) for p, m in zip(mlr, measured, strict=True)]})
     best = fits["best-correlated"]
+    outer = variant_fold(d, runs_dir, TRAIN, TEST, first=best)
+    inner = variant_fold(d, runs_dir, TRAIN[:-1], TRAIN[-1:])
+    inner_scores = {v: r["mean_heldout_rmse_um"] for v, r in inner["variants"].items()}
+    document = {
+        "provenance": provenance(
+            kind="spindlebench CAIVIAC calibration validation",
+            script="python -m spindlebench.calibration.validation",
+            source=file_entry(caiviac.default_source()),
+            runs={n: file_entry(runs_dir / f"{n}.csv") for n in TRAIN + TEST},
+            model=file_entry(MODELS_DIR / MODEL_FILE), segments=SEGMENTS, step_s=STEP_S,
+            fit=FIT, evaluation_limit=MAX_EVALUATIONS),
+        "train": list(TRAIN), "test": list(TEST),
+        "runs": caiviac.run_summary(),
+        "error_range_um": [float(np.ptp(m)) for m in measured],
+        "maps": {label: dict(m) for label, m in maps.items()},
+        "rows": rows,
+        "estimates": {name: {"start": best.start_values[name], "estimate": best.values[name],
+                             "interval95": list(interval)}
+                      for name, interval in best.interval95().items()},
+        "correlated": [{"pair": [best.fit[i], best.fit[j]], "r": float(best.correlation[i, j])}
+                       for i in range(len(best.fit)) for j in range(i)
+                       if abs(best.correlation[i, j]) >= 0.8],
+        "variants": {"outer": outer, "inner": inner,
+                     "nested_choice": identifiability.nested_choice(inner_scores)},
+    }
+    print(heldout_table(document))
+    print()
+    print(variants_table(document))
+    print(f"\nnested choice (inner fold {', '.join(inner['train'])} -> "
+          f"{', '.join(inner['test'])}): {document['variants']['nested_choice']}")
     print("\nestimates (best-correlated map):")
-    for name, (lo, hi) in best.interval95().items():
-        print(f"  {name}: {best.start_values[name]:.4g} -> {best.values[name]:.4g} "
-              f"[{lo:.4g}, {hi:.4g}]")
-    strong = [(best.fit[i], best.fit[j], best.correlation[i, j]) for i in range(len(best.fit))
-              for j in range(i) if abs(best.correlation[i, j]) >= 0.8]
-    print("correlated (|r| >= 0.8): " + (", ".join(f"{a}~{b} {r:+.2f}" for a, b, r in strong)
-                                         or "none"))
+    for name, row in document["estimates"].items():
+        lo, hi = row["interval95"]
+        print(f"  {name}: {row['start']:.4g} -> {row['estimate']:.4g} [{lo:.4g}, {hi:.4g}]")
+    print("correlated (|r| >= 0.8): " + (", ".join(
+        f"{c['pair'][0]}~{c['pair'][1]} {c['r']:+.2f}" for c in document["correlated"])
+        or "none"))
     figure = out / "calibration_caiviac.png"
     _figure(best, best_predicted, mlr, measured, figure)
-    print(f"\n{time.perf_counter() - started:.0f} s in all; figure {figure}")
+    json_path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(json_path, json.dumps(document, indent=1, sort_keys=True) + "\n")
+    print(f"\n{time.perf_counter() - started:.0f} s wall, {time.process_time() - cpu_started:.0f}"
+          f" CPU-s in all; figure {figure}, results {json_path}")
+    return document
+
+
+def _calibrated_label(map_label: str) -> str:
+    """The table's name of a calibration with the sensor map ``map_label``."""
+    if map_label == "error only":
+        return "calibrated model, error only (no temperature channel)"
+    return f"calibrated model, {map_label} map (speed programme only)"
+
+
+def _cells(values: list[float]) -> str:
+    return " | ".join(f"{v:.1f}" for v in values)
+
+
+def heldout_table(document: dict) -> str:
+    """The calibration table: held-out RMSE (µm) of each calibration and of MLR."""
+    test = document["test"]
+    lines = [f"| method | {' | '.join(test)} | notes |", "|---|" + "---|" * len(test) + "---|",
+             f"| error range (max − min) | {_cells(document['error_range_um'])} | |"]
+    for row in document["rows"]:
+        note, method = "", row["method"]
+        if row.get("map") is not None:
+            method = _calibrated_label(row["map"])
+            temperatures = row["training_temperature_rmse_K"]
+            note = (f"{row['evaluations']} of at most {row['evaluation_limit']} evaluations; "
+                    f"training fit: error {row['training_error_rmse_um']:.1f} µm, temperatures "
+                    + (f"{temperatures:.1f} K" if temperatures is not None else "–"))
+        lines.append(f"| {method} | {_cells(row['heldout_rmse_um'])} | {note} |")
+    return "\n".join(lines)
+
+
+VARIANT_LABELS = {
+    "full": "default set (13 fitted)",
+    "no-capacities": "without the heat capacities (10)",
+    "tied-capacities": "default set, the three capacities by one common factor",
+    "regularised": "default set, refitted with the noise at the misfit",
+    "pruned": "default set, then those at a bound left at their start value",
+}
+
+
+def variants_table(document: dict) -> str:
+    """The fit-set variants: held-out RMSE (µm) on the protocol's fold and on the inner fold
+    (training runs only), the training error, and what sits at a bound."""
+    outer, inner = document["variants"]["outer"], document["variants"]["inner"]
+    test = outer["test"]
+    inner_name = ", ".join(inner["test"])
+    lines = [f"| fit set | fitted | {' | '.join(test)} | mean | training error (µm) | at a bound "
+             f"| inner fold: {inner_name} |", "|---|---|" + "---|" * len(test) + "---|---|---|---|"]
+    for variant in (v for v in identifiability.VARIANTS if v in outer["variants"]):
+        row, inner_row = outer["variants"][variant], inner["variants"][variant]
+        rmse = [row["heldout_rmse_um"][n] for n in test]
+        lines.append(f"| {VARIANT_LABELS[variant]} | {len(row['fitted'])} | {_cells(rmse)} | "
+                     f"{row['mean_heldout_rmse_um']:.1f} | {row['training_error_rmse_um']:.1f} | "
+                     f"{len(row['at_bound'])} | {inner_row['mean_heldout_rmse_um']:.1f} |")
+    return "\n".join(lines)
+
+
+def runs_table(document: dict) -> str:
+    """The runs as the adapter cuts the source (0-based source rows; ch3 re-zeroed, µm)."""
+    lines = ["| run | rpm | heating rows (n) | cycle rows (n) | ch3_um in heating (µm) | ch3_um at "
+             "end of heating | at end of cycle |", "|---|---|---|---|---|---|---|"]
+    for row in document["runs"]:
+        (h0, h1), (c0, c1) = row["heating_rows"], row["cycle_rows"]
+        rpm = " → ".join(f"{v:g}" for v in row["speeds_rpm"])
+        lines.append(f"| {row['run']} | {rpm} | {h0}–{h1} ({h1 - h0 + 1}) | {c0}–{c1} "
+                     f"({c1 - c0 + 1}) | {row['heating_min_um']:.1f} … "
+                     f"{row['heating_max_um']:.1f} | {row['end_of_heating_um']:.1f} | "
+                     f"{row['end_of_cycle_um']:.1f} |")
+    return "\n".join(lines)
 
 
 def _figure(fit: Fit, predicted, mlr, measured, path: Path) -> None:
@@ -255,6 +420,9 @@ def _figure(fit: Fit, predicted, mlr, measured, path: Path) -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", type=Path, help="output folder of 'adapt caiviac --phase cycle'")
-    parser.add_argument("--out", type=Path, default=Path("docs/figures"))
+    parser.add_argument("--out", type=Path, default=Path("docs/figures"),
+                        help="folder of the figure")
+    parser.add_argument("--json", type=Path, default=Path(DEFAULT_JSON),
+                        help=f"the results (default {DEFAULT_JSON}: the docs' tables)")
     args = parser.parse_args()
-    run(args.runs, args.out)
+    run(args.runs, args.out, args.json)

@@ -90,6 +90,10 @@ def summary_lines(fit: Fit) -> list[str]:
         lines.append("not separated by these recordings (|correlation| >= "
                      f"{STRONG_CORRELATION:g}): " + ", ".join(
                          f"{a}~{b} {c:+.2f}" for _, a, b, c in strong))
+    if fit.at_bound:
+        lines.append(f"at a bound of the factor range ({len(fit.at_bound)} of {len(fit.fit)}: "
+                     "the fit compensates there for what the model cannot do; docs/validation"
+                     ".md, 'Which parameters to fit'): " + ", ".join(fit.at_bound))
     lines.append(f"residuals (reduced chi-square {fit.chi2_reduced:.3g}):")
     for row in fit.channel_rmse:
         unit = "um" if row["kind"] == "error" else "K"
