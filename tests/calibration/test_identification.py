@@ -304,3 +304,30 @@ def test_an_observer_without_a_stabilising_filter_is_one_line_and_never_chosen(m
                        r"disturbance"):
         ObserverRegressor(n_nodes=1, disturbances=1).fit(X, y)
     assert issubclass(ObserverError, SpindlebenchError)
+
+
+def test_hammerstein_with_feeds_and_room_recovers_the_known_exponent_and_feed_gain():
+    """Issue 22 (twin recovery): the speed's heat through ``(n / n_ref)^a`` with ``a``
+    fitted, a feed rate as a second heat input and the room as an input, two nodes. Data
+    made by exactly that structure with a = 5/3 give back a, the time constants and the
+    feed's steady gain; the speed alone (the feed left out, it does not follow the spindle
+    here) cannot fit the same data."""
+    t = np.arange(0, 36 * 3600, 120.0)
+    n = np.select([(t // 7200) % 4 == k for k in range(3)], [6000.0, 2500.0, 4500.0], 0.0)
+    feed = np.where((t // 5400) % 3 == 0, 2000.0, np.where((t // 5400) % 3 == 1, 500.0, 0.0))
+    room = 20.0 + 3.0 * np.sin(2 * np.pi * t / 86400.0)
+    heat = (n / 6000.0) ** (5 / 3)
+    y = (-14.0 * lag(heat, 2400.0, t) + 6.0 * lag(heat, 14400.0, t)
+         + 0.004 * lag(feed, 2400.0, t) + 0.002 * lag(feed, 14400.0, t)
+         + 1.5 * lag(room - room[0], 2400.0, t) - 2.0 * lag(room - room[0], 14400.0, t))
+    X = np.column_stack([t, n, room, feed])
+    model = ThermalNetworkRegressor(n_nodes=2, ambient=True, feeds=1).fit(X, y)
+    assert model.fit_.exponents[0] == pytest.approx(5 / 3, abs=0.01)
+    assert sorted(model.fit_.taus_s) == pytest.approx([2400.0, 14400.0], rel=0.01)
+    assert np.sqrt(np.mean((model.predict(X) - y) ** 2)) < 0.01
+    steady = model.predict(np.column_stack([t, 0 * n, room[0] + 0 * t, 1000.0 + 0 * t]))
+    assert steady[-1] - steady[0] == pytest.approx(6.0, rel=0.02)  # 0.004 + 0.002 per mm/min
+    blind = ThermalNetworkRegressor(n_nodes=2, ambient=True).fit(X[:, :3], y)
+    assert np.sqrt(np.mean((blind.predict(X[:, :3]) - y) ** 2)) > 0.3
+    with pytest.raises(ValueError, match="feed column"):
+        ThermalNetworkRegressor(n_nodes=1, feeds=2).fit(X[:, :3], y)
