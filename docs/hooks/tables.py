@@ -68,7 +68,8 @@ Sources (``Sources``, the checkout's by default):
 - ``results/twin/*.json`` (or ``docs/snapshots/twin/``), written by the same script's
   ``--synthetic``, ``--evidence``, ``--room-proxy`` and ``--evaluate`` with ``--out
   results/twin`` (``twin synthetic``, ``twin superposition``, ``twin evidence``, ``twin
-  room-proxy``, ``twin evaluate@RUN``), rendered by the script's own ``*_markdown``.
+  room-proxy``, ``twin every-split``, ``twin evaluate@RUN``), rendered by the script's own
+  ``*_markdown``.
 """
 
 from __future__ import annotations
@@ -1512,6 +1513,9 @@ TWIN_TABLES: dict[str, tuple[str, str, str]] = {
     "room-proxy": ("room_proxy.json", "room_proxy_markdown",
                    "python -m spindlebench.identification.validation --room-proxy "
                    "--out results/twin"),
+    "every-split": ("every_split.json", "every_split_markdown",
+                    "python -m spindlebench.identification.validation --every-split "
+                    "--out results/twin"),
     "evaluate": ("evaluate.json", "evaluate_markdown",
                  "python -m spindlebench.identification.validation --evaluate DIR "
                  "--out results/twin"),
@@ -1551,7 +1555,7 @@ def twin_table(path: Path, key: str | None = None) -> str:
         text = render(document["runs"], run)
     elif what in ("superposition", "heat-path"):
         text = render(document["superposition"])
-    elif what == "room-proxy":
+    elif what in ("room-proxy", "every-split"):
         text = render(document["splits"])
     else:
         text = render(document)
