@@ -15,6 +15,14 @@ project's ``ols``), MLR on the observer's four sensors, the transfer-function ba
 the grey-box network from the speed alone (order by leave-one-cycle-out), and the observer on
 the four sensors most correlated with the error over the training runs (the rule of
 ``top-k-correlated``) and on all 16. Prints markdown tables and writes ``caiviac.json``.
+
+The other modes, each printing its tables and writing one JSON under ``--out`` that the docs'
+tables are generated from (``docs/hooks/tables.py``, ``twin KEY``): ``--evidence``
+(``evidence.json``: the error against speed and sensors, per run), ``--room-proxy``
+(``room_proxy.json``), ``--every-split [--observer]`` (``every_split.json``: all 20 ways to
+train on three runs), ``--evaluate DIR`` (``evaluate.json``: ``spindlebench evaluate
+--regressor`` on the adapter's cycles) and ``--synthetic DIR`` (``synthetic.json``: twin
+recovery on the testbench's own machine, with the superposition check).
 """
 
 from __future__ import annotations
@@ -483,10 +491,8 @@ def synthetic(folder: Path) -> dict:
     y = frame[DRIFT_COLUMN].to_numpy(float)
     chosen = sorted(np.argsort([-abs(np.corrcoef(T[:, j] - T[0, j], y)[0, 1])
                                 for j in range(20)])[:4])
-    for arrays in [train]:
-        arrays["observer"] = np.column_stack([arrays["speed"], arrays["T"][:, chosen]])
     tests = {name: _synthetic_arrays(folder, name) for name in SYNTHETIC_TESTS}
-    for arrays in tests.values():
+    for arrays in [train, *tests.values()]:  # the observer reads the chosen four sensors
         arrays["observer"] = np.column_stack([arrays["speed"], arrays["T"][:, chosen]])
     results: dict = {"observer_sensors": [f"T{j + 1}" for j in chosen], "rmse_um": {},
                      "train_rmse_um": {}, "models": {}}
