@@ -77,6 +77,10 @@ docs-snapshots:
 	  cp $$run/table6_rmse.csv $$run/provenance.json $$dest/; done
 	if ls results/fingerprint/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/fingerprint && \
 	  cp results/fingerprint/*.json docs/snapshots/fingerprint/; fi
+	if ls results/twin/*.json >/dev/null 2>&1; then mkdir -p docs/snapshots/twin && \
+	  cp results/twin/*.json docs/snapshots/twin/; fi
+	for run in results/caiviac_identification/*/caiviac.json; do test -f $$run || continue; \
+	  dest=docs/snapshots/$$(dirname $${run#results/}); mkdir -p $$dest; cp $$run $$dest/; done
 	for sweep in season-sweep season-sweep-methods af-sweep; do \
 	  test -f results/$$sweep/summary/by_method.csv || continue; \
 	  mkdir -p docs/snapshots/$$sweep/summary; \

@@ -49,7 +49,8 @@ Sources (``Sources``, the checkout's by default):
   report of the default machine, per direction and tilt, or the speed spectrum's steps);
 - ``results/caiviac_identification/*/caiviac.json`` (or their snapshots), written by
   ``python -m spindlebench.identification.validation --splits ... --out ...``
-  (``identification-split C``: that split's table, as the script prints it);
+  (``identification-split C``: that split's table, as the script prints it;
+  ``twin summary``: the means of every split);
 - ``results/discretisation/discretisation.json`` (or its snapshot), written by ``python -m
   spindlebench.model.discretisation --out ...`` (``discretisation``: the drift rise per segment
   count; its provenance line says when the model source has changed since);
@@ -63,7 +64,12 @@ Sources (``Sources``, the checkout's by default):
   ``results/`` or its snapshot;
 - ``results/caiviac_calibration/caiviac_calibration.json`` (or its snapshot), written by
   ``python -m spindlebench.calibration.validation`` (``calibration heldout|variants|runs``:
-  the calibration table, the fit-set variants, the runs as the adapter cut them).
+  the calibration table, the fit-set variants, the runs as the adapter cut them);
+- ``results/twin/*.json`` (or ``docs/snapshots/twin/``), written by the same script's
+  ``--synthetic``, ``--evidence``, ``--room-proxy`` and ``--evaluate`` with ``--out
+  results/twin`` (``twin synthetic``, ``twin superposition``, ``twin evidence``, ``twin
+  room-proxy``, ``twin every-split``, ``twin evaluate@RUN``), rendered by the script's own
+  ``*_markdown``.
 """
 
 from __future__ import annotations
@@ -1488,6 +1494,88 @@ def leaderboard_section(key: str | None, sources: Sources) -> str:
         parts += [f"### {task}\n", block("leaderboard", source, task, f"Task `{task}`",
                                          leaderboard_table(path, task))]
     return "\n".join(parts)
+#: The twin page's other tables (``twin KEY``): key -> (file under ``results/twin/`` or
+#: ``docs/snapshots/twin/``, the ``identification.validation`` function that renders it, and
+#: the command that writes the file). ``summary`` reads every split's ``caiviac.json``.
+TWIN = "twin"
+TWIN_TABLES: dict[str, tuple[str, str, str]] = {
+    "synthetic": ("synthetic.json", "synthetic_markdown",
+                  "python -m spindlebench.identification.validation --synthetic DIR "
+                  "--out results/twin"),
+    "superposition": ("synthetic.json", "superposition_markdown",
+                      "python -m spindlebench.identification.validation --synthetic DIR "
+                      "--out results/twin"),
+    "heat-path": ("synthetic.json", "superposition_markdown",
+                  "python -m spindlebench.identification.validation --synthetic DIR "
+                  "--out results/twin"),
+    "evidence": ("evidence.json", "evidence_markdown",
+                 "python -m spindlebench.identification.validation --evidence --out results/twin"),
+    "room-proxy": ("room_proxy.json", "room_proxy_markdown",
+                   "python -m spindlebench.identification.validation --room-proxy "
+                   "--out results/twin"),
+    "every-split": ("every_split.json", "every_split_markdown",
+                    "python -m spindlebench.identification.validation --every-split "
+                    "--out results/twin"),
+    "evaluate": ("evaluate.json", "evaluate_markdown",
+                 "python -m spindlebench.identification.validation --evaluate DIR "
+                 "--out results/twin"),
+}
+
+
+def twin_file(key: str, sources: Sources) -> Path | None:
+    """The file behind ``twin KEY`` (``KEY@RUN`` for ``evaluate``): from ``results/``, else
+    its snapshot; ``summary``: the folder of the splits' ``caiviac.json`` files."""
+    if key == "summary":
+        for base in (sources.results, sources.snapshots):
+            if list((base / IDENTIFICATION).glob("*/caiviac.json")):
+                return base / IDENTIFICATION
+        return None
+    name = TWIN_TABLES[key.split("@", 1)[0]][0]
+    for base in (sources.results, sources.snapshots):
+        if (base / TWIN / name).is_file():
+            return base / TWIN / name
+    return None
+
+
+def twin_table(path: Path, key: str | None = None) -> str:
+    """``twin KEY``'s table from ``path``, rendered as the validation script prints it."""
+    from spindlebench.identification import validation
+
+    if key == "summary":
+        splits: dict = {}
+        for file in sorted(path.glob("*/caiviac.json")):
+            splits.update(json.loads(file.read_text(encoding="utf-8"))["splits"])
+        return validation.summary_markdown(dict(sorted(splits.items())))
+    what, _, run = (key or "").partition("@")
+    if what not in TWIN_TABLES:
+        raise ValueError(f"twin {key!r}: no such table (have: summary, {', '.join(TWIN_TABLES)})")
+    document = json.loads(path.read_text(encoding="utf-8"))
+    render = getattr(validation, TWIN_TABLES[what][1])
+    if what == "evaluate":
+        text = render(document["runs"], run)
+    elif what in ("superposition", "heat-path"):
+        text = render(document["superposition"])
+    elif what in ("room-proxy", "every-split"):
+        text = render(document["splits"])
+    else:
+        text = render(document)
+    # a script's printout may hold several tables (and a line of words) apart by blank
+    # lines: each is its own generated table, so its marker stands right above it
+    return text.split("\n\n")[1 if what == "heat-path" else 0]
+
+
+def twin_section(key: str | None, sources: Sources) -> str:
+    if not key:
+        raise ValueError("<!-- generate: twin -->: needs the table (e.g. synthetic)")
+    path = twin_file(key, sources)
+    command = (IDENTIFICATION_COMMAND.replace("SPLITS NAME", "A,B AB").replace(
+        "SPLITS", "A,B").replace("NAME", "AB") + "` and `--splits C,D --out .../CD") \
+        if key == "summary" else TWIN_TABLES[key.split("@", 1)[0]][2]
+    if path is None:
+        return placeholder(f"The twin table {key}", command)
+    source = sources.name(path)
+    return block("twin", source, key, f"From `{source}`, written by `{command}`",
+                 twin_table(path, key))
 
 
 # --------------------------------------------------------------------------- calibration
@@ -1567,6 +1655,8 @@ def section(by: str, key: str | None, sources: Sources) -> str:
         return iso_section(by, key, sources)
     if by == "identification-split":
         return identification_section(key, sources)
+    if by == TWIN:
+        return twin_section(key, sources)
     if by == "discretisation":
         return discretisation_section(sources)
     if by == "cold-start":
@@ -1581,7 +1671,7 @@ def section(by: str, key: str | None, sources: Sources) -> str:
                      f"{', '.join([*MACHINE_TABLES, *STUDY_TABLES, *RUN_TABLES, *SWEEP_TABLES])}, "
                      "sensitivity, fingerprint-medians, compensation-targets, "
                      f"{', '.join(ISO_TABLES)}, identification-split, discretisation, "
-                     "cold-start, evaluate-runs, leaderboard, calibration)")
+                     "cold-start, evaluate-runs, leaderboard, calibration, twin)")
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
@@ -1627,6 +1717,8 @@ def regenerate(by: str, source: str, key: str | None, sources: Sources | None = 
         return leaderboard_table(path, key)
     if by == "calibration":
         return calibration_table(path, key)
+    if by == TWIN:
+        return twin_table(path, key)
     return STUDY_TABLES[by](path, key)
 
 

@@ -304,3 +304,55 @@ def test_an_observer_without_a_stabilising_filter_is_one_line_and_never_chosen(m
                        r"disturbance"):
         ObserverRegressor(n_nodes=1, disturbances=1).fit(X, y)
     assert issubclass(ObserverError, SpindlebenchError)
+
+
+def test_hammerstein_with_feeds_and_room_recovers_the_known_exponent_and_feed_gain():
+    """Issue 22 (twin recovery): the speed's heat through ``(n / n_ref)^a`` with ``a``
+    fitted, a feed rate as a second heat input and the room as an input, two nodes. Data
+    made by exactly that structure with a = 5/3 give back a, the time constants and the
+    feed's steady gain; the speed alone (the feed left out, it does not follow the spindle
+    here) cannot fit the same data."""
+    t = np.arange(0, 36 * 3600, 120.0)
+    n = np.select([(t // 7200) % 4 == k for k in range(3)], [6000.0, 2500.0, 4500.0], 0.0)
+    feed = np.where((t // 5400) % 3 == 0, 2000.0, np.where((t // 5400) % 3 == 1, 500.0, 0.0))
+    room = 20.0 + 3.0 * np.sin(2 * np.pi * t / 86400.0)
+    heat = (n / 6000.0) ** (5 / 3)
+    y = (-14.0 * lag(heat, 2400.0, t) + 6.0 * lag(heat, 14400.0, t)
+         + 0.004 * lag(feed, 2400.0, t) + 0.002 * lag(feed, 14400.0, t)
+         + 1.5 * lag(room - room[0], 2400.0, t) - 2.0 * lag(room - room[0], 14400.0, t))
+    X = np.column_stack([t, n, room, feed])
+    model = ThermalNetworkRegressor(n_nodes=2, ambient=True, feeds=1).fit(X, y)
+    assert model.fit_.exponents[0] == pytest.approx(5 / 3, abs=0.01)
+    assert sorted(model.fit_.taus_s) == pytest.approx([2400.0, 14400.0], rel=0.01)
+    assert np.sqrt(np.mean((model.predict(X) - y) ** 2)) < 0.01
+    steady = model.predict(np.column_stack([t, 0 * n, room[0] + 0 * t, 1000.0 + 0 * t]))
+    assert steady[-1] - steady[0] == pytest.approx(6.0, rel=0.02)  # 0.004 + 0.002 per mm/min
+    blind = ThermalNetworkRegressor(n_nodes=2, ambient=True).fit(X[:, :3], y)
+    assert np.sqrt(np.mean((blind.predict(X[:, :3]) - y) ** 2)) > 0.3
+    with pytest.raises(ValueError, match="feed column"):
+        ThermalNetworkRegressor(n_nodes=1, feeds=2).fit(X[:, :3], y)
+
+
+@pytest.mark.parametrize("kwargs", [{"basis": (0.0, 5 / 3)}, {}])
+def test_an_identified_network_superposes_speed_and_room_which_the_twin_check_relies_on(kwargs):
+    """docs/twin.md's superposition check: a network LTI in the room and in a static map of
+    the speed and feeds predicts a programme as the sum of its speed part (room held at its
+    first value) and its room part (spindle and feeds off). The 81-node truth departs from
+    that by 3.5-4.1 um; the identified model must not, or the argument fails."""
+    t = np.arange(0, 24 * 3600, 300.0)
+    n = np.select([(t // 7200) % 3 == 0, (t // 7200) % 3 == 1], [5000.0, 2000.0], 0.0)
+    feed = np.where(n > 0, 1500.0, 0.0)
+    room = 18.0 + 3.0 * np.sin(2 * np.pi * t / 86400.0)
+    y = -8.0 * lag((n / 5000.0) ** 1.5, 3000.0, t) + 1.2 * lag(room - room[0], 20000.0, t)
+    model = ThermalNetworkRegressor(n_nodes=2, ambient=True, feeds=1, starts=1,
+                                    **kwargs).fit(np.column_stack([t, n, room, feed]), y)
+
+    def predict(speed, air, feeds):
+        return model.predict(np.column_stack([t, speed, air, feeds]))
+
+    full = predict(n, room, feed)
+    speed_part = predict(n, np.full_like(room, room[0]), feed)
+    room_part = predict(0 * n, room, 0 * feed)
+    rest = predict(0 * n, np.full_like(room, room[0]), 0 * feed)
+    assert np.allclose(full - rest, (speed_part - rest) + (room_part - rest), atol=1e-9)
+    assert np.ptp(speed_part) > 1.0 and np.ptp(room_part) > 0.5  # both parts are there

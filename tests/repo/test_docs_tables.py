@@ -60,25 +60,8 @@ HAND_TABLES: dict[tuple[str, str], str] = {
     ("study-sweep.md", "| table | keys (default) | meaning |"): KEYS,
     ("study-sweep.md", "| key | default | meaning |"): KEYS,
 }
-TWIN = ("a result of `identify` / `evaluate --regressor` runs on the CAIVIAC splits (issue "
-        "22) quoted from their output: to become a generate: line when those runs write a "
-        "file the docs read")
 HAND_TABLES.update({
     ("twin.md", "| regressor | reads | fitted as |"): PROSE,
-    ("twin.md", "| form | wall | CPU |"): "bench_identification.py's numbers, now in "
-        "bench/results/bench_identification.json and on the speed page; this page keeps its "
-        "typed copy until it reads that file",
-    **{("twin.md", header): TWIN for header in (
-        "| split | MLR, 16 sensors | network from speed | ratio | observer, 4 sensors | "
-        "observer, 16 sensors | observer 16 vs MLR 16 |",
-        "| run | rpm | starts at (h) | ch3 change over heating (um) | mean rise of t1-t3, "
-        "t12-t15 (K) | t5 rise (K) |",
-        "| split | room proxy | MLR, 16 sensors | network (speed) | network (speed + room "
-        "proxy) |",
-        "| `--method` / `--regressor` (k) | run1_1250 | run2_2500 | run3_3750 | run5_3500 | "
-        "run6_stepped | **mean** | CPU |",
-        "| `--method` / `--regressor` (k) | run1 | run2 | run4 | run5 | run6 | **mean** | CPU |",
-        "| model | fit on train (vs truth) | heldout | exp1 | exp3 |")},
 })
 HAND_TABLES.update({
     ("benchmark.md", "| task | what trains | what is predicted | folds |"):

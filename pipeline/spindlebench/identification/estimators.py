@@ -2,7 +2,9 @@
 
 Their ``X`` is a recording's columns in time order, not a table of independent rows: column 0
 is ``time_s``, column 1 the spindle speed (rev/min), then (``ThermalNetworkRegressor`` with
-``ambient=True``) the ambient in degC, or (``ObserverRegressor``) the sensors in degC. A model
+``ambient=True``) the ambient in degC, then (``feeds=k``) ``k`` further heat inputs used as
+they are (e.g. ``|feed_x| + |feed_y|`` in mm/min), or (``ObserverRegressor``) the sensors in
+degC. A model
 is simulated through all of ``X`` from rest at its first row; ``sample_weight`` 0 leaves a
 sample out of the fit while the simulation still runs through it (the held-out cycles of a
 continuous recording).
@@ -35,8 +37,10 @@ AUTO_OBSERVER_NODES = (1, 2)
 AUTO_DISTURBANCES = (0, 1, 2)
 
 
-def _inputs(X: np.ndarray, ambient: bool = False) -> Inputs:
-    return Inputs(X[:, 0], X[:, 1], ambient_C=X[:, 2] if ambient else None)
+def _inputs(X: np.ndarray, ambient: bool = False, feeds: int = 0) -> Inputs:
+    first = 3 if ambient else 2
+    linear = X[:, first:first + feeds].T if feeds else np.empty((0, 0))
+    return Inputs(X[:, 0], X[:, 1], linear, ambient_C=X[:, 2] if ambient else None)
 
 
 def _mask(sample_weight, n: int) -> np.ndarray:
@@ -55,6 +59,11 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         Heat sources of the speed, each ``(n / n_ref)^a`` with its own exponent.
     ambient : bool, default=False
         Column 2 of ``X`` is the ambient (degC), an input to every node.
+    feeds : int, default=0
+        The next ``feeds`` columns of ``X`` (after the ambient, if any) are heat inputs used
+        as they are, one source each with its own weight per node (a Hammerstein input map:
+        the feeds' heat is about proportional to the feed rate; the speed's goes through
+        ``(n / n_ref)^a``). A user has them from the NC programme.
     initial : bool, default=False
         Fit each node's initial temperature (else the first sample is at rest).
     exponent : float or None, default=None
@@ -95,6 +104,7 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         "n_nodes": [Interval(Integral, 1, 6, closed="both"), StrOptions({"auto"})],
         "speed_sources": [Interval(Integral, 1, 2, closed="both")],
         "ambient": ["boolean"],
+        "feeds": [Interval(Integral, 0, None, closed="left")],
         "initial": ["boolean"],
         "exponent": [Interval(Real, 0, None, closed="neither"), None],
         "basis": ["array-like", None],
@@ -104,8 +114,9 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
 
     def __init__(self, n_nodes="auto", speed_sources: int = 1, ambient: bool = False,
                  initial: bool = False, exponent=None, starts: int = 4, random_state: int = 0,
-                 basis=None):
+                 basis=None, feeds: int = 0):
         self.n_nodes = n_nodes
+        self.feeds = feeds
         self.speed_sources = speed_sources
         self.ambient = ambient
         self.initial = initial
@@ -118,14 +129,18 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         basis = () if self.basis is None else tuple(float(a) for a in self.basis)
         if any(not a >= 0 for a in basis) or len(set(basis)) < len(basis):
             raise ValueError(f"basis {self.basis!r}: exponents must be >= 0 and distinct")
-        return Structure("network", n_nodes, self.speed_sources, 0, self.ambient, self.initial,
-                         self.exponent, basis=basis)
+        return Structure("network", n_nodes, self.speed_sources, int(self.feeds), self.ambient,
+                         self.initial, self.exponent, basis=basis)
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, sample_weight=None):
         """Identify the network on the samples with ``sample_weight`` > 0."""
         X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=10)
-        inputs = _inputs(X, self.ambient)
+        if X.shape[1] < 2 + self.ambient + self.feeds:
+            raise ValueError(f"X has {X.shape[1]} columns; time_s, speed"
+                             f"{', ambient' if self.ambient else ''} and {self.feeds} feed "
+                             "column(s) expected")
+        inputs = _inputs(X, self.ambient, int(self.feeds))
         weight = _mask(sample_weight, len(y))
         self.order_scores_ = []
         if self.n_nodes == "auto":
@@ -143,7 +158,8 @@ class ThermalNetworkRegressor(RegressorMixin, BaseEstimator):
         initial state if ``initial``: meant for the training recording)."""
         check_is_fitted(self)
         X = validate_data(self, X, dtype=np.float64, reset=False)
-        return self.fit_.predict(_inputs(X, self.ambient), initial=self.initial)[:, 0]
+        return self.fit_.predict(_inputs(X, self.ambient, int(self.feeds)),
+                                 initial=self.initial)[:, 0]
 
 
 class TransferFunctionRegressor(RegressorMixin, BaseEstimator):
