@@ -21,9 +21,12 @@ themselves, one sensor's differences at a time, with the matrix path's rule, so 
 are dropped or refused.
 psi follows from the raw sensors' covariances with the target like R's rows do.
 
-Above ``COMPILED_ABOVE`` candidates the inner loop over the n candidates is compiled with
-Numba; the m x m product is BLAS, kept single-threaded (a 500 x 500 product per row gains
-nothing from threads on a shared machine).
+Above ``COMPILED_ABOVE`` candidates Prim's loop is compiled with Numba (``prim_kernel``): a
+symmetric similarity (the unit vectors' dot product in a fixed order), a vectorised screen
+through the Gram matrix per block of candidates and lazy links; the same clusters as the
+NumPy rows to rounding (on exact ties it may build another maximum spanning tree of R, with
+the same weights and cuts to rounding). Below, the m x m product of each row is BLAS, kept
+single-threaded (a product per row gains nothing from threads on a shared machine).
 """
 
 from __future__ import annotations
@@ -273,7 +276,12 @@ def maximum_spanning_tree_of_pairs(
 
     The same rules as ``closure.maximum_spanning_tree`` on the matrix (start at the first
     candidate, take the largest link, the first one on ties, and a parent only changes on a
-    strictly larger similarity), so on exact ties it builds the same tree.
+    strictly larger similarity). The NumPy rows build the matrix path's tree on exact ties;
+    the compiled loop's similarity differs from theirs in the last bits, so on ties it may
+    build another maximum spanning tree (weights equal to rounding; the same clusters at
+    every cut unless two similarities within rounding of each other straddle it).
+    ``screen=False``: the compiled loop forms every similarity exactly (the tests'
+    reference for the screen, far slower).
     """
     kept = np.asarray(kept, dtype=np.int64)
     if not np.all(np.isfinite(geometry.inverse_norm[kept])):
@@ -341,8 +349,8 @@ class PairSelection:
     take nearly all the time) are done once, then :meth:`select` cuts the tree for each k.
 
     A placement study asks for k = m clusters for every budget m: with 500 nodes and all
-    their differences one tree takes ~40 s, so building it once per budget would multiply
-    that by the number of budgets for the same result.
+    their differences one tree takes seconds (minutes at 1 000), so building it once per
+    budget would multiply that by the number of budgets for the same result.
 
     ``n_clusters`` is the largest k that will be asked for: the counts are checked against
     it (and constant candidates dropped, with their warning) here, as
