@@ -159,10 +159,10 @@ def d_margin(r, scale, spread):  # pragma: no cover (compiled)
     return 2.0 * scale * spread * (gamma + 4 * UNIT) * (1.0 + 1e-6)
 
 
-@njit(cache=True, nogil=True, fastmath=True)
+@njit(cache=True, nogil=True)
 def _count(c, fixed, margin, threshold):  # pragma: no cover (compiled)
-    """How many candidates may pass the screen (vectorised: each comparison's float32
-    arithmetic is the same with fast-math, only the count is reassociated)."""
+    """How many candidates may pass the screen: an integer reduction, so vectorised without
+    fast-math (IEEE float32 comparisons, the same as the scalar test's; as fast here)."""
     hits = 0
     for t in range(threshold.shape[0]):
         hits += np.int32(1) if abs(fixed - c[t]) + margin > threshold[t] else np.int32(0)
