@@ -68,6 +68,13 @@ def block_top(high, outside, offset, count):  # pragma: no cover (compiled)
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _before(w, top, high):  # pragma: no cover (compiled)
+    """Whether candidate ``w`` is a block's top rather than ``top`` (-1: none): the larger
+    high, the first on ties."""
+    return top < 0 or high[w] > high[top] or (high[w] == high[top] and w < top)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _top_of_all(high, tops):  # pragma: no cover (compiled)
     """The candidate with the largest ``high`` over the blocks' tops, the first on ties (the
     blocks are in candidate order)."""
@@ -268,7 +275,7 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
                             counts[3] += 1
                             _relink(w, vertex, lower, upper, False, inverse_norm, low, high,
                                     exact, parent, threshold, slack)
-                            if top < 0 or high[w] > high[top]:
+                            if _before(w, top, high):
                                 top = w
                             continue
                         if upper <= low[w]:  # cannot beat it
@@ -288,7 +295,7 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
                         counts[3] += 1
                         _relink(w, vertex, value, value, True, inverse_norm, low, high,
                                 exact, parent, threshold, slack)
-                        if top < 0 or high[w] > high[top]:
+                        if _before(w, top, high):
                             top = w
             tops[block] = block_top(high, outside, offset, count) if lowered else top
 
