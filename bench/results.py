@@ -35,13 +35,14 @@ def cpu_model() -> str:
 
 
 def git_commit() -> str | None:
-    """The checkout's commit (with ``+dirty`` when files differ from it), or None."""
+    """The checkout's commit (with ``+dirty`` when files differ from it, the results folder
+    aside: a script writing its rows after each one must not mark its own file), or None."""
     here = Path(__file__).resolve().parent
     try:
         commit = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"],
                                 capture_output=True, text=True, check=True).stdout.strip()
         dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain",
-                                "--untracked-files=no"],
+                                "--untracked-files=no", "--", ":/", ":(exclude,top)bench/results"],
                                capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return None

@@ -1,5 +1,8 @@
-"""The screened Prim loop (``prim_kernel.prim_steps`` with ``screen``) builds the unscreened
-loop's tree bit for bit: the screen only skips candidates that provably fail the exact test.
+"""The screened Prim loop (``prim_kernel.prim_blocks`` with ``screen``) builds the unscreened
+loop's tree bit for bit: the screen only skips candidates that provably fail the exact test,
+and the lazy links (intervals that hold the exact similarity) only decide where the interval
+decides, so the order, parents and weights are those of the exact test of every candidate in
+every row.
 
 Random warm-ups with ties (duplicated sensors, an offset copy, a scaled copy, a sensor that
 is another's difference partner twice) and a nearly collinear pair (cancellation, where the
@@ -36,14 +39,17 @@ def with_ties(seed: int) -> np.ndarray:
                             3.0 * base[:, 11], base[:, 5] + 1e-7 * rng.normal(size=300)])
 
 
-def trees(raw: np.ndarray, monkeypatch):
+def trees(raw: np.ndarray, monkeypatch, include_raw: bool = True):
     monkeypatch.setattr(pairs_module, "COMPILED_ABOVE", 0)
-    candidates = PairCandidates(raw)
+    candidates = PairCandidates(raw, include_raw)
     constant = check_candidates(candidates, None)
     kept = np.flatnonzero(~constant)
     geometry = PairGeometry.of(candidates, standardized_centre(raw))
-    return (maximum_spanning_tree_of_pairs(geometry, kept, screen=True),
-            maximum_spanning_tree_of_pairs(geometry, kept, screen=False))
+    counts = pairs_module.PRIM_COUNTS.copy()
+    screened = maximum_spanning_tree_of_pairs(geometry, kept, screen=True)
+    visits, passes, formed, _ = pairs_module.PRIM_COUNTS - counts
+    assert passes < visits / 5 and formed < visits / 50  # the screen and the lazy links work
+    return screened, maximum_spanning_tree_of_pairs(geometry, kept, screen=False)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -63,3 +69,12 @@ def test_screened_tree_without_samples_to_spare(monkeypatch):
     np.testing.assert_array_equal(screened.order, reference.order)
     np.testing.assert_array_equal(screened.parent, reference.parent)
     np.testing.assert_array_equal(screened.weight, reference.weight)
+
+
+def test_screened_tree_of_differences_only(monkeypatch):
+    """Without the raw sensors (no block against the zero row), ties included."""
+    screened, reference = trees(with_ties(3), monkeypatch, include_raw=False)
+    np.testing.assert_array_equal(screened.order, reference.order)
+    np.testing.assert_array_equal(screened.parent, reference.parent)
+    np.testing.assert_array_equal(screened.weight.view(np.int64),
+                                  reference.weight.view(np.int64))

@@ -21,9 +21,12 @@ themselves, one sensor's differences at a time, with the matrix path's rule, so 
 are dropped or refused.
 psi follows from the raw sensors' covariances with the target like R's rows do.
 
-Above ``COMPILED_ABOVE`` candidates the inner loop over the n candidates is compiled with
-Numba; the m x m product is BLAS, kept single-threaded (a 500 x 500 product per row gains
-nothing from threads on a shared machine).
+Above ``COMPILED_ABOVE`` candidates Prim's loop is compiled with Numba (``prim_kernel``): a
+symmetric similarity (the unit vectors' dot product in a fixed order), a vectorised screen
+through the Gram matrix per block of candidates and lazy links; the same clusters as the
+NumPy rows to rounding (on exact ties it may build another maximum spanning tree of R, with
+the same weights and cuts to rounding). Below, the m x m product of each row is BLAS, kept
+single-threaded (a product per row gains nothing from threads on a shared machine).
 """
 
 from __future__ import annotations
@@ -257,6 +260,9 @@ def standardized_centre(X: np.ndarray) -> np.ndarray:
 
 #: Vertices per compiled call: between calls Python can act on Ctrl-C.
 PRIM_BATCH = 512
+#: [visits, screened passes, exact similarities formed, links replaced] of the compiled
+#: Prim loops in this process (for the bench; they only grow).
+PRIM_COUNTS = np.zeros(4, dtype=np.int64)
 #: Above this many candidates Prim's loop runs compiled (``prim_kernel``); below, NumPy rows
 #: (``closure.prim_tree``) cost less than importing Numba and loading its code (~1 s of CPU
 #: here; NumPy took 0.33 s for the 5 050 candidates of 100 sensors).
@@ -270,47 +276,71 @@ def maximum_spanning_tree_of_pairs(
 
     The same rules as ``closure.maximum_spanning_tree`` on the matrix (start at the first
     candidate, take the largest link, the first one on ties, and a parent only changes on a
-    strictly larger similarity), so on exact ties it builds the same tree.
+    strictly larger similarity). The NumPy rows build the matrix path's tree on exact ties;
+    the compiled loop's similarity differs from theirs in the last bits, so on ties it may
+    build another maximum spanning tree (weights equal to rounding; the same clusters at
+    every cut unless two similarities within rounding of each other straddle it).
+    ``screen=False``: the compiled loop forms every similarity exactly (the tests'
+    reference for the screen, far slower).
     """
     kept = np.asarray(kept, dtype=np.int64)
+    if not np.all(np.isfinite(geometry.inverse_norm[kept])):
+        raise SelectionError("a spanning tree needs non-constant candidates (a finite, "
+                             "nonzero norm); drop the constant ones first (check_candidates)")
     if kept.size <= COMPILED_ABOVE:
         with threadpool_limits(limits=1, user_api="blas"):
             return prim_tree(kept.size, geometry.rows_of(kept))
-    from spindlebench.selection.prim_kernel import prim_steps, tournament
+    from spindlebench.selection.prim_kernel import block_top, prim_blocks
 
-    n_all = geometry.first.size
-    m = geometry.factor.shape[1]
-    index = np.int16 if m < np.iinfo(np.int16).max else np.int32  # less memory traffic
-    ids = kept.astype(np.int32)
-    first = geometry.first[kept].astype(index)
-    second = geometry.second[kept].astype(index)
-    inverse = geometry.inverse_norm[kept].copy()
-    best = np.full(kept.size, -np.inf)
-    parent = np.full(kept.size, -1, dtype=np.int32)
-    threshold = np.full(kept.size, -np.inf)  # every candidate beats "no link yet"
-    tree = np.empty(2 * (1 << max(0, kept.size - 1).bit_length()), dtype=np.int32)
-    tournament(best, tree, kept.size)
-    state = np.array([0, kept.size, 0], dtype=np.int64)
+    factor = np.ascontiguousarray(geometry.factor)
+    r, m = factor.shape
+    first, second = geometry.first, geometry.second
+    n_all = first.size
+    lengths = np.minimum(np.where(second == m, first, second) + 1, r).astype(np.int64)
+    blocks = candidate_blocks(m, include_raw=bool(n_all and second[0] == m))
+    block_of = np.repeat(np.arange(blocks.shape[0]), blocks[:, 3])
+    active = np.zeros(n_all, dtype=bool)
+    active[kept] = True
+    low = np.full(n_all, -np.inf)  # each link's interval; -inf: none yet (exactly)
+    high = low.copy()
+    exact = np.ones(n_all, dtype=np.bool_)
+    parent = np.full(n_all, -1, dtype=np.int64)
+    threshold = np.where(active, -np.inf, np.inf).astype(np.float32)
+    block_alive = np.bincount(block_of[kept], minlength=blocks.shape[0]).astype(np.int64)
+    tops = np.array([block_top(high, active, offset, count) for offset, count in blocks[:, 2:]],
+                    dtype=np.int64)
     order = np.empty(kept.size, dtype=np.int64)
     weight = np.ones(n_all)
     tree_parent = np.full(n_all, -1, dtype=np.int64)
-    factor_rows = np.vstack([geometry.factor.T, np.zeros((1, geometry.factor.shape[0]))])
-    factor = np.ascontiguousarray(geometry.factor)
-    screen_threshold = np.full(kept.size, -np.inf, dtype=np.float32)
+    factor_rows = np.vstack([factor.T, np.zeros((1, r))])
+    norms = np.append(np.sqrt(np.einsum("ij,ij->j", factor, factor)), 0.0)
     with threadpool_limits(limits=1, user_api="blas"):
         gram = np.zeros((m + 1, m + 1))
         for block in range(0, m, 256):  # small blocks: one BLAS thread, little memory
             gram[block:min(block + 256, m), :m] = factor[:, block:block + 256].T @ factor
-        norm_bound = float(np.sqrt(np.diag(gram).max())) * (1 + 1e-6)
-        for start in range(0, kept.size, PRIM_BATCH):
-            prim_steps(factor_rows, factor, gram, norm_bound, ids, first, second, inverse,
-                       best, parent, threshold, screen_threshold, tree, state, order, weight,
-                       tree_parent, start, min(start + PRIM_BATCH, kept.size), screen)
+    for start in range(0, kept.size, PRIM_BATCH):
+        prim_blocks(factor_rows, gram, norms, first, second, geometry.inverse_norm, lengths,
+                    blocks, block_alive, block_of, tops, active, low, high, exact, parent,
+                    threshold, order, weight, tree_parent, start,
+                    min(start + PRIM_BATCH, kept.size),
+                    screen, PRIM_COUNTS)
     local = np.full(n_all, -1, dtype=np.intp)
     local[kept] = np.arange(kept.size)
     parents = np.full(kept.size, -1, dtype=np.intp)
     parents[local[order[1:]]] = local[tree_parent[order[1:]]]
     return SpanningTree(order=local[order], parent=parents, weight=weight[kept])
+
+
+def candidate_blocks(m: int, include_raw: bool) -> np.ndarray:
+    """(fixed sensor, first k, offset, length) of each contiguous block of candidates in
+    ``PairCandidates`` order: the raw sensors (k = 0..m-1 against the zero row m), then the
+    differences (i, k), k = i+1..m-1, of each sensor i (empty blocks left out)."""
+    rows = [(m, 0, 0, m)] if include_raw else []
+    offset = m if include_raw else 0
+    for i in range(m - 1):
+        rows.append((i, i + 1, offset, m - 1 - i))
+        offset += m - 1 - i
+    return np.array(rows, dtype=np.int64).reshape(-1, 4)
 
 
 class PairSelection:
@@ -319,8 +349,8 @@ class PairSelection:
     take nearly all the time) are done once, then :meth:`select` cuts the tree for each k.
 
     A placement study asks for k = m clusters for every budget m: with 500 nodes and all
-    their differences one tree takes ~40 s, so building it once per budget would multiply
-    that by the number of budgets for the same result.
+    their differences one tree takes seconds (minutes at 1 000), so building it once per
+    budget would multiply that by the number of budgets for the same result.
 
     ``n_clusters`` is the largest k that will be asked for: the counts are checked against
     it (and constant candidates dropped, with their warning) here, as

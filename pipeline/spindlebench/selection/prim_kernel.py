@@ -1,4 +1,4 @@
-"""Compiled steps of Prim's algorithm over sensors and their differences (``selection.pairs``).
+"""Compiled Prim's algorithm over sensors and their differences (``selection.pairs``).
 
 Numba compiles it once and caches the machine code on disk; it is imported only when a
 row-wise selection of more than ``pairs.COMPILED_ABOVE`` candidates runs (importing Numba and
@@ -6,17 +6,41 @@ loading the cached code cost ~1 s of CPU and ~100 MB here; below that size NumPy
 cheaper). Each call takes a batch of vertices, so the Python loop around it stays responsive
 to Ctrl-C.
 
-The loop over the outside candidates is what costs (n^2 / 2 visits): per visit it reads two
-int16 sensor indices and one threshold, and compares |u_first - u_second| with it. The
-threshold of a candidate is the largest difference that does not beat its best link
-(``link_threshold``, exact in floating point), so the similarity is only formed, and the link
-updated, when it beats it (rare: a best link only grows). The largest link is kept in a
-tournament tree (``tournament``) instead of a running maximum over the loop. Same trees,
-bit for bit, as the running-maximum loop; 1.3x fewer CPU seconds at 500 sensors.
+**The similarity** of two candidates is ``edge_similarity``: min(|s_v . s_w|, 1) of their unit
+vectors in the orthonormal basis of the centred rises (``pairs.PairGeometry``), in a fixed
+summation order. It is symmetric bit for bit (the products are the same numbers whichever
+candidate is the row), so the tree is a maximum spanning tree of ONE symmetric matrix, and
+every maximum spanning tree of it has the same edge weights and the same clusters at every
+cut (``cut``). It costs O(r), so it is formed only where a comparison needs it.
 
-Tried and dropped: the row loop split over two threads (``prange``) was 20x slower in wall
-time on this shared 2-core machine (a barrier per row, ~125 000 rows, threads descheduled);
-a blockwise pre-scan (any link beaten in 32 candidates?) gained nothing.
+**The screen** makes the n^2 visits cheap. Candidates are laid out in ``pair_indices`` order,
+so the differences (i, k), k = i+1..m-1, of sensor i are one contiguous block (the raw
+sensors one more, against the zero row m). For the new vertex v, two rows of the Gram matrix
+C = G^T G give its covariance with every sensor, c_j = (C_aj - C_bj) / |s_v| (O(m),
+float32), and |c_i - c_k| / |s_w| is the similarity of v and w = (i, k) up to ``row_margin``
+(a rigorous bound on every rounding between those numbers and the exact similarity). A
+visit reads one float32 threshold and one float32 of c, contiguously, and compares: the
+loop is vectorised, ~0.2-0.4 ns a visit here.
+
+**Lazy links.** A candidate's best link is kept as an interval [low, high] that holds its
+exact similarity: the float64 Gram value widened by its own rounding bound (``d_margin``), or
+the exact value itself. A row replaces a link whose high it beats for sure, ignores one it
+cannot beat, and only when the two overlap forms both exact similarities and compares them.
+The next vertex is the candidate with the largest high (each block keeps its top,
+``block_top``): a top whose link is not exact is made exact and the top taken again, until
+it is exact, which is then the largest exact link (the first on ties, since every other
+high is an upper bound). So exact similarities are formed about once per vertex, plus
+near-ties, instead of once per improvement (tens of millions at 1 000 sensors), and the tree
+is the one the exact test of every candidate in every row gives (``screen=False``, the
+reference the tests compare with, bit for bit), by the rules of ``closure.prim_tree`` (the
+largest link, the first on ties; a parent changes only on a strictly larger similarity).
+
+Tried and dropped: a block skipped whole by max_k |c_i - c_k| (suffix minima and maxima of
+c) against a lower bound of its thresholds (almost never skips: as the previous kernel's
+chunk bounds, the spread of c within a block is far above the thresholds of its
+small-norm differences); a tournament tree for the largest link (replayed at every
+improvement; the blocks' tops cost less); squeezing tree members out (the gather of c it
+needs costs 2x the contiguous visit it saves).
 """
 
 from __future__ import annotations
@@ -24,171 +48,89 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-#: The tree members are squeezed out of the outside arrays when they make up this fraction
-#: (1/8: the loop runs over at most 8/7 of the outside candidates; each squeeze is one copy).
-SQUEEZE_DENOMINATOR = 8
-
-
-@njit(cache=True, nogil=True, inline="always")
-def link_threshold(link, inverse_norm):  # pragma: no cover (compiled)
-    """The largest x with fl(x * inverse_norm) <= link (inf if no similarity beats
-    ``link``, i.e. link = 1): min(d * inverse_norm, 1) > link exactly when d > x, since a
-    product with a positive number rounds monotonically."""
-    if link >= 1.0:
-        return np.inf
-    if link == -np.inf:
-        return -np.inf
-    x = link / inverse_norm
-    while x * inverse_norm > link:
-        x = np.nextafter(x, -np.inf)
-    while np.nextafter(x, np.inf) * inverse_norm <= link:
-        x = np.nextafter(x, np.inf)
-    return x
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _winner(best, a, b):  # pragma: no cover (compiled)
-    """Of outside positions a < b (-1: none), the larger link, the earlier one on ties."""
-    if b < 0:
-        return a
-    if a < 0:
-        return b
-    return a if best[a] >= best[b] else b
+#: Candidates per vectorised chunk of a block: a chunk where a candidate may pass the screen
+#: is rescanned one candidate at a time.
+CHUNK = 16
+STATS = np.zeros(4, dtype=np.int64)
+#: Unit roundoff of float64 and of float32.
+UNIT = 2.0 ** -53
+UNIT32 = 2.0 ** -24
 
 
 @njit(cache=True, nogil=True)
-def tournament(best, tree, n_active):  # pragma: no cover (compiled)
-    """Build the tournament over positions 0..n_active-1: leaves at tree[size + j] (size =
-    len(tree) // 2, a power of two), each inner node the winner of its two children, so
-    tree[1] is the position of the largest link (the first on ties)."""
-    size = tree.shape[0] // 2
-    for j in range(size):
-        tree[size + j] = j if j < n_active else -1
-    for node in range(size - 1, 0, -1):
-        tree[node] = _winner(best, tree[2 * node], tree[2 * node + 1])
+def block_top(high, outside, offset, count):  # pragma: no cover (compiled)
+    """The block's outside candidate with the largest ``high``, the first on ties (-1: none)."""
+    top = -1
+    for j in range(offset, offset + count):
+        if outside[j] and (top < 0 or high[j] > high[top]):
+            top = j
+    return top
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _replay(best, tree, position):  # pragma: no cover (compiled)
-    """Replay the matches above leaf ``position`` after its link changed."""
-    node = (tree.shape[0] // 2 + position) // 2
-    while node >= 1:
-        winner = _winner(best, tree[2 * node], tree[2 * node + 1])
-        if tree[node] == winner and winner != position:
-            return  # nothing above changes
-        tree[node] = winner
-        node //= 2
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def prim_steps(factor_rows, factor, gram, norm_bound, ids, first, second, inverse_norm, best,
-               parent, threshold, screen_threshold, tree, state, order, weight, tree_parent,
-               start, stop, screen):  # pragma: no cover (compiled)
-    """Add vertices ``order[start:stop]`` to the tree; ``state`` = [position of the next
-    vertex in the outside arrays, number of outside entries, entries of tree members].
-
-    The outside arrays (``ids``, ``first``, ``second``, ``inverse_norm``, ``best``,
-    ``parent``, ``threshold``, in candidate order) hold every candidate not yet in the tree,
-    plus joined ones until they make up 1/``SQUEEZE_DENOMINATOR`` (then they are squeezed
-    out, order kept, and the tournament ``tree`` rebuilt). ``factor_rows`` is G^T with a row
-    of zeros appended ((m + 1) x r): a candidate's vector is row ``first`` minus row
-    ``second`` (the zero row for a raw sensor). G (``factor``, r x m) is upper triangular, so
-    that vector is zero below entry max(first, second) and only that many rows of G enter the
-    product with it.
-
-    A joined entry carries a NaN norm, an infinite threshold and leaves the tournament, so no
-    row raises it and it is never the largest: the next vertex is the outside one with the
-    largest link, the first on ties; a parent changes only on a strictly larger similarity
-    (the rules of ``closure.prim_tree``).
-
-    With ``screen``, each candidate is first compared through the Gram matrix (``gram`` =
-    G^T G with a zero row and column appended, (m + 1)^2): the new vertex's covariances with
-    the sensors are a difference of two rows of it, O(m) instead of the O(m r) product.
-    Those values differ from the product's by at most ``screen_margin`` (a rounding bound,
-    ``norm_bound`` = the largest |g_j|), so a candidate whose screened difference is not
-    above its threshold minus the margin cannot pass the exact test and is skipped. Only when
-    one can, the product is formed (once per row) and the exact test decides with exactly
-    the numbers of the unscreened loop: the same tree, bit for bit, as ``screen=False``.
-    """
-    m = factor_rows.shape[0] - 1
-    r = factor.shape[0]
-    size = tree.shape[0] // 2
-    u = np.zeros(m + 1)
-    near = np.zeros(m + 1)
-    at, n_active, dead = state[0], state[1], state[2]
-    for position in range(start, stop):
-        vertex = ids[at]
-        order[position] = vertex
-        if position:
-            weight[vertex] = best[at]
-            tree_parent[vertex] = parent[at]
-        scale = inverse_norm[at]
-        a, b = first[at], second[at]
-        rows = min((a if b == m else max(a, b)) + 1, r)  # nonzero entries
-        best[at] = -np.inf
-        inverse_norm[at] = np.nan
-        threshold[at] = np.inf
-        screen_threshold[at] = np.inf
-        tree[size + at] = -1
-        _replay(best, tree, at)
-        dead += 1
-        if SQUEEZE_DENOMINATOR * dead > n_active:  # squeeze, keeping candidate order
-            kept = 0
-            for j in range(n_active):
-                if not np.isnan(inverse_norm[j]):
-                    ids[kept] = ids[j]
-                    first[kept] = first[j]
-                    second[kept] = second[j]
-                    inverse_norm[kept] = inverse_norm[j]
-                    best[kept] = best[j]
-                    parent[kept] = parent[j]
-                    threshold[kept] = threshold[j]
-                    screen_threshold[kept] = screen_threshold[j]
-                    kept += 1
-            n_active = kept
-            dead = 0
-            tournament(best, tree, n_active)
-        formed = False
-        if screen:
-            for i in range(m):
-                near[i] = (gram[a, i] - gram[b, i]) * scale
-            spread = (np.sqrt(gram[a, a]) + np.sqrt(gram[b, b])) * scale
-            margin = screen_margin(r, norm_bound, spread)
-            for j in range(n_active):
-                if abs(near[first[j]] - near[second[j]]) + margin > screen_threshold[j]:
-                    if not formed:
-                        direction = (factor_rows[a, :rows] - factor_rows[b, :rows]) * scale
-                        u[:m] = direction @ factor[:rows]  # covariances with every sensor
-                        formed = True
-                    d = abs(u[first[j]] - u[second[j]])
-                    if d > threshold[j]:  # the similarity beats the best link (exactly)
-                        _link(j, d, vertex, inverse_norm, best, parent, threshold, tree)
-                        screen_threshold[j] = below32(threshold[j])
-        else:
-            direction = (factor_rows[a, :rows] - factor_rows[b, :rows]) * scale
-            u[:m] = direction @ factor[:rows]  # covariance of the new vertex with every sensor
-            for j in range(n_active):
-                d = abs(u[first[j]] - u[second[j]])
-                if d > threshold[j]:  # the similarity beats the best link (exactly)
-                    _link(j, d, vertex, inverse_norm, best, parent, threshold, tree)
-        at = tree[1]
-    state[0], state[1], state[2] = at, n_active, dead
-    return at
+def _before(w, top, high):  # pragma: no cover (compiled)
+    """Whether candidate ``w`` is a block's top rather than ``top`` (-1: none): the larger
+    high, the first on ties."""
+    return top < 0 or high[w] > high[top] or (high[w] == high[top] and w < top)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _link(j, d, vertex, inverse_norm, best, parent, threshold, tree):  # pragma: no cover
-    """Candidate ``j``'s best link becomes ``vertex`` with difference ``d``."""
-    similarity = min(d * inverse_norm[j], 1.0)
-    best[j] = similarity
-    parent[j] = vertex
-    threshold[j] = link_threshold(similarity, inverse_norm[j])
-    _replay(best, tree, j)
+def _top_of_all(high, tops):  # pragma: no cover (compiled)
+    """The candidate with the largest ``high`` over the blocks' tops, the first on ties (the
+    blocks are in candidate order)."""
+    best = -1
+    for block in range(tops.shape[0]):
+        top = tops[block]
+        if top >= 0 and (best < 0 or high[top] > high[best]):
+            best = top
+    return best
 
 
 @njit(cache=True, nogil=True, inline="always")
-def below32(value):  # pragma: no cover (compiled)
-    """The largest float32 not above ``value`` (half the bytes per visit of the screen)."""
+def unit_vector(factor_rows, a, b, scale, length, out):  # pragma: no cover (compiled)
+    """out[:length] = (g_a - g_b) * scale, the candidate's unit vector (g_m = 0); the rest of
+    it is zero since G is upper triangular (``length`` = its nonzero entries)."""
+    for t in range(length):
+        out[t] = (factor_rows[a, t] - factor_rows[b, t]) * scale
+
+
+@njit(cache=True, nogil=True, inline="always")
+def edge_similarity(x, y, length):  # pragma: no cover (compiled)
+    """min(|x . y|, 1) over the first ``length`` entries (beyond, one of them is zero), in
+    four interleaved sums in a fixed order: the same bits whichever of x, y is which."""
+    s0 = s1 = s2 = s3 = 0.0
+    t = 0
+    while t + 4 <= length:
+        s0 += x[t] * y[t]
+        s1 += x[t + 1] * y[t + 1]
+        s2 += x[t + 2] * y[t + 2]
+        s3 += x[t + 3] * y[t + 3]
+        t += 4
+    while t < length:
+        s0 += x[t] * y[t]
+        t += 1
+    return min(abs((s0 + s1) + (s2 + s3)), 1.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def exact_slack(r):  # pragma: no cover (compiled)
+    """E: |edge_similarity - s_v . s_w / (|s_v| |s_w|)| < E, the exact similarity of the
+    vectors in float64 arithmetic (a dot product of r terms: gamma_r; forming each unit
+    vector: 2 roundings per entry; the computed norms: (r + 3) u), doubled as headroom."""
+    gamma = r * UNIT / (1.0 - r * UNIT)
+    return 2.0 * (gamma + (2 * r + 16) * UNIT)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def link_threshold(low, inverse_norm, slack):  # pragma: no cover (compiled)
+    """A float32 t with t <= (low - slack) |s_w|: a screened value (|c_i - c_k| + M_v) not
+    above t proves the exact similarity does not beat a link of at least ``low`` (inf when
+    nothing can: the similarity is clipped at 1; -inf when anything does)."""
+    if low >= 1.0:
+        return np.float32(np.inf)
+    if low == -np.inf:
+        return np.float32(-np.inf)
+    value = (low - 2.0 * slack) / inverse_norm * (1.0 - 8 * UNIT)
     rounded = np.float32(value)
     if rounded > value:
         rounded = np.nextafter(rounded, np.float32(-np.inf))
@@ -196,21 +138,174 @@ def below32(value):  # pragma: no cover (compiled)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def screen_margin(r, norm_bound, spread):  # pragma: no cover (compiled)
-    """A bound on |screened - exact| covariance difference of one row.
+def row_margin(r, scale, spread):  # pragma: no cover (compiled)
+    """M_v (float32, rounded up), twice a bound on | fl32(|c_i - c_k|) - |s_v . s_w| / |s_v| |
+    for every candidate w = (i, k), plus the rounding of the float32 sum with M_v itself;
+    ``spread`` = (|g_a| + |g_b|) max_j |g_j|.
 
-    With unit u = 2^-53, gamma = r u / (1 - r u) (a length-r dot product's relative
-    rounding bound) and |g| <= ``norm_bound``: a Gram entry is off by at most gamma |g_i||g_j|,
-    so the screened covariance (G_a - G_b) . g_j s is off by at most
-    (gamma + 2u)(1 + u) s (|g_a| + |g_b|) |g_j| (``spread`` = s (|g_a| + |g_b|), at least
-    |d| ~ 1, large when g_a ~ g_b); the product's is off by at most
-    (gamma + 3u)(1 + gamma) |d| |g_j| with |d| <= 1 + 3u. Two covariances and the final
-    subtraction of each way give the factor 2 and the last terms; the whole bound is doubled
-    again as headroom for the rounding of this very formula and of the norms.
+    Each Gram entry is off by gamma_r |g_i| |g_j|; c_j = (C_aj - C_bj) * scale, rounded to
+    float64 and then float32, is off by scale * spread * (gamma_r + 2 u + u32); two of them,
+    the float32 difference (u32 of |c_i| + |c_k|) and the sum (3 u32) add up to
+    scale * spread * (2 gamma_r + 4 u + 6 u32).
     """
-    unit = 2.0 ** -53
-    gamma = r * unit / (1.0 - r * unit)
-    screened = (gamma + 2 * unit) * (1 + unit) * spread
-    exact = (gamma + 3 * unit) * (1 + gamma) * (1 + 3 * unit)
-    per_covariance = (screened + exact) * norm_bound
-    return 2.0 * (2.0 * per_covariance + 2 * unit * (spread + 1.0) * 2.0 * norm_bound)
+    gamma = r * UNIT / (1.0 - r * UNIT)
+    value = scale * spread * (4.0 * gamma + 8 * UNIT + 16 * UNIT32) * (1.0 + 1e-6)
+    rounded = np.float32(value)
+    if rounded < value:
+        rounded = np.nextafter(rounded, np.float32(np.inf))
+    return rounded
+
+
+@njit(cache=True, nogil=True, inline="always")
+def d_margin(r, scale, spread):  # pragma: no cover (compiled)
+    """Twice a bound on |d - |s_v . s_w| / |s_v|| for d = |(C_ai - C_bi) - (C_ak - C_bk)|
+    * scale in float64, ``spread`` = (|g_a| + |g_b|) (|g_i| + |g_k|): four Gram entries off
+    by gamma_r |g_x| |g_y| each, three subtractions and the product rounded (4 u), the
+    norms' own rounding (the factor 1 + 1e-6)."""
+    gamma = r * UNIT / (1.0 - r * UNIT)
+    return 2.0 * scale * spread * (gamma + 4 * UNIT) * (1.0 + 1e-6)
+
+
+@njit(cache=True, nogil=True)
+def _count(c, fixed, margin, threshold):  # pragma: no cover (compiled)
+    """How many candidates may pass the screen: an integer reduction, so vectorised without
+    fast-math (IEEE float32 comparisons, the same as the scalar test's; as fast here)."""
+    hits = 0
+    for t in range(threshold.shape[0]):
+        hits += np.int32(1) if abs(fixed - c[t]) + margin > threshold[t] else np.int32(0)
+    return hits
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _exact(p, w, factor_rows, first, second, inverse_norm, lengths, buffer_p, buffer_w):
+    """The exact similarity of candidates p and w."""  # pragma: no cover (compiled)
+    unit_vector(factor_rows, first[p], second[p], inverse_norm[p], lengths[p], buffer_p)
+    unit_vector(factor_rows, first[w], second[w], inverse_norm[w], lengths[w], buffer_w)
+    return edge_similarity(buffer_p, buffer_w, min(lengths[p], lengths[w]))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, blocks,
+                block_alive, block_of, tops, outside, low, high, exact, parent, threshold,
+                order, weight, tree_parent, start, stop, screen, counts):  # pragma: no cover
+    """Add vertices ``order[start:stop]`` to the tree (positions are candidate indices).
+
+    ``factor_rows`` is G^T with a zero row appended ((m + 1) x r), ``gram`` G^T G with a
+    zero row and column ((m + 1)^2), ``norms`` |g_j| (0 for j = m); per candidate:
+    ``first``, ``second`` (m for a raw sensor), ``inverse_norm``, ``lengths`` (nonzero
+    entries of its vector), ``outside`` (a vertex not yet in the tree), its link's interval
+    ``low``, ``high`` (-inf: none yet), ``exact`` (the interval is the exact similarity),
+    ``parent``, ``threshold`` (float32; +inf once it joined, if it is not a vertex, or if
+    nothing can beat its link); per block (fixed sensor, first k, offset, length) of
+    ``blocks``, ``block_alive`` (its candidates still outside) and ``tops`` (its outside
+    candidate with the largest ``high``, the first on ties; ``block_top``), and ``block_of``
+    per candidate. ``counts`` gathers [visits, screened passes, exact similarities formed,
+    links replaced].
+    """
+    m = factor_rows.shape[0] - 1
+    r = factor_rows.shape[1]
+    slack = exact_slack(r)
+    norm_bound = norms.max() * (1.0 + 1e-6)
+    row = np.zeros(r)
+    buffer_p = np.zeros(r)
+    buffer_w = np.zeros(r)
+    c = np.zeros(m + 1, dtype=np.float32)
+    for position in range(start, stop):
+        vertex = _top_of_all(high, tops)
+        while not exact[vertex]:  # the top's link made exact, until the top is exact
+            value = _exact(parent[vertex], vertex, factor_rows, first, second, inverse_norm,
+                           lengths, buffer_p, buffer_w)
+            counts[2] += 1
+            _relink(vertex, parent[vertex], value, value, True, inverse_norm, low, high,
+                    exact, parent, threshold, slack)
+            home = block_of[vertex]
+            tops[home] = block_top(high, outside, blocks[home, 2], blocks[home, 3])
+            vertex = _top_of_all(high, tops)
+        order[position] = vertex
+        if position:
+            weight[vertex] = high[vertex]
+            tree_parent[vertex] = parent[vertex]
+        outside[vertex] = False
+        high[vertex] = -np.inf
+        threshold[vertex] = np.inf
+        home = block_of[vertex]
+        block_alive[home] -= 1
+        tops[home] = block_top(high, outside, blocks[home, 2], blocks[home, 3])
+        if position == order.shape[0] - 1:
+            break
+        a, b = first[vertex], second[vertex]
+        scale = inverse_norm[vertex]
+        length = lengths[vertex]
+        unit_vector(factor_rows, a, b, scale, length, row)
+        for j in range(m):
+            c[j] = np.float32((gram[a, j] - gram[b, j]) * scale)
+        margin = row_margin(r, scale, (norms[a] + norms[b]) * norm_bound)
+        for block in range(blocks.shape[0]):
+            if block_alive[block] == 0:
+                continue
+            fixed_index, k0, offset, count = blocks[block, 0], blocks[block, 1], \
+                blocks[block, 2], blocks[block, 3]
+            fixed = c[fixed_index]
+            counts[0] += count
+            if screen and _count(c[k0:k0 + count], fixed, margin,
+                                 threshold[offset:offset + count]) == 0:
+                continue
+            top = tops[block]
+            lowered = False
+            for chunk in range(0, count, CHUNK):
+                end = min(count, chunk + CHUNK)
+                if screen and _count(c[k0 + chunk:k0 + end], fixed, margin,
+                                     threshold[offset + chunk:offset + end]) == 0:
+                    continue
+                for t in range(chunk, end):
+                    w = offset + t
+                    screened = abs(fixed - c[k0 + t])
+                    if threshold[w] == np.inf or (screen and screened + margin <= threshold[w]):
+                        continue
+                    counts[1] += 1
+                    if screen:  # the float64 Gram value and its own, tighter, bound
+                        i, k = first[w], second[w]
+                        d = abs((gram[a, i] - gram[b, i]) - (gram[a, k] - gram[b, k])) * scale
+                        spread = d_margin(r, scale, (norms[a] + norms[b])
+                                          * (norms[i] + norms[k])) * inverse_norm[w]
+                        upper = min(d * inverse_norm[w] * (1 + 4 * UNIT) + spread + slack, 1.0)
+                        lower = max(d * inverse_norm[w] * (1 - 4 * UNIT) - spread - slack,
+                                    0.0)
+                        if lower > high[w]:  # beats the link for sure
+                            counts[3] += 1
+                            _relink(w, vertex, lower, upper, False, inverse_norm, low, high,
+                                    exact, parent, threshold, slack)
+                            if _before(w, top, high):
+                                top = w
+                            continue
+                        if upper <= low[w]:  # cannot beat it
+                            continue
+                    if not exact[w]:  # overlapping: both exact (the link's high may fall)
+                        value = _exact(parent[w], w, factor_rows, first, second,
+                                       inverse_norm, lengths, buffer_p, buffer_w)
+                        counts[2] += 1
+                        _relink(w, parent[w], value, value, True, inverse_norm, low, high,
+                                exact, parent, threshold, slack)
+                        lowered = lowered or w == top
+                    unit_vector(factor_rows, first[w], second[w], inverse_norm[w], lengths[w],
+                                buffer_w)
+                    value = edge_similarity(row, buffer_w, min(length, lengths[w]))
+                    counts[2] += 1
+                    if value > high[w]:
+                        counts[3] += 1
+                        _relink(w, vertex, value, value, True, inverse_norm, low, high,
+                                exact, parent, threshold, slack)
+                        if _before(w, top, high):
+                            top = w
+            tops[block] = block_top(high, outside, offset, count) if lowered else top
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _relink(w, vertex, bottom, top, is_exact, inverse_norm, low, high, exact, parent,
+            threshold, slack):  # pragma: no cover (compiled)
+    """Candidate ``w``'s link becomes ``vertex`` with similarity in [bottom, top]."""
+    low[w] = bottom
+    high[w] = top
+    exact[w] = is_exact
+    parent[w] = vertex
+    threshold[w] = link_threshold(bottom, inverse_norm[w], slack)
