@@ -108,7 +108,7 @@ def test_a_worker_killed_mid_sweep_loses_no_result_and_a_relative_study_path_wor
     # the scheduler saw sealed tasks only (executor.SealedCall): it never unpickled a study
     # task, which imported the study's modules (SciPy, pandas) into it
     loaded = Path(f"/proc/{scheduler.pid}/maps").read_text(encoding="utf-8")
-    assert "scipy" not in loaded and "pandas" not in loaded
+    assert f"{os.sep}scipy{os.sep}" not in loaded and f"{os.sep}pandas{os.sep}" not in loaded
 
 
 @pytest.mark.slow
