@@ -73,15 +73,31 @@ def subreaper() -> None:
         raise SystemExit(f"prctl(PR_SET_CHILD_SUBREAPER): errno {ctypes.get_errno()}")
 
 
-def reap() -> None:
-    """Wait for every child that has ended (re-parented orphans included)."""
+def reap(keep: tuple[int, ...] = ()) -> None:
+    """Wait until every child but ``keep`` has ended, and collect them (re-parented orphans
+    included).
+
+    Waiting matters: a local pool's forkserver outlives the sweep command by a moment (it
+    exits when it sees the command gone, then is re-parented here), and its CPU, the pool's
+    workers' included, counts only once it is collected. Collecting only what had ended when
+    the command returned moved a local run's worker CPU into the next row (a Dask row read
+    about 3 CPU-s too high, the local row as much too low)."""
+    import psutil
+
+    deadline = time.monotonic() + CLUSTER_START_S
     while True:
         try:
             pid, _ = os.waitpid(-1, os.WNOHANG)
         except ChildProcessError:
             return
-        if pid == 0:
+        if pid:
+            continue
+        alive = {child.pid for child in psutil.Process().children()} - set(keep)
+        if not alive:
             return
+        if time.monotonic() > deadline:
+            raise SystemExit(f"processes {sorted(alive)} outlived the sweep command")
+        time.sleep(0.02)
 
 
 def children_cpu() -> float:
@@ -123,6 +139,9 @@ class Cluster:
                 time.sleep(1.0)
         raise SystemExit(f"no Dask cluster with {workers} worker(s) at {self.address}")
 
+    def pids(self) -> tuple[int, ...]:
+        return tuple(process.pid for process in self.processes)
+
     def cpu(self) -> dict[str, float]:
         """CPU seconds so far of the cluster's processes by role: ``scheduler``, ``nanny``
         (the ``dask worker`` process and its nannies) and ``workers`` (the processes the
@@ -151,8 +170,7 @@ class Cluster:
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
-        time.sleep(1.0)  # nanny-spawned workers exit after their nanny
-        reap()
+        reap()  # nanny-spawned workers exit after their nanny: wait for them
 
 
 def sweep(study: Path, out: Path, executor: list[str], env: dict | None = None) -> float:
@@ -182,7 +200,7 @@ def measure(study: Path, folder: Path, kind: str, workers: int,
         before_cluster, before_command = cluster.cpu(), children_cpu()
         try:
             wall = sweep(study, out, ["--dask-address", cluster.address], env)
-            reap()
+            reap(keep=cluster.pids())
             during = {role: cpu_s - before_cluster[role]
                       for role, cpu_s in cluster.cpu().items()}
             command = children_cpu() - before_command
