@@ -20,7 +20,13 @@ settings docs/speed.md gives for a study cluster); workers and nannies with Dask
 quieted by the study's plugins. The results CSV of every run is compared with the
 first's, byte for byte.
 
+A Dask row also has the CPU of a cluster that was already running: the command's process
+tree plus the cluster's processes (``scheduler``, ``nanny``, ``workers``, read with psutil)
+while the command ran, without the cluster's start, stop and idle time before.
+
 Run: .venv/bin/python bench/bench_dask.py  (writes bench/results/bench_dask.json)
+or   .venv/bin/python bench/bench_dask.py --example  (the example season sweep itself, 5
+replicas, every season's training run, 2 workers: bench/results/bench_dask_example.json)
 or   .venv/bin/python bench/bench_dask.py --compare OLD_CHECKOUT  (1 worker, the code of
 OLD_CHECKOUT, e.g. a ``git archive`` of main, then this checkout's, back to back: writes
 bench/results/bench_dask_compare.json)
@@ -29,8 +35,11 @@ Keys of a ``sweep`` row: ``executor`` (local or dask), ``workers``, ``cpu_s`` (p
 cluster included), ``command_wall_s`` (the sweep command), ``total_wall_s`` (with the
 cluster's start and stop), ``cluster_start_wall_s``, ``load_before``/``load_after``,
 ``results_sha256`` (of results.csv). ``dask_idle``: ``cpu_s`` over ``wall_s``, and
-``cores_busy`` = their ratio. ``summary``: ``dask_over_local_cpu_N`` = Dask's ``cpu_s`` over
-the local pool's for N workers, against ``goal_ratio``.
+``cores_busy`` = their ratio. A Dask row: ``running_cluster_cpu_s``, ``command_cpu_s``,
+``scheduler_cpu_s``, ``nanny_cpu_s``, ``workers_cpu_s``, and ``over_local`` /
+``running_over_local``: its ``cpu_s`` / ``running_cluster_cpu_s`` over the local row's
+``cpu_s`` for as many workers. ``summary``: the same ratios per worker count
+(``dask_over_local_cpu_N``, ``running_dask_over_local_cpu_N``) against ``goal_ratio``.
 """
 
 from __future__ import annotations
@@ -47,7 +56,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench_sweep import bench_study
+from bench_sweep import STUDY, bench_study
 
 from results import record
 
@@ -276,26 +285,32 @@ def main() -> None:
     if sys.argv[1:2] == ["--compare"]:
         compare(Path(sys.argv[2]))
         return
+    example = sys.argv[1:2] == ["--example"]
     subreaper()
     print("load average (1, 5, 15 min): " + ", ".join(f"{v:.1f}" for v in os.getloadavg()))
     rows: list[dict] = []
     with tempfile.TemporaryDirectory(prefix="bench-dask-") as name:
         folder = Path(name)
-        study = bench_study(folder)
-        for workers in WORKERS:
+        study = STUDY if example else bench_study(folder)
+        for workers in (2,) if example else WORKERS:
             for kind in ("local", "dask"):
                 row = measure(study, folder, kind, workers)
+                if kind == "dask":
+                    row["over_local"] = row["cpu_s"] / rows[-1]["cpu_s"]
+                    row["running_over_local"] = row["running_cluster_cpu_s"] / rows[-1]["cpu_s"]
                 rows.append(row)
                 print(f"{kind:>6} {workers} worker(s): {row['cpu_s']:7.1f} CPU-s, command "
                       f"{row['command_wall_s']:6.1f} s wall, load {row['load_after'][0]:.1f}",
                       flush=True)
+            if example:
+                continue
             rows.append(idle(workers, IDLE_S))
             print(f"  idle cluster of {workers} for {rows[-1]['wall_s']:.0f} s: "
                   f"{rows[-1]['cpu_s']:.1f} CPU-s", flush=True)
     if len({row["results_sha256"] for row in rows if row["row"] == "sweep"}) != 1:
         raise SystemExit("results.csv differs between executors")
     summary = {}
-    for workers in WORKERS:
+    for workers in (2,) if example else WORKERS:
         local = next(r for r in rows if r["row"] == "sweep" and r["executor"] == "local"
                      and r["workers"] == workers)
         dask = next(r for r in rows if r["row"] == "sweep" and r["executor"] == "dask"
@@ -308,7 +323,8 @@ def main() -> None:
               f"{dask['running_cluster_cpu_s'] / local['cpu_s']:.2f} on a running cluster "
               "(goal <= 1.2)")
     rows.append({"row": "summary", **summary, "goal_ratio": 1.2})
-    print(f"wrote {record('bench_dask', rows, {'dask_over_local_cpu': 1.2})}")
+    name = "bench_dask_example" if example else "bench_dask"
+    print(f"wrote {record('bench_dask', rows, {'dask_over_local_cpu': 1.2}, name=name)}")
 
 
 if __name__ == "__main__":
