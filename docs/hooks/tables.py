@@ -180,12 +180,23 @@ BENCH_COLUMNS: dict[str, list[tuple[str, str]]] = {
                                 ("candidates", "candidates"), ("cpu_s", "CPU s (median)"),
                                 ("ratio_to_fuzzy", "× fuzzy"), ("met", "within 3×"),
                                 ("note", "where not: why")],
+    "bench_dask": [("row", "row"), ("executor", "executor"), ("workers", "workers"),
+                   ("cpu_s", "CPU s (cluster started and stopped)"),
+                   ("over_local", "÷ local"),
+                   ("running_cluster_cpu_s", "CPU s (cluster running)"),
+                   ("running_over_local", "÷ local"), ("command_cpu_s", "command CPU s"),
+                   ("scheduler_cpu_s", "scheduler"), ("nanny_cpu_s", "nanny"),
+                   ("workers_cpu_s", "Dask workers"), ("command_wall_s", "command wall s"),
+                   ("wall_s", "idle wall s"), ("cores_busy", "idle cores busy")],
     "bench_sweep": [("executor", "executor"), ("workers", "workers"),
                     ("simulations", "simulations"), ("wall_s", "wall s"),
                     ("ms_per_simulation", "ms per simulation"),
                     ("experiments_per_s", "experiments/s"),
                     ("s_per_evaluation_job", "s per evaluation job")],
 }
+
+#: ``bench_dask.py --example`` writes the same rows for the example sweep itself.
+BENCH_COLUMNS["bench_dask_example"] = BENCH_COLUMNS["bench_dask"]
 
 
 def bench_provenance(document: Mapping[str, Any], source: str) -> str:

@@ -8,7 +8,7 @@ import distributed
 import pytest
 from conftest import REPO
 from spindlebench.core.errors import SpindlebenchError
-from spindlebench.studies.running.executor import Task, TaskRunner, one_line_error
+from spindlebench.studies.running.executor import Task, TaskRunner, call_isolated, one_line_error
 
 
 def square(x: int) -> int:
@@ -198,3 +198,26 @@ def test_dask_tasks_are_not_hashed_into_shared_keys():
         first = executor.submit(time.perf_counter_ns).result()
         second = executor.submit(time.perf_counter_ns).result()
     assert second > first
+
+
+def test_the_scheduler_is_handed_sealed_tasks():
+    """A study task reaches the scheduler as ``pickle.loads(BYTES)`` (``SealedCall``): the
+    scheduler unpickles what it is given, and unpickling a study's task made it import the
+    study's modules and rebuild every evaluation job's data. The worker still runs the call,
+    its exceptions come back as data."""
+    import pickle
+
+    from spindlebench.studies.running.executor import dask_executor
+
+    with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                   protocol="tcp://", dashboard_address=None) as cluster,
+          dask_executor(cluster.scheduler_address) as executor):
+        future = executor.submit(call_isolated, square, (2,))
+        failed = executor.submit(call_isolated, square, (3,))
+        assert future.result()[:2] == (4, None)
+        assert failed.result()[1].startswith("ValueError")
+        specs = [task.run_spec for task in cluster.scheduler.tasks.values()]
+    assert len(specs) == 2
+    for spec in specs:
+        assert spec.func is pickle.loads
+        assert [type(arg) for arg in spec.args] == [bytes]

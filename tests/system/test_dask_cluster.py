@@ -71,7 +71,7 @@ def cluster(tmp_path):
 
         with distributed.Client(address, timeout="120s") as client:
             client.wait_for_workers(2, timeout=180)
-        yield address, workers
+        yield address, workers, processes[0]
     finally:
         for process in processes:
             process.kill()
@@ -86,7 +86,7 @@ def files_of(folder: Path) -> dict[str, bytes]:
 @pytest.mark.slow
 def test_a_worker_killed_mid_sweep_loses_no_result_and_a_relative_study_path_works(
         tmp_path, cluster):
-    address, workers = cluster
+    address, workers, scheduler = cluster
     reference = tmp_path / "reference"
     run = spindlebench("sweep", str(TINY), "-o", str(reference), "--workers", "0",
                        "--no-progress")
@@ -105,6 +105,10 @@ def test_a_worker_killed_mid_sweep_loses_no_result_and_a_relative_study_path_wor
     assert not list(out.rglob("*.error.*"))  # before: FileNotFoundError on every run
     assert files_of(out) == files_of(reference)
     assert address in (out / "provenance.json").read_text(encoding="utf-8")
+    # the scheduler saw sealed tasks only (executor.SealedCall): it never unpickled a study
+    # task, which imported the study's modules (SciPy, pandas) into it
+    loaded = Path(f"/proc/{scheduler.pid}/maps").read_text(encoding="utf-8")
+    assert f"{os.sep}scipy{os.sep}" not in loaded and f"{os.sep}pandas{os.sep}" not in loaded
 
 
 @pytest.mark.slow
