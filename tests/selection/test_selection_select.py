@@ -102,3 +102,42 @@ def test_offset_pair_difference_is_constant_also_as_rises():
         result = select_sensitive_points(PairwiseDifferences().fit_transform(rises(raw)), a - c,
                                          2, names=["A", "B", "C", "A-B", "A-C", "B-C"])
     assert result.dropped.tolist() == [3]
+
+
+def test_sensitive_points_select_every_k_as_select_sensitive_points_does():
+    """One SensitivePoints for k = 1..5 (its R, t(R), psi and tree made once) gives what a
+    fresh select_sensitive_points gives per k, and warns and raises the same, per k."""
+    import warnings
+
+    from spindlebench.selection.errors import SelectionError, SelectionWarning
+    from spindlebench.selection.select import SensitivePoints
+
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 1.0, 60)[:, None]
+    X = np.hstack([t ** p + 0.05 * rng.standard_normal((60, 1)) for p in (1, 1, 2, 3, 5, 8)])
+    X = np.hstack([X, np.ones((60, 1))])  # a constant candidate: dropped with a warning
+    y = 3.0 * t[:, 0] ** 2 + 0.01 * rng.standard_normal(60)
+    names = [f"c{i}" for i in range(X.shape[1])]
+    points = SensitivePoints(X, y, names=names)
+    for k in (1, 2, 3, 4, 5):
+        with warnings.catch_warnings(record=True) as shared_warned:
+            warnings.simplefilter("always")
+            shared = points.select(k)
+        with warnings.catch_warnings(record=True) as fresh_warned:
+            warnings.simplefilter("always")
+            fresh = select_sensitive_points(X, y, k, names=names)
+        assert [str(w.message) for w in shared_warned] == [str(w.message) for w in fresh_warned]
+        assert any(issubclass(w.category, SelectionWarning) for w in shared_warned)
+        assert shared.eta == fresh.eta
+        assert [c.tolist() for c in shared.clusters] == [c.tolist() for c in fresh.clusters]
+        np.testing.assert_array_equal(shared.selected, fresh.selected)
+        np.testing.assert_array_equal(shared.psi, fresh.psi)
+        np.testing.assert_array_equal(shared.closure, fresh.closure)
+    for k in (0, 7):  # too few or too many clusters: the same one-line error each time
+        with pytest.raises(SelectionError) as shared_error, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            points.select(k)
+        with pytest.raises(SelectionError) as fresh_error, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            select_sensitive_points(X, y, k, names=names)
+        assert str(shared_error.value) == str(fresh_error.value)

@@ -155,3 +155,22 @@ def test_a_sidecar_missing_from_the_manifest_is_recorded_as_a_whole_run_would(tm
     path.write_text(json.dumps(entries, indent=1) + "\n", encoding="utf-8")
     assert ResultStore(tmp_path).has_recording("runs/r001/Jan.csv")
     assert path.read_bytes() == whole
+
+
+def test_the_manifest_text_is_the_json_of_the_sorted_hashes_after_writes_and_removes(tmp_path):
+    """Its entries' lines are encoded once and reused: after writes, rewrites and removes
+    (names that JSON escapes among them) the file is still ``json.dumps(sorted, indent=1)``."""
+    store = ResultStore(tmp_path)
+    frame = pd.DataFrame({"a": [1.0, 2.0], "b": [3.0, 4.0]})
+    names = ["evals/b.csv", 'evals/q"uote.csv', "evals/é.csv", "a.csv", "evals/c.csv"]
+    for step, name in enumerate(names):
+        store.write_frame(name, frame + step)
+    store.write_frame("a.csv", frame * 10)  # rewritten: a new hash
+    store.remove("evals/c.csv")
+    text = (tmp_path / "manifest.json").read_text(encoding="utf-8")
+    manifest = json.loads(text)
+    assert sorted(manifest) == sorted(set(names) - {"evals/c.csv"})
+    assert text == json.dumps(dict(sorted(manifest.items())), indent=1) + "\n"
+    for name in ("a.csv", "evals/b.csv", 'evals/q"uote.csv', "evals/é.csv"):
+        store.remove(name)
+    assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == "{}\n"

@@ -55,7 +55,12 @@ from spindlebench.selection.errors import (
 )
 from spindlebench.selection.method_registry import METHOD_REGISTRY
 from spindlebench.selection.pairs import ROW_WISE_ABOVE, PairCandidates
-from spindlebench.selection.registry import MethodChoice, fit_with, select_with
+from spindlebench.selection.registry import (
+    MethodChoice,
+    fit_with,
+    select_with,
+    sensitive_points,
+)
 from spindlebench.selection.regression import EstimatorFit, LinearFit, rises, rmse
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
@@ -755,10 +760,20 @@ def evaluate_checked(
         if choice.is_paper and row_wise(candidates, similarity, closure):  # R too large
             matrix = PairCandidates(
                 _finite(candidates.matrix(train_frame, range(len(chosen))), chosen))
+        else:  # made once per recording and candidate set: every k selects from it
+            matrix = train_frame.memo(("candidates", candidates),
+                                      lambda: _finite(candidates.matrix(train_frame), names))
+        points = None if support is not None else train_frame.memo(
+            ("sensitive points", candidates, target, similarity, closure, choice.method,
+             choice.within),
+            lambda: sensitive_points(choice, matrix, y_train, similarity, names, closure))
+        if support is not None:
+            selection = given_selection(matrix, y_train, names, support, train_name)
+        elif points is not None:  # the paper's method: its k-independent steps once
+            selection = points.select(k)
         else:
-            matrix = _finite(candidates.matrix(train_frame), names)
-        selection = select_with(choice, matrix, y_train, k, similarity, names, seed, closure) \
-            if support is None else given_selection(matrix, y_train, names, support, train_name)
+            selection = select_with(choice, matrix, y_train, k, similarity, names, seed,
+                                    closure)
         selected_names = [names[i] for i in selection.selected]
         train_values = candidates.matrix(train_frame, selection.selected)
         if dynamic:  # the driver columns in front of the rises (``selection.dynamic``)

@@ -369,6 +369,21 @@ def _fitted_psi(selector, n_kept: int):
     return np.full(n_kept, np.nan)
 
 
+def sensitive_points(choice: MethodChoice, X, y, similarity: str = DEFAULT_SIMILARITY,
+                     names=None, closure: str = "fast"):
+    """The ``select.SensitivePoints`` through which ``select_with(choice, X, y, k, ...)``
+    selects, for every k at once (its k-independent steps done once), or None where
+    ``select_with`` takes another way (another method or choice inside clusters, or a
+    ``pairs.PairCandidates``)."""
+    from spindlebench.selection.pairs import PairCandidates
+    from spindlebench.selection.select import SensitivePoints
+
+    if isinstance(X, PairCandidates) or choice.method != DEFAULT_METHOD \
+            or choice.within != DEFAULT_WITHIN:
+        return None
+    return SensitivePoints(X, y, similarity, closure, names=names)
+
+
 def select_each(choice: MethodChoice, X, y, ks, similarity: str = DEFAULT_SIMILARITY,
                 names=None, random_state: int = DEFAULT_METHOD_SEED, closure: str = "fast"):
     """``select_with`` for each k of ``ks``, one ``Selection`` per ``next()``: a generator,

@@ -80,10 +80,10 @@ def _fold_errors(X: np.ndarray, y: np.ndarray, alphas: np.ndarray, n_folds: int,
         mean = X_train.mean(axis=0)
         scale = X_train.std(axis=0)
         scale[scale == 0] = 1.0
-        Xt, Xv = (X_train - mean) / scale, (X[valid] - mean) / scale
+        Xv = (X[valid] - mean) / scale
         y_mean = y[train].mean()
-        if factors is None:
-            U, s, Vt = np.linalg.svd(Xt, full_matrices=False)
+        if factors is None:  # (the factored way never forms the standardised training X)
+            U, s, Vt = np.linalg.svd((X_train - mean) / scale, full_matrices=False)
         else:
             A, B = factors
             Q, R = np.linalg.qr(A[train] - A[train].mean(axis=0))

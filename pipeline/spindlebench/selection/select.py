@@ -17,8 +17,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from spindlebench.core.names import DEFAULT_SIMILARITY
-from spindlebench.selection.closure import transitive_closure
-from spindlebench.selection.cut import Cut, cut_for_clusters
+from spindlebench.selection.closure import (
+    SpanningTree,
+    check_similarity,
+    maximum_spanning_tree,
+    transitive_closure,
+)
+from spindlebench.selection.cut import Cut, cut_tree_for_clusters
 from spindlebench.selection.errors import (
     SelectionError,
     SelectionWarning,
@@ -162,21 +167,52 @@ def select_sensitive_points(
     runs row-wise (``pairs.select_among_pairs``): the same clusters and psi, eta to rounding,
     without the n x n matrices (formed on request up to ``pairs.MAX_FORMED_CANDIDATES``).
     """
-    X, y = _check_inputs(X, y, n_clusters)
-    if names is not None:
-        names = [str(name) for name in names]
-        check_names(names, X.shape[1])
-    from spindlebench.selection import pairs  # (pairs builds on this module)
+    return SensitivePoints(X, y, similarity, closure, names).select(n_clusters)
 
-    if (closure == "fast" and similarity == DEFAULT_SIMILARITY
-            and X.shape[1] > pairs.ROW_WISE_ABOVE):
-        m = pairs.sensors_with_differences(X)
-        if m is not None:
-            return pairs.select_among_pairs(X[:, :m], y, n_clusters, names=names)
-    kept, dropped = split_constant(constant_columns(X), names, n_clusters)
-    kept_names = None if names is None else [names[i] for i in kept]
-    R = similarity_matrix(X[:, kept], similarity, kept_names)
-    T = transitive_closure(R, closure)
-    psi = np.full(X.shape[1], np.nan)
-    psi[kept] = correlation_with(X[:, kept], y, kept_names)
-    return assemble(kept, dropped, R, T, cut_for_clusters(T, n_clusters), psi)
+
+class SensitivePoints:
+    """``select_sensitive_points`` on one ``X`` and ``y`` for any number of k: every step
+    that does not depend on k (the constant candidates, R, t(R), psi and the maximum
+    spanning tree the cut reads) is done once, at the first ``select``.
+
+    Why: a study selects k = 2, 3, 4 from the same candidates of the same training run;
+    those steps were done again for each k. Each ``select(k)`` checks its inputs, warns and
+    raises as ``select_sensitive_points(X, y, k, ...)`` does, in the same order, and gives
+    the same selection (the shared arrays are read-only: do not modify them).
+    """
+
+    def __init__(self, X: np.ndarray, y: np.ndarray, similarity: str = DEFAULT_SIMILARITY,
+                 closure: str = "fast", names: Sequence[str] | None = None) -> None:
+        self.X, self.y = X, y
+        self.similarity, self.closure, self.names = similarity, closure, names
+        self._constant: np.ndarray | None = None
+        self._prepared: tuple[np.ndarray, np.ndarray, np.ndarray, SpanningTree] | None = None
+
+    def select(self, n_clusters: int) -> Selection:
+        """``select_sensitive_points(X, y, n_clusters, similarity, closure, names)``."""
+        X, y = _check_inputs(self.X, self.y, n_clusters)
+        names = self.names
+        if names is not None:
+            names = [str(name) for name in names]
+            check_names(names, X.shape[1])
+        from spindlebench.selection import pairs  # (pairs builds on this module)
+
+        if (self.closure == "fast" and self.similarity == DEFAULT_SIMILARITY
+                and X.shape[1] > pairs.ROW_WISE_ABOVE):
+            m = pairs.sensors_with_differences(X)
+            if m is not None:
+                return pairs.select_among_pairs(X[:, :m], y, n_clusters, names=names)
+        if self._constant is None:
+            self._constant = constant_columns(X)
+        kept, dropped = split_constant(self._constant, names, n_clusters)
+        if self._prepared is None:  # a step that raises raises again at the next k
+            kept_names = None if names is None else [names[i] for i in kept]
+            R = similarity_matrix(X[:, kept], self.similarity, kept_names)
+            T = transitive_closure(R, self.closure)
+            psi = np.full(X.shape[1], np.nan)
+            psi[kept] = correlation_with(X[:, kept], y, kept_names)
+            self._prepared = (R, T, psi, maximum_spanning_tree(check_similarity(T)))
+        R, T, psi, tree = self._prepared
+        # cut_for_clusters(T, n_clusters), its tree made once
+        check_n_clusters(n_clusters, T.shape[0])
+        return assemble(kept, dropped, R, T, cut_tree_for_clusters(tree, n_clusters), psi)

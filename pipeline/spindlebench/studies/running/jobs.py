@@ -13,6 +13,7 @@ per training run.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -100,7 +101,6 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
     its unit) instead.
     """
     truth = job.truths[experiment.id]
-    temperatures = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
     drift = truth[TRUTH_COLUMNS[-1]].to_numpy(float)
     time_s = truth[TIME_COLUMN].to_numpy(float)
     # one float block, filled column group by column group: building the frame column by
@@ -108,15 +108,10 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
     values = np.empty((len(time_s), len(MEASURED_COLUMNS)))
     values[:, 0] = time_s
     if job.condition is None:
-        values[:, 1:-2] = temperatures
+        values[:, 1:-2] = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
         values[:, -2] = drift - drift[0]
     else:
-        fault = job.condition.fault if held_out else None
-        model = sensor_model(job.condition.noise, fault)
-        measured_C, measured_drift = measure(model, time_s, temperatures, drift, SENSORS,
-                                             job.seeds[experiment.id])
-        if np.isnan(measured_C).any():  # a dropout: hold the last good reading
-            measured_C = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
+        model, measured_C, measured_drift = _measured_sensors(job, experiment, held_out)
         values[:, 1:-2] = measured_C
         values[:, -2] = measured_drift
         if job.target != DRIFT_COLUMN:
@@ -134,6 +129,44 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
         if column in truth.columns:
             frame[column] = truth[column].to_numpy(float)
     return frame
+
+
+def _measured_sensors(job: EvaluationJob, experiment: Experiment,
+                      held_out: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+    """(sensor model, measured T1..T20 with a dropout held at its last good reading,
+    measured axial drift) of the run under ``job``'s measured condition."""
+    truth = job.truths[experiment.id]
+    fault = job.condition.fault if held_out else None
+    model = sensor_model(job.condition.noise, fault)
+    measured_C, measured_drift = measure(
+        model, truth[TIME_COLUMN].to_numpy(float),
+        truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float),
+        truth[TRUTH_COLUMNS[-1]].to_numpy(float), SENSORS, job.seeds[experiment.id])
+    if np.isnan(measured_C).any():  # a dropout: hold the last good reading
+        measured_C = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
+    return model, measured_C, measured_drift
+
+
+def measured_targets(jobs: Mapping[str, EvaluationJob], experiment: Experiment,
+                     held_out: bool = True) -> pd.DataFrame:
+    """``time_s``, T1..T20 and every target's measured reading (a column named by the
+    target) of the run, for one job per target of the same (replica, measured condition):
+    the columns ``measured_frame`` of each target's job gives, with the sensors measured
+    once instead of once per target (the same seed, truth and readings in every job)."""
+    first = next(iter(jobs.values()))
+    if first.condition is None:
+        raise ValueError("measured_targets needs a measured condition, not the noise-free one")
+    model, measured_C, measured_drift = _measured_sensors(first, experiment, held_out)
+    time_s = first.truths[experiment.id][TIME_COLUMN].to_numpy(float)
+    values = np.empty((len(time_s), 1 + len(SENSORS)))
+    values[:, 0] = time_s
+    values[:, 1:] = measured_C
+    out = pd.DataFrame(values, columns=[TIME_COLUMN, *SENSORS])
+    for target, job in jobs.items():
+        out[target] = measured_target(target, model, time_s, job.truths[experiment.id],
+                                      measured_drift, job.seeds[experiment.id],
+                                      job.probe_geometry_m)
+    return out
 
 
 def evaluate_job(job: EvaluationJob) -> dict[str, TrainingResult]:

@@ -133,6 +133,8 @@ class ResultStore:
         self.root = Path(root)
         self._owned = owned
         self._manifest: dict[str, str] | None = None
+        #: key -> (hash, its line of manifest.json) of the entries encoded so far
+        self._manifest_lines: dict[str, tuple[str, str]] = {}
         self._verified: dict[str, bool] = {}
         self._lock: int | None = None
         #: the folder's manifest was lost: a piece it does not name is redone without a
@@ -276,8 +278,25 @@ class ResultStore:
         self._save_manifest()
 
     def _save_manifest(self) -> None:
-        write_text(self.path(MANIFEST_FILE),
-                   json.dumps(dict(sorted(self.manifest().items())), indent=1) + "\n")
+        write_text(self.path(MANIFEST_FILE), self._manifest_text())
+
+    def _manifest_text(self) -> str:
+        """``json.dumps(dict(sorted(manifest.items())), indent=1) + "\\n"``, each entry's
+        line made once (tested to be the same text).
+
+        Why: the manifest is saved after every piece written, so a sweep of a thousand
+        recordings and as many evaluations encoded its thousands of entries again each time
+        (quadratic in the pieces); now only the sorting and joining are repeated."""
+        manifest = self.manifest()
+        if not manifest:
+            return "{}\n"
+        lines = self._manifest_lines
+        for key in [key for key, (value, _) in lines.items() if manifest.get(key) != value]:
+            del lines[key]  # removed or rewritten since
+        for key, value in manifest.items():
+            if key not in lines:
+                lines[key] = (value, f" {json.dumps(key)}: {json.dumps(value)}")
+        return "{\n" + ",\n".join(lines[key][1] for key in sorted(manifest)) + "\n}\n"
 
     def write_recording(self, relative: str | Path, frame: pd.DataFrame,
                         sidecar: dict[str, Any]) -> Path:

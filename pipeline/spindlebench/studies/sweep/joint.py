@@ -28,16 +28,15 @@ import pandas as pd
 
 from spindlebench.core.atomic import write_text
 from spindlebench.core.console import one_line_error
-from spindlebench.core.names import SENSORS, SIX_DIFF
+from spindlebench.core.names import SIX_DIFF
 from spindlebench.core.provenance import file_entry, provenance
-from spindlebench.formats.recording import TIME_COLUMN
 from spindlebench.selection.evaluate import CheckedRecording
 from spindlebench.selection.method_registry import joint_names
 from spindlebench.selection.multi_target import evaluate_targets
 from spindlebench.selection.registry import parse_method
 from spindlebench.studies.family.experiments import Experiment, replicas
-from spindlebench.studies.family.methods import GROUP_SENSORS, TARGET, group_method_name
-from spindlebench.studies.running.jobs import EvaluationJob, measured_frame
+from spindlebench.studies.family.methods import GROUP_SENSORS, group_method_name
+from spindlebench.studies.running.jobs import EvaluationJob, measured_targets
 
 if TYPE_CHECKING:
     from spindlebench.studies.running.executor import TaskRunner
@@ -52,13 +51,9 @@ JOINT_COLUMNS = (
 
 def _frame(jobs: dict[str, EvaluationJob], experiment: Experiment,
            held_out: bool) -> pd.DataFrame:
-    """The run's sensor readings and every target's probe reading (column named by it)."""
-    frames = {t: measured_frame(job, experiment, held_out) for t, job in jobs.items()}
-    first = next(iter(frames.values()))
-    out = first.loc[:, [TIME_COLUMN, *SENSORS]].copy()
-    for target, frame in frames.items():
-        out[target] = frame[TARGET].to_numpy()
-    return out
+    """The run's sensor readings and every target's probe reading (column named by it),
+    the sensors measured once for all targets (``jobs.measured_targets``)."""
+    return measured_targets(jobs, experiment, held_out)
 
 
 def joint_rows(sweeps: list[Sweep]) -> pd.DataFrame:
