@@ -181,6 +181,10 @@ METHOD_NAME_EXCEPTIONS = {
     ("studies/benchmark/scoring.py", "stability"),
     ("studies/benchmark/benchmark_report.py", "stability"),
     ("studies/benchmark/benchmark_report.py", "average"),
+    # the twin page's evaluate protocol: the --method arguments it passes to the command
+    # line, as a user types them (EVALUATE_ROWS)
+    *(("identification/validation.py", name)
+      for name in ("all-candidates", "top-k-correlated", "closure")),
 }
 
 

@@ -42,9 +42,13 @@ from spindlebench.core.provenance import file_entry, provenance
 from spindlebench.formats.recording import (
     AMBIENT_COLUMN,
     DRIFT_COLUMN,
+    FEED_X_COLUMN,
+    FEED_Y_COLUMN,
+    HEAT_FLOW_PREFIX,
     SPEED_COLUMN,
     TIME_COLUMN,
     TRUE_DRIFT_COLUMN,
+    true_column,
 )
 from spindlebench.identification.estimators import (
     ObserverRegressor,
@@ -239,7 +243,7 @@ def room_evidence(frame, schedule) -> dict:
         a, h = run.start, run.heating_stop - 1
         runs.append({
             "run": run.name, "mean_rpm": float(np.mean(frame["spindle_rpm"].iloc[a:h + 1])),
-            "start_h": float(frame["time_s"].iloc[a] / 3600),
+            "start_h": float(frame[TIME_COLUMN].iloc[a] / 3600),
             "error_change_um": float(y[h] - y[a]),
             "shared_rise_K": float(np.mean([frame[c].iloc[h] - frame[c].iloc[a]
                                             for c in SHARED_DRIFT_SENSORS])),
@@ -358,11 +362,12 @@ SYNTHETIC_TESTS = ("heldout", "exp1", "exp3")
 
 
 #: The feed-rate columns a user has from the NC programme (their |sum| is one heat input).
-FEED_COLUMNS = ("feed_x_mm_per_min", "feed_y_mm_per_min")
+FEED_COLUMNS = (FEED_X_COLUMN, FEED_Y_COLUMN)
 #: The truth's heat flows (W): the spindle's (bearings and motor) and the feeds' (their
 #: axis motors' standing 4 W each taken off). Only an oracle reads them.
-SPINDLE_HEAT = ("true_Q_front_bearing_W", "true_Q_rear_bearing_W", "true_Q_spindle_motor_W")
-FEED_HEAT = ("true_Q_x_feed_W", "true_Q_y_feed_W")
+SPINDLE_HEAT = tuple(true_column(f"{HEAT_FLOW_PREFIX}{name}_W")
+                     for name in ("front_bearing", "rear_bearing", "spindle_motor"))
+FEED_HEAT = tuple(true_column(f"{HEAT_FLOW_PREFIX}{axis}_feed_W") for axis in ("x", "y"))
 
 
 def _synthetic_arrays(folder: Path, name: str) -> dict:
