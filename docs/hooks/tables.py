@@ -195,6 +195,12 @@ BENCH_COLUMNS: dict[str, list[tuple[str, str]]] = {
                     ("s_per_evaluation_job", "s per evaluation job")],
 }
 
+#: ``bench_sweep.py``'s goal row: the 1 008-experiment sweep's CPU by part.
+BENCH_COLUMNS["bench_sweep_goal"] = [
+    ("experiments", "experiments"), ("workers", "workers"), ("cpu_s", "CPU s in all"),
+    ("simulation_cpu_s", "simulations"), ("evaluation_cpu_s", "evaluations"),
+    ("coordinator_cpu_s", "coordinator"), ("outputs_cpu_s", "of which outputs"),
+    ("over_floor", "× simulations"), ("goal_over_floor", "goal ×"), ("wall_s", "wall s")]
 #: ``bench_dask.py --example`` writes the same rows for the example sweep itself.
 BENCH_COLUMNS["bench_dask_example"] = BENCH_COLUMNS["bench_dask"]
 
