@@ -30,6 +30,9 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import resource
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -310,13 +313,18 @@ EVALUATE_ROWS = {
 }
 
 
+def _children_cpu_s() -> float:
+    """User + system CPU seconds of the ended child processes of this one."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def evaluate_protocol(folder: Path, out: Path) -> dict:
     """``spindlebench evaluate`` (in-process) on the cycles ``spindlebench adapt caiviac
     --phase cycle`` wrote to ``folder``: each training run of ``EVALUATE_ROWS`` against the
     other five, each row's ``--json`` written under ``out`` (its CPU seconds printed, not
-    stored: the same inputs give the same bytes)."""
-    from spindlebench.commands.main import main as cli
-
+    stored: the same inputs give the same bytes). The command runs as a user runs it, in its
+    own process: a domain module does not import the command line."""
     runs = sorted(p.stem for p in folder.glob("run*.csv"))
     result: dict = {}
     for train, rows in EVALUATE_ROWS.items():
@@ -324,13 +332,14 @@ def evaluate_protocol(folder: Path, out: Path) -> dict:
         result[train] = []
         for method, regressor, k in rows:
             path = out / f"evaluate_{train}_{method}_{regressor}.json"
-            start = time.process_time()
-            status = cli(["evaluate", "--train", str(folder / f"{train}.csv"), "--test",
-                          *[str(folder / f"{r}.csv") for r in tests], "--target", TARGET,
-                          "--method", method, "--regressor", regressor, "--clusters", str(k),
-                          "--json", str(path)])
+            start = _children_cpu_s()
+            status = subprocess.call([
+                sys.executable, "-m", "spindlebench", "evaluate", "--train",
+                str(folder / f"{train}.csv"), "--test", *[str(folder / f"{r}.csv") for r in tests],
+                "--target", TARGET, "--method", method, "--regressor", regressor,
+                "--clusters", str(k), "--json", str(path)])
             print(f"evaluate --train {train} --method {method} --regressor {regressor}: "
-                  f"{time.process_time() - start:.1f} CPU-s", flush=True)
+                  f"{_children_cpu_s() - start:.1f} CPU-s", flush=True)
             if status != 0:
                 raise SystemExit(f"evaluate {train} {method} {regressor}: exit {status}")
             document = json.loads(path.read_text(encoding="utf-8"))
