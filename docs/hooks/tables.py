@@ -1640,6 +1640,82 @@ def calibration_section(key: str | None, sources: Sources) -> str:
     return block("calibration", source, key, provenance, calibration_table(path, key))
 
 
+# --------------------------------------------------------------------------- values in prose
+
+#: One number of a sentence, read from a file a command wrote: ``<!-- value: FILE PATH
+#: [FORMAT] -->`` (inline, anywhere in a line). FILE is ``bench/...`` or ``docs/...`` (the
+#: checkout's) or a name under ``results/`` (its committed copy under ``docs/snapshots/`` where
+#: the command has not been run here); PATH is the field, dot-separated: a key, a list's index,
+#: or ``[KEY=VALUE]`` for the one item of a list whose KEY is VALUE, without spaces
+#: (``rows.[hours=39.0].cpu_s``); FORMAT is a Python format spec (``.1f``; ``-`` or none: ``number``). It becomes
+#: ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
+#: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
+VALUE = re.compile(r"<!-- value: (\S+) (\S+)(?: (\S+))? -->")
+VALUE_OUT = re.compile(r"<!-- value from=(\S+) key=(\S+) format=(\S+) -->(.*?)<!-- /value -->")
+
+
+def value_file(name: str, sources: Sources) -> Path | None:
+    """Where ``<!-- value: NAME ... -->`` reads: the checkout's file for ``bench/`` and
+    ``docs/`` names, else ``results/NAME`` or its snapshot; None when there is none."""
+    if name.startswith(("bench/", "docs/")):
+        path = sources.bench / name.removeprefix("bench/results/") \
+            if name.startswith("bench/results/") else sources.root / name
+        return path if path.is_file() else None
+    return _results_or_snapshot(name, sources)
+
+
+def field_of(document: Any, key: str, where: str) -> Any:
+    """The field ``key`` (dot-separated, see ``VALUE``) of a JSON document; a missing field
+    is a one-line error naming the file and the key."""
+    value = document
+    for part in key.split("."):
+        selector = re.fullmatch(r"\[(\w+)=([^\]]*)\]", part)
+        if selector and isinstance(value, list):
+            name, wanted = selector.groups()
+            found = [item for item in value
+                     if isinstance(item, dict) and str(item.get(name)) == wanted]
+            if len(found) != 1:
+                raise ValueError(f"{where}: {key}: {len(found)} items have {name}={wanted}")
+            value = found[0]
+        elif isinstance(value, list) and re.fullmatch(r"-?\d+", part):
+            try:
+                value = value[int(part)]
+            except IndexError:
+                raise ValueError(f"{where}: {key}: no item {part}") from None
+        elif isinstance(value, dict) and part in value:
+            value = value[part]
+        else:
+            raise ValueError(f"{where}: {key}: no field {part!r}")
+    if isinstance(value, dict | list):
+        raise ValueError(f"{where}: {key}: is not one value")
+    return value
+
+
+def formatted(value: Any, spec: str) -> str:
+    return number(value) if spec == "-" else format(value, spec)
+
+
+def value_text(path: Path, key: str, spec: str) -> str:
+    """One value as a page shows it, read again from ``path`` (the check's entry point)."""
+    return formatted(field_of(json.loads(path.read_text(encoding="utf-8")), key, str(path)),
+                     spec)
+
+
+def value_section(name: str, key: str, spec: str | None, sources: Sources) -> str:
+    spec = spec or "-"
+    path = value_file(name, sources)
+    if path is None:
+        return f"*(`{name}` is not in this build)*"
+    source = sources.name(path)
+    text = formatted(field_of(json.loads(path.read_text(encoding="utf-8")), key, source), spec)
+    return f"<!-- value from={source} key={key} format={spec} -->{text}<!-- /value -->"
+
+
+def expand_values(markdown: str, sources: Sources) -> str:
+    return VALUE.sub(lambda m: value_section(m.group(1), m.group(2), m.group(3), sources),
+                     markdown)
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1692,9 +1768,11 @@ def section(by: str, key: str | None, sources: Sources) -> str:
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
-    """Every ``<!-- generate: ... -->`` line of a page replaced by its table(s)."""
+    """Every ``<!-- generate: ... -->`` line of a page replaced by its table(s), and every
+    inline ``<!-- value: ... -->`` by its value."""
     sources = sources or Sources()
-    return PLACEHOLDER.sub(lambda m: section(m.group(1), m.group(2), sources), markdown)
+    markdown = PLACEHOLDER.sub(lambda m: section(m.group(1), m.group(2), sources), markdown)
+    return expand_values(markdown, sources)
 
 
 def regenerate(by: str, source: str, key: str | None, sources: Sources | None = None) -> str:
