@@ -1647,7 +1647,8 @@ def calibration_section(key: str | None, sources: Sources) -> str:
 #: checkout's) or a name under ``results/`` (its committed copy under ``docs/snapshots/`` where
 #: the command has not been run here); PATH is the field, dot-separated: a key, a list's index,
 #: or ``[KEY=VALUE]`` for the one item of a list whose KEY is VALUE, without spaces
-#: (``rows.[hours=39.0].cpu_s``); FORMAT is a Python format spec (``.1f``; ``-`` or none: ``number``). It becomes
+#: (``rows.[hours=39.0].cpu_s``); FORMAT is a Python format spec (``.1f``; ``-`` or none:
+#: ``number``). It becomes
 #: ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
 #: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
 VALUE = re.compile(r"<!-- value: (\S+) (\S+)(?: (\S+))? -->")
@@ -1668,7 +1669,7 @@ def field_of(document: Any, key: str, where: str) -> Any:
     """The field ``key`` (dot-separated, see ``VALUE``) of a JSON document; a missing field
     is a one-line error naming the file and the key."""
     value = document
-    for part in key.split("."):
+    for part in re.findall(r"\[[^\]]*\]|[^.]+", key):
         selector = re.fullmatch(r"\[(\w+)=([^\]]*)\]", part)
         if selector and isinstance(value, list):
             name, wanted = selector.groups()

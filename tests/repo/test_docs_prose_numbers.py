@@ -84,20 +84,36 @@ def test_the_scan_finds_numbers_with_units_in_prose_only():
                                    (1, "−3.1 µm"), (1, "30×"), (1, "2 000 mm"), (7, "2 min")]
 
 
+def compare(page: str, text: str, allowed_here: Counter) -> tuple[list[str], list[str]]:
+    """The page's numbers the list does not allow (``page:line: number``), and the list's
+    numbers the page no longer has."""
+    hits = prose_numbers(text)
+    extra = Counter(n for _, n in hits) - allowed_here
+    new = []
+    for line, number in hits:
+        if extra[number] > 0:
+            new.append(f"{page}:{line}: {number!r}")
+            extra[number] -= 1
+    gone = [f"{page}: {number!r} ({count}×)" for number, count in
+            (allowed_here - Counter(n for _, n in hits)).items()]
+    return new, gone
+
+
+def test_a_new_number_or_a_removed_one_is_named():
+    text = "It ran 6 h.\nThen 6 h more, and 12.5 µm.\n"
+    assert compare("p.md", text, Counter({"6 h": 2, "12.5 µm": 1})) == ([], [])
+    assert compare("p.md", text, Counter({"6 h": 1, "3 K": 1})) == (
+        ["p.md:1: '6 h'", "p.md:2: '12.5 µm'"], ["p.md: '3 K' (1×)"])  # the first is named
+
+
 def test_every_number_with_a_unit_in_prose_is_allowed_with_a_reason():
     reasons, per_page = allowed()
     new, gone = [], []
     for page in pages():
-        hits = prose_numbers((REPO / page).read_text(encoding="utf-8"))
-        have = Counter(n for _, n in hits)
-        allowed_here = per_page.get(page, Counter())
-        extra = have - allowed_here
-        for line, text in hits:
-            if extra[text] > 0:
-                new.append(f"{page}:{line}: {text!r}")
-                extra[text] -= 1
-        gone += [f"{page}: {text!r} ({count}×)" for text, count in
-                 (allowed_here - have).items()]
+        found = compare(page, (REPO / page).read_text(encoding="utf-8"),
+                        per_page.get(page, Counter()))
+        new += found[0]
+        gone += found[1]
     assert not new, (
         "a number with a unit was typed into prose: write it as <!-- value: FILE PATH FORMAT "
         "--> from the file the command writes, point to the generated table, or (an argument, "
