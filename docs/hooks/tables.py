@@ -1646,13 +1646,15 @@ def calibration_section(key: str | None, sources: Sources) -> str:
 #: [FORMAT] -->`` (inline, anywhere in a line). FILE is ``bench/...`` or ``docs/...`` (the
 #: checkout's) or a name under ``results/`` (its committed copy under ``docs/snapshots/`` where
 #: the command has not been run here); PATH is the field, dot-separated: a key, a list's index,
-#: or ``[KEY=VALUE]`` for the one item of a list whose KEY is VALUE, without spaces
-#: (``rows.[hours=39.0].cpu_s``); FORMAT is a Python format spec (``.1f``; ``-`` or none:
+#: or ``[KEY=VALUE]`` for the one item of a list whose KEY is VALUE (``rows.[hours=39.0].cpu_s``);
+#: ``[KEY]`` is a key holding dots, and the whole PATH is in double quotes when a key has spaces
+#: (``"range_um.[X at 0.8 m].min"``); FORMAT is a Python format spec (``.1f``; ``-`` or none:
 #: ``number``). It becomes
 #: ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
 #: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
-VALUE = re.compile(r"<!-- value: (\S+) (\S+)(?: (\S+))? -->")
-VALUE_OUT = re.compile(r"<!-- value from=(\S+) key=(\S+) format=(\S+) -->(.*?)<!-- /value -->")
+VALUE = re.compile(r'<!-- value: (\S+) ("[^"]+"|\S+)(?: (\S+))? -->')
+VALUE_OUT = re.compile(r'<!-- value from=(\S+) key=("[^"]+"|\S+) format=(\S+) -->(.*?)'
+                       r"<!-- /value -->")
 
 
 def value_file(name: str, sources: Sources) -> Path | None:
@@ -1669,8 +1671,11 @@ def field_of(document: Any, key: str, where: str) -> Any:
     """The field ``key`` (dot-separated, see ``VALUE``) of a JSON document; a missing field
     is a one-line error naming the file and the key."""
     value = document
+    key = key.strip('"')
     for part in re.findall(r"\[[^\]]*\]|[^.]+", key):
         selector = re.fullmatch(r"\[(\w+)=([^\]]*)\]", part)
+        literal = re.fullmatch(r"\[([^=\]]+)\]", part)
+        part = literal.group(1) if literal else part
         if selector and isinstance(value, list):
             name, wanted = selector.groups()
             found = [item for item in value

@@ -152,7 +152,7 @@ def test_a_value_is_one_field_of_its_file_and_a_wrong_key_is_one_line(tmp_path):
 
     path = tmp_path / "snapshots" / "study" / "out.json"
     path.parent.mkdir(parents=True)
-    path.write_text(json.dumps({"goals": {"cpu_s": 120.0}, "rows": [
+    path.write_text(json.dumps({"goals": {"cpu_s": 120.0}, "the goals": {"a 0.8 m": 3.2}, "rows": [
         {"fit": "a", "hours": 39.0, "cpu_s": 43.094106}, {"fit": "b", "hours": 46.3,
                                                           "cpu_s": 47.2671, "share": 0.0187}]}),
         encoding="utf-8")
@@ -161,9 +161,10 @@ def test_a_value_is_one_field_of_its_file_and_a_wrong_key_is_one_line(tmp_path):
     page = tables.expand("took <!-- value: study/out.json rows.0.cpu_s .1f --> CPU-s, then "
                          "<!-- value: study/out.json rows.[hours=46.3].cpu_s .2f --> "
                          "(<!-- value: study/out.json rows.-1.share .1% -->, goal "
-                         "<!-- value: study/out.json goals.cpu_s -->)\n", sources)
+                         "<!-- value: study/out.json goals.cpu_s -->, "
+                         '<!-- value: study/out.json "the goals.[a 0.8 m]" .0f -->)\n', sources)
     shown = [m[3] for m in tables.VALUE_OUT.findall(page)]
-    assert shown == ["43.1", "47.27", "1.9%", "120"]
+    assert shown == ["43.1", "47.27", "1.9%", "120", "3"]
     assert "not in this build" not in page
     assert "from=snapshots/study/out.json key=rows.0.cpu_s" in page
     for key, error in (("rows.2.cpu_s", "no item 2"), ("rows.[hours=1].cpu_s", "0 items"),
