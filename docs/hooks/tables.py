@@ -18,6 +18,11 @@ that file's provenance::
 ``regenerate(by, source, key)``, which must give the same table from that file: a table typed
 by hand has no marker and must be listed there with the reason it is typed.
 
+A number in a sentence is read the same way, inline: ``<!-- value: FILE PATH [FORMAT] -->``
+(``VALUE``: one field of a JSON file) becomes the formatted field with a marker naming file
+and key, and the same test reads each again; ``tests/repo/test_docs_prose_numbers.py`` keeps
+typed numbers with units out of the prose.
+
 Sources (``Sources``, the checkout's by default):
 
 - ``bench/results/*.json`` (``bench/results.py record()``: machine, load, date and commit once
