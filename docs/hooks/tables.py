@@ -1648,14 +1648,18 @@ def calibration_section(key: str | None, sources: Sources) -> str:
 # --------------------------------------------------------------------------- values in prose
 
 #: One number of a sentence, read from a file a command wrote: ``<!-- value: FILE PATH
-#: [FORMAT] -->`` (inline, anywhere in a line). FILE is ``bench/...`` or ``docs/...`` (the
-#: checkout's) or a name under ``results/`` (its committed copy under ``docs/snapshots/`` where
-#: the command has not been run here); PATH is the field, dot-separated: a key, a list's index,
-#: or ``[KEY=VALUE]`` for the one item of a list whose KEY is VALUE (``rows.[hours=39.0].cpu_s``);
-#: ``[KEY]`` is a key holding dots, and the whole PATH is in double quotes when a key has spaces
-#: (``"range_um.[X at 0.8 m].min"``); FORMAT is a Python format spec (``.1f``; ``-`` or none:
-#: ``number``). It becomes
-#: ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
+#: [FORMAT] -->`` (inline, anywhere in a line).
+#:
+#: - FILE: ``bench/...`` or ``docs/...`` (the checkout's), or a name under ``results/`` (its
+#:   committed copy under ``docs/snapshots/`` where the command has not been run here); a JSON
+#:   file, or a CSV file as its list of rows (numbers as floats, an empty cell None).
+#: - PATH: the field, dot-separated: a key, a list's index, ``[KEY=VALUE]`` for the one item of
+#:   a list whose KEY is VALUE (``rows.[hours=39.0].cpu_s``; ``[label=greedy,m=2]``: both),
+#:   ``[KEY]`` for a key holding dots; the whole PATH in double quotes when a key has spaces
+#:   (``"range_um.[X at 0.8 m].min"``).
+#: - FORMAT: a Python format spec (``.1f``; ``-`` or none: ``number``).
+#:
+#: It becomes ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
 #: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
 VALUE = re.compile(r'<!-- value: (\S+) ("[^"]+"|\S+)(?: (\S+))? -->')
 VALUE_OUT = re.compile(r'<!-- value from=(\S+) key=("[^"]+"|\S+) format=(\S+) -->(.*?)'
@@ -1678,15 +1682,15 @@ def field_of(document: Any, key: str, where: str) -> Any:
     value = document
     key = key.strip('"')
     for part in re.findall(r"\[[^\]]*\]|[^.]+", key):
-        selector = re.fullmatch(r"\[(\w+)=([^\]]*)\]", part)
+        selector = re.fullmatch(r"\[(\w+=[^\],]*(?:,\w+=[^\],]*)*)\]", part)
         literal = re.fullmatch(r"\[([^=\]]+)\]", part)
         part = literal.group(1) if literal else part
         if selector and isinstance(value, list):
-            name, wanted = selector.groups()
-            found = [item for item in value
-                     if isinstance(item, dict) and str(item.get(name)) == wanted]
+            wanted = dict(c.split("=", 1) for c in selector.group(1).split(","))
+            found = [item for item in value if isinstance(item, dict) and
+                     all(_matches(item.get(k), v) for k, v in wanted.items())]
             if len(found) != 1:
-                raise ValueError(f"{where}: {key}: {len(found)} items have {name}={wanted}")
+                raise ValueError(f"{where}: {key}: {len(found)} items have {selector.group(1)}")
             value = found[0]
         elif isinstance(value, list) and re.fullmatch(r"-?\d+", part):
             try:
@@ -1697,9 +1701,37 @@ def field_of(document: Any, key: str, where: str) -> Any:
             value = value[part]
         else:
             raise ValueError(f"{where}: {key}: no field {part!r}")
-    if isinstance(value, dict | list):
+    if isinstance(value, dict | list) or value is None:
         raise ValueError(f"{where}: {key}: is not one value")
     return value
+
+
+def _matches(value: Any, wanted: str) -> bool:
+    """A selector's condition: the field's text, or the same number (``m=2`` finds 2.0)."""
+    if str(value) == wanted:
+        return True
+    try:
+        return float(value) == float(wanted)
+    except (TypeError, ValueError):
+        return False
+
+
+def _cell(text: str) -> Any:
+    try:
+        return float(text)
+    except ValueError:
+        return text if text else None
+
+
+def value_document(path: Path) -> Any:
+    """A JSON file as parsed; a CSV file as its rows, numbers as floats, empty cells None."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".csv":
+        import csv
+        import io
+
+        return [{k: _cell(v) for k, v in row.items()} for row in csv.DictReader(io.StringIO(text))]
+    return json.loads(text)
 
 
 def formatted(value: Any, spec: str) -> str:
@@ -1708,8 +1740,7 @@ def formatted(value: Any, spec: str) -> str:
 
 def value_text(path: Path, key: str, spec: str) -> str:
     """One value as a page shows it, read again from ``path`` (the check's entry point)."""
-    return formatted(field_of(json.loads(path.read_text(encoding="utf-8")), key, str(path)),
-                     spec)
+    return formatted(field_of(value_document(path), key, str(path)), spec)
 
 
 def value_section(name: str, key: str, spec: str | None, sources: Sources) -> str:
@@ -1718,7 +1749,7 @@ def value_section(name: str, key: str, spec: str | None, sources: Sources) -> st
     if path is None:
         return f"*(`{name}` is not in this build)*"
     source = sources.name(path)
-    text = formatted(field_of(json.loads(path.read_text(encoding="utf-8")), key, source), spec)
+    text = formatted(field_of(value_document(path), key, source), spec)
     return f"<!-- value from={source} key={key} format={spec} -->{text}<!-- /value -->"
 
 

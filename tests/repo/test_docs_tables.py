@@ -172,6 +172,16 @@ def test_a_value_is_one_field_of_its_file_and_a_wrong_key_is_one_line(tmp_path):
         with pytest.raises(ValueError, match=f"out.json: {re.escape(key)}: {error}"):
             tables.expand(f"<!-- value: study/out.json {key} -->", sources)
     assert "not in this build" in tables.expand("<!-- value: other/x.json a -->", sources)
+    (path.parent / "rows.csv").write_text("label,m,rmse_um\ngreedy,2,1.9193\ngreedy,3,1.33\n"
+                                          "fuzzy,2,\n", encoding="utf-8")
+    page = tables.expand("<!-- value: study/rows.csv [label=greedy,m=3].rmse_um .2f -->, "
+                         "<!-- value: study/rows.csv [m=2.0,label=greedy].rmse_um .1f -->",
+                         sources)
+    assert [m[3] for m in tables.VALUE_OUT.findall(page)] == ["1.33", "1.9"]
+    for key, error in (("[label=fuzzy,m=2].rmse_um", "is not one value"),  # an empty cell
+                       ("[m=2].rmse_um", "2 items have m=2")):
+        with pytest.raises(ValueError, match=re.escape(f"rows.csv: {key}: {error}")):
+            tables.expand(f"<!-- value: study/rows.csv {key} -->", sources)
     path.write_text(path.read_text(encoding="utf-8").replace("43.094106", "44.0"),
                     encoding="utf-8")
     assert tables.value_text(path, "rows.0.cpu_s", ".1f") != shown[0]  # the check would fail
