@@ -1661,7 +1661,7 @@ def calibration_section(key: str | None, sources: Sources) -> str:
 #:
 #: It becomes ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
 #: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
-VALUE = re.compile(r'<!-- value: (\S+) ("[^"]+"|\S+)(?: (\S+))? -->')
+VALUE = re.compile(r'(?<!`)<!-- value: (\S+) ("[^"]+"|\S+)(?: (\S+))? -->')  # not in `code`
 VALUE_OUT = re.compile(r'<!-- value from=(\S+) key=("[^"]+"|\S+) format=(\S+) -->(.*?)'
                        r"<!-- /value -->")
 
@@ -1747,7 +1747,7 @@ def value_section(name: str, key: str, spec: str | None, sources: Sources) -> st
     spec = spec or "-"
     path = value_file(name, sources)
     if path is None:
-        return f"*(`{name}` is not in this build)*"
+        return f"*(value: `{name}` is not in this build)*"
     source = sources.name(path)
     text = formatted(field_of(value_document(path), key, source), spec)
     return f"<!-- value from={source} key={key} format={spec} -->{text}<!-- /value -->"

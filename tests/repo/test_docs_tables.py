@@ -137,7 +137,8 @@ def test_every_value_in_prose_reads_again_from_its_file(pages):
     and reading that field again from the file alone gives the same text."""
     checked = 0
     for name, text in pages.items():
-        assert "<!-- value:" not in text, f"{name}: a value line was not expanded"
+        assert not tables.VALUE.search(text), f"{name}: a value line was not expanded"
+        assert "(value: `" not in text, f"{name}: a value's file is missing"
         for source, key, spec, shown in tables.VALUE_OUT.findall(text):
             assert tables.value_text(tables.Sources().path(source), key, spec) == shown, \
                 f"{name}: {key} of {source} is no longer {shown}"
@@ -172,6 +173,8 @@ def test_a_value_is_one_field_of_its_file_and_a_wrong_key_is_one_line(tmp_path):
         with pytest.raises(ValueError, match=f"out.json: {re.escape(key)}: {error}"):
             tables.expand(f"<!-- value: study/out.json {key} -->", sources)
     assert "not in this build" in tables.expand("<!-- value: other/x.json a -->", sources)
+    assert tables.expand("`<!-- value: FILE PATH -->`", sources) == \
+        "`<!-- value: FILE PATH -->`"  # the form quoted in code stays as written
     (path.parent / "rows.csv").write_text("label,m,rmse_um\ngreedy,2,1.9193\ngreedy,3,1.33\n"
                                           "fuzzy,2,\n", encoding="utf-8")
     page = tables.expand("<!-- value: study/rows.csv [label=greedy,m=3].rmse_um .2f -->, "
