@@ -18,6 +18,11 @@ that file's provenance::
 ``regenerate(by, source, key)``, which must give the same table from that file: a table typed
 by hand has no marker and must be listed there with the reason it is typed.
 
+A number in a sentence is read the same way, inline: ``<!-- value: FILE PATH [FORMAT] -->``
+(``VALUE``: one field of a JSON file) becomes the formatted field with a marker naming file
+and key, and the same test reads each again; ``tests/repo/test_docs_prose_numbers.py`` keeps
+typed numbers with units out of the prose.
+
 Sources (``Sources``, the checkout's by default):
 
 - ``bench/results/*.json`` (``bench/results.py record()``: machine, load, date and commit once
@@ -1640,6 +1645,119 @@ def calibration_section(key: str | None, sources: Sources) -> str:
     return block("calibration", source, key, provenance, calibration_table(path, key))
 
 
+# --------------------------------------------------------------------------- values in prose
+
+#: One number of a sentence, read from a file a command wrote: ``<!-- value: FILE PATH
+#: [FORMAT] -->`` (inline, anywhere in a line).
+#:
+#: - FILE: ``bench/...`` or ``docs/...`` (the checkout's), or a name under ``results/`` (its
+#:   committed copy under ``docs/snapshots/`` where the command has not been run here); a JSON
+#:   file, or a CSV file as its list of rows (numbers as floats, an empty cell None).
+#: - PATH: the field, dot-separated: a key, a list's index, ``[KEY=VALUE]`` for the one item of
+#:   a list whose KEY is VALUE (``rows.[hours=39.0].cpu_s``; ``[label=greedy,m=2]``: both),
+#:   ``[KEY]`` for a key holding dots; the whole PATH in double quotes when a key has spaces
+#:   (``"range_um.[X at 0.8 m].min"``).
+#: - FORMAT: a Python format spec (``.1f``; ``-`` or none: ``number``).
+#:
+#: It becomes ``<!-- value from=FILE key=PATH format=FORMAT -->43.1<!-- /value -->``, which
+#: ``tests/repo/test_docs_tables.py`` reads again from the file alone.
+VALUE = re.compile(r'(?<!`)<!-- value: (\S+) ("[^"]+"|\S+)(?: (\S+))? -->')  # not in `code`
+VALUE_OUT = re.compile(r'<!-- value from=(\S+) key=("[^"]+"|\S+) format=(\S+) -->(.*?)'
+                       r"<!-- /value -->")
+
+
+def value_file(name: str, sources: Sources) -> Path | None:
+    """Where ``<!-- value: NAME ... -->`` reads: the checkout's file for ``bench/`` and
+    ``docs/`` names, else ``results/NAME`` or its snapshot; None when there is none."""
+    if name.startswith(("bench/", "docs/")):
+        path = sources.bench / name.removeprefix("bench/results/") \
+            if name.startswith("bench/results/") else sources.root / name
+        return path if path.is_file() else None
+    return _results_or_snapshot(name, sources)
+
+
+def field_of(document: Any, key: str, where: str) -> Any:
+    """The field ``key`` (dot-separated, see ``VALUE``) of a JSON document; a missing field
+    is a one-line error naming the file and the key."""
+    value = document
+    key = key.strip('"')
+    for part in re.findall(r"\[[^\]]*\]|[^.]+", key):
+        selector = re.fullmatch(r"\[(\w+=[^\],]*(?:,\w+=[^\],]*)*)\]", part)
+        literal = re.fullmatch(r"\[([^=\]]+)\]", part)
+        part = literal.group(1) if literal else part
+        if selector and isinstance(value, list):
+            wanted = dict(c.split("=", 1) for c in selector.group(1).split(","))
+            found = [item for item in value if isinstance(item, dict) and
+                     all(_matches(item.get(k), v) for k, v in wanted.items())]
+            if len(found) != 1:
+                raise ValueError(f"{where}: {key}: {len(found)} items have {selector.group(1)}")
+            value = found[0]
+        elif isinstance(value, list) and re.fullmatch(r"-?\d+", part):
+            try:
+                value = value[int(part)]
+            except IndexError:
+                raise ValueError(f"{where}: {key}: no item {part}") from None
+        elif isinstance(value, dict) and part in value:
+            value = value[part]
+        else:
+            raise ValueError(f"{where}: {key}: no field {part!r}")
+    if isinstance(value, dict | list) or value is None:
+        raise ValueError(f"{where}: {key}: is not one value")
+    return value
+
+
+def _matches(value: Any, wanted: str) -> bool:
+    """A selector's condition: the field's text, or the same number (``m=2`` finds 2.0)."""
+    if str(value) == wanted:
+        return True
+    try:
+        return float(value) == float(wanted)
+    except (TypeError, ValueError):
+        return False
+
+
+def _cell(text: str) -> Any:
+    try:
+        return float(text)
+    except ValueError:
+        return text if text else None
+
+
+def value_document(path: Path) -> Any:
+    """A JSON file as parsed; a CSV file as its rows, numbers as floats, empty cells None."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".csv":
+        import csv
+        import io
+
+        return [{k: _cell(v) for k, v in row.items()} for row in csv.DictReader(io.StringIO(text))]
+    return json.loads(text)
+
+
+def formatted(value: Any, spec: str) -> str:
+    return number(value) if spec == "-" else format(value, spec)
+
+
+def value_text(path: Path, key: str, spec: str) -> str:
+    """One value as a page shows it, read again from ``path`` (the check's entry point)."""
+    return formatted(field_of(value_document(path), key, str(path)), spec)
+
+
+def value_section(name: str, key: str, spec: str | None, sources: Sources) -> str:
+    spec = spec or "-"
+    path = value_file(name, sources)
+    if path is None:
+        return f"*(value: `{name}` is not in this build)*"
+    source = sources.name(path)
+    text = formatted(field_of(value_document(path), key, source), spec)
+    return f"<!-- value from={source} key={key} format={spec} -->{text}<!-- /value -->"
+
+
+def expand_values(markdown: str, sources: Sources) -> str:
+    return VALUE.sub(lambda m: value_section(m.group(1), m.group(2), m.group(3), sources),
+                     markdown)
+
+
 # --------------------------------------------------------------------------- pages
 
 def section(by: str, key: str | None, sources: Sources) -> str:
@@ -1692,9 +1810,11 @@ def section(by: str, key: str | None, sources: Sources) -> str:
 
 
 def expand(markdown: str, sources: Sources | None = None) -> str:
-    """Every ``<!-- generate: ... -->`` line of a page replaced by its table(s)."""
+    """Every ``<!-- generate: ... -->`` line of a page replaced by its table(s), and every
+    inline ``<!-- value: ... -->`` by its value."""
     sources = sources or Sources()
-    return PLACEHOLDER.sub(lambda m: section(m.group(1), m.group(2), sources), markdown)
+    markdown = PLACEHOLDER.sub(lambda m: section(m.group(1), m.group(2), sources), markdown)
+    return expand_values(markdown, sources)
 
 
 def regenerate(by: str, source: str, key: str | None, sources: Sources | None = None) -> str:

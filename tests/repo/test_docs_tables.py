@@ -12,6 +12,7 @@ gone must leave the list).
 from __future__ import annotations
 
 import importlib
+import re
 import shutil
 import sys
 
@@ -129,6 +130,64 @@ def test_every_table_is_generated_from_its_file_or_listed_as_typed(pages):
     gone = set(hand) - seen_hand
     assert not gone, f"listed as typed but no longer in the docs: {sorted(gone)}"
     assert checked >= 1
+
+
+def test_every_value_in_prose_reads_again_from_its_file(pages):
+    """Each ``<!-- value: ... -->`` of a page became its file's field (``tables.VALUE_OUT``),
+    and reading that field again from the file alone gives the same text."""
+    checked = 0
+    for name, text in pages.items():
+        assert not tables.VALUE.search(text), f"{name}: a value line was not expanded"
+        assert "(value: `" not in text, f"{name}: a value's file is missing"
+        for source, key, spec, shown in tables.VALUE_OUT.findall(text):
+            assert tables.value_text(tables.Sources().path(source), key, spec) == shown, \
+                f"{name}: {key} of {source} is no longer {shown}"
+            checked += 1
+    assert checked >= 10
+
+
+def test_a_value_is_one_field_of_its_file_and_a_wrong_key_is_one_line(tmp_path):
+    """The value form's paths (key, index, ``[KEY=VALUE]`` item), its formats, the snapshot
+    fallback, and a missing field or item named with the file and key."""
+    import json
+
+    path = tmp_path / "snapshots" / "study" / "out.json"
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps({"goals": {"cpu_s": 120.0}, "the goals": {"a 0.8 m": 3.2}, "rows": [
+        {"fit": "a", "hours": 39.0, "cpu_s": 43.094106}, {"fit": "b", "hours": 46.3,
+                                                          "cpu_s": 47.2671, "share": 0.0187}]}),
+        encoding="utf-8")
+    sources = tables.Sources(root=tmp_path, results=tmp_path / "results",
+                             snapshots=tmp_path / "snapshots")
+    page = tables.expand("took <!-- value: study/out.json rows.0.cpu_s .1f --> CPU-s, then "
+                         "<!-- value: study/out.json rows.[hours=46.3].cpu_s .2f --> "
+                         "(<!-- value: study/out.json rows.-1.share .1% -->, goal "
+                         "<!-- value: study/out.json goals.cpu_s -->, "
+                         '<!-- value: study/out.json "the goals.[a 0.8 m]" .0f -->)\n', sources)
+    shown = [m[3] for m in tables.VALUE_OUT.findall(page)]
+    assert shown == ["43.1", "47.27", "1.9%", "120", "3"]
+    assert "not in this build" not in page
+    assert "from=snapshots/study/out.json key=rows.0.cpu_s" in page
+    for key, error in (("rows.2.cpu_s", "no item 2"), ("rows.[hours=1].cpu_s", "0 items"),
+                       ("goals.wall_s", "no field 'wall_s'"), ("rows", "is not one value")):
+        with pytest.raises(ValueError, match=f"out.json: {re.escape(key)}: {error}"):
+            tables.expand(f"<!-- value: study/out.json {key} -->", sources)
+    assert "not in this build" in tables.expand("<!-- value: other/x.json a -->", sources)
+    assert tables.expand("`<!-- value: FILE PATH -->`", sources) == \
+        "`<!-- value: FILE PATH -->`"  # the form quoted in code stays as written
+    (path.parent / "rows.csv").write_text("label,m,rmse_um\ngreedy,2,1.9193\ngreedy,3,1.33\n"
+                                          "fuzzy,2,\n", encoding="utf-8")
+    page = tables.expand("<!-- value: study/rows.csv [label=greedy,m=3].rmse_um .2f -->, "
+                         "<!-- value: study/rows.csv [m=2.0,label=greedy].rmse_um .1f -->",
+                         sources)
+    assert [m[3] for m in tables.VALUE_OUT.findall(page)] == ["1.33", "1.9"]
+    for key, error in (("[label=fuzzy,m=2].rmse_um", "is not one value"),  # an empty cell
+                       ("[m=2].rmse_um", "2 items have m=2")):
+        with pytest.raises(ValueError, match=re.escape(f"rows.csv: {key}: {error}")):
+            tables.expand(f"<!-- value: study/rows.csv {key} -->", sources)
+    path.write_text(path.read_text(encoding="utf-8").replace("43.094106", "44.0"),
+                    encoding="utf-8")
+    assert tables.value_text(path, "rows.0.cpu_s", ".1f") != shown[0]  # the check would fail
 
 
 def test_the_generated_pages_name_their_tables_and_the_speed_page_reads_every_bench_file():
