@@ -167,13 +167,15 @@ def d_margin(r, scale, spread):  # pragma: no cover (compiled)
 
 
 @njit(cache=True, nogil=True)
-def _count(c, fixed, margin, threshold):  # pragma: no cover (compiled)
-    """How many candidates may pass the screen: an integer reduction, so vectorised without
-    fast-math (IEEE float32 comparisons, the same as the scalar test's; as fast here)."""
-    hits = 0
+def _any(c, fixed, margin, threshold):  # pragma: no cover (compiled)
+    """Whether a candidate may pass the screen: an OR of IEEE float32 comparisons (the same
+    as the scalar test's), vectorised without fast-math. A boolean OR, not a count: LLVM
+    keeps it in mask registers, 8 candidates a step (0.10 ns a visit here), where a count
+    was widened to int64 lanes, 4 a step (0.16 ns)."""
+    hit = False
     for t in range(threshold.shape[0]):
-        hits += np.int32(1) if abs(fixed - c[t]) + margin > threshold[t] else np.int32(0)
-    return hits
+        hit |= abs(fixed - c[t]) + margin > threshold[t]
+    return hit
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -247,15 +249,15 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
                 blocks[block, 2], blocks[block, 3]
             fixed = c[fixed_index]
             counts[0] += count
-            if screen and _count(c[k0:k0 + count], fixed, margin,
-                                 threshold[offset:offset + count]) == 0:
+            if screen and not _any(c[k0:k0 + count], fixed, margin,
+                                   threshold[offset:offset + count]):
                 continue
             top = tops[block]
             lowered = False
             for chunk in range(0, count, CHUNK):
                 end = min(count, chunk + CHUNK)
-                if screen and _count(c[k0 + chunk:k0 + end], fixed, margin,
-                                     threshold[offset + chunk:offset + end]) == 0:
+                if screen and not _any(c[k0 + chunk:k0 + end], fixed, margin,
+                                       threshold[offset + chunk:offset + end]):
                     continue
                 for t in range(chunk, end):
                     w = offset + t
