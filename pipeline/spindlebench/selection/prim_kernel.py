@@ -59,12 +59,20 @@ UNIT32 = 2.0 ** -24
 
 @njit(cache=True, nogil=True)
 def block_top(high, outside, offset, count):  # pragma: no cover (compiled)
-    """The block's outside candidate with the largest ``high``, the first on ties (-1: none)."""
-    top = -1
+    """The block's outside candidate with the largest ``high``, the first on ties (-1: none).
+
+    Two branch-free-ish passes (the largest high, then the first outside candidate holding
+    it), ~30 % faster than one pass that tests ``outside`` at every step: candidates not
+    outside hold high = -inf (set when a vertex joins; the others never get a link), so the
+    largest high over the block is the largest over the outside ones, and with -inf (no
+    link yet) the first outside candidate is the first on ties, as before."""
+    best = -np.inf
     for j in range(offset, offset + count):
-        if outside[j] and (top < 0 or high[j] > high[top]):
-            top = j
-    return top
+        best = max(best, high[j])
+    for j in range(offset, offset + count):
+        if outside[j] and high[j] == best:
+            return j
+    return -1
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -247,13 +255,14 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
         for j in range(m):
             c[j] = np.float32((gram[a, j] - gram[b, j]) * scale)
         margin = row_margin(r, scale, (norms[a] + norms[b]) * norm_bound)
+        visits = 0  # counted here, stored once a row (a store per block is a chain of them)
         for block in range(blocks.shape[0]):
             if block_alive[block] == 0:
                 continue
             fixed_index, k0, offset, count = blocks[block, 0], blocks[block, 1], \
                 blocks[block, 2], blocks[block, 3]
             fixed = c[fixed_index]
-            counts[0] += count
+            visits += count
             if screen and not _any(c, k0, threshold, offset, count, fixed, margin):
                 continue
             top = tops[block]
@@ -270,7 +279,10 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
                         continue
                     counts[1] += 1
                     if screen:  # the float64 Gram value and its own, tighter, bound
-                        i, k = first[w], second[w]
+                        # w's sensors from its block, not from first/second (8 MB read at
+                        # random): the raw block has them swapped, (m, k) for (k, m), which
+                        # gives the same bits (|x - y| = |y - x|, a sum of two norms).
+                        i, k = fixed_index, k0 + t
                         d = abs((gram[a, i] - gram[b, i]) - (gram[a, k] - gram[b, k])) * scale
                         spread = d_margin(r, scale, (norms[a] + norms[b])
                                           * (norms[i] + norms[k])) * inverse_norm[w]
@@ -304,6 +316,7 @@ def prim_blocks(factor_rows, gram, norms, first, second, inverse_norm, lengths, 
                         if _before(w, top, high):
                             top = w
             tops[block] = block_top(high, outside, offset, count) if lowered else top
+        counts[0] += visits
 
 
 @njit(cache=True, nogil=True, inline="always")
