@@ -78,3 +78,20 @@ def test_screened_tree_of_differences_only(monkeypatch):
     np.testing.assert_array_equal(screened.parent, reference.parent)
     np.testing.assert_array_equal(screened.weight.view(np.int64),
                                   reference.weight.view(np.int64))
+
+
+def test_block_top_is_the_first_outside_candidate_with_the_largest_link():
+    """``block_top``'s two passes against the definition, on the kernel's invariant
+    (candidates not outside hold -inf), with ties and blocks with no link yet or none
+    outside."""
+    from spindlebench.selection.prim_kernel import block_top
+
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        high = rng.choice([-np.inf, 0.25, 0.5, 0.5, 1.0], size=40)
+        outside = rng.uniform(size=40) < rng.uniform()
+        high[~outside] = -np.inf
+        offset, count = int(rng.integers(0, 20)), int(rng.integers(1, 21))
+        inside = [j for j in range(offset, offset + count) if outside[j]]
+        expected = max(inside, key=lambda j: (high[j], -j)) if inside else -1
+        assert block_top(high, outside, offset, count) == expected
