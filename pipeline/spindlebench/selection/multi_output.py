@@ -62,6 +62,16 @@ class _MultiOutputSelector(SupportFromSelected):
         _budget(self.k, X.shape[1])
         return X, Y
 
+    def _standardised_data(self, X, y):
+        """``_data``, standardised (``_standardised``), refused if fewer than ``k`` candidates
+        vary: ``X``, ``Z``, ``W`` and the mask of the varying columns."""
+        X, Y = self._data(X, y)
+        Z, W, varying = _standardised(X, Y)
+        if varying.sum() < self.k:
+            raise SelectionError(f"only {int(varying.sum())} candidate(s) vary; cannot select "
+                                 f"{self.k}")
+        return X, Z, W, varying
+
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.target_tags.multi_output = True
@@ -104,11 +114,7 @@ class MultiTaskLassoSelector(_MultiOutputSelector):
         """Compute the multi-task path on standardised data and keep its first k entries."""
         from sklearn.linear_model import lasso_path
 
-        X, Y = self._data(X, y)
-        Z, W, varying = _standardised(X, Y)
-        if varying.sum() < self.k:
-            raise SelectionError(f"only {int(varying.sum())} candidate(s) vary; cannot select "
-                                 f"{self.k}")
+        X, Z, W, varying = self._standardised_data(X, y)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # convergence warnings at tiny penalties
             _, coefs, _ = lasso_path(Z[:, varying], W, eps=PATH_EPS, alphas=PATH_ALPHAS)
@@ -156,11 +162,8 @@ class PLSVIPSelector(_MultiOutputSelector):
         """Fit PLS on standardised data, rank the candidates by VIP, keep the first k."""
         from sklearn.cross_decomposition import PLSRegression
 
-        X, Y = self._data(X, y)
-        Z, W, varying = _standardised(X, Y)
+        X, Z, W, varying = self._standardised_data(X, y)
         p = int(varying.sum())
-        if p < self.k:
-            raise SelectionError(f"only {p} candidate(s) vary; cannot select {self.k}")
         components = max(1, min(self.k, p, len(Z) - 1))
         pls = PLSRegression(n_components=components, scale=False).fit(Z[:, varying], W)
         t, w, q = pls.x_scores_, pls.x_weights_, pls.y_loadings_
