@@ -19,7 +19,7 @@ from spindlebench.core.names import ALL_RAW, SIX_DIFF, SIX_RAW
 from spindlebench.studies.family.population import TABLE_FILE, Member, Population
 from spindlebench.studies.family.population_summary import (
     on_machines,
-    write_population_provenance,
+    write_population_readme,
 )
 
 SUMMARY_FILE = "summary.csv"
@@ -98,7 +98,4 @@ def compensation_population_report(out: Path, population: Population, members: l
     missing = sorted({m.name for m in kept} - set(rows["machine"]))
     if missing:
         lines += ["", f"No summary (see their folders): {', '.join(missing)}."]
-    text = "\n".join(lines) + "\n"
-    atomic.write_text(out / "README.md", text)
-    write_population_provenance(out, population, members, study_path, fmu)
-    return text
+    return write_population_readme(out, lines, population, members, study_path, fmu)

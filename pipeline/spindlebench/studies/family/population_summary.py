@@ -1,4 +1,5 @@
-"""What every population report shares: "on how many machines" in words, and its provenance.
+"""What every population report shares: "on how many machines" in words, how its README and
+provenance are written.
 
 A study kind (sweep, placement, compensation) reads its own per-machine outputs and decides,
 machine by machine, whether a conclusion holds there; how that count is written and what the
@@ -29,3 +30,13 @@ def write_population_provenance(out: Path, population: Population, members: list
               "seed": population.seed, "machines_sha256": population_sha256(members),
               "package_versions": package_versions()}
     atomic.write_text(out / "provenance.json", json.dumps(record, indent=2) + "\n")
+
+
+def write_population_readme(out: Path, lines: list[str], population: Population,
+                            members: list[Member], study_path: Path, fmu: Path) -> str:
+    """Write a population report's ``README.md`` (``lines``) and its ``provenance.json``
+    into ``out``; return the README text."""
+    text = "\n".join(lines) + "\n"
+    atomic.write_text(out / "README.md", text)
+    write_population_provenance(out, population, members, study_path, fmu)
+    return text

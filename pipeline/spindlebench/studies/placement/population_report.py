@@ -18,7 +18,7 @@ from spindlebench.core import atomic
 from spindlebench.studies.family.population import TABLE_FILE, Member, Population
 from spindlebench.studies.family.population_summary import (
     on_machines,
-    write_population_provenance,
+    write_population_readme,
 )
 
 PLACEMENTS_FILE = "placements.csv"
@@ -84,7 +84,4 @@ def placement_population_report(out: Path, population: Population, members: list
     missing = sorted({m.name for m in kept} - set(rows["machine"]))
     if missing:
         lines += ["", f"No placements (see their folders): {', '.join(missing)}."]
-    text = "\n".join(lines) + "\n"
-    atomic.write_text(out / "README.md", text)
-    write_population_provenance(out, population, members, study_path, fmu)
-    return text
+    return write_population_readme(out, lines, population, members, study_path, fmu)

@@ -20,7 +20,7 @@ from spindlebench.core import atomic
 from spindlebench.studies.family.population import TABLE_FILE, Member, Population
 from spindlebench.studies.family.population_summary import (
     on_machines,
-    write_population_provenance,
+    write_population_readme,
 )
 
 VERDICT_FILE = Path("summary") / "verdict.csv"
@@ -103,7 +103,4 @@ def sweep_population_report(out: Path, population: Population, members: list[Mem
         if values.size and np.isfinite(values).any():
             lines.append(f"| {key.removeprefix('median_')} | {np.nanmin(values):.3f} | "
                          f"{np.nanmedian(values):.3f} | {np.nanmax(values):.3f} |")
-    text = "\n".join(lines) + "\n"
-    atomic.write_text(out / "README.md", text)
-    write_population_provenance(out, population, members, study_path, fmu)
-    return text
+    return write_population_readme(out, lines, population, members, study_path, fmu)
