@@ -230,6 +230,16 @@ def target_truth_columns(target: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys([*(true_column(p) for p in RADIAL_PROBES), true_column(target)]))
 
 
+def one_target_readme(text: str, target: str, study_kind: str, joint: str) -> str:
+    """A study README for one of several targets: a line under its title saying which target
+    this folder is for and where the ``joint`` results of all targets are (``../README.md``);
+    ``study_kind`` names the study ("sweep", "study")."""
+    title, rest = text.split("\n", 1)
+    return (f"{title} — target `{target}`\n\nThis folder is the {study_kind} for the target "
+            f"`{target}` alone (RMSE in its unit; 'drift' below means it); the {joint} of all "
+            "targets are in `../README.md`.\n" + rest)
+
+
 def probe_geometry_m(study: SweepStudy, fmu) -> tuple[float, float]:
     """(l, end-face offset) in m of the five-probe set-up of the study's runs: the machine's
     and the study's parameters on top of the FMU's defaults, as ``scenario_for`` gives them

@@ -30,6 +30,7 @@ from spindlebench.selection import rmse
 from spindlebench.selection.registry import methods_record
 from spindlebench.studies.family.experiments import (
     experiments,
+    one_target_readme,
     replicas,
     sensor_seed,
     training_experiments,
@@ -244,10 +245,7 @@ def write_outputs(work: PlacementStudyRun, outcome: PlacementOutcome, runner: Ta
     store.write_json("provenance.json", record_)
     text = report.readme(study, outcome, figures, record_, work.trains, scored_replicas)
     if store is not work.store:  # one of several targets: say which, under the title
-        title, rest = text.split("\n", 1)
-        text = (f"{title} — target `{outcome.target}`\n\nThis folder is the study for the "
-                f"target `{outcome.target}` alone (RMSE in its unit; 'drift' below means "
-                "it); the joint placements of all targets are in `../README.md`.\n" + rest)
+        text = one_target_readme(text, outcome.target, "study", "joint placements")
     write_text(store.path("README.md"), text)
 
 

@@ -41,6 +41,7 @@ from spindlebench.studies.family.experiments import (
     Experiment,
     conditions,
     experiments,
+    one_target_readme,
     probe_geometry_m,
     replicas,
     sensor_seed,
@@ -376,10 +377,7 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
     store.write_json("provenance.json", record)
     text = report.readme(study, results, tables, figures, record, sweep.trains)
     if store is not sweep.store:  # one of several targets: say which, under the title
-        title, rest = text.split("\n", 1)
-        text = (f"{title} — target `{sweep.target}`\n\nThis folder is the sweep for the "
-                f"target `{sweep.target}` alone (RMSE in its unit; 'drift' below means it); "
-                "the joint selections of all targets are in `../README.md`.\n" + rest)
+        text = one_target_readme(text, sweep.target, "sweep", "joint selections")
     write_text(store.path("README.md"), text)
 
 
