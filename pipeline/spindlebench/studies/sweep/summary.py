@@ -18,6 +18,9 @@ paper's groups, the other selection methods on them, the baselines) within the s
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
@@ -28,6 +31,8 @@ RAW = (ALL_RAW, SIX_RAW)
 CASE = ["data", "replica", "noise", "fault", "train_experiment", "test_experiment"]
 SLICES = ("noise", "fault", "test_season", "test_month", "test_speed_rpm", "test_programme",
           "test_cooling", "train_experiment")
+#: The code of k for the methods without one (``Scored.codes("k")``).
+NO_K_KEY = -1
 
 
 def _stats(values: pd.Series) -> pd.Series:
@@ -68,31 +73,117 @@ def by_season(results: pd.DataFrame) -> pd.DataFrame:
             .rename("median_um").reset_index())
 
 
-def stability(results: pd.DataFrame) -> pd.DataFrame:
-    """Spread across k, across seasons and across held-out runs, per data and method."""
+class Scored:
+    """The scored rows of a results table, its key columns as integer codes (each in the
+    sorted order of its values), each coded once for every table computed from them.
+
+    Grouping by the codes gives the groups in the order grouping by the columns does
+    (sorted, or by first appearance with ``sort=False``) but hashes integers: factorising
+    the text columns of a 1 000-run sweep's 380 000 rows again for every grouping was most
+    of the summary's time. The key columns of a results table have no missing values; k is
+    ``NO_K_KEY`` for a method without one (a missing key would drop its rows).
+    """
+
+    def __init__(self, results: pd.DataFrame) -> None:
+        self.frame = ok_rows(results)
+        self.rmse = self.frame["rmse_um"].to_numpy()
+        self._codes: dict[str, np.ndarray] = {}
+        self._labels: dict[str, pd.Index] = {}
+
+    def codes(self, column: str) -> np.ndarray:
+        if column not in self._codes:
+            if column == "k":
+                self._codes[column] = self.frame["k"].fillna(NO_K_KEY).to_numpy(dtype=np.int64)
+            else:
+                self._codes[column], self._labels[column] = pd.factorize(
+                    self.frame[column], sort=True)
+        return self._codes[column]
+
+    def label(self, column: str, code: int) -> Any:
+        """The value a code stands for (k: the int, or None for a method without k)."""
+        if column == "k":
+            return None if code == NO_K_KEY else int(code)
+        return self._labels[column][code]
+
+    def code(self, column: str, value: Any) -> int:
+        """The code of ``value`` in ``column``, -1 if no scored row has it."""
+        self.codes(column)
+        labels = self._labels[column]
+        return int(labels.get_loc(value)) if value in labels else -1
+
+    def reduced(self, columns: Sequence[str], how: str | list[str],
+                rows: np.ndarray | slice = slice(None), sort: bool = True,
+                values: np.ndarray | None = None) -> pd.Series | pd.DataFrame:
+        """``values`` (the RMSE) of ``rows`` grouped by ``columns`` and reduced by ``how``
+        (``SeriesGroupBy.agg``), indexed by the columns' codes.
+
+        The codes are grouped as one integer (their place in the grid of all combinations),
+        the order a grouping by the columns gives: pandas factorises each key of a grouping
+        again, and those passes were half of what was left of the summary's time."""
+        codes = [self.codes(c)[rows] + 1 for c in columns]  # k's NO_K_KEY is -1
+        shape = [int(c.max()) + 1 if len(c) else 1 for c in codes]
+        key = np.ravel_multi_index(codes, shape)
+        reduced = pd.Series(self.rmse[rows] if values is None else values).groupby(
+            key, sort=sort).agg(how)
+        reduced.index = pd.MultiIndex.from_arrays(
+            [c - 1 for c in np.unravel_index(reduced.index.to_numpy(), shape)])
+        return reduced
+
+    def slice_axes(self, rows: np.ndarray) -> list[str]:
+        """The study axes the claim and the ranking are sliced by: those with more than one
+        value in ``rows``, but not the month where each season has one month (its slices
+        would repeat the season's)."""
+        counts = {axis: np.count_nonzero(np.bincount(self.codes(axis)[rows]))
+                  for axis in (*SLICES, "test_season")}  # values present (a sort took 5x)
+        return [axis for axis in SLICES if counts[axis] > 1 and not (
+            axis == "test_month" and counts["test_month"] == counts["test_season"])]
+
+    def label_text(self, column: str, code: int) -> str:
+        """A slice's value as the tables name it: a float in its shortest form."""
+        value = self.label(column, code)
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def stability(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
+    """Spread across k, across seasons and across held-out runs, per data and method.
+
+    Every spread is one grouped reduction over the whole table, looked up per data, method
+    and k (a grouping per method and k, by text columns, took five times as long on a
+    1 000-run sweep)."""
+    scored = scored or Scored(results)
+    k = scored.codes("k")
+    with_k = np.flatnonzero(k != NO_K_KEY)
+    by_case = scored.reduced(["data", "method", *CASE[1:]], ["max", "min"], with_k)
+    k_spread = (by_case["max"] - by_case["min"]).groupby(level=[0, 1]).median()
+    medians_k = scored.reduced(["data", "method", "k"], "median", with_k)
+    k_range = medians_k.groupby(level=[0, 1]).agg(["max", "min"])
+    n_k = medians_k.groupby(level=[0, 1]).size()
+    seasons: dict[tuple, dict[str, float]] = {}
+    for (kind, method, at, season), median in scored.reduced(
+            ["data", "method", "k", "test_season"], "median").items():
+        seasons.setdefault((kind, method, at), {})[scored.label("test_season", season)] = median
+    experiment_sd = (scored.reduced(["data", "method", "k", "replica", "noise", "fault",
+                                     "train_experiment"], "std")
+                     .groupby(level=[0, 1, 2]).median())
+    ks: dict[tuple, list[int]] = {}  # per data and method, its k in the order they come
+    for kind, method, at in scored.reduced(["data", "method", "k"], "size", sort=False).index:
+        ks.setdefault((kind, method), []).append(at)
     rows = []
-    data = ok_rows(results)
-    for (kind, method), group in data.groupby(["data", "method"], sort=False):
-        with_k = group[group["k"].notna()]
-        if with_k["k"].nunique() > 1:
-            # max and min as grouped reductions, not a Python function per case: the same
-            # values, 50x faster (a lambda per case was half of a 1 000-run sweep's outputs)
-            by_case = with_k.groupby(CASE)["rmse_um"]
-            per_case = by_case.max() - by_case.min()
-            medians_k = with_k.groupby("k")["rmse_um"].median()
-            k_spread, k_median_range = per_case.median(), medians_k.max() - medians_k.min()
+    for (kind, method), at in ((pair, at) for pair, all_k in ks.items() for at in all_k):
+        if n_k.get((kind, method), 0) > 1:
+            spread = k_spread[(kind, method)]
+            median_range = k_range.loc[(kind, method), "max"] - k_range.loc[(kind, method), "min"]
         else:
-            k_spread = k_median_range = np.nan
-        for k, at_k in group.groupby("k", dropna=False, sort=False):
-            seasons = at_k.groupby("test_season")["rmse_um"].median()
-            per_training = at_k.groupby(["replica", "noise", "fault", "train_experiment"])
-            experiment_sd = per_training["rmse_um"].std().median()
-            rows.append({"data": kind, "method": method, "k": k,
-                         "k_spread_um": k_spread, "k_median_range_um": k_median_range,
-                         "season_spread_um": seasons.max() - seasons.min()
-                         if len(seasons) > 1 else np.nan,
-                         "worst_season": seasons.idxmax() if len(seasons) else "",
-                         "experiment_sd_um": experiment_sd})
+            spread = median_range = np.nan
+        by_season = seasons.get((kind, method, at), {})
+        rows.append({"data": scored.label("data", kind), "method": scored.label("method", method),
+                     "k": scored.label("k", at), "k_spread_um": spread,
+                     "k_median_range_um": median_range,
+                     "season_spread_um": max(by_season.values()) - min(by_season.values())
+                     if len(by_season) > 1 else np.nan,
+                     "worst_season": max(by_season, key=by_season.__getitem__)
+                     if by_season else "",
+                     "experiment_sd_um": experiment_sd.get((kind, method, at), np.nan)})
     table = pd.DataFrame(rows)
     if len(table):
         table["k"] = table["k"].astype("Int64")
@@ -146,30 +237,32 @@ def verdict(results: pd.DataFrame, summary: pd.DataFrame, stable: pd.DataFrame) 
     return pd.DataFrame(rows)
 
 
-def claim_by_slice(results: pd.DataFrame) -> pd.DataFrame:
+def claim_by_slice(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
     """Within each value of each axis, per k: median of ``six_diff`` against the better raw
     group (``versus = best-raw``) and against the same six sensors without differences
-    (``versus = six_raw``, the paper's like-for-like comparison)."""
+    (``versus = six_raw``, the paper's like-for-like comparison). The medians of each axis
+    come from one grouping (by value, k and method), in the order the values come."""
+    scored = scored or Scored(results)
+    groups = [scored.code("method", m) for m in (DIFF, *RAW)]
+    rows_at = np.flatnonzero((scored.codes("data") == scored.code("data", "measured"))
+                             & np.isin(scored.codes("method"), groups))
     rows = []
-    data = ok_rows(results)
-    data = data[(data["data"] == "measured") & data["method"].isin([DIFF, *RAW])]
-    for axis in SLICES:
-        if data[axis].nunique() < 2:
-            continue
-        if axis == "test_month" and data["test_month"].nunique() == data["test_season"].nunique():
-            continue  # one month per season: the month slices repeat the season slices
-        for (value, k), at in data.groupby([axis, "k"], sort=False):
-            medians = at.groupby("method")["rmse_um"].median()
+    for axis in scored.slice_axes(rows_at):
+        cells: dict[tuple, dict[str, float]] = {}
+        for (value, k, method), median in scored.reduced(
+                [axis, "k", "method"], "median", rows_at, sort=False).items():
+            cells.setdefault((value, k), {})[scored.label("method", method)] = median
+        for (value, k), medians in cells.items():
             if DIFF not in medians:
                 continue
-            raws = medians.drop(DIFF)
-            if isinstance(value, float):
-                value = f"{value:g}"
-            for versus, reference in (("best-raw", raws.idxmin() if len(raws) else None),
+            raws = {m: medians[m] for m in sorted(medians) if m != DIFF}
+            for versus, reference in (("best-raw", min(raws, key=raws.__getitem__)
+                                       if raws else None),
                                       (SIX_RAW, SIX_RAW if SIX_RAW in raws else None)):
                 if reference is None:
                     continue
-                rows.append({"axis": axis, "value": value, "k": int(k), "versus": versus,
+                rows.append({"axis": axis, "value": scored.label_text(axis, value),
+                             "k": scored.label("k", k), "versus": versus,
                              "diff_median_um": medians[DIFF], "reference": reference,
                              "reference_median_um": raws[reference],
                              "ratio": medians[DIFF] / raws[reference]
@@ -178,31 +271,35 @@ def claim_by_slice(results: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def rank_by_slice(results: pd.DataFrame) -> pd.DataFrame:
+def rank_by_slice(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
     """Every method (not the oracle) ranked by median held-out RMSE within each slice (axis
     value) and k, on measured data; ``all`` is the whole study. Methods without k (ridge)
-    take part at every k. Rank 1 is the lowest median."""
-    data = ok_rows(results)
-    data = data[(data["data"] == "measured") & (data["method"] != "oracle")]
-    ks = sorted(int(k) for k in data["k"].dropna().unique())
+    take part at every k. Rank 1 is the lowest median; equal medians rank in the order the
+    methods first come in the slice.
+
+    Each axis is one grouping by value, k and method (a method has a k on every row or on
+    none), not a grouping per slice and k."""
+    scored = scored or Scored(results)
+    rows_at = np.flatnonzero((scored.codes("data") == scored.code("data", "measured"))
+                             & (scored.codes("method") != scored.code("method", "oracle")))
+    ks = sorted(int(k) for k in np.unique(scored.codes("k")[rows_at]) if k != NO_K_KEY)
     rows = []
-    slices = [("all", "all", data)]
-    for axis in SLICES:
-        if data[axis].nunique() < 2:
-            continue
-        if axis == "test_month" and data["test_month"].nunique() == data["test_season"].nunique():
-            continue
-        slices += [(axis, f"{value:g}" if isinstance(value, float) else str(value), at)
-                   for value, at in data.groupby(axis, sort=False)]
-    for axis, value, at in slices:
-        for k in ks or [None]:
-            chosen = at[at["k"].isna() | (at["k"] == k)] if k is not None else at
-            medians = chosen.groupby("method", sort=False)["rmse_um"].median().sort_values(
-                kind="stable")
-            for rank, (method, median) in enumerate(medians.items(), start=1):
-                rows.append({"axis": axis, "value": value, "k": k, "rank": rank,
-                             "method": method, "median_um": median,
-                             "of": len(medians)})
+    for axis in [None, *scored.slice_axes(rows_at)]:
+        keys = ["k", "method"] if axis is None else [axis, "k", "method"]
+        first = scored.reduced(keys, "min", rows_at, sort=False, values=rows_at)
+        cells: dict[Any, dict[int, list[tuple[float, int, int]]]] = {}
+        for key, median in scored.reduced(keys, "median", rows_at, sort=False).items():
+            value, k, method = (None, *key) if axis is None else key
+            cells.setdefault(value, {}).setdefault(k, []).append((median, first[key], method))
+        for value, by_k in cells.items():
+            for k in ks or [None]:
+                chosen = sorted([*by_k.get(NO_K_KEY, []), *(by_k.get(k, []) if k else [])])
+                for rank, (median, _, method) in enumerate(chosen, start=1):
+                    rows.append({"axis": axis or "all",
+                                 "value": "all" if axis is None
+                                 else scored.label_text(axis, value),
+                                 "k": k, "rank": rank, "method": scored.label("method", method),
+                                 "median_um": median, "of": len(chosen)})
     table = pd.DataFrame(rows)
     if len(table):
         table["k"] = table["k"].astype("Int64")
@@ -224,14 +321,15 @@ def baselines_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
 def summarise(results: pd.DataFrame) -> dict[str, pd.DataFrame]:
     """Every summary table, keyed by the file name it is written under."""
     summary = by_method(results)
-    stable = stability(results)
+    scored = Scored(results)
+    stable = stability(results, scored)
     return {
         "by_method": summary,
         "by_condition": by_condition(results),
         "by_season": by_season(results),
         "stability": stable,
         "verdict": verdict(results, summary, stable),
-        "claim_by_slice": claim_by_slice(results),
+        "claim_by_slice": claim_by_slice(results, scored),
         "best": baselines_vs_paper(summary),
-        "rank_by_slice": rank_by_slice(results),
+        "rank_by_slice": rank_by_slice(results, scored),
     }
