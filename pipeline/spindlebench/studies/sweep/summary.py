@@ -111,23 +111,45 @@ class Scored:
         labels = self._labels[column]
         return int(labels.get_loc(value)) if value in labels else -1
 
+    def key(self, columns: Sequence[str], rows: np.ndarray | slice = slice(None)
+            ) -> tuple[np.ndarray, list[int]]:
+        """The codes of ``columns`` in ``rows`` as one integer per row, their place in the
+        grid of all combinations (of that shape): ordered as the code tuples are.
+
+        Grouping by it is one pass: pandas factorises each key of a grouping again, and those
+        passes were half of what was left of the summary's time."""
+        codes = [self.codes(c)[rows] + 1 for c in columns]  # k's NO_K_KEY is -1
+        shape = [int(c.max()) + 1 if len(c) else 1 for c in codes]
+        return np.ravel_multi_index(codes, shape), shape
+
+    @staticmethod
+    def unkey(key: np.ndarray, shape: Sequence[int]) -> list[np.ndarray]:
+        """The codes of each column in ``key`` (``Scored.key``)."""
+        return [codes - 1 for codes in np.unravel_index(key, shape)]
+
     def reduced(self, columns: Sequence[str], how: str | list[str],
                 rows: np.ndarray | slice = slice(None), sort: bool = True,
                 values: np.ndarray | None = None) -> pd.Series | pd.DataFrame:
         """``values`` (the RMSE) of ``rows`` grouped by ``columns`` and reduced by ``how``
-        (``SeriesGroupBy.agg``), indexed by the columns' codes.
-
-        The codes are grouped as one integer (their place in the grid of all combinations),
-        the order a grouping by the columns gives: pandas factorises each key of a grouping
-        again, and those passes were half of what was left of the summary's time."""
-        codes = [self.codes(c)[rows] + 1 for c in columns]  # k's NO_K_KEY is -1
-        shape = [int(c.max()) + 1 if len(c) else 1 for c in codes]
-        key = np.ravel_multi_index(codes, shape)
+        (``SeriesGroupBy.agg``), indexed by the columns' codes."""
+        key, shape = self.key(columns, rows)
         reduced = pd.Series(self.rmse[rows] if values is None else values).groupby(
             key, sort=sort).agg(how)
-        reduced.index = pd.MultiIndex.from_arrays(
-            [c - 1 for c in np.unravel_index(reduced.index.to_numpy(), shape)])
+        reduced.index = pd.MultiIndex.from_arrays(self.unkey(reduced.index.to_numpy(), shape))
         return reduced
+
+    def values_by(self, columns: Sequence[str], rows: np.ndarray | slice = slice(None)
+                  ) -> dict[tuple, np.ndarray]:
+        """The RMSE of ``rows`` per combination of ``columns`` (keyed by their values, k
+        None for a method without one), each in row order, sorted by the keys: one stable
+        sort (a box plot's boxes; a mask per box compared every row again)."""
+        key, shape = self.key(columns, rows)
+        order = np.argsort(key, kind="stable")
+        key, values = key[order], self.rmse[rows][order]
+        starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if len(key) else key
+        codes = self.unkey(key[starts], shape)
+        return {tuple(self.label(c, int(at[i])) for c, at in zip(columns, codes, strict=True)):
+                chunk for i, chunk in enumerate(np.split(values, starts[1:]))}
 
     def slice_axes(self, rows: np.ndarray) -> list[str]:
         """The study axes the claim and the ranking are sliced by: those with more than one

@@ -8,7 +8,9 @@ and drawing them was most of the figures' time.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -22,6 +24,7 @@ from spindlebench.core.atomic import atomic_path
 from spindlebench.core.names import ALL_RAW, GROUPS, SIX_DIFF, SIX_RAW
 from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE
 from spindlebench.studies.family.seasons import MONTHS
+from spindlebench.studies.sweep.summary import NO_K_KEY, Scored
 
 METHOD_ORDER = (*GROUPS, TOP_K_BASELINE, RIDGE_BASELINE, "oracle")
 COLOURS = {ALL_RAW: "#8c8c8c", SIX_RAW: "#5b8fc9", SIX_DIFF: "#d9622b",
@@ -43,14 +46,9 @@ def _save(fig: Figure, path: Path) -> Path:
     return path
 
 
-def _present(column: pd.Series) -> set:
-    """The distinct values of a column (``set(column)`` walks every cell of a pandas string
-    column in Python: most of the plots' time on a 1 000-run sweep's 380 000 rows)."""
-    return set(column.unique())
-
-
-def _methods(frame: pd.DataFrame) -> list[str]:
-    present = _present(frame["method"])
+def _methods(present: Iterable[str]) -> list[str]:
+    """The ``present`` methods in the order the figures show them."""
+    present = set(present)
     return [m for m in METHOD_ORDER if m in present]
 
 
@@ -104,13 +102,11 @@ def _draw_boxes(ax: Axes, boxes: list[tuple[float, np.ndarray, str]], width: flo
     ax.set_xlim(positions.min() - 0.5, positions.max() + 0.5)
 
 
-def _grouped_boxes(ax: Axes, frame: pd.DataFrame, categories: list, category: str,
+def _grouped_boxes(ax: Axes, values: Mapping[tuple[str, Any], np.ndarray], categories: list,
                    methods: list[str]) -> None:
+    """One group of boxes per category, one box per method (``values[(method, category)]``,
+    drawn if it has values)."""
     width = 0.8 / max(1, len(methods))
-    # each box's values in one grouping pass (in row order, as a mask per box gave them):
-    # a mask per method and category compared every row of a 1 000-run sweep's table again
-    values = {key: group.dropna().to_numpy() for key, group in
-              frame.groupby(["method", category], sort=False)["rmse_um"]}
     boxes = []
     for j, method in enumerate(methods):
         drawn = False
@@ -130,105 +126,133 @@ def _grouped_boxes(ax: Axes, frame: pd.DataFrame, categories: list, category: st
     ax.set_ylim(low, high + 0.25 * (high - low))  # room for the legend above the boxes
 
 
-def by_method_and_k(results: pd.DataFrame, path: Path) -> Path | None:
+def _clipped_top(rmse_um: pd.Series) -> tuple[float, int]:
+    """The y limit that keeps a few extreme cases from flattening every box, and how many
+    values lie above it."""
+    top = float(rmse_um.quantile(0.99)) * 1.15
+    return top, int((rmse_um > top).sum())
+
+
+def _rows(scored: Scored, data: str) -> np.ndarray:
+    """The scored rows of one data kind (measured or noise-free)."""
+    return np.flatnonzero(scored.codes("data") == scored.code("data", data))
+
+
+def by_method_and_k(results: pd.DataFrame, path: Path, scored: Scored | None = None
+                    ) -> Path | None:
     """One panel per k with the methods that have one, and one "no k" panel for ridge and the
     oracle (they do not depend on k, so repeating them in every k panel suggested they did);
     measured next to the noise-free truth."""
-    ok = results[results["rmse_um"].notna()]
-    ks = sorted(int(k) for k in ok["k"].dropna().unique())
+    scored = scored or Scored(results)
+    boxes = scored.values_by(["k", "method", "data"])  # (k, method, data) -> values
+    ks = sorted({k for k, _, _ in boxes if k is not None})
     if not ks:
         return None
-    no_k = ok[ok["k"].isna()]
-    panels: list[tuple[str, pd.DataFrame]] = [(f"k = {k}", ok[ok["k"] == k]) for k in ks]
-    if len(no_k):
-        panels.append(("no k: " + ", ".join(_methods(no_k)), no_k))
-    widths = [max(1, len(_methods(frame))) for _, frame in panels]
+    panels = [(f"k = {k}", k) for k in ks]
+    no_k = _methods(m for k, m, _ in boxes if k is None)
+    if no_k:
+        panels.append(("no k: " + ", ".join(no_k), None))
+    at = {k: {(data, method): values for (kk, method, data), values in boxes.items() if kk == k}
+          for _, k in panels}
+    methods = {k: _methods(method for _, method in at[k]) for _, k in panels}
+    widths = [max(1, len(methods[k])) for _, k in panels]
     fig = Figure(figsize=(0.85 * sum(widths) + 1.2, 4.4), layout="constrained")
     axes = fig.subplots(1, len(panels), sharey=True, squeeze=False,
                         gridspec_kw={"width_ratios": widths})
-    series = [s for s in ("measured", "noise-free") if s in _present(ok["data"])]
-    for ax, (title, at) in zip(axes[0], panels, strict=True):
-        _grouped_boxes(ax, at.rename(columns={"method": "category", "data": "method"}),
-                       _methods(at), "category", series)
+    present = {data for _, _, data in boxes}
+    series = [s for s in ("measured", "noise-free") if s in present]
+    for ax, (title, k) in zip(axes[0], panels, strict=True):
+        _grouped_boxes(ax, at[k], methods[k], series)
         ax.set_title(title, fontsize=10)
     for ax in axes[0][1:]:
         ax.set_ylabel("")
-    # A few extreme cases would flatten every box: clip the axis, say so.
-    top = float(ok["rmse_um"].quantile(0.99)) * 1.15
-    clipped = int((ok["rmse_um"] > top).sum())
+    top, clipped = _clipped_top(scored.frame["rmse_um"])
     axes[0][0].set_ylim(0, top)
     axes[0][0].legend(loc="upper left", fontsize=8)
-    note = f"\n({clipped} of {len(ok)} values above {top:.0f} µm not shown)" if clipped else ""
+    note = (f"\n({clipped} of {len(scored.frame)} values above {top:.0f} µm not shown)"
+            if clipped else "")
     fig.suptitle("Held-out RMSE per method: measured vs noise-free truth" + note, fontsize=11)
     return _save(fig, path)
 
 
-def _no_k_note(frame: pd.DataFrame) -> str:
-    names = [m for m in _methods(frame) if m in NO_K]
+def _no_k_note(methods: Iterable[str]) -> str:
+    names = [m for m in _methods(methods) if m in NO_K]
     return f"; {' and '.join(names)}: no k" if names else ""
 
 
-def by_month(results: pd.DataFrame, path: Path) -> Path | None:
+def by_month(results: pd.DataFrame, path: Path, scored: Scored | None = None) -> Path | None:
     """Held-out RMSE by month, one row of panels per k and one column per held-out spindle
     speed: the month alone hardly moves the error, the speed of the held-out run and k do,
     so a single k = 2 panel pooled over speeds looked flat and hid what varies. Methods
     without a k (ridge, oracle) are repeated in every row, as the title says."""
-    ok = results[results["rmse_um"].notna() & (results["data"] == "measured")]
-    if ok.empty:
+    scored = scored or Scored(results)
+    rows = _rows(scored, "measured")
+    if not len(rows):
         return None
-    ks = sorted(int(k) for k in ok["k"].dropna().unique()) or [None]
-    speeds = (sorted(float(v) for v in ok["test_speed_rpm"].dropna().unique())
-              if "test_speed_rpm" in ok else [None])
-    months = [m for m in MONTHS if m in _present(ok["test_month"])]
-    n_methods = len(_methods(ok))
-    fig = Figure(figsize=(max(5.0, 0.22 * n_methods * len(months) + 1.5) * len(speeds),
-                          3.3 * len(ks) + 0.6), layout="constrained")
+    by_speed = "test_speed_rpm" in scored.frame
+    boxes = scored.values_by(["k", "test_speed_rpm", "method", "test_month"] if by_speed
+                             else ["k", "method", "test_month"], rows)
+    if not by_speed:  # one column of panels: every run at speed None
+        boxes = {(k, None, *rest): values for (k, *rest), values in boxes.items()}
+    ks = sorted({k for k, *_ in boxes if k is not None}) or [None]
+    speeds = sorted({float(speed) for _, speed, _, _ in boxes}) if by_speed else [None]
+    months = [m for m in MONTHS if m in {month for *_, month in boxes}]
+    all_methods = {method for _, _, method, _ in boxes}
+    fig = Figure(figsize=(max(5.0, 0.22 * len(_methods(all_methods)) * len(months) + 1.5)
+                          * len(speeds), 3.3 * len(ks) + 0.6), layout="constrained")
     axes = fig.subplots(len(ks), len(speeds), squeeze=False, sharey=True)
     for row, k in enumerate(ks):
-        at_k = ok[(ok["k"] == k) | ok["k"].isna()] if k is not None else ok
         for column, speed in enumerate(speeds):
-            at = at_k if speed is None else at_k[at_k["test_speed_rpm"] == speed]
+            at = {(method, month): values for (kk, sp, method, month), values in boxes.items()
+                  if (k is None or kk in (k, None)) and (speed is None or sp == speed)}
             ax = axes[row, column]
-            _grouped_boxes(ax, at, months, "test_month", _methods(at))
+            _grouped_boxes(ax, at, months, _methods(method for method, _ in at))
             where = [f"k = {k}" if k is not None else "", f"held-out runs at {speed:g} rpm"
                      if speed is not None else "all held-out runs"]
             ax.set_title(", ".join(w for w in where if w), fontsize=10)
             if column:
                 ax.set_ylabel("")
-    top = float(ok["rmse_um"].quantile(0.99)) * 1.15
-    clipped = int((ok["rmse_um"] > top).sum())
+    top, clipped = _clipped_top(scored.frame["rmse_um"].iloc[rows])
     axes[0, 0].set_ylim(0, top)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, ncols=len(labels), loc="outside lower center",
                frameon=False)  # outside: inside, it hid the tallest boxes
-    note = f"; {clipped} of {len(ok)} values above {top:.0f} µm not shown" if clipped else ""
-    fig.suptitle(f"Held-out RMSE by month of the held-out run (measured{_no_k_note(ok)}, "
-                 f"repeated in every row{note})", fontsize=11)
+    note = f"; {clipped} of {len(rows)} values above {top:.0f} µm not shown" if clipped else ""
+    fig.suptitle(f"Held-out RMSE by month of the held-out run (measured"
+                 f"{_no_k_note(all_methods)}, repeated in every row{note})", fontsize=11)
     return _save(fig, path)
 
 
-def by_condition(results: pd.DataFrame, path: Path, k: int) -> Path | None:
-    ok = results[results["rmse_um"].notna() & (results["data"] == "measured")].copy()
-    at = ok[(ok["k"] == k) | ok["k"].isna()].copy()
-    if at.empty:
+def by_condition(results: pd.DataFrame, path: Path, k: int, scored: Scored | None = None
+                 ) -> Path | None:
+    scored = scored or Scored(results)
+    rows = _rows(scored, "measured")
+    rows = rows[np.isin(scored.codes("k")[rows], [k, NO_K_KEY])]
+    if not len(rows):
         return None
-    at["condition"] = at["noise"] + " / " + at["fault"]
-    conditions = list(dict.fromkeys(at["condition"]))
+    boxes = {(method, f"{noise} / {fault}"): values for (method, noise, fault), values in
+             scored.values_by(["method", "noise", "fault"], rows).items()}
+    # the conditions in the order they come, as the table lists them
+    conditions = [f"{scored.label('noise', n)} / {scored.label('fault', f)}" for n, f in
+                  scored.reduced(["noise", "fault"], "size", rows, sort=False).index]
+    methods = _methods(method for method, _ in boxes)
     fig = Figure(figsize=(max(6.0, 1.8 * len(conditions)), 4.2))
     ax = fig.subplots()
-    _grouped_boxes(ax, at, conditions, "condition", _methods(at))
+    _grouped_boxes(ax, boxes, conditions, methods)
     ax.set_title(f"Held-out RMSE by measurement condition (noise / fault, k = {k}"
-                 f"{_no_k_note(at)})")
+                 f"{_no_k_note(methods)})")
     ax.legend(fontsize=8, ncols=3)
     return _save(fig, path)
 
 
 def box_plots(results: pd.DataFrame, folder: Path) -> dict[str, Path]:
     """Write every figure into ``folder``; return name → path of those that have data."""
+    scored = Scored(results)
     figures: dict[str, Path | None] = {}
     ks = sorted(int(k) for k in results["k"].dropna().unique())
-    figures["by_method"] = by_method_and_k(results, folder / "rmse_by_method.png")
+    figures["by_method"] = by_method_and_k(results, folder / "rmse_by_method.png", scored)
     if ks:
-        figures["by_month"] = by_month(results, folder / "rmse_by_month.png")
-        figures["by_condition"] = by_condition(results, folder / "rmse_by_condition.png", ks[0])
+        figures["by_month"] = by_month(results, folder / "rmse_by_month.png", scored)
+        figures["by_condition"] = by_condition(results, folder / "rmse_by_condition.png",
+                                               ks[0], scored)
     return {name: path for name, path in figures.items() if path is not None}
