@@ -365,10 +365,11 @@ def baselines_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def summarise(results: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """Every summary table, keyed by the file name it is written under."""
+def summarise(results: pd.DataFrame, scored: Scored | None = None) -> dict[str, pd.DataFrame]:
+    """Every summary table, keyed by the file name it is written under; ``scored``: the
+    results' coded rows, when the caller shares them (with the box plots)."""
     summary = by_method(results)
-    scored = Scored(results)
+    scored = scored or Scored(results)
     stable = stability(results, scored)
     return {
         "by_method": summary,

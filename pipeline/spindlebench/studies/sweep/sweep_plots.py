@@ -52,11 +52,17 @@ def _methods(present: Iterable[str]) -> list[str]:
     return [m for m in METHOD_ORDER if m in present]
 
 
+#: The names of matplotlib's box-plot styles (their values are read when drawing: a style
+#: context may change them; walking all rcParams for every part of every axes cost 50 ms).
+_BOXPLOT_PROPS = tuple(key for key in matplotlib.rcParams if key.startswith("boxplot.")
+                       and "props." in key)
+
+
 def _rc(part: str) -> dict:
     """matplotlib's style of one part of a box plot (rcParams ``boxplot.<part>props.*``),
     the style ``Axes.boxplot`` gives it, so the collections below draw the same boxes."""
     prefix = f"boxplot.{part}props."
-    return {key[len(prefix):]: value for key, value in matplotlib.rcParams.items()
+    return {key[len(prefix):]: matplotlib.rcParams[key] for key in _BOXPLOT_PROPS
             if key.startswith(prefix)}
 
 
@@ -245,9 +251,11 @@ def by_condition(results: pd.DataFrame, path: Path, k: int, scored: Scored | Non
     return _save(fig, path)
 
 
-def box_plots(results: pd.DataFrame, folder: Path) -> dict[str, Path]:
-    """Write every figure into ``folder``; return name → path of those that have data."""
-    scored = Scored(results)
+def box_plots(results: pd.DataFrame, folder: Path, scored: Scored | None = None
+              ) -> dict[str, Path]:
+    """Write every figure into ``folder``; return name → path of those that have data.
+    ``scored``: the results' coded rows when the summary already made them."""
+    scored = scored or Scored(results)
     figures: dict[str, Path | None] = {}
     ks = sorted(int(k) for k in results["k"].dropna().unique())
     figures["by_method"] = by_method_and_k(results, folder / "rmse_by_method.png", scored)
