@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from pandas.core.groupby import SeriesGroupBy
 
 from spindlebench.core.names import ALL_RAW, SIX_DIFF, SIX_RAW
 
@@ -48,44 +47,46 @@ def _stats(values: np.ndarray) -> tuple[float, ...]:
     return float(len(v)), median, q1, q3, q3 - q1, v.max(), v.mean()
 
 
-def _stats_table(grouped: SeriesGroupBy) -> pd.DataFrame:
-    """Each group's keys and ``STATS`` (n as a float), the groups in their grouping order.
+def _stats_table(number: np.ndarray, values: np.ndarray, keys: pd.DataFrame) -> pd.DataFrame:
+    """Each group's keys and ``STATS`` of its ``values`` (n as a float); ``number``: every
+    row's group (``Scored.groups``).
 
     The groups' values come from one stable sort by group number and each is reduced by
     numpy: ``apply`` made pandas Series per group, a third of the summary's time."""
-    number = grouped.ngroup().to_numpy()
     order = np.argsort(number, kind="stable")
-    number = number[order]
-    starts = np.flatnonzero(number[1:] != number[:-1]) + 1
-    values = grouped.obj.to_numpy(dtype=float)[order]
-    stats = pd.DataFrame([_stats(chunk) for chunk in np.split(values, starts)],
+    starts = np.flatnonzero(np.diff(number[order])) + 1
+    stats = pd.DataFrame([_stats(chunk) for chunk in np.split(values[order], starts)],
                          columns=list(STATS))
-    return pd.concat([grouped.size().index.to_frame(index=False), stats], axis=1)
+    return pd.concat([keys, stats], axis=1)
 
 
 def ok_rows(results: pd.DataFrame) -> pd.DataFrame:
     return results[results["rmse_um"].notna()]
 
 
-def by_method(results: pd.DataFrame) -> pd.DataFrame:
+def by_method(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
     """Median, IQR and worst case of the held-out RMSE per data, method and k."""
-    grouped = results.groupby(["data", "method", "k"], dropna=False, sort=False)
-    table = _stats_table(grouped["rmse_um"])
-    table["failed"] = (grouped["rmse_um"].size() - grouped["rmse_um"].count()).to_numpy()
-    table["median_vs_true_drift_um"] = grouped["rmse_true_um"].median().to_numpy()
+    number, keys = (scored or Scored(results)).groups(["data", "method", "k"], by_levels=True)
+    rmse = results["rmse_um"].to_numpy(dtype=float)
+    table = _stats_table(number, rmse, keys)
+    table["failed"] = np.bincount(number, weights=np.isnan(rmse)).astype(np.int64)
+    table["median_vs_true_drift_um"] = (pd.Series(results["rmse_true_um"].to_numpy())
+                                        .groupby(number).median().to_numpy())
     table["n"] = table["n"].astype(int)
     return table
 
 
-def by_condition(results: pd.DataFrame) -> pd.DataFrame:
-    return _stats_table(results.groupby(["data", "noise", "fault", "method", "k"],
-                                        dropna=False, sort=False)["rmse_um"])
+def by_condition(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
+    number, keys = (scored or Scored(results)).groups(["data", "noise", "fault", "method", "k"],
+                                                      by_levels=True)
+    return _stats_table(number, results["rmse_um"].to_numpy(dtype=float), keys)
 
 
-def by_season(results: pd.DataFrame) -> pd.DataFrame:
-    keys = ["data", "method", "k", "test_season"]
-    return (results.groupby(keys, dropna=False, sort=False)["rmse_um"].median()
-            .rename("median_um").reset_index())
+def by_season(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
+    number, keys = (scored or Scored(results)).groups(["data", "method", "k", "test_season"])
+    keys["median_um"] = (pd.Series(results["rmse_um"].to_numpy()).groupby(number).median()
+                         .to_numpy())
+    return keys
 
 
 class Scored:
@@ -95,47 +96,86 @@ class Scored:
     Grouping by the codes gives the groups in the order grouping by the columns does
     (sorted, or by first appearance with ``sort=False``) but hashes integers: factorising
     the text columns of a 1 000-run sweep's 380 000 rows again for every grouping was most
-    of the summary's time. The key columns of a results table have no missing values; k is
-    ``NO_K_KEY`` for a method without one (a missing key would drop its rows).
+    of the summary's time. A missing value is code -1 (the key columns of a scored row have
+    none; a failed evaluation's row has only its replica, condition and training run); k is
+    ``NO_K_KEY`` for a method without one.
     """
 
     def __init__(self, results: pd.DataFrame) -> None:
-        self.frame = ok_rows(results)
+        self.results = results
+        self.ok = np.flatnonzero(results["rmse_um"].notna().to_numpy())
+        self.frame = results.iloc[self.ok]
         self.rmse = self.frame["rmse_um"].to_numpy()
+        self._all_codes: dict[str, np.ndarray] = {}
         self._codes: dict[str, np.ndarray] = {}
         self._labels: dict[str, pd.Index] = {}
 
-    def codes(self, column: str) -> np.ndarray:
-        if column not in self._codes:
+    def all_codes(self, column: str) -> np.ndarray:
+        """The codes of ``column`` on every row of the results, scored or not."""
+        if column not in self._all_codes:
+            values = self.results[column]
             if column == "k":
-                self._codes[column] = self.frame["k"].fillna(NO_K_KEY).to_numpy(dtype=np.int64)
+                self._all_codes[column] = values.fillna(NO_K_KEY).to_numpy(dtype=np.int64)
             else:
-                self._codes[column], self._labels[column] = pd.factorize(
-                    self.frame[column], sort=True)
+                self._all_codes[column], self._labels[column] = pd.factorize(values, sort=True)
+        return self._all_codes[column]
+
+    def codes(self, column: str) -> np.ndarray:
+        """The codes of ``column`` on the scored rows."""
+        if column not in self._codes:
+            self._codes[column] = self.all_codes(column)[self.ok]
         return self._codes[column]
 
     def label(self, column: str, code: int) -> Any:
-        """The value a code stands for (k: the int, or None for a method without k)."""
+        """The value a code stands for (k: the int, or None for a method without k; NaN
+        for a missing value, as on the row of an evaluation that failed)."""
         if column == "k":
             return None if code == NO_K_KEY else int(code)
-        return self._labels[column][code]
+        return np.nan if code < 0 else self._labels[column][code]  # -1: missing
 
     def code(self, column: str, value: Any) -> int:
-        """The code of ``value`` in ``column``, -1 if no scored row has it."""
-        self.codes(column)
+        """The code of ``value`` in ``column``, -1 if no row has it."""
+        self.all_codes(column)
         labels = self._labels[column]
         return int(labels.get_loc(value)) if value in labels else -1
 
-    def key(self, columns: Sequence[str], rows: np.ndarray | slice = slice(None)
-            ) -> tuple[np.ndarray, list[int]]:
-        """The codes of ``columns`` in ``rows`` as one integer per row, their place in the
-        grid of all combinations (of that shape): ordered as the code tuples are.
+    def key(self, columns: Sequence[str], rows: np.ndarray | slice = slice(None),
+            every_row: bool = False) -> tuple[np.ndarray, list[int]]:
+        """The codes of ``columns`` in ``rows`` (of the scored rows, or of ``every_row``) as
+        one integer per row, their place in the grid of all combinations (of that shape):
+        ordered as the code tuples are.
 
         Grouping by it is one pass: pandas factorises each key of a grouping again, and those
         passes were half of what was left of the summary's time."""
-        codes = [self.codes(c)[rows] + 1 for c in columns]  # k's NO_K_KEY is -1
+        codes = [(self.all_codes(c) if every_row else self.codes(c))[rows] + 1
+                 for c in columns]  # k's NO_K_KEY is -1
         shape = [int(c.max()) + 1 if len(c) else 1 for c in codes]
         return np.ravel_multi_index(codes, shape), shape
+
+    def groups(self, columns: Sequence[str], by_levels: bool = False
+               ) -> tuple[np.ndarray, pd.DataFrame]:
+        """Every row's group by ``columns`` and each group's key values, the groups numbered
+        as ``groupby(sort=False, dropna=False)`` orders them (as they first come) or, with
+        ``by_levels``, as unstacking its result does (by each column's values in the order
+        they first come, missing ones last)."""
+        key, shape = self.key(columns, every_row=True)
+        number, uniques = pd.factorize(key)
+        codes = self.unkey(uniques, shape)
+        if by_levels:
+            ranks = []
+            for column, at in zip(columns, codes, strict=True):
+                come = [c for c in pd.unique(self.all_codes(column)) if c != -1]
+                rank = np.full(max(shape) + 1, len(come), dtype=np.int64)  # missing: last
+                rank[np.asarray(come, dtype=np.int64) + 1] = np.arange(len(come))
+                ranks.append(rank[at + 1])
+            order = np.lexsort(ranks[::-1])
+            number = np.argsort(order)[number]
+            codes = [at[order] for at in codes]
+        keys = pd.DataFrame({column: [self.label(column, int(code)) for code in at]
+                             for column, at in zip(columns, codes, strict=True)})
+        if "k" in keys:
+            keys["k"] = keys["k"].astype("Int64")
+        return number, keys
 
     @staticmethod
     def unkey(key: np.ndarray, shape: Sequence[int]) -> list[np.ndarray]:
@@ -233,9 +273,8 @@ def win_rates(scored: Scored) -> dict[str, pd.Series]:
     groups that, like ``six_diff``, have a score. Each group's score per case is one
     grouping (a table of the three side by side was half of the verdict's time)."""
     method = scored.codes("method")
-    firsts = {m: scored.reduced([*CASE, "k"], "first",
-                                np.flatnonzero(method == scored.code("method", m)))
-              for m in (DIFF, *RAW) if scored.code("method", m) >= 0}
+    rows = {m: np.flatnonzero(method == scored.code("method", m)) for m in (DIFF, *RAW)}
+    firsts = {m: scored.reduced([*CASE, "k"], "first", at) for m, at in rows.items() if len(at)}
     if DIFF not in firsts:
         return {}
     data_and_k = [0, len(CASE)]  # the levels of data and k in the case index
@@ -368,13 +407,13 @@ def baselines_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
 def summarise(results: pd.DataFrame, scored: Scored | None = None) -> dict[str, pd.DataFrame]:
     """Every summary table, keyed by the file name it is written under; ``scored``: the
     results' coded rows, when the caller shares them (with the box plots)."""
-    summary = by_method(results)
     scored = scored or Scored(results)
+    summary = by_method(results, scored)
     stable = stability(results, scored)
     return {
         "by_method": summary,
-        "by_condition": by_condition(results),
-        "by_season": by_season(results),
+        "by_condition": by_condition(results, scored),
+        "by_season": by_season(results, scored),
         "stability": stable,
         "verdict": verdict(results, summary, stable, scored),
         "claim_by_slice": claim_by_slice(results, scored),
