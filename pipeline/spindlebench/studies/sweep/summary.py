@@ -60,10 +60,6 @@ def _stats_table(number: np.ndarray, values: np.ndarray, keys: pd.DataFrame) -> 
     return pd.concat([keys, stats], axis=1)
 
 
-def ok_rows(results: pd.DataFrame) -> pd.DataFrame:
-    return results[results["rmse_um"].notna()]
-
-
 def by_method(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
     """Median, IQR and worst case of the held-out RMSE per data, method and k."""
     number, keys = (scored or Scored(results)).groups(["data", "method", "k"], by_levels=True)
@@ -90,8 +86,9 @@ def by_season(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFra
 
 
 class Scored:
-    """The scored rows of a results table, its key columns as integer codes (each in the
-    sorted order of its values), each coded once for every table computed from them.
+    """A results table with its key columns as integer codes (each in the sorted order of
+    its values), on every row and on the scored rows (``frame``, ``rmse``, a score), each
+    column coded once for every table and figure computed from it.
 
     Grouping by the codes gives the groups in the order grouping by the columns does
     (sorted, or by first appearance with ``sort=False``) but hashes integers: factorising

@@ -67,12 +67,13 @@ def _rc(part: str) -> dict:
 
 
 def _segments(ax: Axes, segments: list, style: dict, zorder: float,
-              capstyle: str = matplotlib.rcParams["lines.solid_capstyle"]) -> None:
-    """Straight lines in ``style`` (rcParams ``boxplot.*props`` keys), capped and joined as
-    ``Axes.boxplot``'s ``Line2D`` are (a collection's default caps are butt)."""
+              capstyle: str | None = None) -> None:
+    """Straight lines in ``style`` (rcParams ``boxplot.*props`` keys), capped (by default)
+    and joined as ``Axes.boxplot``'s ``Line2D`` are (a collection's default caps are butt)."""
     ax.add_collection(LineCollection(
         segments, colors=style["color"], linewidths=style["linewidth"],
-        linestyles=style["linestyle"], capstyle=capstyle,
+        linestyles=style["linestyle"],
+        capstyle=capstyle or matplotlib.rcParams["lines.solid_capstyle"],
         joinstyle=matplotlib.rcParams["lines.solid_joinstyle"], zorder=zorder))
 
 
