@@ -9,6 +9,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
+from matplotlib.collections import LineCollection
 from spindlebench.core.paths import DEFAULT_FMU
 from spindlebench.studies.placement import schematic
 from spindlebench.studies.placement.placement_file import fmu_nodes
@@ -72,8 +73,10 @@ def test_every_method_colour_shows_on_white_and_under_a_black_median(kept, tmp_p
     plots.by_month(results(), tmp_path / "month.png")
     assert [ax.get_title() for ax in kept[0].axes] == [
         "k = 2, all held-out runs", "k = 3, all held-out runs"]  # one row per k
-    medians = [line for line in kept[0].axes[0].lines
-               if mcolors.to_rgb(line.get_color()) == (0, 0, 0) and line.get_linewidth() == 1.5]
+    medians = [segment for lines in kept[0].axes[0].collections
+               if isinstance(lines, LineCollection) and lines.get_zorder() > 2
+               and mcolors.to_rgb(lines.get_colors()[0]) == (0, 0, 0)
+               and lines.get_linewidths()[0] == 1.5 for segment in lines.get_segments()]
     assert len(medians) == 4 * 2  # all_raw, six_diff, ridge, oracle in two months
 
 

@@ -144,19 +144,28 @@ def failure_slices(slices: pd.DataFrame, versus: str) -> list[str]:
     lines = [f"Differences lose in {len(failing)} of {len(slices)} slices (axis value × k).",
              "", "| axis | value | " + " | ".join(f"k = {k}" for k in ks) + " |",
              "|---|---|" + "---|" * len(ks)]
-    for (axis, value), rows in slices.groupby(["axis", "value"], sort=False):
+    for (axis, value), by_k in _by_slice_and_k(slices).items():
         cells = []
         for k in ks:
-            at = rows[rows["k"] == k]
-            if at.empty:
+            if k not in by_k:
                 cells.append("")
                 continue
-            row = at.iloc[0]
-            mark = "✓" if row["holds"] else "✗"
-            reference = f" ({row['reference']})" if versus == "best-raw" else ""
-            cells.append(f"{row['ratio']:.2f} {mark}{reference}")
+            row = by_k[k][0]
+            mark = "✓" if row.holds else "✗"
+            reference = f" ({row.reference})" if versus == "best-raw" else ""
+            cells.append(f"{row.ratio:.2f} {mark}{reference}")
         lines.append(f"| {axis} | {value} | " + " | ".join(cells) + " |")
     return lines
+
+
+def _by_slice_and_k(table: pd.DataFrame) -> dict[tuple, dict[Any, list]]:
+    """The rows of a per-slice table (``axis``, ``value``, ``k`` columns) as named tuples,
+    per slice and k, in the table's order: one pass over it, not a mask per slice and k
+    (those were most of the README's time)."""
+    cells: dict[tuple, dict[Any, list]] = {}
+    for row in table.itertuples(index=False):
+        cells.setdefault((row.axis, row.value), {}).setdefault(row.k, []).append(row)
+    return cells
 
 
 def rank_lines(ranks: pd.DataFrame | None, shown: int = 3) -> list[str]:
@@ -171,18 +180,17 @@ def rank_lines(ranks: pd.DataFrame | None, shown: int = 3) -> list[str]:
              "and the rank of the paper's six_diff (closure + differences).", "",
              "| slice | " + " | ".join(f"k = {int(k)}" for k in ks) + " |",
              "|---|" + "---|" * len(ks)]
-    for (axis, value), at in ranks.groupby(["axis", "value"], sort=False):
+    for (axis, value), by_k in _by_slice_and_k(ranks).items():
         cells = []
         for k in ks:
-            here = at[at["k"] == k].sort_values("rank")
-            if here.empty:
+            if k not in by_k:
                 cells.append("")
                 continue
-            top = ", ".join(f"{row.method} ({row.median_um:.2f})"
-                            for row in here.head(shown).itertuples())
-            diff = here[here["method"] == DIFF]
-            if len(diff):
-                top += f"; six_diff {int(diff['rank'].iloc[0])}/{int(here['of'].iloc[0])}"
+            here = sorted(by_k[k], key=lambda row: row.rank)
+            top = ", ".join(f"{row.method} ({row.median_um:.2f})" for row in here[:shown])
+            diff = [row for row in here if row.method == DIFF]
+            if diff:
+                top += f"; six_diff {int(diff[0].rank)}/{int(here[0].of)}"
             cells.append(top.replace("|", "\\|"))
         name = "whole study" if axis == "all" else f"{axis} = {value}"
         lines.append(f"| {name} | " + " | ".join(cells) + " |")

@@ -353,11 +353,12 @@ def write_outputs(sweep: Sweep, outcome: SweepOutcome, runner: TaskRunner,
     if not results["rmse_um"].notna().any():
         raise nothing_to_summarise(sweep, results)
     say("summarising the results per method, season and condition")
-    tables = summary.summarise(results)
+    scored = summary.Scored(results)  # coded once for the tables and the plots
+    tables = summary.summarise(results, scored)
     for name, table in tables.items():
         store.write_frame(f"summary/{name}.csv", table)
     say("drawing the box plots")
-    figures = plots.box_plots(results, store.path("plots"))
+    figures = plots.box_plots(results, store.path("plots"), scored)
     say("writing provenance.json and README.md")
     seeds = {f"r{r}": {e.id: sensor_seed(study, r, e) for e in sweep.family}
              for r in replicas(study)}
