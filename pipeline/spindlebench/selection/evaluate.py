@@ -61,7 +61,13 @@ from spindlebench.selection.registry import (
     select_with,
     sensitive_points,
 )
-from spindlebench.selection.regression import EstimatorFit, LinearFit, rises, rmse
+from spindlebench.selection.regression import (
+    EstimatorFit,
+    LinearFit,
+    rises,
+    rmse,
+    rmse_each,
+)
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
 
@@ -115,6 +121,7 @@ class CheckedRecording:
         self._nan: dict[str, np.ndarray] = {}
         self._any_nan: dict[str, bool] = {}
         self._rises: dict[tuple[str, ...], np.ndarray] = {}
+        self._column_rises: dict[str, np.ndarray | None] = {}
         self._memo: dict[Any, Any] = {}
         self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
@@ -168,6 +175,12 @@ class CheckedRecording:
             self._nan[column] = np.isnan(self.values(column))
         return self._nan[column]
 
+    def complete(self, columns: tuple[str, ...]) -> bool:
+        """Whether none of ``columns`` has a NaN (kept per column list: every model of a
+        study asks it again of each test run)."""
+        return self.memo(("complete", columns),
+                         lambda: not any(self.has_nan(column) for column in columns))
+
     def has_nan(self, column: str) -> bool:
         """Whether ``column`` has a NaN anywhere."""
         if column not in self._any_nan:
@@ -195,6 +208,26 @@ class CheckedRecording:
         if key not in self._rises:
             self._rises[key] = rises(self.stack(columns))
         return self._rises[key]
+
+    def column_rises(self, columns: Sequence[str]) -> list[np.ndarray]:
+        """The columns of ``self.rises(columns)``, each made once per column (read-only use).
+
+        Why: each of a study's many models reads the rises of a few sensors of every test
+        run, a different few each; a rise is one subtraction per sample, so a column's is the
+        same whatever list it is made in. A column whose reference (first) value is not
+        finite while later ones are takes ``self.rises(columns)``, which raises its error."""
+        out = []
+        for column in columns:
+            if column not in self._column_rises:
+                values = self.values(column)
+                bad = len(values) == 0 or (not math.isfinite(values[0])
+                                            and bool(np.isfinite(values).any()))
+                self._column_rises[column] = None if bad else values - values[0]
+            rise = self._column_rises[column]
+            if rise is None:
+                return list(self.rises(columns).T)
+            out.append(rise)
+        return out
 
     def missing(self, columns: Sequence[str]) -> np.ndarray:
         """Where ``columns`` are missing (NaN), (samples, len(columns)); for checked columns."""
@@ -291,14 +324,14 @@ class CandidateSet:
         if isinstance(frame, CheckedRecording) and wanted.size <= FEW_CANDIDATES:
             # a model's few candidates, column by column: the same subtractions, without
             # the all-sensors block (most of the time of each of a study's many calls)
-            values, at = frame.rises(needed), {sensor: i for i, sensor in enumerate(needed)}
+            rise = dict(zip(needed, frame.column_rises(needed), strict=True))
             out = np.empty((len(frame), wanted.size))
             for j, column in enumerate(wanted.tolist()):
                 if column < n:
-                    out[:, j] = values[:, at[self.sensors[column]]]
+                    out[:, j] = rise[self.sensors[column]]
                 else:
                     a, b = self.sensors[first[column - n]], self.sensors[second[column - n]]
-                    out[:, j] = values[:, at[a]] - values[:, at[b]]
+                    out[:, j] = rise[a] - rise[b]
             return out
         raw = np.full((len(frame), n), np.nan)
         raw[:, [self.sensors.index(s) for s in needed]] = frame.rises(needed) if isinstance(
@@ -438,9 +471,20 @@ def _naming(name: str) -> Iterator[None]:
     try:
         yield
     except SelectionError as exc:
-        if str(exc).startswith("recording "):
+        named = _named(exc, name)
+        if named is exc:
             raise
-        raise type(exc)(f"recording {name}: {exc}") from exc
+        raise named from exc
+
+
+def _named(exc: Exception, name: str) -> Exception:
+    """``exc`` with the recording's name in front (``_naming``): a ``SelectionError`` that does
+    not name one yet becomes a new one of its type (its cause ``exc``); any other as it is."""
+    if not isinstance(exc, SelectionError) or str(exc).startswith("recording "):
+        return exc
+    named = type(exc)(f"recording {name}: {exc}")
+    named.__cause__ = exc
+    return named
 
 
 def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
@@ -455,6 +499,8 @@ def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
 def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:
     """``matrix`` (rises, differences), or an overflow error naming the first columns where
     subtracting two finite values gave inf (|values| near 1e308)."""
+    if np.isfinite(matrix).all():  # the common case in one pass: nothing to name
+        return matrix
     with np.errstate(over="ignore", invalid="ignore"):
         bad = np.flatnonzero(~np.isfinite(matrix).all(axis=0))
     if bad.size:
@@ -703,6 +749,65 @@ def load_recordings(
     return CheckedRecording(train_name, train_frame), test_frames
 
 
+def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
+                 used: Sequence[str],
+                 inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
+                 fit: LinearFit | EstimatorFit) -> tuple[dict[str, np.ndarray], ...]:
+    """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
+    test recording (``inputs(recording, part used)``: the model's inputs).
+
+    Why in three passes (inputs of every run, then every prediction, then every RMSE in one
+    reduction, ``rmse_each``) rather than run by run: a study scores each of its many
+    models on the same 23 runs, and the per-run calls were most of its time. The values
+    are those of the run-by-run way, and so are the errors, in its order: a run's failing
+    inputs are raised only after the runs before it are predicted and scored (which raise
+    first where they would), and a failing prediction only after the RMSE of those before.
+    """
+    test_rows: dict[str, np.ndarray] = {}
+    measured: dict[str, np.ndarray] = {}
+    values: dict[str, np.ndarray] = {}
+    failure: Exception | None = None
+    columns = tuple(used)
+    for name, recording in tests.items():
+        try:
+            if missing == "drop-rows" and not recording.complete(columns):
+                rows = _complete_rows(recording, used)
+            else:
+                rows = np.arange(len(recording))
+            test_rows[name] = rows
+            # a part only when samples were dropped: else its conversions serve again
+            frame = recording.take(rows) if len(rows) < len(recording) else recording
+            measured[name] = frame.values(target)
+            values[name] = inputs(recording, frame)
+        except Exception as exc:  # raised once the runs before it are scored
+            failure = _named(exc, name)
+            break
+    predictions: dict[str, np.ndarray] = {}
+    if isinstance(fit, LinearFit):
+        predictions = dict(zip(values, fit.predict_each(list(values.values())), strict=True))
+    scored: list[str] = []
+    for name in values:
+        try:
+            if name not in predictions:
+                predictions[name] = fit.predict(values[name])
+            if not np.isfinite(predictions[name]).all():
+                raise SelectionOverflowError("values too large to predict (overflow)")
+        except Exception as exc:  # raised once the runs before it are scored
+            failure = _named(exc, name)
+            break
+        scored.append(name)
+    try:
+        found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
+    except SelectionError:  # the first run that fails, named
+        for name in scored:
+            with _naming(name):
+                rmse(measured[name], predictions[name])
+        raise
+    if failure is not None:
+        raise failure
+    return predictions, measured, dict(zip(scored, found, strict=True)), test_rows
+
+
 def evaluate_checked(
     train: CheckedRecording,
     tests: Mapping[str, CheckedRecording],
@@ -782,28 +887,20 @@ def evaluate_checked(
     used = [*candidates.sensors_of(selection.selected), target]
     if dynamic:
         used += list(driver_columns(choice.regressor))
-    predictions, measured, errors, test_rows = {}, {}, {}, {}
-    for name, recording in tests.items():
-        test_rows[name] = np.arange(len(recording))
-        frame = recording
-        if missing == "drop-rows":
-            test_rows[name] = _complete_rows(recording, used)
-            if len(test_rows[name]) < len(recording):  # else its conversions serve again
-                frame = recording.take(test_rows[name])
-        measured[name] = frame.values(target)
-        with _naming(name):
-            def candidate_values(frame: CheckedRecording = frame) -> np.ndarray:
-                return _finite(candidates.matrix(frame, selection.selected), selected_names)
+    key = ("candidates", candidates, tuple(selection.selected))
 
-            # a whole recording's values of these candidates serve every model that reads them
-            values = recording.memo(("candidates", candidates, tuple(selection.selected)),
-                                    candidate_values) if frame is recording else \
-                candidate_values()
-            predictions[name] = fit.predict(
-                model_inputs(choice.regressor, frame.values, values) if dynamic else values)
-            if not np.all(np.isfinite(predictions[name])):
-                raise SelectionOverflowError("values too large to predict (overflow)")
-            errors[name] = rmse(measured[name], predictions[name])
+    def inputs(recording: CheckedRecording, frame: CheckedRecording) -> np.ndarray:
+        """The model's inputs on test ``frame`` (``recording``, or the part of it used)."""
+        def candidate_values() -> np.ndarray:
+            return _finite(candidates.matrix(frame, selection.selected), selected_names)
+
+        # a whole recording's values of these candidates serve every model that reads them
+        values = recording.memo(key, candidate_values) if frame is recording else \
+            candidate_values()
+        return model_inputs(choice.regressor, frame.values, values) if dynamic else values
+
+    predictions, measured, errors, test_rows = _score_tests(tests, target, missing, used,
+                                                            inputs, fit)
     return Evaluation(
         train=train_name,
         target=target,

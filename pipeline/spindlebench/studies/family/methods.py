@@ -63,6 +63,7 @@ from spindlebench.selection.registry import (
     parse_method,
     select_with,
 )
+from spindlebench.selection.regression import rmse_each
 from spindlebench.selection.regressors import blocked_cv_alpha
 from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE, Methods
 
@@ -232,19 +233,30 @@ def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.Dat
 
 
 def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
-            rows: Mapping[str, np.ndarray] | None = None) -> dict[str, Score]:
-    """Scores of the predictions of every test run (on its samples ``rows`` if given)."""
-    return {name: _score(data, name, predictions[name], selected,
-                         None if rows is None else rows[name]) for name in data.tests}
+            rows: Mapping[str, np.ndarray] | None = None,
+            measured_rmse: Mapping[str, float] | None = None) -> dict[str, Score]:
+    """Scores of the predictions of every test run (on its samples ``rows`` if given), each
+    RMSE of all runs in one reduction (``rmse_each``); ``measured_rmse``: the RMSE against
+    the measured drift where known already."""
+    names = list(data.tests)
+    truths, measured = [], []
+    for name in names:
+        truth, target = data.column(name, TRUTH), data.column(name, TARGET)
+        if rows is not None and len(rows[name]) < len(truth):
+            truth, target = truth[rows[name]], target[rows[name]]
+        truths.append(truth)
+        measured.append(target)
+    predicted = [predictions[name] for name in names]
+    scores = [measured_rmse[name] for name in names] if measured_rmse is not None else \
+        rmse_each(measured, predicted)
+    return {name: Score(score, truth_score, selected) for name, score, truth_score
+            in zip(names, scores, rmse_each(truths, predicted), strict=True)}
 
 
-def _score(data: EvaluationData, name: str, prediction: np.ndarray, selected: str,
-           rows: np.ndarray | None = None) -> Score:
-    """Score of the prediction of test run ``name`` (on its samples ``rows`` if given)."""
-    measured, truth = data.column(name, TARGET), data.column(name, TRUTH)
-    if rows is not None:
-        measured, truth = measured[rows], truth[rows]
-    return Score(rmse(measured, prediction), rmse(truth, prediction), selected)
+def _score(data: EvaluationData, name: str, prediction: np.ndarray, selected: str) -> Score:
+    """Score of the prediction of test run ``name`` (all its samples)."""
+    return Score(rmse(data.column(name, TARGET), prediction),
+                 rmse(data.column(name, TRUTH), prediction), selected)
 
 
 def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
@@ -260,14 +272,8 @@ def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dic
                                   differences=spec.group == SIX_DIFF, similarity=similarity,
                                   missing="drop-rows", method=spec.choice, seed=spec.seed)
     # evaluate scored the measured drift already (the same arrays): only the truth is left
-    selected, scores = ";".join(result.selected), {}
-    for name in data.tests:
-        truth, rows = data.column(name, TRUTH), result.test_rows[name]
-        if len(rows) < len(truth):
-            truth = truth[rows]
-        scores[name] = Score(result.rmse_um[name], rmse(truth, result.predictions[name]),
-                             selected)
-    return scores
+    return _scores(data, result.predictions, ";".join(result.selected), result.test_rows,
+                   result.rmse_um)
 
 
 def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
@@ -278,7 +284,8 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
         selection = select_with(TOP_K, X, y, spec.k, names=SENSORS)
     chosen = selection.selected
     fit = fit_with(TOP_K, X[:, chosen], y)
-    predictions = {name: fit.predict(data.raw_rises(name)[:, chosen]) for name in data.tests}
+    predictions = dict(zip(data.tests, fit.predict_each(
+        [data.raw_rises(name)[:, chosen] for name in data.tests]), strict=True))
     return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
 
 
