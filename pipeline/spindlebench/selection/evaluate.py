@@ -19,6 +19,7 @@ the experiment; an experiment left with fewer than 2 complete samples is an erro
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
@@ -122,6 +123,7 @@ class CheckedRecording:
         self._any_nan: dict[str, bool] = {}
         self._rises: dict[tuple[str, ...], np.ndarray] = {}
         self._column_rises: dict[str, np.ndarray | None] = {}
+        self._column_set: frozenset | None = None
         self._memo: dict[Any, Any] = {}
         self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
@@ -134,6 +136,13 @@ class CheckedRecording:
     @property
     def columns(self) -> pd.Index | tuple[str, ...]:
         return self.frame.columns
+
+    @property
+    def column_set(self) -> frozenset:
+        """The column names as a set, made once (``resolve_sensors`` tests many names)."""
+        if self._column_set is None:
+            self._column_set = frozenset(self.frame.columns)
+        return self._column_set
 
     def take(self, rows: np.ndarray) -> CheckedRecording:
         """The samples at positions ``rows`` (of this recording) only."""
@@ -315,24 +324,22 @@ class CandidateSet:
         a test recording is complete only in those, and an unused sensor's gap must not
         matter."""
         n = len(self.sensors)
-        size = n + n * (n - 1) // 2 if self.differences else n  # len(self.names), unnamed
-        wanted = np.arange(size) if columns is None else np.asarray(columns, int)
-        if wanted.size and (wanted.min() < 0 or wanted.max() >= size):
-            raise SelectionError(f"candidate index out of range 0..{size - 1}")
-        needed = self.sensors_of(wanted)
-        first, second = pair_indices(n)
-        if isinstance(frame, CheckedRecording) and wanted.size <= FEW_CANDIDATES:
+        size = self.size
+        if isinstance(frame, CheckedRecording) and (
+                size if columns is None else len(columns)) <= FEW_CANDIDATES:
             # a model's few candidates, column by column: the same subtractions, without
             # the all-sensors block (most of the time of each of a study's many calls)
+            needed, parts = _few_candidates(self, tuple(range(size)) if columns is None
+                                            else tuple(int(column) for column in columns))
             rise = dict(zip(needed, frame.column_rises(needed), strict=True))
-            out = np.empty((len(frame), wanted.size))
-            for j, column in enumerate(wanted.tolist()):
-                if column < n:
-                    out[:, j] = rise[self.sensors[column]]
-                else:
-                    a, b = self.sensors[first[column - n]], self.sensors[second[column - n]]
-                    out[:, j] = rise[a] - rise[b]
+            out = np.empty((len(frame), len(parts)))
+            for j, (a, b) in enumerate(parts):
+                out[:, j] = rise[a] if b is None else rise[a] - rise[b]
             return out
+        wanted = np.arange(size) if columns is None else np.asarray(columns, int)
+        self._check_columns(wanted)
+        needed = self.sensors_of(wanted)
+        first, second = pair_indices(n)
         raw = np.full((len(frame), n), np.nan)
         raw[:, [self.sensors.index(s) for s in needed]] = frame.rises(needed) if isinstance(
             frame, CheckedRecording) else rises(frame.loc[:, needed].to_numpy(dtype=float))
@@ -342,6 +349,17 @@ class CandidateSet:
         out[:, is_raw] = raw[:, wanted[is_raw]]
         out[:, ~is_raw] = raw[:, first[pair]] - raw[:, second[pair]]
         return out
+
+    @property
+    def size(self) -> int:
+        """``len(self.names)``, without naming them."""
+        n = len(self.sensors)
+        return n + n * (n - 1) // 2 if self.differences else n
+
+    def _check_columns(self, columns: np.ndarray) -> None:
+        """Refuse candidate indices outside ``0..size - 1``."""
+        if columns.size and (columns.min() < 0 or columns.max() >= self.size):
+            raise SelectionError(f"candidate index out of range 0..{self.size - 1}")
 
     def sensors_of(self, columns: Sequence[int]) -> list[str]:
         """The raw sensors that candidates ``columns`` are made of, in sensor order."""
@@ -354,6 +372,22 @@ class CandidateSet:
             else:
                 used.update((int(first[column - n]), int(second[column - n])))
         return [self.sensors[i] for i in sorted(used)]
+
+
+@functools.lru_cache(maxsize=4096)
+def _few_candidates(candidates: CandidateSet, columns: tuple[int, ...]
+                    ) -> tuple[list[str], list[tuple[str, str | None]]]:
+    """The sensors that candidates ``columns`` are made of, and each candidate as (sensor,
+    None) or the pair (A, B) of ``A-B``: worked out once per candidate set and columns (a
+    study makes the same few candidates of every held-out run)."""
+    candidates._check_columns(np.asarray(columns, int))
+    n = len(candidates.sensors)
+    first, second = pair_indices(n)
+    sensors = candidates.sensors
+    parts: list[tuple[str, str | None]] = [
+        (sensors[column], None) if column < n
+        else (sensors[first[column - n]], sensors[second[column - n]]) for column in columns]
+    return candidates.sensors_of(columns), parts
 
 
 @dataclass(frozen=True)
@@ -557,6 +591,8 @@ def _sparse_sensors(recording: CheckedRecording, sensors: list[str]) -> list[str
     """``sensors`` without those missing in more than ``SPARSE_SENSOR_FRACTION`` of the
     samples of ``recording`` (warned); an error if none is left."""
     name = recording.name
+    if recording.complete(tuple(sensors)):  # the common case: nothing missing anywhere
+        return sensors
     fractions = {s: float(np.isnan(recording.values(s)).mean()) for s in sensors}
     sparse = [s for s in sensors if fractions[s] > SPARSE_SENSOR_FRACTION]
     if not sparse:
@@ -580,7 +616,7 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
     """Positions of the samples where every one of ``columns`` is present (warned when some
     are not); an error if fewer than 2 are left."""
     name, frame = recording.name, recording.frame
-    if not any(recording.has_nan(column) for column in columns):
+    if recording.complete(tuple(columns)):
         return np.arange(len(recording))
     missing = recording.missing(list(columns))
     incomplete = missing.any(axis=1)
@@ -605,15 +641,18 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
 
 
 def resolve_sensors(
-    train_name: str,
-    train: pd.DataFrame | RecordingTable,
-    tests: Mapping[str, pd.DataFrame | RecordingTable],
+    train: CheckedRecording,
+    tests: Mapping[str, CheckedRecording],
     target: str,
     sensors: Sequence[str] | None,
 ) -> list[str]:
-    """The sensor list, checked against every recording."""
-    for name, frame in [(train_name, train), *tests.items()]:
-        if target not in frame.columns:
+    """The sensor list, checked against every recording (each named as ``tests`` names it).
+
+    Membership is tested on each recording's ``column_set``: a study asks this of the same
+    recordings for every model, and a pandas ``Index`` lookup per column and recording was a
+    tenth of an evaluation."""
+    for name, recording in [(train.name, train), *tests.items()]:
+        if target not in recording.column_set:
             raise SelectionError(f"recording {name}: target column '{target}' not found")
     if sensors is not None:
         sensors = [str(sensor) for sensor in sensors]
@@ -624,18 +663,19 @@ def resolve_sensors(
             raise SelectionError(f"sensor(s) listed twice: {', '.join(repeated)}")
         if target in sensors:
             raise SelectionError(f"the target '{target}' is also listed as a sensor")
-        for name, frame in [(train_name, train), *tests.items()]:
-            missing = [sensor for sensor in sensors if sensor not in frame.columns]
+        for name, recording in [(train.name, train), *tests.items()]:
+            columns = recording.column_set
+            missing = [sensor for sensor in sensors if sensor not in columns]
             if missing:
                 raise SelectionError(
                     f"recording {name}: sensor column(s) not found: {', '.join(missing)}"
                 )
         return sensors
-    chosen = default_sensors(train, target)
+    chosen = default_sensors(train.frame, target)
     if not chosen:
-        raise SelectionError(f"recording {train_name}: no sensor columns found; pass --sensors")
-    for name, frame in tests.items():
-        check_same_sensors(name, default_sensors(frame, target), chosen, train_name)
+        raise SelectionError(f"recording {train.name}: no sensor columns found; pass --sensors")
+    for name, recording in tests.items():
+        check_same_sensors(name, default_sensors(recording.frame, target), chosen, train.name)
     return chosen
 
 
@@ -767,13 +807,10 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
     measured: dict[str, np.ndarray] = {}
     values: dict[str, np.ndarray] = {}
     failure: Exception | None = None
-    columns = tuple(used)
     for name, recording in tests.items():
         try:
-            if missing == "drop-rows" and not recording.complete(columns):
-                rows = _complete_rows(recording, used)
-            else:
-                rows = np.arange(len(recording))
+            rows = _complete_rows(recording, used) if missing == "drop-rows" else \
+                np.arange(len(recording))
             test_rows[name] = rows
             # a part only when samples were dropped: else its conversions serve again
             frame = recording.take(rows) if len(rows) < len(recording) else recording
@@ -834,17 +871,17 @@ def evaluate_checked(
         raise SelectionError("at least one test recording is needed")
     choice = MethodChoice() if method is None else method
     train_name = train.name
-    frames = {name: recording.frame for name, recording in tests.items()}
-    chosen = resolve_sensors(train_name, train.frame, frames, target, sensors)
+    chosen = resolve_sensors(train, tests, target, sensors)
     checked = [*chosen, target]
     dynamic = is_dynamic(choice.regressor)
     if dynamic:  # the regressor reads the speed programme too: present and finite everywhere
         for recording in [train, *tests.values()]:
             check_drivers(choice.regressor, recording.name, recording.columns)
         checked += [c for c in driver_columns(choice.regressor) if c not in checked]
+    check = ("checked", tuple(checked), missing)
     for recording in [train, *tests.values()]:
         # a check that passed is not repeated; one that failed raises again, in this order
-        recording.memo(("checked", tuple(checked), missing),
+        recording.memo(check,
                        lambda recording=recording: _check_values(recording, checked, missing))
 
     train_rows = np.arange(len(train))
