@@ -124,6 +124,7 @@ class CheckedRecording:
         self._rises: dict[tuple[str, ...], np.ndarray] = {}
         self._column_rises: dict[str, np.ndarray | None] = {}
         self._column_set: frozenset | None = None
+        self._no_nan: bool | None = None
         self._memo: dict[Any, Any] = {}
         self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
@@ -185,10 +186,21 @@ class CheckedRecording:
         return self._nan[column]
 
     def complete(self, columns: tuple[str, ...]) -> bool:
-        """Whether none of ``columns`` has a NaN (kept per column list: every model of a
-        study asks it again of each test run)."""
-        return self.memo(("complete", columns),
-                         lambda: not any(self.has_nan(column) for column in columns))
+        """Whether none of ``columns`` has a NaN (every model of a study asks it again of
+        each test run): at once when the recording has none anywhere, else kept per column
+        list."""
+        return self._nan_free() or self.memo(
+            ("complete", columns), lambda: not any(self.has_nan(column) for column in columns))
+
+    def _nan_free(self) -> bool:
+        """Whether no column has a NaN (one scan of the float block, made once; False when
+        the recording is not one float block). A part is when its whole recording is."""
+        if self._parent is not None:
+            return self._parent._nan_free()
+        if self._no_nan is None:
+            block = self._float_block()
+            self._no_nan = block is not None and not bool(np.isnan(block).any())
+        return self._no_nan
 
     def has_nan(self, column: str) -> bool:
         """Whether ``column`` has a NaN anywhere."""

@@ -163,14 +163,27 @@ def rmse_each(ys: Sequence[np.ndarray], predictions: Sequence[np.ndarray]) -> li
     errors are its own, in its order."""
     if len(ys) != len(predictions):
         raise SelectionError(f"rmse_each: {len(ys)} measured but {len(predictions)} predicted")
-    if ys and all(type(a) is np.ndarray and a.ndim == 1 and a.dtype == np.float64
-                  and a.shape == ys[0].shape for a in (*ys, *predictions)) and ys[0].size:
+    stacked = _stacked(ys), _stacked(predictions)
+    if stacked[0] is not None and stacked[1] is not None \
+            and stacked[0].shape == stacked[1].shape and stacked[0].shape[1]:
         with np.errstate(over="ignore", invalid="ignore"):
-            residuals = np.stack(ys) - np.stack(predictions)
+            residuals = stacked[0] - stacked[1]
             values = np.sqrt(np.add.reduce(residuals * residuals, axis=1) / residuals.shape[1])
         if np.isfinite(values).all():
             return values.tolist()
     return [rmse(y, p) for y, p in zip(ys, predictions, strict=True)]
+
+
+def _stacked(arrays: Sequence[np.ndarray]) -> np.ndarray | None:
+    """Equally long 1-D float64 arrays as the rows of one array; None for anything else
+    (no arrays, other shapes or types: ``rmse`` converts those its own way)."""
+    if not arrays or not all(type(a) is np.ndarray for a in arrays):
+        return None
+    try:
+        stacked = np.stack(arrays)
+    except ValueError:  # not equally long
+        return None
+    return stacked if stacked.ndim == 2 and stacked.dtype == np.float64 else None
 
 
 @dataclass(frozen=True)
