@@ -256,7 +256,7 @@ def _result_frame(job: EvaluationJob, train: Experiment, tests: list[Experiment]
     tested = [by_id[row["test_experiment"]] for row in rows]
     n = len(rows)
     condition = job.condition
-    columns: dict[str, list[Any]] = {
+    columns: dict[str, Any] = {
         "replica": [job.replica] * n,
         "data": ["measured" if condition else NOISE_FREE] * n,
         "noise": [condition.noise.name if condition else NOISE_FREE] * n,
@@ -269,6 +269,5 @@ def _result_frame(job: EvaluationJob, train: Experiment, tests: list[Experiment]
     columns["test_speed_rpm"] = [e.speed_rpm for e in tested]
     columns["test_programme"] = [e.programme for e in tested]
     columns["test_cooling"] = [e.cooling for e in tested]
-    frame = pd.DataFrame(columns)
-    frame["k"] = frame["k"].astype("Int64")
-    return frame
+    columns["k"] = pd.array(columns["k"], dtype="Int64")  # made so: no column cast after
+    return pd.DataFrame(columns)
