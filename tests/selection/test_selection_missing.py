@@ -333,3 +333,34 @@ def test_the_first_failing_test_recording_in_order_is_named(order, first):
         with pytest.raises(SelectionError, match=f"^recording {first}: "):
             evaluate(train, {name: runs[name] for name in order}, "drift_um", k=2,
                      missing="drop-rows")
+
+
+def test_stacked_candidates_are_each_recordings_matrix_to_the_bit_and_layout():
+    """A model's candidates of every held-out run made at once are each run's own
+    ``CandidateSet.matrix`` (values and row-major layout); runs of other lengths, or too
+    many candidates, are made run by run (None)."""
+    from spindlebench.selection.evaluate import (
+        CandidateSet,
+        CheckedRecording,
+        _stacked_candidates,
+    )
+
+    rng = np.random.default_rng(9)
+    sensors = ("A", "B", "C", "D")
+
+    def recording(name: str, n: int) -> CheckedRecording:
+        frame = pd.DataFrame(rng.normal(size=(n, 4)).cumsum(axis=0), columns=list(sensors))
+        return CheckedRecording(name, frame)
+
+    train = recording("train", 40)
+    tests = {name: recording(name, 40) for name in "xyz"}
+    candidates = CandidateSet(sensors, True)
+    for columns in ((0,), (1, 5), (9, 2, 7), (4, 5, 6, 7)):
+        stacked = _stacked_candidates(train, tests, candidates, columns)
+        for block, test in zip(stacked, tests.values(), strict=True):
+            alone = candidates.matrix(test, columns)
+            assert np.array_equal(block, alone)
+            assert block.flags.c_contiguous and alone.flags.c_contiguous
+    assert _stacked_candidates(train, {**tests, "short": recording("short", 30)}, candidates,
+                               (0, 1)) is None
+    assert _stacked_candidates(train, tests, candidates, tuple(range(9))) is None

@@ -801,12 +801,48 @@ def load_recordings(
     return CheckedRecording(train_name, train_frame), test_frames
 
 
+def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                        candidates: CandidateSet, columns: tuple[int, ...]
+                        ) -> list[np.ndarray] | None:
+    """Candidates ``columns`` of every (whole) test recording, made for all at once: each
+    recording's ``candidates.matrix(recording, columns)``, to the bit and in its layout.
+
+    Why: a study's every model reads a few candidates of the same 23 held-out runs; made
+    run by run that was a third of an evaluation. Here each candidate is one subtraction on
+    the runs' rises stacked (the same subtraction per sample), and each run's block is a
+    row-major (samples, candidates) part of one array, as ``matrix`` makes it. None (each
+    run then made on its own, with its own error) for many candidates, recordings not
+    equally long, a rise that cannot be made, or a value that is not finite."""
+    recordings = tuple(tests.values())
+    if len(columns) > FEW_CANDIDATES or len({len(r) for r in recordings}) != 1:
+        return None
+    needed, parts = _few_candidates(candidates, columns)
+    # kept by the training recording, whose tests these are: the memo holds the recordings,
+    # so their ids name them while it lives
+    stacks = train.memo(("stacked test rises", tuple(map(id, recordings))),
+                        lambda: (recordings, {}))[1]
+    try:
+        for sensor in needed:
+            if sensor not in stacks:
+                stacks[sensor] = np.stack([r.column_rises([sensor])[0] for r in recordings])
+    except SelectionError:  # a rise that cannot be made: each run raises its own error
+        return None
+    out = np.empty((len(recordings), len(recordings[0]), len(parts)))
+    with np.errstate(over="ignore", invalid="ignore"):  # warned by the run that overflows
+        for j, (a, b) in enumerate(parts):
+            out[:, :, j] = stacks[a] if b is None else stacks[a] - stacks[b]
+    return list(out) if np.isfinite(out).all() else None
+
+
 def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
                  used: Sequence[str],
                  inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
-                 fit: LinearFit | EstimatorFit) -> tuple[dict[str, np.ndarray], ...]:
+                 fit: LinearFit | EstimatorFit,
+                 batch: Callable[[], list[np.ndarray] | None] | None = None,
+                 ) -> tuple[dict[str, np.ndarray], ...]:
     """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
-    test recording (``inputs(recording, part used)``: the model's inputs).
+    test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
+    of every recording at once, or None, asked only when no sample is dropped).
 
     Why in three passes (inputs of every run, then every prediction, then every RMSE in one
     reduction, ``rmse_each``) rather than run by run: a study scores each of its many
@@ -819,7 +855,10 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
     measured: dict[str, np.ndarray] = {}
     values: dict[str, np.ndarray] = {}
     failure: Exception | None = None
-    for name, recording in tests.items():
+    columns = tuple(used)
+    shared = batch() if batch is not None and (missing != "drop-rows" or all(
+        recording.complete(columns) for recording in tests.values())) else None
+    for i, (name, recording) in enumerate(tests.items()):
         try:
             rows = _complete_rows(recording, used) if missing == "drop-rows" else \
                 np.arange(len(recording))
@@ -827,7 +866,7 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
             # a part only when samples were dropped: else its conversions serve again
             frame = recording.take(rows) if len(rows) < len(recording) else recording
             measured[name] = frame.values(target)
-            values[name] = inputs(recording, frame)
+            values[name] = shared[i] if shared is not None else inputs(recording, frame)
         except Exception as exc:  # raised once the runs before it are scored
             failure = _named(exc, name)
             break
@@ -948,8 +987,12 @@ def evaluate_checked(
             candidate_values()
         return model_inputs(choice.regressor, frame.values, values) if dynamic else values
 
+    def batch() -> list[np.ndarray] | None:
+        return None if dynamic else _stacked_candidates(train, tests, candidates,
+                                                        tuple(selection.selected))
+
     predictions, measured, errors, test_rows = _score_tests(tests, target, missing, used,
-                                                            inputs, fit)
+                                                            inputs, fit, batch)
     return Evaluation(
         train=train_name,
         target=target,
