@@ -661,8 +661,8 @@ def resolve_sensors(
     """The sensor list, checked against every recording (each named as ``tests`` names it).
 
     Membership is tested on each recording's ``column_set``: a study asks this of the same
-    recordings for every model, and a pandas ``Index`` lookup per column and recording was a
-    tenth of an evaluation."""
+    recordings for every model, and a pandas ``Index`` lookup per column and recording was
+    some 3 % of an evaluation."""
     for name, recording in [(train.name, train), *tests.items()]:
         if target not in recording.column_set:
             raise SelectionError(f"recording {name}: target column '{target}' not found")
@@ -808,7 +808,7 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     recording's ``candidates.matrix(recording, columns)``, to the bit and in its layout.
 
     Why: a study's every model reads a few candidates of the same 23 held-out runs; made
-    run by run that was a third of an evaluation. Here each candidate is one subtraction on
+    run by run that was a tenth of an evaluation. Here each candidate is one subtraction on
     the runs' rises stacked (the same subtraction per sample), and each run's block is a
     row-major (samples, candidates) part of one array, as ``matrix`` makes it. None (each
     run then made on its own, with its own error) for many candidates, recordings not
@@ -839,14 +839,15 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
                  inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
                  fit: LinearFit | EstimatorFit,
                  batch: Callable[[], list[np.ndarray] | None] | None = None,
-                 ) -> tuple[dict[str, np.ndarray], ...]:
+                 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, float],
+                            dict[str, np.ndarray]]:
     """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
     test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
     of every recording at once, or None, asked only when no sample is dropped).
 
     Why in three passes (inputs of every run, then every prediction, then every RMSE in one
     reduction, ``rmse_each``) rather than run by run: a study scores each of its many
-    models on the same 23 runs, and the per-run calls were most of its time. The values
+    models on the same 23 runs, and the per-run calls were half of its time. The values
     are those of the run-by-run way, and so are the errors, in its order: a run's failing
     inputs are raised only after the runs before it are predicted and scored (which raise
     first where they would), and a failing prediction only after the RMSE of those before.

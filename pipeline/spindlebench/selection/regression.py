@@ -156,7 +156,7 @@ def rmse_each(ys: Sequence[np.ndarray], predictions: Sequence[np.ndarray]) -> li
     """``[rmse(y, p) for y, p in zip(ys, predictions)]``, to the last bit, in one reduction.
 
     Why: a sweep scores every method on 23 held-out runs, and 23 calls of ``rmse`` cost
-    twenty times one reduction over the runs stacked. Equally long float64 runs are stacked
+    several times one reduction over the runs stacked. Equally long float64 runs are stacked
     as rows: numpy's pairwise sum then runs along each (contiguous) row exactly as on the
     run alone (tests compare the two). Anything else, or a result that is not finite (NaN
     input, or an overflow ``rmse`` raises on), takes ``rmse`` pair by pair, so the values and

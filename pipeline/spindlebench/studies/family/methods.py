@@ -53,7 +53,7 @@ from spindlebench.core.names import (
     SIX_RAW,
 )
 from spindlebench.formats.recording import DRIFT_COLUMN, recording_name
-from spindlebench.selection import PairwiseDifferences, rises, rmse
+from spindlebench.selection import PairwiseDifferences, rises
 from spindlebench.selection.differences import pairwise_differences, with_differences_matrix
 from spindlebench.selection.evaluate import CheckedRecording, evaluate_checked
 from spindlebench.selection.registry import (
@@ -253,12 +253,6 @@ def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selecte
             in zip(names, scores, rmse_each(truths, predicted), strict=True)}
 
 
-def _score(data: EvaluationData, name: str, prediction: np.ndarray, selected: str) -> Score:
-    """Score of the prediction of test run ``name`` (all its samples)."""
-    return Score(rmse(data.column(name, TARGET), prediction),
-                 rmse(data.column(name, TRUTH), prediction), selected)
-
-
 def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
     # A dropout reaches evaluate only as a whole-run NaN column (jobs.measured_frame holds a
     # dropped sensor at its last good reading): with "drop-rows" a group whose model does not
@@ -282,7 +276,8 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         ranking = data.checked_train.memo("top-k ranking", lambda: _top_k_ranking(X, y))
-        chosen = ranking[:spec.k] if ranking is not None and spec.k <= len(ranking) else \
+        shared = ranking is not None and isinstance(spec.k, int) and 1 <= spec.k <= len(ranking)
+        chosen = ranking[:spec.k] if shared else \
             select_with(TOP_K, X, y, spec.k, names=SENSORS).selected
     fit = fit_with(TOP_K, X[:, chosen], y)
     predictions = dict(zip(data.tests, fit.predict_each(
@@ -321,8 +316,8 @@ def _ridge(data: EvaluationData) -> dict[str, Score]:
 def ridge_candidates(raw: np.ndarray) -> np.ndarray:
     """``PairwiseDifferences().fit(raw).transform(raw)`` of a run's float64 rises: the same
     two calls on the same array (``pairwise_differences``, then ``np.hstack``), so the same
-    bits and layout, without scikit-learn validating the array twice (a sixth of the ridge
-    baseline's time). Values that are not finite pass here: ``_ridge_predictions`` then
+    bits and layout, without scikit-learn validating the array twice (an eighth of the
+    ridge baseline's time). Values that are not finite pass here: ``_ridge_predictions`` then
     takes ``model.predict``, which refuses them as before."""
     return np.hstack([raw, pairwise_differences(raw)])
 
@@ -368,8 +363,8 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
 
 
 def _oracle(data: EvaluationData) -> dict[str, Score]:
-    # Fitted on the held-out run itself, so the same for every training run: fitted and
-    # scored once per run (all fits first, then the scores: the errors of one pass each)
+    # Fitted on the held-out run itself, so the same for every training run: fitted once
+    # per run (all fits first, then the scores: the errors of one pass each)
     def prediction(name: str) -> Callable[[], np.ndarray]:
         def fit() -> np.ndarray:
             X = data.raw_rises(name)
@@ -378,9 +373,7 @@ def _oracle(data: EvaluationData) -> dict[str, Score]:
         return fit
 
     predictions = {name: data.runs.memo(ORACLE, name, prediction(name)) for name in data.tests}
-    selected = "all 20 sensors, fitted on the held-out run itself"
-    return {name: data.runs.memo(f"{ORACLE} score", name, lambda name=name: _score(
-        data, name, predictions[name], selected)) for name in data.tests}
+    return _scores(data, predictions, "all 20 sensors, fitted on the held-out run itself")
 
 
 def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],

@@ -90,7 +90,7 @@ TrainingResult = pd.DataFrame | str
 
 class _TruthColumns:
     """A run's truth frame as float arrays from one conversion: looking its columns up in
-    pandas, a few times per run, was a tenth of an evaluation's time. The values are the
+    pandas, a few times per run, was some 6 % of an evaluation's time. The values are the
     frame's (a copy of the same float64s, column-major as pandas gives a column block)."""
 
     def __init__(self, truth: pd.DataFrame) -> None:
