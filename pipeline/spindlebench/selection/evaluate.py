@@ -125,6 +125,7 @@ class CheckedRecording:
         self._column_rises: dict[str, np.ndarray | None] = {}
         self._column_set: frozenset | None = None
         self._no_nan: bool | None = None
+        self._finite: bool | None = None
         self._memo: dict[Any, Any] = {}
         self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
@@ -199,8 +200,20 @@ class CheckedRecording:
             return self._parent._nan_free()
         if self._no_nan is None:
             block = self._float_block()
-            self._no_nan = block is not None and not bool(np.isnan(block).any())
+            self._no_nan = self.all_finite() or (
+                block is not None and not bool(np.isnan(block).any()))
         return self._no_nan
+
+    def all_finite(self) -> bool:
+        """Whether every column is float64 and finite (one scan of the float block, made
+        once; False when the recording is not one float block): then no column has a
+        ``problem``. A part is when its whole recording is."""
+        if self._parent is not None:
+            return self._parent.all_finite()
+        if self._finite is None:
+            block = self._float_block()
+            self._finite = block is not None and bool(np.isfinite(block).all())
+        return self._finite
 
     def has_nan(self, column: str) -> bool:
         """Whether ``column`` has a NaN anywhere."""
@@ -593,6 +606,8 @@ def _check_values(recording: CheckedRecording, columns: Sequence[str], missing: 
             f"recording {recording.name}: has {len(recording)} row(s); an experiment needs at "
             "least 2"
         )
+    if recording.all_finite():  # every column float64 and finite: nothing to refuse
+        return
     for column in columns:
         problem = recording.problem(column, missing)
         if problem:
