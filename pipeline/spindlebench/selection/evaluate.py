@@ -872,12 +872,12 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
     values: dict[str, np.ndarray] = {}
     failure: Exception | None = None
     columns = tuple(used)
-    shared = batch() if batch is not None and (missing != "drop-rows" or all(
-        recording.complete(columns) for recording in tests.values())) else None
+    whole = missing != "drop-rows" or all(recording.complete(columns)
+                                          for recording in tests.values())
+    shared = batch() if batch is not None and whole else None
     for i, (name, recording) in enumerate(tests.items()):
         try:
-            rows = _complete_rows(recording, used) if missing == "drop-rows" else \
-                np.arange(len(recording))
+            rows = np.arange(len(recording)) if whole else _complete_rows(recording, used)
             test_rows[name] = rows
             # a part only when samples were dropped: else its conversions serve again
             frame = recording.take(rows) if len(rows) < len(recording) else recording
