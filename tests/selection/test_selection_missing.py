@@ -3,6 +3,7 @@
 testbench's sensor-fault example with the committed FMU."""
 
 import json
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -286,3 +287,80 @@ def test_checked_recordings_reused_give_what_evaluate_gives_each_time(simulated)
             assert np.array_equal(reused.predictions[name], fresh.predictions[name])
             assert np.array_equal(reused.test_rows[name], fresh.test_rows[name])
     assert outcomes["ok"] and outcomes["error"]  # k > candidates fails for the one-sensor set
+
+
+def test_column_rises_are_the_columns_of_rises_and_raise_as_it_does():
+    """Per-column rises (made once per column) are the columns of the block's rises to the
+    bit; a column whose reference is missing while later values are not raises rises' own
+    error; one missing everywhere stays NaN."""
+    from spindlebench.selection.evaluate import CheckedRecording
+
+    rng = np.random.default_rng(6)
+    frame = pd.DataFrame(rng.normal(size=(50, 3)) * 30 + 20, columns=["A", "B", "C"])
+    frame["D"] = np.nan
+    frame["E"] = frame["A"]
+    frame.loc[0, "E"] = np.nan
+    recording = CheckedRecording("run", frame)
+    for columns in (["A"], ["C", "A"], ["A", "B", "C", "D"]):
+        block = CheckedRecording("run", frame).rises(columns)
+        for i, rise in enumerate(recording.column_rises(columns)):
+            assert np.array_equal(rise, block[:, i], equal_nan=True)
+    with pytest.raises(SelectionError) as per_column:
+        recording.column_rises(["A", "E"])
+    with pytest.raises(SelectionError) as block:
+        CheckedRecording("run", frame).rises(["A", "E"])
+    assert str(per_column.value) == str(block.value)
+
+
+@pytest.mark.parametrize(("order", "first"), [("abc", "b"), ("acb", "c")])
+def test_the_first_failing_test_recording_in_order_is_named(order, first):
+    """The held-out runs are prepared, predicted and scored in passes, but the error is the
+    first run's that fails, as run by run: b's prediction overflows, c has too few samples."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0, 1, 60)[:, None]
+
+    def run() -> pd.DataFrame:
+        X = 20 + 5 * t * rng.uniform(0.5, 2, size=(1, 4)) + rng.normal(size=(60, 4)) * 0.1
+        frame = pd.DataFrame(X, columns=["S1", "S2", "S3", "S4"])
+        frame["drift_um"] = 3 * (X[:, 0] - X[0, 0]) + rng.normal(size=60) * 0.05
+        return frame
+
+    train, runs = run(), {name: run() for name in "abc"}
+    runs["b"][["S1", "S2", "S3", "S4"]] = np.repeat(t, 4, axis=1) * 1e308
+    runs["c"].loc[1:, ["S1", "S2", "S3", "S4"]] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(SelectionError, match=f"^recording {first}: "):
+            evaluate(train, {name: runs[name] for name in order}, "drift_um", k=2,
+                     missing="drop-rows")
+
+
+def test_stacked_candidates_are_each_recordings_matrix_to_the_bit_and_layout():
+    """A model's candidates of every held-out run made at once are each run's own
+    ``CandidateSet.matrix`` (values and row-major layout); runs of other lengths, or too
+    many candidates, are made run by run (None)."""
+    from spindlebench.selection.evaluate import (
+        CandidateSet,
+        CheckedRecording,
+        _stacked_candidates,
+    )
+
+    rng = np.random.default_rng(9)
+    sensors = ("A", "B", "C", "D")
+
+    def recording(name: str, n: int) -> CheckedRecording:
+        frame = pd.DataFrame(rng.normal(size=(n, 4)).cumsum(axis=0), columns=list(sensors))
+        return CheckedRecording(name, frame)
+
+    train = recording("train", 40)
+    tests = {name: recording(name, 40) for name in "xyz"}
+    candidates = CandidateSet(sensors, True)
+    for columns in ((0,), (1, 5), (9, 2, 7), (4, 5, 6, 7)):
+        stacked = _stacked_candidates(train, tests, candidates, columns)
+        for block, test in zip(stacked, tests.values(), strict=True):
+            alone = candidates.matrix(test, columns)
+            assert np.array_equal(block, alone)
+            assert block.flags.c_contiguous and alone.flags.c_contiguous
+    assert _stacked_candidates(train, {**tests, "short": recording("short", 30)}, candidates,
+                               (0, 1)) is None
+    assert _stacked_candidates(train, tests, candidates, tuple(range(9))) is None

@@ -101,3 +101,38 @@ def test_rmse_is_the_textbook_formula_to_the_bit():
             y, p = rng.normal(size=n) * 50, rng.normal(size=n) * 50
             assert rmse(y, p) == float(np.sqrt(np.mean((y - p) ** 2)))
     assert np.isnan(rmse(np.array([1.0, np.nan]), np.array([1.0, 2.0])))
+
+
+def test_rmse_each_is_rmse_of_each_pair_to_the_bit():
+    """One reduction over the stacked runs gives each run's own bits (numpy's pairwise sum
+    runs along each row as on the row alone), around the summation's blocks too; unequal
+    lengths, NaN and overflow take rmse pair by pair (its values, its error)."""
+    from spindlebench.selection.regression import rmse_each
+
+    rng = np.random.default_rng(4)
+    for n in (1, 2, 7, 8, 9, 127, 128, 129, 181, 1000, 4099):
+        ys = [rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3) for _ in range(23)]
+        ps = [rng.normal(size=n) * 50 for _ in range(23)]
+        assert rmse_each(ys, ps) == [rmse(y, p) for y, p in zip(ys, ps, strict=True)]
+    uneven = [np.arange(3.0), np.arange(5.0)]
+    assert rmse_each(uneven, [u + 1 for u in uneven]) == [1.0, 1.0]
+    with_nan = rmse_each([np.array([1.0, np.nan]), np.ones(2)], [np.ones(2), np.zeros(2)])
+    assert np.isnan(with_nan[0]) and with_nan[1] == 1.0
+    assert rmse_each([], []) == []
+    with pytest.raises(SelectionError, match="overflow"):
+        rmse_each([np.ones(2), np.full(2, 1e300)], [np.zeros(2), np.full(2, -1e300)])
+    with pytest.raises(SelectionError, match="2 measured but 1 predicted"):
+        rmse_each([np.ones(2), np.ones(2)], [np.ones(2)])
+
+
+def test_linear_fit_predict_each_is_predict_of_each():
+    """The same product per input under one errstate: the same bits as predict."""
+    from spindlebench.selection.regression import LinearFit
+
+    rng = np.random.default_rng(5)
+    fit = LinearFit(intercept=0.3, coefficients=rng.normal(size=3), r2=1.0)
+    Xs = [rng.normal(size=(n, 3)) * 40 for n in (2, 181, 200)] + [
+        np.asfortranarray(rng.normal(size=(181, 3)))]
+    for each, X in zip(fit.predict_each(Xs), Xs, strict=True):
+        assert np.array_equal(each, fit.predict(X))
+    assert np.isinf(fit.predict_each([np.full((2, 3), 1e308)])[0]).any()

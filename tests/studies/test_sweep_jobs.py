@@ -6,6 +6,8 @@ Uses ``scenarios/studies/tiny_sweep.toml`` with ``rule = "each-season"`` (Jan an
 
 from __future__ import annotations
 
+import dataclasses
+
 import pandas as pd
 import pytest
 from conftest import REPO
@@ -182,3 +184,18 @@ def test_measured_frames_carry_the_programme_for_identified_models(swept):
     rows = pd.DataFrame(score_all([MethodSpec("six_raw:closure+tf1", 2)], frame, tests,
                                   job.similarity))
     assert len(rows) == len(tests) and rows["rmse_um"].notna().all(), rows
+
+
+def test_measured_frame_is_the_same_from_a_truth_that_is_not_one_float_block(swept):
+    """A truth frame of float64 columns is converted once (``_TruthColumns``); one with
+    another column type takes pandas column by column: the same frame to the bit."""
+    sweep, _ = swept
+    for condition in sweep.conditions:
+        job = sweep.evaluation_task(1, condition, sweep.trains[:1]).args[0]
+        train = sweep.trains[0]
+        mixed = {name: truth.assign(label="x") for name, truth in job.truths.items()}
+        other = dataclasses.replace(job, truths=mixed)
+        for held_out in (True, False):
+            pd.testing.assert_frame_equal(measured_frame(job, train, held_out),
+                                          measured_frame(other, train, held_out),
+                                          check_exact=True)

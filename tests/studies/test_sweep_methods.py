@@ -190,3 +190,41 @@ def _assert_scores_as_before(rows, specs, train, tests):
         assert (mine["error"] == "").all(), spec
         for _, row in mine.iterrows():
             assert (row["rmse_um"], row["rmse_true_um"]) == old[row["test_experiment"]], spec
+
+
+def test_ridge_candidates_are_the_transformers_to_the_bit_and_layout():
+    """The ridge baseline's per-run candidates skip scikit-learn's validation: the same
+    values and the same memory layout as ``PairwiseDifferences().fit(X).transform(X)`` (its
+    products round by layout), for the column-major rises the sweep makes and others."""
+    from spindlebench.selection import PairwiseDifferences
+    from spindlebench.studies.family.methods import ridge_candidates
+
+    rng = np.random.default_rng(7)
+    raw = rng.normal(size=(181, 20)) * 5
+    for X in (np.asfortranarray(raw - raw[0]), raw - raw[0], raw[:, :6]):
+        made, transformed = ridge_candidates(X), PairwiseDifferences().fit(X).transform(X)
+        assert np.array_equal(made, transformed)
+        assert made.flags.c_contiguous == transformed.flags.c_contiguous
+        assert made.flags.f_contiguous == transformed.flags.f_contiguous
+
+
+def test_top_k_choice_of_each_k_is_the_first_k_of_the_ranking():
+    """The top-k baseline selects all 20 once and takes the first k: the choice selecting
+    k on its own makes, ties (equal |psi|) included; a constant sensor falls back to k."""
+    import warnings
+
+    from spindlebench.selection.registry import select_with
+    from spindlebench.studies.family.methods import TOP_K, _top_k_ranking
+
+    rng = np.random.default_rng(8)
+    X = rng.normal(size=(60, 20)).cumsum(axis=0)
+    X[:, 5], X[:, 11] = X[:, 2], -X[:, 2]  # ties in |psi|
+    y = X[:, 2] + X[:, 7] + rng.normal(size=60)
+    ranking = _top_k_ranking(X, y)
+    for k in range(1, 21):
+        assert select_with(TOP_K, X, y, k, names=SENSORS).selected.tolist() == \
+            ranking[:k].tolist()
+    X[:, 3] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _top_k_ranking(X, y) is None

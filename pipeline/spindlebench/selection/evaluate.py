@@ -19,6 +19,7 @@ the experiment; an experiment left with fewer than 2 complete samples is an erro
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
@@ -61,7 +62,13 @@ from spindlebench.selection.registry import (
     select_with,
     sensitive_points,
 )
-from spindlebench.selection.regression import EstimatorFit, LinearFit, rises, rmse
+from spindlebench.selection.regression import (
+    EstimatorFit,
+    LinearFit,
+    rises,
+    rmse,
+    rmse_each,
+)
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
 
@@ -115,6 +122,10 @@ class CheckedRecording:
         self._nan: dict[str, np.ndarray] = {}
         self._any_nan: dict[str, bool] = {}
         self._rises: dict[tuple[str, ...], np.ndarray] = {}
+        self._column_rises: dict[str, np.ndarray | None] = {}
+        self._column_set: frozenset | None = None
+        self._no_nan: bool | None = None
+        self._finite: bool | None = None
         self._memo: dict[Any, Any] = {}
         self._length = len(frame)
         self._problems: dict[tuple[str, str], str | None] = {}
@@ -127,6 +138,13 @@ class CheckedRecording:
     @property
     def columns(self) -> pd.Index | tuple[str, ...]:
         return self.frame.columns
+
+    @property
+    def column_set(self) -> frozenset:
+        """The column names as a set, made once (``resolve_sensors`` tests many names)."""
+        if self._column_set is None:
+            self._column_set = frozenset(self.frame.columns)
+        return self._column_set
 
     def take(self, rows: np.ndarray) -> CheckedRecording:
         """The samples at positions ``rows`` (of this recording) only."""
@@ -168,6 +186,35 @@ class CheckedRecording:
             self._nan[column] = np.isnan(self.values(column))
         return self._nan[column]
 
+    def complete(self, columns: tuple[str, ...]) -> bool:
+        """Whether none of ``columns`` has a NaN (every model of a study asks it again of
+        each test run): at once when the recording has none anywhere, else kept per column
+        list."""
+        return self._nan_free() or self.memo(
+            ("complete", columns), lambda: not any(self.has_nan(column) for column in columns))
+
+    def _nan_free(self) -> bool:
+        """Whether no column has a NaN (one scan of the float block, made once; False when
+        the recording is not one float block). A part is when its whole recording is."""
+        if self._parent is not None:
+            return self._parent._nan_free()
+        if self._no_nan is None:
+            block = self._float_block()
+            self._no_nan = self.all_finite() or (
+                block is not None and not bool(np.isnan(block).any()))
+        return self._no_nan
+
+    def all_finite(self) -> bool:
+        """Whether every column is float64 and finite (one scan of the float block, made
+        once; False when the recording is not one float block): then no column has a
+        ``problem``. A part is when its whole recording is."""
+        if self._parent is not None:
+            return self._parent.all_finite()
+        if self._finite is None:
+            block = self._float_block()
+            self._finite = block is not None and bool(np.isfinite(block).all())
+        return self._finite
+
     def has_nan(self, column: str) -> bool:
         """Whether ``column`` has a NaN anywhere."""
         if column not in self._any_nan:
@@ -195,6 +242,26 @@ class CheckedRecording:
         if key not in self._rises:
             self._rises[key] = rises(self.stack(columns))
         return self._rises[key]
+
+    def column_rises(self, columns: Sequence[str]) -> list[np.ndarray]:
+        """The columns of ``self.rises(columns)``, each made once per column (read-only use).
+
+        Why: each of a study's many models reads the rises of a few sensors of every test
+        run, a different few each; a rise is one subtraction per sample, so a column's is the
+        same whatever list it is made in. A column whose reference (first) value is not
+        finite while later ones are takes ``self.rises(columns)``, which raises its error."""
+        out = []
+        for column in columns:
+            if column not in self._column_rises:
+                values = self.values(column)
+                bad = len(values) == 0 or (not math.isfinite(values[0])
+                                            and bool(np.isfinite(values).any()))
+                self._column_rises[column] = None if bad else values - values[0]
+            rise = self._column_rises[column]
+            if rise is None:
+                return list(self.rises(columns).T)
+            out.append(rise)
+        return out
 
     def missing(self, columns: Sequence[str]) -> np.ndarray:
         """Where ``columns`` are missing (NaN), (samples, len(columns)); for checked columns."""
@@ -282,24 +349,22 @@ class CandidateSet:
         a test recording is complete only in those, and an unused sensor's gap must not
         matter."""
         n = len(self.sensors)
-        size = n + n * (n - 1) // 2 if self.differences else n  # len(self.names), unnamed
-        wanted = np.arange(size) if columns is None else np.asarray(columns, int)
-        if wanted.size and (wanted.min() < 0 or wanted.max() >= size):
-            raise SelectionError(f"candidate index out of range 0..{size - 1}")
-        needed = self.sensors_of(wanted)
-        first, second = pair_indices(n)
-        if isinstance(frame, CheckedRecording) and wanted.size <= FEW_CANDIDATES:
+        size = self.size
+        if isinstance(frame, CheckedRecording) and (
+                size if columns is None else len(columns)) <= FEW_CANDIDATES:
             # a model's few candidates, column by column: the same subtractions, without
             # the all-sensors block (most of the time of each of a study's many calls)
-            values, at = frame.rises(needed), {sensor: i for i, sensor in enumerate(needed)}
-            out = np.empty((len(frame), wanted.size))
-            for j, column in enumerate(wanted.tolist()):
-                if column < n:
-                    out[:, j] = values[:, at[self.sensors[column]]]
-                else:
-                    a, b = self.sensors[first[column - n]], self.sensors[second[column - n]]
-                    out[:, j] = values[:, at[a]] - values[:, at[b]]
+            needed, parts = _few_candidates(self, tuple(range(size)) if columns is None
+                                            else tuple(int(column) for column in columns))
+            rise = dict(zip(needed, frame.column_rises(needed), strict=True))
+            out = np.empty((len(frame), len(parts)))
+            for j, (a, b) in enumerate(parts):
+                out[:, j] = rise[a] if b is None else rise[a] - rise[b]
             return out
+        wanted = np.arange(size) if columns is None else np.asarray(columns, int)
+        self._check_columns(wanted)
+        needed = self.sensors_of(wanted)
+        first, second = pair_indices(n)
         raw = np.full((len(frame), n), np.nan)
         raw[:, [self.sensors.index(s) for s in needed]] = frame.rises(needed) if isinstance(
             frame, CheckedRecording) else rises(frame.loc[:, needed].to_numpy(dtype=float))
@@ -309,6 +374,17 @@ class CandidateSet:
         out[:, is_raw] = raw[:, wanted[is_raw]]
         out[:, ~is_raw] = raw[:, first[pair]] - raw[:, second[pair]]
         return out
+
+    @property
+    def size(self) -> int:
+        """``len(self.names)``, without naming them."""
+        n = len(self.sensors)
+        return n + n * (n - 1) // 2 if self.differences else n
+
+    def _check_columns(self, columns: np.ndarray) -> None:
+        """Refuse candidate indices outside ``0..size - 1``."""
+        if columns.size and (columns.min() < 0 or columns.max() >= self.size):
+            raise SelectionError(f"candidate index out of range 0..{self.size - 1}")
 
     def sensors_of(self, columns: Sequence[int]) -> list[str]:
         """The raw sensors that candidates ``columns`` are made of, in sensor order."""
@@ -321,6 +397,22 @@ class CandidateSet:
             else:
                 used.update((int(first[column - n]), int(second[column - n])))
         return [self.sensors[i] for i in sorted(used)]
+
+
+@functools.lru_cache(maxsize=4096)
+def _few_candidates(candidates: CandidateSet, columns: tuple[int, ...]
+                    ) -> tuple[list[str], list[tuple[str, str | None]]]:
+    """The sensors that candidates ``columns`` are made of, and each candidate as (sensor,
+    None) or the pair (A, B) of ``A-B``: worked out once per candidate set and columns (a
+    study makes the same few candidates of every held-out run)."""
+    candidates._check_columns(np.asarray(columns, int))
+    n = len(candidates.sensors)
+    first, second = pair_indices(n)
+    sensors = candidates.sensors
+    parts: list[tuple[str, str | None]] = [
+        (sensors[column], None) if column < n
+        else (sensors[first[column - n]], sensors[second[column - n]]) for column in columns]
+    return candidates.sensors_of(columns), parts
 
 
 @dataclass(frozen=True)
@@ -438,9 +530,20 @@ def _naming(name: str) -> Iterator[None]:
     try:
         yield
     except SelectionError as exc:
-        if str(exc).startswith("recording "):
+        named = _named(exc, name)
+        if named is exc:
             raise
-        raise type(exc)(f"recording {name}: {exc}") from exc
+        raise named from exc
+
+
+def _named(exc: Exception, name: str) -> Exception:
+    """``exc`` with the recording's name in front (``_naming``): a ``SelectionError`` that does
+    not name one yet becomes a new one of its type (its cause ``exc``); any other as it is."""
+    if not isinstance(exc, SelectionError) or str(exc).startswith("recording "):
+        return exc
+    named = type(exc)(f"recording {name}: {exc}")
+    named.__cause__ = exc
+    return named
 
 
 def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
@@ -455,6 +558,8 @@ def row_wise(candidates: CandidateSet, similarity: str, closure: str) -> bool:
 def _finite(matrix: np.ndarray, names: Sequence[str]) -> np.ndarray:
     """``matrix`` (rises, differences), or an overflow error naming the first columns where
     subtracting two finite values gave inf (|values| near 1e308)."""
+    if np.isfinite(matrix).all():  # the common case in one pass: nothing to name
+        return matrix
     with np.errstate(over="ignore", invalid="ignore"):
         bad = np.flatnonzero(~np.isfinite(matrix).all(axis=0))
     if bad.size:
@@ -501,6 +606,8 @@ def _check_values(recording: CheckedRecording, columns: Sequence[str], missing: 
             f"recording {recording.name}: has {len(recording)} row(s); an experiment needs at "
             "least 2"
         )
+    if recording.all_finite():  # every column float64 and finite: nothing to refuse
+        return
     for column in columns:
         problem = recording.problem(column, missing)
         if problem:
@@ -511,6 +618,8 @@ def _sparse_sensors(recording: CheckedRecording, sensors: list[str]) -> list[str
     """``sensors`` without those missing in more than ``SPARSE_SENSOR_FRACTION`` of the
     samples of ``recording`` (warned); an error if none is left."""
     name = recording.name
+    if recording.complete(tuple(sensors)):  # the common case: nothing missing anywhere
+        return sensors
     fractions = {s: float(np.isnan(recording.values(s)).mean()) for s in sensors}
     sparse = [s for s in sensors if fractions[s] > SPARSE_SENSOR_FRACTION]
     if not sparse:
@@ -534,7 +643,7 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
     """Positions of the samples where every one of ``columns`` is present (warned when some
     are not); an error if fewer than 2 are left."""
     name, frame = recording.name, recording.frame
-    if not any(recording.has_nan(column) for column in columns):
+    if recording.complete(tuple(columns)):
         return np.arange(len(recording))
     missing = recording.missing(list(columns))
     incomplete = missing.any(axis=1)
@@ -559,15 +668,18 @@ def _complete_rows(recording: CheckedRecording, columns: Sequence[str]) -> np.nd
 
 
 def resolve_sensors(
-    train_name: str,
-    train: pd.DataFrame | RecordingTable,
-    tests: Mapping[str, pd.DataFrame | RecordingTable],
+    train: CheckedRecording,
+    tests: Mapping[str, CheckedRecording],
     target: str,
     sensors: Sequence[str] | None,
 ) -> list[str]:
-    """The sensor list, checked against every recording."""
-    for name, frame in [(train_name, train), *tests.items()]:
-        if target not in frame.columns:
+    """The sensor list, checked against every recording (each named as ``tests`` names it).
+
+    Membership is tested on each recording's ``column_set``: a study asks this of the same
+    recordings for every model, and a pandas ``Index`` lookup per column and recording was
+    some 3 % of an evaluation."""
+    for name, recording in [(train.name, train), *tests.items()]:
+        if target not in recording.column_set:
             raise SelectionError(f"recording {name}: target column '{target}' not found")
     if sensors is not None:
         sensors = [str(sensor) for sensor in sensors]
@@ -578,18 +690,19 @@ def resolve_sensors(
             raise SelectionError(f"sensor(s) listed twice: {', '.join(repeated)}")
         if target in sensors:
             raise SelectionError(f"the target '{target}' is also listed as a sensor")
-        for name, frame in [(train_name, train), *tests.items()]:
-            missing = [sensor for sensor in sensors if sensor not in frame.columns]
+        for name, recording in [(train.name, train), *tests.items()]:
+            columns = recording.column_set
+            missing = [sensor for sensor in sensors if sensor not in columns]
             if missing:
                 raise SelectionError(
                     f"recording {name}: sensor column(s) not found: {', '.join(missing)}"
                 )
         return sensors
-    chosen = default_sensors(train, target)
+    chosen = default_sensors(train.frame, target)
     if not chosen:
-        raise SelectionError(f"recording {train_name}: no sensor columns found; pass --sensors")
-    for name, frame in tests.items():
-        check_same_sensors(name, default_sensors(frame, target), chosen, train_name)
+        raise SelectionError(f"recording {train.name}: no sensor columns found; pass --sensors")
+    for name, recording in tests.items():
+        check_same_sensors(name, default_sensors(recording.frame, target), chosen, train.name)
     return chosen
 
 
@@ -703,6 +816,102 @@ def load_recordings(
     return CheckedRecording(train_name, train_frame), test_frames
 
 
+def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                        candidates: CandidateSet, columns: tuple[int, ...]
+                        ) -> list[np.ndarray] | None:
+    """Candidates ``columns`` of every (whole) test recording, made for all at once: each
+    recording's ``candidates.matrix(recording, columns)``, to the bit and in its layout.
+
+    Why: a study's every model reads a few candidates of the same 23 held-out runs; made
+    run by run that was a tenth of an evaluation. Here each candidate is one subtraction on
+    the runs' rises stacked (the same subtraction per sample), and each run's block is a
+    row-major (samples, candidates) part of one array, as ``matrix`` makes it. None (each
+    run then made on its own, with its own error) for many candidates, recordings not
+    equally long, a rise that cannot be made, or a value that is not finite."""
+    recordings = tuple(tests.values())
+    if len(columns) > FEW_CANDIDATES or len({len(r) for r in recordings}) != 1:
+        return None
+    needed, parts = _few_candidates(candidates, columns)
+    # kept by the training recording, whose tests these are: the memo holds the recordings,
+    # so their ids name them while it lives
+    stacks = train.memo(("stacked test rises", tuple(map(id, recordings))),
+                        lambda: (recordings, {}))[1]
+    try:
+        for sensor in needed:
+            if sensor not in stacks:
+                stacks[sensor] = np.stack([r.column_rises([sensor])[0] for r in recordings])
+    except SelectionError:  # a rise that cannot be made: each run raises its own error
+        return None
+    out = np.empty((len(recordings), len(recordings[0]), len(parts)))
+    with np.errstate(over="ignore", invalid="ignore"):  # warned by the run that overflows
+        for j, (a, b) in enumerate(parts):
+            out[:, :, j] = stacks[a] if b is None else stacks[a] - stacks[b]
+    return list(out) if np.isfinite(out).all() else None
+
+
+def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
+                 used: Sequence[str],
+                 inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
+                 fit: LinearFit | EstimatorFit,
+                 batch: Callable[[], list[np.ndarray] | None] | None = None,
+                 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, float],
+                            dict[str, np.ndarray]]:
+    """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
+    test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
+    of every recording at once, or None, asked only when no sample is dropped).
+
+    Why in three passes (inputs of every run, then every prediction, then every RMSE in one
+    reduction, ``rmse_each``) rather than run by run: a study scores each of its many
+    models on the same 23 runs, and the per-run calls were half of its time. The values
+    are those of the run-by-run way, and so are the errors, in its order: a run's failing
+    inputs are raised only after the runs before it are predicted and scored (which raise
+    first where they would), and a failing prediction only after the RMSE of those before.
+    """
+    test_rows: dict[str, np.ndarray] = {}
+    measured: dict[str, np.ndarray] = {}
+    values: dict[str, np.ndarray] = {}
+    failure: Exception | None = None
+    columns = tuple(used)
+    whole = missing != "drop-rows" or all(recording.complete(columns)
+                                          for recording in tests.values())
+    shared = batch() if batch is not None and whole else None
+    for i, (name, recording) in enumerate(tests.items()):
+        try:
+            rows = np.arange(len(recording)) if whole else _complete_rows(recording, used)
+            test_rows[name] = rows
+            # a part only when samples were dropped: else its conversions serve again
+            frame = recording.take(rows) if len(rows) < len(recording) else recording
+            measured[name] = frame.values(target)
+            values[name] = shared[i] if shared is not None else inputs(recording, frame)
+        except Exception as exc:  # raised once the runs before it are scored
+            failure = _named(exc, name)
+            break
+    predictions: dict[str, np.ndarray] = {}
+    if isinstance(fit, LinearFit):
+        predictions = dict(zip(values, fit.predict_each(list(values.values())), strict=True))
+    scored: list[str] = []
+    for name in values:
+        try:
+            if name not in predictions:
+                predictions[name] = fit.predict(values[name])
+            if not np.isfinite(predictions[name]).all():
+                raise SelectionOverflowError("values too large to predict (overflow)")
+        except Exception as exc:  # raised once the runs before it are scored
+            failure = _named(exc, name)
+            break
+        scored.append(name)
+    try:
+        found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
+    except SelectionError:  # the first run that fails, named
+        for name in scored:
+            with _naming(name):
+                rmse(measured[name], predictions[name])
+        raise
+    if failure is not None:
+        raise failure
+    return predictions, measured, dict(zip(scored, found, strict=True)), test_rows
+
+
 def evaluate_checked(
     train: CheckedRecording,
     tests: Mapping[str, CheckedRecording],
@@ -729,17 +938,17 @@ def evaluate_checked(
         raise SelectionError("at least one test recording is needed")
     choice = MethodChoice() if method is None else method
     train_name = train.name
-    frames = {name: recording.frame for name, recording in tests.items()}
-    chosen = resolve_sensors(train_name, train.frame, frames, target, sensors)
+    chosen = resolve_sensors(train, tests, target, sensors)
     checked = [*chosen, target]
     dynamic = is_dynamic(choice.regressor)
     if dynamic:  # the regressor reads the speed programme too: present and finite everywhere
         for recording in [train, *tests.values()]:
             check_drivers(choice.regressor, recording.name, recording.columns)
         checked += [c for c in driver_columns(choice.regressor) if c not in checked]
+    check = ("checked", tuple(checked), missing)
     for recording in [train, *tests.values()]:
         # a check that passed is not repeated; one that failed raises again, in this order
-        recording.memo(("checked", tuple(checked), missing),
+        recording.memo(check,
                        lambda recording=recording: _check_values(recording, checked, missing))
 
     train_rows = np.arange(len(train))
@@ -782,28 +991,24 @@ def evaluate_checked(
     used = [*candidates.sensors_of(selection.selected), target]
     if dynamic:
         used += list(driver_columns(choice.regressor))
-    predictions, measured, errors, test_rows = {}, {}, {}, {}
-    for name, recording in tests.items():
-        test_rows[name] = np.arange(len(recording))
-        frame = recording
-        if missing == "drop-rows":
-            test_rows[name] = _complete_rows(recording, used)
-            if len(test_rows[name]) < len(recording):  # else its conversions serve again
-                frame = recording.take(test_rows[name])
-        measured[name] = frame.values(target)
-        with _naming(name):
-            def candidate_values(frame: CheckedRecording = frame) -> np.ndarray:
-                return _finite(candidates.matrix(frame, selection.selected), selected_names)
+    key = ("candidates", candidates, tuple(selection.selected))
 
-            # a whole recording's values of these candidates serve every model that reads them
-            values = recording.memo(("candidates", candidates, tuple(selection.selected)),
-                                    candidate_values) if frame is recording else \
-                candidate_values()
-            predictions[name] = fit.predict(
-                model_inputs(choice.regressor, frame.values, values) if dynamic else values)
-            if not np.all(np.isfinite(predictions[name])):
-                raise SelectionOverflowError("values too large to predict (overflow)")
-            errors[name] = rmse(measured[name], predictions[name])
+    def inputs(recording: CheckedRecording, frame: CheckedRecording) -> np.ndarray:
+        """The model's inputs on test ``frame`` (``recording``, or the part of it used)."""
+        def candidate_values() -> np.ndarray:
+            return _finite(candidates.matrix(frame, selection.selected), selected_names)
+
+        # a whole recording's values of these candidates serve every model that reads them
+        values = recording.memo(key, candidate_values) if frame is recording else \
+            candidate_values()
+        return model_inputs(choice.regressor, frame.values, values) if dynamic else values
+
+    def batch() -> list[np.ndarray] | None:
+        return None if dynamic else _stacked_candidates(train, tests, candidates,
+                                                        tuple(selection.selected))
+
+    predictions, measured, errors, test_rows = _score_tests(tests, target, missing, used,
+                                                            inputs, fit, batch)
     return Evaluation(
         train=train_name,
         target=target,

@@ -88,6 +88,33 @@ class EvaluationJob:
 TrainingResult = pd.DataFrame | str
 
 
+class _TruthColumns:
+    """A run's truth frame as float arrays from one conversion: looking its columns up in
+    pandas, a few times per run, was some 6 % of an evaluation's time. The values are the
+    frame's (a copy of the same float64s, column-major as pandas gives a column block)."""
+
+    def __init__(self, truth: pd.DataFrame) -> None:
+        self.frame = truth
+        self.block = truth.to_numpy(dtype=float) if truth.columns.is_unique and all(
+            dtype == np.float64 for dtype in truth.dtypes) else None
+        self.position = {column: i for i, column in enumerate(truth.columns)}
+
+    def __contains__(self, column: str) -> bool:
+        return column in self.position
+
+    def column(self, column: str) -> np.ndarray:
+        """One column as float64."""
+        if self.block is None:
+            return self.frame[column].to_numpy(float)
+        return self.block[:, self.position[column]]
+
+    def columns(self, columns: list[str]) -> np.ndarray:
+        """Several columns side by side, (samples, len(columns)), column-major."""
+        if self.block is None:
+            return self.frame[columns].to_numpy(float)
+        return np.asfortranarray(self.block[:, [self.position[c] for c in columns]])
+
+
 def measured_frame(job: EvaluationJob, experiment: Experiment,
                    held_out: bool = True) -> pd.DataFrame:
     """The run as the condition's instruments see it (the fault only when ``held_out``:
@@ -100,48 +127,49 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
     ``job.target`` the drift columns hold that target's measured reading and true rise (in
     its unit) instead.
     """
-    truth = job.truths[experiment.id]
-    drift = truth[TRUTH_COLUMNS[-1]].to_numpy(float)
-    time_s = truth[TIME_COLUMN].to_numpy(float)
-    # one float block, filled column group by column group: building the frame column by
-    # column was a third of an evaluation's time
-    values = np.empty((len(time_s), len(MEASURED_COLUMNS)))
+    truth = _TruthColumns(job.truths[experiment.id])
+    drift = truth.column(TRUTH_COLUMNS[-1])
+    time_s = truth.column(TIME_COLUMN)
+    drivers = [column for column in STUDY_DRIVER_COLUMNS if column in truth]
+    # one float block, filled column group by column group, made a frame once: building it
+    # column by column was a third of an evaluation's time
+    values = np.empty((len(time_s), len(MEASURED_COLUMNS) + len(drivers)))
     values[:, 0] = time_s
+    at = len(MEASURED_COLUMNS)  # the drift columns are the two before ``at``
     if job.condition is None:
-        values[:, 1:-2] = truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float)
-        values[:, -2] = drift - drift[0]
+        values[:, 1:at - 2] = truth.columns(list(TRUTH_COLUMNS[1:-1]))
+        values[:, at - 2] = drift - drift[0]
     else:
-        model, measured_C, measured_drift = _measured_sensors(job, experiment, held_out)
-        values[:, 1:-2] = measured_C
-        values[:, -2] = measured_drift
+        model, measured_C, measured_drift = _measured_sensors(job, experiment, held_out,
+                                                              truth)
+        values[:, 1:at - 2] = measured_C
+        values[:, at - 2] = measured_drift
         if job.target != DRIFT_COLUMN:
-            values[:, -2] = measured_target(job.target, model, time_s, truth,
-                                            measured_drift, job.seeds[experiment.id],
-                                            job.probe_geometry_m)
-    values[:, -1] = drift - drift[0]
+            values[:, at - 2] = measured_target(job.target, model, time_s, truth.frame,
+                                                measured_drift, job.seeds[experiment.id],
+                                                job.probe_geometry_m)
+    values[:, at - 1] = drift - drift[0]
     if job.target != DRIFT_COLUMN:
-        true_target = truth[true_column(job.target)].to_numpy(float)
-        values[:, -1] = true_target - true_target[0]
+        true_target = truth.column(true_column(job.target))
+        values[:, at - 1] = true_target - true_target[0]
         if job.condition is None:
-            values[:, -2] = values[:, -1]
-    frame = pd.DataFrame(values, columns=list(MEASURED_COLUMNS))
-    for column in STUDY_DRIVER_COLUMNS:  # the programme, for the dynamic regressors
-        if column in truth.columns:
-            frame[column] = truth[column].to_numpy(float)
-    return frame
+            values[:, at - 2] = values[:, at - 1]
+    for i, column in enumerate(drivers):  # the programme, for the dynamic regressors
+        values[:, at + i] = truth.column(column)
+    return pd.DataFrame(values, columns=[*MEASURED_COLUMNS, *drivers])
 
 
-def _measured_sensors(job: EvaluationJob, experiment: Experiment,
-                      held_out: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+def _measured_sensors(job: EvaluationJob, experiment: Experiment, held_out: bool,
+                      truth: _TruthColumns | None = None) -> tuple[Any, np.ndarray, np.ndarray]:
     """(sensor model, measured T1..T20 with a dropout held at its last good reading,
-    measured axial drift) of the run under ``job``'s measured condition."""
-    truth = job.truths[experiment.id]
+    measured axial drift) of the run under ``job``'s measured condition (``truth``: its
+    truth columns, if made already)."""
+    truth = _TruthColumns(job.truths[experiment.id]) if truth is None else truth
     fault = job.condition.fault if held_out else None
     model = sensor_model(job.condition.noise, fault)
     measured_C, measured_drift = measure(
-        model, truth[TIME_COLUMN].to_numpy(float),
-        truth[list(TRUTH_COLUMNS[1:-1])].to_numpy(float),
-        truth[TRUTH_COLUMNS[-1]].to_numpy(float), SENSORS, job.seeds[experiment.id])
+        model, truth.column(TIME_COLUMN), truth.columns(list(TRUTH_COLUMNS[1:-1])),
+        truth.column(TRUTH_COLUMNS[-1]), SENSORS, job.seeds[experiment.id])
     if np.isnan(measured_C).any():  # a dropout: hold the last good reading
         measured_C = pd.DataFrame(measured_C).ffill().bfill().to_numpy()
     return model, measured_C, measured_drift
@@ -228,7 +256,7 @@ def _result_frame(job: EvaluationJob, train: Experiment, tests: list[Experiment]
     tested = [by_id[row["test_experiment"]] for row in rows]
     n = len(rows)
     condition = job.condition
-    columns: dict[str, list[Any]] = {
+    columns: dict[str, Any] = {
         "replica": [job.replica] * n,
         "data": ["measured" if condition else NOISE_FREE] * n,
         "noise": [condition.noise.name if condition else NOISE_FREE] * n,
@@ -241,6 +269,5 @@ def _result_frame(job: EvaluationJob, train: Experiment, tests: list[Experiment]
     columns["test_speed_rpm"] = [e.speed_rpm for e in tested]
     columns["test_programme"] = [e.programme for e in tested]
     columns["test_cooling"] = [e.cooling for e in tested]
-    frame = pd.DataFrame(columns)
-    frame["k"] = frame["k"].astype("Int64")
-    return frame
+    columns["k"] = pd.array(columns["k"], dtype="Int64")  # made so: no column cast after
+    return pd.DataFrame(columns)
