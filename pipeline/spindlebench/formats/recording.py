@@ -789,13 +789,15 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     names = [str(name) for name in frame.columns]
     wanted = [str(name) for name in columns]
     values = frame.to_numpy()
+    place = {name: number for number, name in enumerate(names)}
     if FLOAT_FORMAT is not None or not floats_only(frame) or len(frame) < 2 \
-            or len(set(names)) < len(names) or any(name != name.strip() for name in names) \
+            or len(place) < len(names) or any(name != name.strip() for name in names) \
             or not set(wanted) <= set(names) or not np.isfinite(values).all():
         return None
-    if TIME_COLUMN in names and not (np.diff(frame[TIME_COLUMN].to_numpy()) > 0).all():
+    if TIME_COLUMN in place and not (np.diff(values[:, place[TIME_COLUMN]]) > 0).all():
         return None
-    out = pd.DataFrame({name: frame[name].to_numpy(copy=True) for name in wanted})
+    # one block, as read_recording's frame (building it column by column cost 10x more)
+    out = pd.DataFrame(values[:, [place[name] for name in wanted]], columns=wanted)
     out.attrs = {"path": str(Path(csv_path)), "header": FileHeader(names)}
     return out
 
