@@ -214,15 +214,16 @@ def _put_float(out, at, bits, pow5, inverse):  # pragma: no cover (compiled)
                 at += 1
             out[at], out[at + 1] = 46, 48  # ".0"
             return at + 2
-        _put_digits(out, at, digits // _U(10) ** _U(count - point), point)
+        _put_digits(out, at, digits, count)  # then the fraction moved one place right
+        for place in range(at + count, at + point, -1):
+            out[place] = out[place - 1]
         out[at + point] = 46
-        _put_digits(out, at + point + 1, digits % _U(10) ** _U(count - point), count - point)
         return at + count + 1
-    _put_digits(out, at, digits // _U(10) ** _U(count - 1), 1)
+    _put_digits(out, at + 1, digits, count)  # d.ddd: the first digit moved before the point
+    out[at] = out[at + 1]
     at += 1
     if count > 1:
         out[at] = 46
-        _put_digits(out, at + 1, digits % _U(10) ** _U(count - 1), count - 1)
         at += count
     out[at] = 101  # "e"
     power = point - 1
@@ -235,10 +236,17 @@ def _put_float(out, at, bits, pow5, inverse):  # pragma: no cover (compiled)
 
 @njit(cache=True, nogil=True)
 def _put_digits(out, at, value, count):  # pragma: no cover (compiled)
-    """Write the ``count`` last decimal digits of ``value`` (zero-padded) at ``out[at:]``."""
-    for place in range(count - 1, -1, -1):
-        out[at + place] = 48 + int(value % _U(10))
-        value //= _U(10)
+    """Write the ``count`` last decimal digits of ``value`` (zero-padded) at ``out[at:]``, two
+    at a time (half the divisions)."""
+    place = count
+    while place >= 2:
+        pair = value % _U(100)
+        value //= _U(100)
+        place -= 2
+        out[at + place] = 48 + int(pair // _U(10))
+        out[at + place + 1] = 48 + int(pair % _U(10))
+    if place:
+        out[at] = 48 + int(value % _U(10))
 
 
 @njit(cache=True, nogil=True)
