@@ -174,3 +174,30 @@ def test_the_manifest_text_is_the_json_of_the_sorted_hashes_after_writes_and_rem
     for name in ("a.csv", "evals/b.csv", 'evals/q"uote.csv', "evals/é.csv"):
         store.remove(name)
     assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == "{}\n"
+
+
+def test_read_frames_reads_the_tables_as_concatenating_each_one_read_alone(tmp_path):
+    """Tables of one header are parsed as one text; others each alone: the same values and
+    CSV text as ``pd.concat`` of ``pd.read_csv`` per file, empty cells and text columns
+    included; only a column empty in one file and text in another is str, not object."""
+    store = ResultStore(tmp_path)
+    shared = [pd.DataFrame({"replica": [1, 2], "k": pd.array([2, None], dtype="Int64"),
+                            "rmse_um": [0.1 + 0.2, 1e-5], "selected": ["T1;T9", ""],
+                            "error": ["", ""]}),
+              pd.DataFrame({"replica": [3], "k": pd.array([4], dtype="Int64"),
+                            "rmse_um": [float("nan")], "selected": ["a, b"],
+                            "error": ["evaluation failed: x"]})]
+    failed = pd.DataFrame({"replica": [4], "error": ["evaluation failed: y"]})
+    for tables in (shared, [*shared, failed]):
+        names = [f"t{number}.csv" for number in range(len(tables))]
+        for name, table in zip(names, tables, strict=True):
+            store.write_frame(name, table)
+        expected = pd.concat([pd.read_csv(tmp_path / name) for name in names],
+                             ignore_index=True)
+        read = store.read_frames(names)
+        pd.testing.assert_frame_equal(read, expected, check_exact=True, check_dtype=False)
+        assert [str(a) for a, b in zip(read.dtypes, expected.dtypes, strict=True) if a != b] \
+            in ([], ["str"])
+        store.write_frame("read.csv", read)
+        store.write_frame("expected.csv", expected)
+        assert (tmp_path / "read.csv").read_bytes() == (tmp_path / "expected.csv").read_bytes()

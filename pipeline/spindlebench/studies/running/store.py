@@ -24,13 +24,14 @@ import contextlib
 import errno
 import fcntl
 import hashlib
+import io
 import json
 import os
 import socket
 import stat
 import sys
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -365,8 +366,23 @@ class ResultStore:
         self._written(relative)
         return target
 
-    def read_frame(self, relative: str | Path) -> pd.DataFrame:
-        return pd.read_csv(self.path(relative), keep_default_na=True)
+    def read_frames(self, relatives: Sequence[str | Path]) -> pd.DataFrame:
+        """The rows of the tables ``relatives`` (at least one), in order, as
+        ``pd.concat([pd.read_csv(path) for path in ...], ignore_index=True)`` gives them.
+
+        Why: a sweep collects over a thousand small evaluation files, and pandas' reader
+        cost ~1 ms a file, mostly its set-up; files that share one header (a sweep's, unless
+        an evaluation failed) are parsed as one text, in half the CPU. That gives the same
+        values and text (the same parser reads the same cells); a column's dtype can only
+        differ where one file's cells are all empty and another's text (object there, str
+        here), which writes the same CSV."""
+        texts = [self.path(relative).read_text(encoding="utf-8") for relative in relatives]
+        header, _, _ = texts[0].partition("\n")
+        if len(texts) == 1 or any(not text.startswith(header + "\n") for text in texts):
+            return pd.concat([pd.read_csv(io.StringIO(text), keep_default_na=True)
+                              for text in texts], ignore_index=True)
+        joined = texts[0] + "".join(text[len(header) + 1:] for text in texts[1:])
+        return pd.read_csv(io.StringIO(joined), keep_default_na=True, low_memory=False)
 
     def lock(self) -> None:
         """Take the folder's exclusive lock for the life of this process, or refuse in one

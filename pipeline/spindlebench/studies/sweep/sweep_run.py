@@ -286,17 +286,17 @@ class Sweep:
 
     def collect(self) -> pd.DataFrame:
         """All evaluation files as one tidy table, in a stable order."""
-        frames = []
+        found = []
         for replica in replicas(self.study):
             for condition, train in self.evaluation_keys(replica):
                 relative = evaluation_path(replica, condition, train)
                 for candidate in (relative, error_path(relative)):
                     if self.results.exists(candidate):
-                        frames.append(self.results.read_frame(candidate))
+                        found.append(candidate)
                         break
-        if not frames:
+        if not found:
             return pd.DataFrame(columns=list(RESULT_COLUMNS))
-        results = pd.concat(frames, ignore_index=True)
+        results = self.results.read_frames(found)
         for column in RESULT_COLUMNS:
             if column not in results:
                 results[column] = pd.NA
