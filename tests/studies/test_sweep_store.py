@@ -201,3 +201,28 @@ def test_read_frames_reads_the_tables_as_concatenating_each_one_read_alone(tmp_p
         store.write_frame("read.csv", read)
         store.write_frame("expected.csv", expected)
         assert (tmp_path / "read.csv").read_bytes() == (tmp_path / "expected.csv").read_bytes()
+
+
+def test_one_manifest_save_records_the_blocks_pieces_at_its_end(tmp_path):
+    """An evaluation job's files are recorded with one save; a recording's sidecar with the
+    next save or when the folder is released, its CSV vouching for it meanwhile (a resume
+    records it: ``test_a_sidecar_missing_from_the_manifest_is_recorded_as_a_whole_run_would``)."""
+    store = ResultStore(tmp_path)
+    store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="sweep")
+    path = tmp_path / "manifest.json"
+    before = path.read_bytes()
+    frame = pd.DataFrame({"k": [2], "rmse_um": [1.5]})
+    with store.one_manifest_save():
+        store.write_frame("evals/a.csv", frame)
+        store.write_frame("evals/b.csv", frame)
+        store.remove("evals/a.error.csv")
+        assert path.read_bytes() == before
+    assert {"evals/a.csv", "evals/b.csv"} <= set(json.loads(path.read_bytes()))
+    store.write_recording("runs/r001/Jan.csv", pd.DataFrame({"time_s": [0.0, 60.0],
+                                                            "T1_C": [20.0, 20.5]}), {"run": 1})
+    assert "runs/r001/Jan.json" not in json.loads(path.read_bytes())
+    store.unlock()
+    manifest = json.loads(path.read_bytes())
+    assert "runs/r001/Jan.json" in manifest
+    assert path.read_text(encoding="utf-8") == json.dumps(dict(sorted(manifest.items())),
+                                                          indent=1) + "\n"

@@ -255,22 +255,23 @@ class Sweep:
     def _record_evaluation(self, outcome: Outcome) -> None:
         """Write each training run's rows, or its error file (kept apart so that the next run
         retries it): a job that raised fails all its training runs, a training run whose
-        evaluation raised only itself."""
+        evaluation raised only itself. One manifest save records them all."""
         job: EvaluationJob = outcome.task.args[0]
         condition = job.condition
-        for train in job.trains:
-            path = evaluation_path(job.replica, condition, train)
-            value = outcome.value[train.id] if outcome.ok else outcome.error
-            if isinstance(value, pd.DataFrame):
-                self.results.write_frame(path, value)
-                self.results.remove(error_path(path))
-                continue
-            self.results.write_frame(error_path(path), pd.DataFrame([{
-                "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
-                "noise": condition.noise.name if condition else NOISE_FREE,
-                "fault": condition.fault_name if condition else "none",
-                "train_experiment": train.id,
-                "error": f"evaluation failed: {value}"}]))
+        with self.results.one_manifest_save():
+            for train in job.trains:
+                path = evaluation_path(job.replica, condition, train)
+                value = outcome.value[train.id] if outcome.ok else outcome.error
+                if isinstance(value, pd.DataFrame):
+                    self.results.write_frame(path, value)
+                    self.results.remove(error_path(path))
+                    continue
+                self.results.write_frame(error_path(path), pd.DataFrame([{
+                    "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                    "noise": condition.noise.name if condition else NOISE_FREE,
+                    "fault": condition.fault_name if condition else "none",
+                    "train_experiment": train.id,
+                    "error": f"evaluation failed: {value}"}]))
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self.simulations.store_outcome(outcome)
