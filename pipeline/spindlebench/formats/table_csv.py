@@ -39,9 +39,9 @@ def write_table(path: str | os.PathLike[str], frame: pd.DataFrame,
                 compiled: bool = False) -> None:
     """``frame.to_csv(path, index=False, lineterminator="\\n")``, the same bytes (tested).
 
-    ``compiled``: a float frame's values are written by ``float_text`` (the same text, ~5x
-    faster than ``repr``), for a process that writes many recordings: loading its cached
-    machine code costs ~0.7 s of CPU once, the time ``repr`` takes for ~70 recordings."""
+    ``compiled``: the float values are written by ``float_text`` (the same text, ~5x faster
+    than ``repr``), for a process that writes many tables: loading its cached machine code
+    costs ~0.7 s of CPU once, the time ``repr`` takes for ~70 recordings."""
     if floats_only(frame):
         header = ",".join(map(str, frame.columns))
         if compiled:
@@ -53,7 +53,7 @@ def write_table(path: str | os.PathLike[str], frame: pd.DataFrame,
         lines.extend(",".join([repr(v) if v == v else "" for v in row])
                      for row in frame.to_numpy().tolist())
     else:
-        columns = _column_texts(frame)
+        columns = _column_texts(frame, compiled)
         if columns is None:
             frame.to_csv(path, index=False, lineterminator="\n")
             return
@@ -61,7 +61,7 @@ def write_table(path: str | os.PathLike[str], frame: pd.DataFrame,
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8", newline="")
 
 
-def _column_texts(frame: pd.DataFrame) -> list[list[str]] | None:
+def _column_texts(frame: pd.DataFrame, compiled: bool = False) -> list[list[str]] | None:
     """The header's names, then each column's cells, as written; None where pandas is left
     to write the frame."""
     names = list(frame.columns)
@@ -70,7 +70,7 @@ def _column_texts(frame: pd.DataFrame) -> list[list[str]] | None:
         return None
     texts = [names]
     for _, column in frame.items():
-        cells = _cells(column)
+        cells = _cells(column, compiled)
         if cells is None:
             return None
         texts.append(cells)
@@ -87,10 +87,14 @@ def _quoted(cell: str) -> str:
     return '"' + cell.replace('"', '""') + '"' if "," in cell or '"' in cell else cell
 
 
-def _cells(column: pd.Series) -> list[str] | None:
+def _cells(column: pd.Series, compiled: bool = False) -> list[str] | None:
     import pandas as pd
 
     dtype = column.dtype
+    if dtype == np.float64 and compiled:
+        from spindlebench.formats.float_text import csv_rows
+
+        return csv_rows(column.to_numpy()[:, None]).decode().split("\n")[:-1]
     if dtype == np.float64:
         values = column.to_numpy()
         missing = np.isnan(values)

@@ -390,10 +390,13 @@ class ResultStore:
             raise SpindlebenchError(f"{self.path(relative)}: not readable JSON ({exc}); "
                                     "remove it and run again") from None
 
-    def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
+    def write_frame(self, relative: str | Path, frame: pd.DataFrame,
+                    compiled: bool = False) -> Path:
+        """Write a table (``compiled``: its floats by the compiled formatter, the same text;
+        for a study that writes a thousand, ``table_csv.write_table``)."""
         target = self.path(relative)
         with atomic_path(target) as tmp:
-            write_table(tmp, frame)
+            write_table(tmp, frame, compiled)
         self._written(relative)
         return target
 
