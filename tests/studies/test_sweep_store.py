@@ -171,8 +171,13 @@ def test_the_manifest_text_is_the_json_of_the_sorted_hashes_after_writes_and_rem
     manifest = json.loads(text)
     assert sorted(manifest) == sorted(set(names) - {"evals/c.csv"})
     assert text == json.dumps(dict(sorted(manifest.items())), indent=1) + "\n"
-    for name in ("a.csv", "evals/b.csv", 'evals/q"uote.csv', "evals/é.csv"):
-        store.remove(name)
+    resumed = ResultStore(tmp_path)  # a new process: its first change is a remove
+    resumed.remove("evals/b.csv")
+    del manifest["evals/b.csv"]
+    assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == json.dumps(
+        dict(sorted(manifest.items())), indent=1) + "\n"
+    for name in ("a.csv", 'evals/q"uote.csv', "evals/é.csv"):
+        resumed.remove(name)
     assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == "{}\n"
 
 

@@ -371,8 +371,9 @@ class ResultStore:
         key = Path(relative).as_posix()
         self.path(key).unlink(missing_ok=True)
         self._verified.pop(key, None)
-        if self.manifest().pop(key, None) is not None:
-            keys, lines = self._sorted_entries()
+        if key in self.manifest():
+            keys, lines = self._sorted_entries()  # made (if not yet) before the entry goes
+            del self.manifest()[key]
             at = bisect.bisect_left(keys, key)
             del keys[at], lines[at]
             self._changed()
