@@ -31,10 +31,11 @@ def _results_like(rows: int = 40) -> pd.DataFrame:
     })
 
 
-def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_path):
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_path, compiled):
     frame = _results_like()
-    assert _column_texts(frame) is not None
-    write_table(tmp_path / "fast.csv", frame)
+    assert _column_texts(frame, compiled) is not None
+    write_table(tmp_path / "fast.csv", frame, compiled)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")
 
 
@@ -50,6 +51,7 @@ def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_pat
     pd.DataFrame({"a": np.array([1.5, 2.5], dtype=np.float32), "b": ["x", "y"]}),
     pd.DataFrame({"a": [np.nan, np.nan], "b": [None, None]}),
 ])
-def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame):
-    write_table(tmp_path / "fast.csv", frame)
+@pytest.mark.parametrize("compiled", [False, True])
+def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame, compiled):
+    write_table(tmp_path / "fast.csv", frame, compiled)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")

@@ -171,6 +171,63 @@ def test_the_manifest_text_is_the_json_of_the_sorted_hashes_after_writes_and_rem
     manifest = json.loads(text)
     assert sorted(manifest) == sorted(set(names) - {"evals/c.csv"})
     assert text == json.dumps(dict(sorted(manifest.items())), indent=1) + "\n"
-    for name in ("a.csv", "evals/b.csv", 'evals/q"uote.csv', "evals/é.csv"):
-        store.remove(name)
+    resumed = ResultStore(tmp_path)  # a new process: its first change is a remove
+    resumed.remove("evals/b.csv")
+    del manifest["evals/b.csv"]
+    assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == json.dumps(
+        dict(sorted(manifest.items())), indent=1) + "\n"
+    for name in ("a.csv", 'evals/q"uote.csv', "evals/é.csv"):
+        resumed.remove(name)
     assert (tmp_path / "manifest.json").read_text(encoding="utf-8") == "{}\n"
+
+
+def test_read_frames_reads_the_tables_as_concatenating_each_one_read_alone(tmp_path):
+    """Tables of one header are parsed as one text; others each alone: the same values and
+    CSV text as ``pd.concat`` of ``pd.read_csv`` per file, empty cells and text columns
+    included; only a column empty in one file and text in another is str, not object."""
+    store = ResultStore(tmp_path)
+    shared = [pd.DataFrame({"replica": [1, 2], "k": pd.array([2, None], dtype="Int64"),
+                            "rmse_um": [0.1 + 0.2, 1e-5], "selected": ["T1;T9", ""],
+                            "error": ["", ""]}),
+              pd.DataFrame({"replica": [3], "k": pd.array([4], dtype="Int64"),
+                            "rmse_um": [float("nan")], "selected": ["a, b"],
+                            "error": ["evaluation failed: x"]})]
+    failed = pd.DataFrame({"replica": [4], "error": ["evaluation failed: y"]})
+    for tables in (shared, [*shared, failed]):
+        names = [f"t{number}.csv" for number in range(len(tables))]
+        for name, table in zip(names, tables, strict=True):
+            store.write_frame(name, table)
+        expected = pd.concat([pd.read_csv(tmp_path / name) for name in names],
+                             ignore_index=True)
+        read = store.read_frames(names)
+        pd.testing.assert_frame_equal(read, expected, check_exact=True, check_dtype=False)
+        assert [str(a) for a, b in zip(read.dtypes, expected.dtypes, strict=True) if a != b] \
+            in ([], ["str"])
+        store.write_frame("read.csv", read)
+        store.write_frame("expected.csv", expected)
+        assert (tmp_path / "read.csv").read_bytes() == (tmp_path / "expected.csv").read_bytes()
+
+
+def test_one_manifest_save_records_the_blocks_pieces_at_its_end(tmp_path):
+    """An evaluation job's files are recorded with one save; a recording's sidecar with the
+    next save or when the folder is released, its CSV vouching for it meanwhile (a resume
+    records it: ``test_a_sidecar_missing_from_the_manifest_is_recorded_as_a_whole_run_would``)."""
+    store = ResultStore(tmp_path)
+    store.claim(STUDY, {"fmu_sha256": "a" * 64}, command="sweep")
+    path = tmp_path / "manifest.json"
+    before = path.read_bytes()
+    frame = pd.DataFrame({"k": [2], "rmse_um": [1.5]})
+    with store.one_manifest_save():
+        store.write_frame("evals/a.csv", frame)
+        store.write_frame("evals/b.csv", frame)
+        store.remove("evals/a.error.csv")
+        assert path.read_bytes() == before
+    assert {"evals/a.csv", "evals/b.csv"} <= set(json.loads(path.read_bytes()))
+    store.write_recording("runs/r001/Jan.csv", pd.DataFrame({"time_s": [0.0, 60.0],
+                                                            "T1_C": [20.0, 20.5]}), {"run": 1})
+    assert "runs/r001/Jan.json" not in json.loads(path.read_bytes())
+    store.unlock()
+    manifest = json.loads(path.read_bytes())
+    assert "runs/r001/Jan.json" in manifest
+    assert path.read_text(encoding="utf-8") == json.dumps(dict(sorted(manifest.items())),
+                                                          indent=1) + "\n"

@@ -255,22 +255,23 @@ class Sweep:
     def _record_evaluation(self, outcome: Outcome) -> None:
         """Write each training run's rows, or its error file (kept apart so that the next run
         retries it): a job that raised fails all its training runs, a training run whose
-        evaluation raised only itself."""
+        evaluation raised only itself. One manifest save records them all."""
         job: EvaluationJob = outcome.task.args[0]
         condition = job.condition
-        for train in job.trains:
-            path = evaluation_path(job.replica, condition, train)
-            value = outcome.value[train.id] if outcome.ok else outcome.error
-            if isinstance(value, pd.DataFrame):
-                self.results.write_frame(path, value)
-                self.results.remove(error_path(path))
-                continue
-            self.results.write_frame(error_path(path), pd.DataFrame([{
-                "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
-                "noise": condition.noise.name if condition else NOISE_FREE,
-                "fault": condition.fault_name if condition else "none",
-                "train_experiment": train.id,
-                "error": f"evaluation failed: {value}"}]))
+        with self.results.one_manifest_save():
+            for train in job.trains:
+                path = evaluation_path(job.replica, condition, train)
+                value = outcome.value[train.id] if outcome.ok else outcome.error
+                if isinstance(value, pd.DataFrame):  # a thousand in a sweep: compiled
+                    self.results.write_frame(path, value, compiled=True)
+                    self.results.remove(error_path(path))
+                    continue
+                self.results.write_frame(error_path(path), pd.DataFrame([{
+                    "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                    "noise": condition.noise.name if condition else NOISE_FREE,
+                    "fault": condition.fault_name if condition else "none",
+                    "train_experiment": train.id,
+                    "error": f"evaluation failed: {value}"}]))
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self.simulations.store_outcome(outcome)
@@ -286,17 +287,17 @@ class Sweep:
 
     def collect(self) -> pd.DataFrame:
         """All evaluation files as one tidy table, in a stable order."""
-        frames = []
+        found = []
         for replica in replicas(self.study):
             for condition, train in self.evaluation_keys(replica):
                 relative = evaluation_path(replica, condition, train)
                 for candidate in (relative, error_path(relative)):
                     if self.results.exists(candidate):
-                        frames.append(self.results.read_frame(candidate))
+                        found.append(candidate)
                         break
-        if not frames:
+        if not found:
             return pd.DataFrame(columns=list(RESULT_COLUMNS))
-        results = pd.concat(frames, ignore_index=True)
+        results = self.results.read_frames(found)
         for column in RESULT_COLUMNS:
             if column not in results:
                 results[column] = pd.NA
