@@ -30,8 +30,6 @@ def test_a_simulated_recording_is_written_as_pandas_writes_it(tmp_path):
     assert frame.shape[1] > 100 and (frame.dtypes == np.float64).all()
     write_csv(tmp_path / "fast.csv", frame)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")
-    write_csv(tmp_path / "compiled.csv", frame, compiled=True)
-    assert (tmp_path / "compiled.csv").read_bytes() == (tmp_path / "pandas.csv").read_bytes()
 
 
 @pytest.mark.parametrize("frame", [
@@ -46,8 +44,6 @@ def test_a_simulated_recording_is_written_as_pandas_writes_it(tmp_path):
 def test_edge_values_and_fallbacks_give_pandas_bytes(tmp_path, frame):
     write_csv(tmp_path / "fast.csv", frame)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")
-    write_csv(tmp_path / "compiled.csv", frame, compiled=True)
-    assert (tmp_path / "compiled.csv").read_bytes() == (tmp_path / "pandas.csv").read_bytes()
     write_csv(tmp_path / "six.csv", frame, "%.6f")
     assert (tmp_path / "six.csv").read_bytes() == _pandas(frame, tmp_path / "p6.csv", "%.6f")
 

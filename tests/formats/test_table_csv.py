@@ -31,11 +31,10 @@ def _results_like(rows: int = 40) -> pd.DataFrame:
     })
 
 
-@pytest.mark.parametrize("compiled", [False, True])
-def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_path, compiled):
+def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_path):
     frame = _results_like()
-    assert _column_texts(frame, compiled) is not None
-    write_table(tmp_path / "fast.csv", frame, compiled)
+    assert _column_texts(frame) is not None
+    write_table(tmp_path / "fast.csv", frame)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")
 
 
@@ -51,7 +50,6 @@ def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_pat
     pd.DataFrame({"a": np.array([1.5, 2.5], dtype=np.float32), "b": ["x", "y"]}),
     pd.DataFrame({"a": [np.nan, np.nan], "b": [None, None]}),
 ])
-@pytest.mark.parametrize("compiled", [False, True])
-def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame, compiled):
-    write_table(tmp_path / "fast.csv", frame, compiled)
+def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame):
+    write_table(tmp_path / "fast.csv", frame)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")

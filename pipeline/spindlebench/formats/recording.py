@@ -728,8 +728,7 @@ def check_recording_targets(csv_path: str | os.PathLike[str]) -> tuple[Path, Pat
 
 
 def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
-                    sidecar: dict[str, Any], float_format: str | None = FLOAT_FORMAT,
-                    compiled: bool = False) -> Path:
+                    sidecar: dict[str, Any], float_format: str | None = FLOAT_FORMAT) -> Path:
     """Write ``frame`` as CSV and ``sidecar`` as JSON beside it; return the CSV path.
 
     The one writer of recordings (simulated and adapted). The sidecar gets
@@ -737,13 +736,13 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     platform); a sidecar that already holds the key (``None`` reserves its place) keeps it
     there, with the writer's value. ``float_format`` is the CSV's number format: the
     shortest round trip by default; an adapter of measured data keeps the source's
-    precision (``"%.6f"``). ``compiled``: see ``write_csv``.
+    precision (``"%.6f"``).
     """
     csv_path, json_path = check_recording_targets(csv_path)
     # the JSON context is the outer one, so the CSV is moved into place first: if that move
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
     with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
-        write_csv(tmp_csv, frame, float_format, compiled)
+        write_csv(tmp_csv, frame, float_format)
         paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
         text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
         tmp_json.write_text(text, encoding="utf-8")
@@ -751,18 +750,17 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
 
 
 def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame,
-              float_format: str | None = FLOAT_FORMAT, compiled: bool = False) -> None:
+              float_format: str | None = FLOAT_FORMAT) -> None:
     """``frame.to_csv(path, index=False, float_format=..., lineterminator="\\n")``, the same
     bytes (tested): in the shortest round trip through ``table_csv.write_table``, 2-3x
     faster for the all-float frames the testbench writes (each value Python's ``repr``, what
     pandas writes without a float format). A sweep writes a thousand recordings of ~27 000
     values in its one coordinating process, where pandas' writer was a third of its CPU per
-    run. ``compiled`` (a sweep's store): the values by the compiled ``float_text``, the same
-    text at a fifth of ``repr``'s CPU once its code is loaded (~0.7 s)."""
+    run; ``float_text`` writes the values at a tenth of ``repr``'s CPU."""
     if float_format is None:
         from spindlebench.formats.table_csv import write_table
 
-        write_table(path, frame, compiled)
+        write_table(path, frame)
         return
     frame.to_csv(path, index=False, float_format=float_format, lineterminator="\n")
 

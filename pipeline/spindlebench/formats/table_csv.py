@@ -4,8 +4,7 @@ lineterminator="\\n")``, written about twice as fast for the column types the pr
 A sweep writes a thousand recordings and one result file per training run and condition
 (over a thousand) in its one coordinating process, then ``results.csv`` with every row;
 pandas' writer was most of that time. A frame of floats only (a recording) is written row by
-row, the fastest way for it (or, for a process that writes many, by the compiled
-``float_text``); any other frame column by column. Each column becomes its text
+row (its values by ``float_text``), any other frame column by column. Each column becomes its text
 as pandas makes it (float: the shortest round trip, ``repr``; integer, nullable integer and
 bool: ``str``; text as it is; missing: an empty field), a cell holding the delimiter or the
 quote is quoted as the ``csv`` module's ``QUOTE_MINIMAL`` (which pandas uses) quotes it (in
@@ -22,6 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from spindlebench.formats.float_text import csv_rows
+
 if TYPE_CHECKING:  # imported where a frame is written: reading recordings needs no pandas
     import pandas as pd
 
@@ -35,33 +36,21 @@ def floats_only(frame: pd.DataFrame) -> bool:
         and all(names) and not any(mark in joined for mark in ',"\r\n')
 
 
-def write_table(path: str | os.PathLike[str], frame: pd.DataFrame,
-                compiled: bool = False) -> None:
-    """``frame.to_csv(path, index=False, lineterminator="\\n")``, the same bytes (tested).
-
-    ``compiled``: the float values are written by ``float_text`` (the same text, ~5x faster
-    than ``repr``), for a process that writes many tables: loading its cached machine code
-    costs ~0.7 s of CPU once, the time ``repr`` takes for ~70 recordings."""
+def write_table(path: str | os.PathLike[str], frame: pd.DataFrame) -> None:
+    """``frame.to_csv(path, index=False, lineterminator="\\n")``, the same bytes (tested)."""
     if floats_only(frame):
         header = ",".join(map(str, frame.columns))
-        if compiled:
-            from spindlebench.formats.float_text import csv_rows
-
-            Path(path).write_bytes(f"{header}\n".encode() + csv_rows(frame.to_numpy()))
-            return
-        lines = [header]
-        lines.extend(",".join([repr(v) if v == v else "" for v in row])
-                     for row in frame.to_numpy().tolist())
-    else:
-        columns = _column_texts(frame, compiled)
-        if columns is None:
-            frame.to_csv(path, index=False, lineterminator="\n")
-            return
-        lines = [",".join(columns[0]), *map(",".join, zip(*columns[1:], strict=True))]
+        Path(path).write_bytes(f"{header}\n".encode() + csv_rows(frame.to_numpy()))
+        return
+    columns = _column_texts(frame)
+    if columns is None:
+        frame.to_csv(path, index=False, lineterminator="\n")
+        return
+    lines = [",".join(columns[0]), *map(",".join, zip(*columns[1:], strict=True))]
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8", newline="")
 
 
-def _column_texts(frame: pd.DataFrame, compiled: bool = False) -> list[list[str]] | None:
+def _column_texts(frame: pd.DataFrame) -> list[list[str]] | None:
     """The header's names, then each column's cells, as written; None where pandas is left
     to write the frame."""
     names = list(frame.columns)
@@ -70,7 +59,7 @@ def _column_texts(frame: pd.DataFrame, compiled: bool = False) -> list[list[str]
         return None
     texts = [names]
     for _, column in frame.items():
-        cells = _cells(column, compiled)
+        cells = _cells(column)
         if cells is None:
             return None
         texts.append(cells)
@@ -87,18 +76,12 @@ def _quoted(cell: str) -> str:
     return '"' + cell.replace('"', '""') + '"' if "," in cell or '"' in cell else cell
 
 
-def _cells(column: pd.Series, compiled: bool = False) -> list[str] | None:
+def _cells(column: pd.Series) -> list[str] | None:
     import pandas as pd
 
     dtype = column.dtype
-    if dtype == np.float64 and compiled:
-        from spindlebench.formats.float_text import csv_rows
-
-        return csv_rows(column.to_numpy()[:, None]).decode().split("\n")[:-1]
     if dtype == np.float64:
-        values = column.to_numpy()
-        missing = np.isnan(values)
-        return _blank(list(map(repr, values.tolist())), missing)
+        return csv_rows(column.to_numpy()[:, None]).decode().split("\n")[:-1]
     if dtype == np.int64 or dtype == np.bool_:
         return list(map(str, column.to_numpy().tolist()))
     if isinstance(dtype, pd.StringDtype):  # every cell a str or missing

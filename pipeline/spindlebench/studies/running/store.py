@@ -356,13 +356,12 @@ class ResultStore:
         found without its sidecar was marked not intact, and once redone it stayed so for the
         rest of the process (``place`` then found no runs and exited 2).
 
-        A study writes hundreds of recordings in its one coordinating process: their values
-        go through the compiled formatter (the same bytes, a fifth of the CPU), and the
+        A study writes hundreds of recordings in its one coordinating process: the
         sidecar's hash is saved with the manifest's next save (the next piece written, or
         ``unlock``): its CSV vouches for it meanwhile, and a resumed study records a sidecar
         the manifest lacks without a word (``has_recording``)."""
         target = self.path(relative)
-        write_recording(target, frame, sidecar, compiled=True)
+        write_recording(target, frame, sidecar)
         self._verified[Path(relative).as_posix()] = True
         self._written(Path(relative).with_suffix(".json"), save=False)  # an edit is seen
         return target
@@ -391,13 +390,11 @@ class ResultStore:
             raise SpindlebenchError(f"{self.path(relative)}: not readable JSON ({exc}); "
                                     "remove it and run again") from None
 
-    def write_frame(self, relative: str | Path, frame: pd.DataFrame,
-                    compiled: bool = False) -> Path:
-        """Write a table (``compiled``: its floats by the compiled formatter, the same text;
-        for a study that writes a thousand, ``table_csv.write_table``)."""
+    def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
+        """Write a table (``table_csv.write_table``: pandas' bytes, faster)."""
         target = self.path(relative)
         with atomic_path(target) as tmp:
-            write_table(tmp, frame, compiled)
+            write_table(tmp, frame)
         self._written(relative)
         return target
 

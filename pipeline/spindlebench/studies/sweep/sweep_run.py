@@ -262,8 +262,8 @@ class Sweep:
             for train in job.trains:
                 path = evaluation_path(job.replica, condition, train)
                 value = outcome.value[train.id] if outcome.ok else outcome.error
-                if isinstance(value, pd.DataFrame):  # a thousand in a sweep: compiled
-                    self.results.write_frame(path, value, compiled=True)
+                if isinstance(value, pd.DataFrame):
+                    self.results.write_frame(path, value)
                     self.results.remove(error_path(path))
                     continue
                 self.results.write_frame(error_path(path), pd.DataFrame([{
