@@ -65,6 +65,8 @@ from spindlebench.selection.registry import (
 )
 from spindlebench.selection.regression import rmse_each
 from spindlebench.selection.regressors import blocked_cv_alpha
+from spindlebench.selection.selectors import correlation_ranking
+from spindlebench.selection.similarity import constant_columns
 from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE, Methods
 
 TARGET = DRIFT_COLUMN
@@ -290,7 +292,17 @@ def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
     |psi| (a stable sort) and keeps the first k, so each k's choice is the first k of the
     ranking of all of them (tests compare the two); the selection of all 20 is made once
     per training run instead of once per k. None where that selection fails (a constant
-    sensor): each k then selects on its own, with its own error."""
+    sensor): each k then selects on its own, with its own error.
+
+    Rises that ``select_with`` has nothing to refuse or drop in (finite, no constant column,
+    a target that varies: a sweep's training runs) are ranked by the selector's own ranking
+    (``correlation_ranking``) on the array it would rank, ``X[:, kept]``, without
+    scikit-learn checking them again (two fifths of the baseline's time)."""
+    if X.shape[0] >= 2 and X.shape[0] == y.shape[0] and np.isfinite(X).all() \
+            and np.isfinite(y).all() and not constant_columns(y[:, None])[0]:
+        kept = np.flatnonzero(~constant_columns(X))
+        if kept.size == X.shape[1]:
+            return correlation_ranking(X[:, kept], y)[1]
     try:
         return select_with(TOP_K, X, y, X.shape[1], names=SENSORS).selected
     except Exception:  # each k's own selection raises its own error
