@@ -30,6 +30,7 @@ what a compensation actually achieves.
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -64,7 +65,11 @@ from spindlebench.selection.registry import (
     select_with,
 )
 from spindlebench.selection.regression import rmse_each
-from spindlebench.selection.regressors import blocked_cv_alpha
+from spindlebench.selection.regressors import (
+    StandardisedRidge,
+    blocked_cv_alpha,
+    standardised_ridge,
+)
 from spindlebench.selection.selectors import correlation_ranking
 from spindlebench.selection.similarity import constant_columns
 from spindlebench.studies.family.family_file import RIDGE_BASELINE, TOP_K_BASELINE, Methods
@@ -311,17 +316,29 @@ def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
     X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
-    differences = PairwiseDifferences().fit(X)
-    candidates = differences.transform(X)
+    # finite rises: PairwiseDifferences().fit(X).transform(X) without its checks
+    candidates = ridge_candidates(X) if np.isfinite(X).all() else \
+        PairwiseDifferences().fit(X).transform(X)
     # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
     alpha = blocked_cv_alpha(candidates, y, factors=(X, with_differences_matrix(X.shape[1])))
-    # make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha)).fit(X, y), step
-    # by step as Pipeline.fit runs it, on the candidates made for the CV
-    scaler = StandardScaler().fit(candidates)
-    ridge = Ridge(alpha=alpha).fit(scaler.transform(candidates), y)
-    model = Pipeline([("pairwisedifferences", differences), ("standardscaler", scaler),
-                      ("ridge", ridge)])
-    return _scores(data, _ridge_predictions(model, data),
+    fitted = standardised_ridge(candidates, y, alpha)
+
+    @functools.cache
+    def model() -> Pipeline:
+        """make_pipeline(PairwiseDifferences(), StandardScaler(), Ridge(alpha)).fit(X, y),
+        step by step as Pipeline.fit runs it, on the candidates made for the CV: fitted
+        only where ``standardised_ridge`` (the same fit) does not serve."""
+        scaler = StandardScaler().fit(candidates)
+        ridge = Ridge(alpha=alpha).fit(scaler.transform(candidates), y)
+        return Pipeline([("pairwisedifferences", PairwiseDifferences().fit(X)),
+                         ("standardscaler", scaler), ("ridge", ridge)])
+
+    if fitted is None:  # raises where scikit-learn refuses the training run
+        scaler, ridge = model().steps[1][1], model().steps[2][1]
+        if ridge.coef_.ndim == 1:
+            fitted = StandardisedRidge(scaler.mean_, scaler.scale_, ridge.coef_,
+                                       ridge.intercept_)
+    return _scores(data, _ridge_predictions(fitted, model, data),
                    f"all 210 candidates (alpha={alpha:.3g})")
 
 
@@ -334,18 +351,18 @@ def ridge_candidates(raw: np.ndarray) -> np.ndarray:
     return np.hstack([raw, pairwise_differences(raw)])
 
 
-def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.ndarray]:
-    """``model.predict`` of every test run's raw rises, to the last bit, in a fraction of
-    the time: a run's 210 candidates do not depend on the training run (made once per run),
-    and the scaler's and the ridge's arithmetic (``StandardScaler.transform``: minus
-    ``mean_``, divided by ``scale_``; ``Ridge.predict``: ``X @ coef_ + intercept_``) runs on
-    each run's own array in its own memory layout, as ``model.predict`` runs it (one product
-    on the runs stacked, or on another layout, rounds differently; test_sweep_methods
-    compares the two), without scikit-learn validating each of the 23 inputs twice. When a
-    run's rises or candidates fail or a value is not finite, every run takes
-    ``model.predict`` one by one, so the errors are those of that path, in its order."""
-    scaler, ridge = model.steps[1][1], model.steps[2][1]
-
+def _ridge_predictions(fitted: StandardisedRidge | None, model: Callable[[], Pipeline],
+                       data: EvaluationData) -> dict[str, np.ndarray]:
+    """``model().predict`` of every test run's raw rises, to the last bit, in a fraction of
+    the time (``fitted``: the same fit's arrays): a run's 210 candidates do not depend on
+    the training run (made once per run), and the scaler's and the ridge's arithmetic
+    (``StandardScaler.transform``: minus ``mean_``, divided by ``scale_``;
+    ``Ridge.predict``: ``X @ coef_ + intercept_``) runs on each run's own array in its own
+    memory layout, as ``model.predict`` runs it (one product on the runs stacked, or on
+    another layout, rounds differently; test_sweep_methods compares the two), without
+    scikit-learn validating each of the 23 inputs twice. When a run's rises or candidates
+    fail or a value is not finite, every run takes ``model().predict`` one by one, so the
+    errors are those of that path, in its order."""
     def candidates(name: str) -> Callable[[], np.ndarray]:
         return lambda: ridge_candidates(data.raw_rises(name))
 
@@ -354,8 +371,8 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
                   for name in data.tests]
     except Exception:  # model.predict below raises it where it did
         blocks = []
-    if len(blocks) != len(data.tests) or ridge.coef_.ndim != 1:
-        return {name: model.predict(data.raw_rises(name)) for name in data.tests}
+    if len(blocks) != len(data.tests) or fitted is None:
+        return {name: model().predict(data.raw_rises(name)) for name in data.tests}
     # each run scaled into one reused buffer of the block's own layout (empty_like keeps
     # it, as ``(block - mean_) / scale_`` does): the same elementwise arithmetic and the
     # same product on the same layout, without two fresh arrays per run
@@ -366,14 +383,14 @@ def _ridge_predictions(model: Pipeline, data: EvaluationData) -> dict[str, np.nd
                 buffer.flags.f_contiguous != block.flags.f_contiguous or \
                 buffer.flags.c_contiguous != block.flags.c_contiguous:
             buffer = np.empty_like(block)
-        np.subtract(block, scaler.mean_, out=buffer)
-        np.divide(buffer, scaler.scale_, out=buffer)
-        predictions[name] = buffer @ ridge.coef_ + ridge.intercept_
+        np.subtract(block, fitted.mean, out=buffer)
+        np.divide(buffer, fitted.scale, out=buffer)
+        predictions[name] = buffer @ fitted.coef + fitted.intercept
     # a value of a scaled block that is not finite (which scikit-learn refuses) makes its
     # run's prediction not finite (inf times any coefficient, zero too, is not finite): one
     # check of the predictions instead of one of each 181 x 210 block
     if not np.isfinite(np.concatenate(list(predictions.values()))).all():
-        return {name: model.predict(data.raw_rises(name)) for name in data.tests}
+        return {name: model().predict(data.raw_rises(name)) for name in data.tests}
     return predictions
 
 
