@@ -64,7 +64,7 @@ from spindlebench.selection.registry import (
     parse_method,
     select_with,
 )
-from spindlebench.selection.regression import rmse_each
+from spindlebench.selection.regression import LinearFit, rmse_each
 from spindlebench.selection.regressors import (
     StandardisedRidge,
     blocked_cv_alpha,
@@ -161,6 +161,8 @@ class SharedRuns:
     def __init__(self, frames: Mapping[str, pd.DataFrame]) -> None:
         self.frames = {str(name): frame for name, frame in frames.items()}
         self._checked: dict[str, CheckedRecording] = {}
+        self._stacked: tuple[dict[str, int], np.ndarray] | None = None
+        self._stacked_made = False
 
     def checked(self, name: str, frame: pd.DataFrame) -> CheckedRecording:
         """Run ``name`` as a checked recording; ``frame`` must be this object's frame."""
@@ -175,6 +177,21 @@ class SharedRuns:
         checked = self.checked(name, self.frames[name])
         return self.memo("raw rises", name,
                          lambda: rises(np.asfortranarray(checked.stack(SENSORS))))
+
+    def stacked_raw_rises(self) -> tuple[dict[str, int], np.ndarray] | None:
+        """Each run's position and every run's ``raw_rises(name).T`` stacked, (runs, 20,
+        samples), made once (shared: do not modify); None when the runs differ in length or
+        a run's rises cannot be made (each then raises its own error where it is read)."""
+        if not self._stacked_made:
+            self._stacked_made = True
+            try:
+                rises_each = [self.raw_rises(name) for name in self.frames]
+                self._stacked = None if len({r.shape for r in rises_each}) != 1 else (
+                    {name: i for i, name in enumerate(self.frames)},
+                    np.stack([r.T for r in rises_each]))
+            except Exception:  # read run by run, where it raises
+                self._stacked = None
+        return self._stacked
 
     def memo(self, what: str, name: str, compute: Callable[[], T]) -> T:
         """``compute()`` the first time ``what`` of run ``name`` is asked for, then kept
@@ -215,6 +232,18 @@ class EvaluationData:
         if self._train_rises is None:
             self._train_rises = rises(np.asfortranarray(self.checked_train.stack(SENSORS)))
         return self._train_rises
+
+    def test_raw_rises(self, columns: np.ndarray) -> np.ndarray | None:
+        """(test runs, samples, len(columns)): run i's ``raw_rises(name)[:, columns]``, the
+        same values in the same (column-major) layout, for all test runs at once (so one
+        product predicts them all, ``LinearFit.predict_stacked``); None where the runs are
+        not stacked (``SharedRuns.stacked_raw_rises``)."""
+        stacked = self.runs.stacked_raw_rises()
+        if stacked is None:
+            return None
+        position, rises_T = stacked
+        rows = [position[name] for name in self.tests]
+        return np.swapaxes(rises_T[np.ix_(rows, np.asarray(columns, dtype=np.intp))], 1, 2)
 
     def column(self, name: str, column: str) -> np.ndarray:
         """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
@@ -287,8 +316,10 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
         chosen = ranking[:spec.k] if shared else \
             select_with(TOP_K, X, y, spec.k, names=SENSORS).selected
     fit = fit_with(TOP_K, X[:, chosen], y)
+    stacked = data.test_raw_rises(chosen) if isinstance(fit, LinearFit) else None
     predictions = dict(zip(data.tests, fit.predict_each(
-        [data.raw_rises(name)[:, chosen] for name in data.tests]), strict=True))
+        [data.raw_rises(name)[:, chosen] for name in data.tests]) if stacked is None
+        else fit.predict_stacked(stacked), strict=True))
     return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
 
 
