@@ -136,3 +136,19 @@ def test_linear_fit_predict_each_is_predict_of_each():
     for each, X in zip(fit.predict_each(Xs), Xs, strict=True):
         assert np.array_equal(each, fit.predict(X))
     assert np.isinf(fit.predict_each([np.full((2, 3), 1e308)])[0]).any()
+
+
+def test_linear_fit_predict_stacked_is_predict_of_each_run_to_the_bit():
+    """One product over the runs stacked gives each run's row the bits of its own product,
+    for the few candidates a study's models read (1..8) and runs of several lengths."""
+    from spindlebench.selection.regression import LinearFit
+
+    rng = np.random.default_rng(12)
+    for k in range(1, 9):
+        for samples in (2, 7, 180, 181):
+            fit = LinearFit(intercept=float(rng.normal()), coefficients=rng.normal(size=k),
+                            r2=0.0)
+            runs = rng.normal(size=(23, samples, k)) * 10
+            stacked = fit.predict_stacked(runs)
+            for row, each in zip(stacked, fit.predict_each(list(runs)), strict=True):
+                assert np.array_equal(row, each)

@@ -818,9 +818,10 @@ def load_recordings(
 
 def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
                         candidates: CandidateSet, columns: tuple[int, ...]
-                        ) -> list[np.ndarray] | None:
-    """Candidates ``columns`` of every (whole) test recording, made for all at once: each
-    recording's ``candidates.matrix(recording, columns)``, to the bit and in its layout.
+                        ) -> np.ndarray | None:
+    """Candidates ``columns`` of every (whole) test recording, made for all at once: row i
+    of the (recordings, samples, candidates) array is recording i's
+    ``candidates.matrix(recording, columns)``, to the bit and in its layout.
 
     Why: a study's every model reads a few candidates of the same 23 held-out runs; made
     run by run that was a tenth of an evaluation. Here each candidate is one subtraction on
@@ -846,19 +847,32 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     with np.errstate(over="ignore", invalid="ignore"):  # warned by the run that overflows
         for j, (a, b) in enumerate(parts):
             out[:, :, j] = stacks[a] if b is None else stacks[a] - stacks[b]
-    return list(out) if np.isfinite(out).all() else None
+    return out if np.isfinite(out).all() else None
+
+
+def _stacked_predictions(fit: LinearFit | EstimatorFit, shared: np.ndarray | None,
+                         values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
+    """Every run's prediction in one product, where the runs' inputs are ``shared`` (stacked
+    in the order of ``values``) and the model is linear: each run's row is its own
+    product's bits (``LinearFit.predict_stacked``). None where a prediction is not finite
+    (or there is no stack): the runs are then predicted one by one, so the run that fails
+    raises its error in its turn."""
+    if not isinstance(fit, LinearFit) or shared is None:
+        return None
+    stacked = fit.predict_stacked(shared)
+    return dict(zip(values, stacked, strict=True)) if np.isfinite(stacked).all() else None
 
 
 def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
                  used: Sequence[str],
                  inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
                  fit: LinearFit | EstimatorFit,
-                 batch: Callable[[], list[np.ndarray] | None] | None = None,
+                 batch: Callable[[], np.ndarray | None] | None = None,
                  ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, float],
                             dict[str, np.ndarray]]:
     """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
     test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
-    of every recording at once, or None, asked only when no sample is dropped).
+    of every recording at once, stacked, or None, asked only when no sample is dropped).
 
     Why in three passes (inputs of every run, then every prediction, then every RMSE in one
     reduction, ``rmse_each``) rather than run by run: a study scores each of its many
@@ -886,20 +900,23 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
         except Exception as exc:  # raised once the runs before it are scored
             failure = _named(exc, name)
             break
-    predictions: dict[str, np.ndarray] = {}
-    if isinstance(fit, LinearFit):
-        predictions = dict(zip(values, fit.predict_each(list(values.values())), strict=True))
-    scored: list[str] = []
-    for name in values:
-        try:
-            if name not in predictions:
-                predictions[name] = fit.predict(values[name])
-            if not np.isfinite(predictions[name]).all():
-                raise SelectionOverflowError("values too large to predict (overflow)")
-        except Exception as exc:  # raised once the runs before it are scored
-            failure = _named(exc, name)
-            break
-        scored.append(name)
+    stacked = _stacked_predictions(fit, shared, values) if failure is None else None
+    predictions: dict[str, np.ndarray] = {} if stacked is None else stacked
+    scored: list[str] = [] if stacked is None else list(values)
+    if stacked is None:  # run by run: the first that fails raises, after those before it
+        if isinstance(fit, LinearFit):
+            predictions = dict(zip(values, fit.predict_each(list(values.values())),
+                                   strict=True))
+        for name in values:
+            try:
+                if name not in predictions:
+                    predictions[name] = fit.predict(values[name])
+                if not np.isfinite(predictions[name]).all():
+                    raise SelectionOverflowError("values too large to predict (overflow)")
+            except Exception as exc:  # raised once the runs before it are scored
+                failure = _named(exc, name)
+                break
+            scored.append(name)
     try:
         found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
     except SelectionError:  # the first run that fails, named

@@ -20,10 +20,12 @@ um/K), which is what ``evaluate`` reports and what a controller would run.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from numbers import Integral
 from typing import ClassVar
 
 import numpy as np
+import scipy.linalg
 from sklearn.base import BaseEstimator, RegressorMixin, _fit_context
 from sklearn.cross_decomposition import PLSRegression
 from sklearn.model_selection import KFold
@@ -100,6 +102,73 @@ def _fold_errors(X: np.ndarray, y: np.ndarray, alphas: np.ndarray, n_folds: int,
             coefs = Vt.T @ (s[:, None] / (s[:, None] ** 2 + alphas) * Uty[:, None])
             errors += np.sum((Xv @ coefs + y_mean - y[valid][:, None]) ** 2, axis=0)
     return errors
+
+
+@dataclass(frozen=True)
+class StandardisedRidge:
+    """``make_pipeline(StandardScaler(), Ridge(alpha))`` fitted: the scaler's ``mean_`` and
+    ``scale_``, the ridge's ``coef_`` and ``intercept_``."""
+
+    mean: np.ndarray
+    scale: np.ndarray
+    coef: np.ndarray
+    intercept: np.ndarray
+
+
+def standardised_ridge(X: np.ndarray, y: np.ndarray, alpha: float) -> StandardisedRidge | None:
+    """``StandardScaler().fit(X)`` and ``Ridge(alpha).fit(scaler.transform(X), y)`` of
+    finite float64 ``X`` and ``y`` (1-D), as scikit-learn 1.9 computes them
+    (``_incremental_mean_and_var``, ``_is_constant_feature``; ``_preprocess_data`` and the
+    "auto" solver's Cholesky on X^T X, or on X X^T when there are more columns than
+    samples): the same NumPy and SciPy operations on arrays of the same layouts, so the
+    same bits (tests compare the two), without scikit-learn checking the arrays (half of
+    the two fits' time, the sweep's ridge baseline fits one per training run). None where
+    scikit-learn would do otherwise (values it refuses, a Cholesky that fails: it then
+    falls back to an SVD): the caller fits scikit-learn's estimators.
+    """
+    if X.ndim != 2 or y.ndim != 1 or X.shape[0] != y.shape[0] or X.shape[0] < 1 \
+            or X.dtype != np.float64 or y.dtype != np.float64 \
+            or not (np.isfinite(X).all() and np.isfinite(y).all()):
+        return None
+    n_samples, n_features = X.shape
+    # StandardScaler.partial_fit, first call, no NaN: _incremental_mean_and_var from zeros
+    count = n_samples - np.zeros(n_features)
+    total = np.sum(X, axis=0)
+    mean = (np.zeros(n_features) + total) / count
+    deviation = X - total / count
+    correction = np.sum(deviation, axis=0)
+    deviation **= 2
+    unnormalised = np.sum(deviation, axis=0)
+    unnormalised -= correction**2 / count
+    variance = unnormalised / count
+    eps = np.finfo(np.float64).eps
+    seen = count[0]
+    constant = variance <= seen * eps * variance + (seen * mean * eps) ** 2
+    scale = np.sqrt(variance)
+    scale[constant] = 1.0
+    Z = (X - mean) / scale  # StandardScaler.transform
+    if not np.isfinite(Z).all():  # Ridge would refuse
+        return None
+    # Ridge.fit: _preprocess_data centres a copy, then the Cholesky solver
+    offset = np.asarray(np.average(Z, axis=0))
+    Z -= offset
+    y_offset = np.asarray(np.average(y, axis=0))
+    targets = (y - y_offset).reshape(-1, 1)
+    try:
+        if n_features > n_samples:
+            K = Z @ Z.T
+            K.flat[:: n_samples + 1] += alpha
+            dual = scipy.linalg.solve(K, targets, assume_a="pos", overwrite_a=False)
+            coef = (Z.T @ dual).T
+        else:
+            A = Z.T @ Z
+            Xy = Z.T @ targets
+            A.flat[:: n_features + 1] += alpha
+            coef = scipy.linalg.solve(A, Xy, assume_a="pos", overwrite_a=True).T
+    except np.linalg.LinAlgError:  # scikit-learn then solves by SVD
+        return None
+    coef = np.divide(np.ravel(coef), np.ones(n_features))
+    return StandardisedRidge(mean, scale, coef, y_offset - offset @ coef)
 
 
 def widened_cv_alpha(X: np.ndarray, y: np.ndarray, alphas: np.ndarray = RIDGE_ALPHAS,

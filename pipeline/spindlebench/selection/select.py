@@ -20,6 +20,7 @@ from spindlebench.core.names import DEFAULT_SIMILARITY
 from spindlebench.selection.closure import (
     SpanningTree,
     check_similarity,
+    closure_from_tree,
     maximum_spanning_tree,
     transitive_closure,
 )
@@ -172,8 +173,8 @@ def select_sensitive_points(
 
 class SensitivePoints:
     """``select_sensitive_points`` on one ``X`` and ``y`` for any number of k: every step
-    that does not depend on k (the constant candidates, R, t(R), psi and the maximum
-    spanning tree the cut reads) is done once, at the first ``select``.
+    that does not depend on k (the constant candidates, R, psi and the maximum spanning
+    tree the cut reads; t(R) when asked for) is done once, at the first ``select``.
 
     Why: a study selects k = 2, 3, 4 from the same candidates of the same training run;
     those steps were done again for each k. Each ``select(k)`` checks its inputs, warns and
@@ -186,7 +187,7 @@ class SensitivePoints:
         self.X, self.y = X, y
         self.similarity, self.closure, self.names = similarity, closure, names
         self._constant: np.ndarray | None = None
-        self._prepared: tuple[np.ndarray, np.ndarray, np.ndarray, SpanningTree] | None = None
+        self._prepared: tuple[np.ndarray, MatrixSource, np.ndarray, SpanningTree] | None = None
 
     def select(self, n_clusters: int) -> Selection:
         """``select_sensitive_points(X, y, n_clusters, similarity, closure, names)``."""
@@ -208,11 +209,44 @@ class SensitivePoints:
         if self._prepared is None:  # a step that raises raises again at the next k
             kept_names = None if names is None else [names[i] for i in kept]
             R = similarity_matrix(X[:, kept], self.similarity, kept_names)
-            T = transitive_closure(R, self.closure)
+            T, tree = _closure_and_tree(R, self.closure)
             psi = np.full(X.shape[1], np.nan)
             psi[kept] = correlation_with(X[:, kept], y, kept_names)
-            self._prepared = (R, T, psi, maximum_spanning_tree(check_similarity(T)))
+            self._prepared = (R, T, psi, tree)
         R, T, psi, tree = self._prepared
         # cut_for_clusters(T, n_clusters), its tree made once
-        check_n_clusters(n_clusters, T.shape[0])
+        check_n_clusters(n_clusters, tree.order.size)
         return assemble(kept, dropped, R, T, cut_tree_for_clusters(tree, n_clusters), psi)
+
+
+def _closure_and_tree(R: np.ndarray, closure: str) -> tuple[MatrixSource, SpanningTree]:
+    """t(R) (or the function that forms it, once, on request) and the maximum spanning tree
+    the cut reads, raising what ``transitive_closure(R, closure)`` raises.
+
+    Why: with the fast closure, t(R) is made from a maximum spanning tree of R, and a cut of
+    t(R) reads the same clusters and eta off that tree as off one of t(R) (every maximum
+    spanning tree of a graph has the same edge similarities, and these are exact minima and
+    maxima of R's entries; the clusters at eta are the graph's components at eta, whichever
+    tree spans it). So the tree of R serves the cut, and t(R) is formed only when a caller
+    reads ``Selection.closure`` (the evaluations of a sweep never do): neither t(R) nor a
+    second tree is made per training run and group."""
+    if closure != "fast":
+        T = transitive_closure(R, closure)
+        return T, maximum_spanning_tree(check_similarity(T))
+    tree = maximum_spanning_tree(check_similarity(R))
+    return _ClosureOfTree(tree), tree
+
+
+class _ClosureOfTree:
+    """``closure_from_tree(tree)``, formed at the first call and then kept: a
+    ``Selection``'s closure source that pickles (a fitted selector holding its selection
+    does), unlike a function made inside another."""
+
+    def __init__(self, tree: SpanningTree) -> None:
+        self.tree = tree
+        self._matrix: np.ndarray | None = None
+
+    def __call__(self) -> np.ndarray:
+        if self._matrix is None:
+            self._matrix = closure_from_tree(self.tree)
+        return self._matrix

@@ -293,9 +293,18 @@ class TopCorrelatedSelector(_Selector):
         X, y = self._data(X, y)
         k = self._k()
         _budget(k, X.shape[1])
-        self.scores_ = _abs_psi(X, y)
-        self.selected_ = np.argsort(-self.scores_, kind="stable")[:k]
+        self.scores_, ranking = correlation_ranking(X, y)
+        self.selected_ = ranking[:k]
         return self
+
+
+def correlation_ranking(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``TopCorrelatedSelector``'s ranking of checked data: (|psi| of every column, -1 for
+    constant ones; the columns by it, strongest first, the first one on ties). Its own
+    home, so a study ranking its training run's candidates once for every k
+    (``family.methods``) ranks them as the selector does."""
+    scores = _abs_psi(X, y)
+    return scores, np.argsort(-scores, kind="stable")
 
 
 def path_order(X: np.ndarray, y: np.ndarray, k: int, l1_ratio: float) -> np.ndarray:
