@@ -39,3 +39,28 @@ def test_atomic_write_has_default_permissions(tmp_path):
         assert target.stat().st_mode & 0o777 == 0o644
     finally:
         os.umask(mask)
+
+
+def test_the_first_write_into_a_folder_removes_every_stale_part_file(tmp_path):
+    """Killed writers' part files go at this process's first write there, whatever target
+    they were for; a live writer's and other dot files stay."""
+    import os
+
+    stale = [tmp_path / ".a.csv.999999999.k2j4_x8q.part", tmp_path / ".b.999999998.abcdefgh.part"]
+    kept = [tmp_path / f".c.csv.{os.getpid()}.abcdefgh.part", tmp_path / ".notes.part",
+            tmp_path / ".d.999999999.part"]
+    for path in stale + kept:
+        path.write_text("x")
+    atomic.write_text(tmp_path / "new.txt", "x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["new.txt", *(p.name for p in kept)])
+
+
+def test_a_folder_removed_after_a_write_is_made_again(tmp_path):
+    import shutil
+
+    target = tmp_path / "sub" / "a.txt"
+    atomic.write_text(target, "one")
+    shutil.rmtree(target.parent)
+    atomic.write_text(target, "two")
+    assert target.read_text() == "two"

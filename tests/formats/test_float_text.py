@@ -62,3 +62,12 @@ def test_many_values_of_each_family_are_written_as_repr_writes_them(family):
 
 def test_no_rows_is_no_text():
     assert csv_rows(np.empty((0, 3))) == b""
+
+
+def test_values_outside_the_positional_range_spread_over_rows_and_columns():
+    """A simulated recording has a ~1e-13 column in every row among positional values."""
+    rng = np.random.default_rng(26)
+    values = rng.uniform(10.0, 30.0, (60, 13))
+    values[:, 4] = rng.uniform(-1e-12, 1e-12, 60)
+    values.flat[rng.choice(values.size, len(AWKWARD), replace=False)] = AWKWARD
+    assert csv_rows(values) == _repr_rows(values)

@@ -481,7 +481,7 @@ def test_a_real_dask_scheduler_passes_the_handshake_check():
 
 
 def test_a_target_name_near_the_limit_gets_a_short_part_name(tmp_path):
-    from spindlebench.core.atomic import atomic_path, remove_stale_parts, write_text
+    from spindlebench.core.atomic import atomic_path, remove_stale_parts_in, write_text
 
     target = tmp_path / ("r" * 240 + ".json")  # 245 characters: the file system takes 255
     write_text(target, "{}\n")
@@ -490,7 +490,7 @@ def test_a_target_name_near_the_limit_gets_a_short_part_name(tmp_path):
         assert len(tmp.name) < 160
         stale = tmp.with_name(tmp.name.replace(f".{os.getpid()}.", ".999999999.", 1))
         stale.write_text("left by a killed writer", encoding="utf-8")
-    assert remove_stale_parts(target) == [stale]
+    assert remove_stale_parts_in(tmp_path) == [stale]
 
 
 def test_evaluate_writes_a_json_with_a_245_character_name(tmp_path, capsys):
@@ -667,20 +667,18 @@ def test_calibrate_says_what_is_wrong_instead_of_did_not_converge(tmp_path, caps
 
 
 def test_a_signal_right_after_the_part_file_is_made_leaves_no_part_file(tmp_path, monkeypatch):
-    """Ctrl-C between ``mkstemp`` and the ``try`` that removes the part file left
-    ``.manifest.json.<pid>.<random>.part`` in a study folder."""
-    import tempfile
-
+    """Ctrl-C between making the part file (then ``mkstemp``) and the ``try`` that removes
+    it left ``.manifest.json.<pid>.<random>.part`` in a study folder."""
     from spindlebench.core import atomic, interrupts
 
-    made = tempfile.mkstemp
+    made = atomic._create
 
-    def mkstemp_then_signal(*args, **kwargs):
-        handle = made(*args, **kwargs)
+    def create_then_signal(*args, **kwargs):
+        created = made(*args, **kwargs)
         os.kill(os.getpid(), signal.SIGINT)  # lands at the next bytecode, here
-        return handle
+        return created
 
-    monkeypatch.setattr(atomic.tempfile, "mkstemp", mkstemp_then_signal)
+    monkeypatch.setattr(atomic, "_create", create_then_signal)
     interrupts.install()
     try:
         with pytest.raises(KeyboardInterrupt):

@@ -2,29 +2,22 @@
 
 The temporary file beside the target is named ``.<target>.<pid>.<random>.part`` (a long target
 name shortened to its start and a hash, so the part name stays within 255 bytes): a process
-killed with SIGKILL cannot remove it, so the next write of the same target removes every
-part file of that target whose writer process no longer exists.
+killed with SIGKILL cannot remove it, so a process's first write into a folder removes every
+part file there whose writer process no longer exists. Once per folder and process, not per
+write: a sweep writes ~3 500 files into folders of up to a thousand, and the scan of the
+folder at every write was half of an atomic write's CPU.
 """
 
 from __future__ import annotations
 
 import contextlib
-import glob
 import hashlib
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
-from spindlebench.core import interrupts
 from spindlebench.core.paths import refuse_shipped
-
-
-def _current_umask() -> int:
-    """The process umask (read by setting and restoring it; there is no getter)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 @contextlib.contextmanager
@@ -35,29 +28,56 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     """
     target = Path(target)
     refuse_shipped(target)  # never a shipped file, unless --overwrite-shipped says so
-    target.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_parts(target)
+    _sweep_once(target.parent)
     tmp: Path | None = None
     try:
-        # a signal between making the part file and knowing its name left it behind (seen
-        # with Ctrl-C during a study's manifest write): made with signals deferred, so once
-        # one raises (at the end of this block at the latest) ``tmp`` names the file to remove
-        with interrupts.deferred():
-            fd, tmp_name = tempfile.mkstemp(prefix=f".{_part_stem(target.name)}.{os.getpid()}.",
-                                            suffix=".part", dir=target.parent)
-            tmp = Path(tmp_name)
-            os.close(fd)
-        # mkstemp makes the file private (0600); give it the mode a plain open() would.
-        os.chmod(tmp, 0o666 & ~_current_umask())
+        # named before it is made, so a signal at any point (Ctrl-C right after the file was
+        # made left it behind) finds ``tmp`` naming the file to remove
+        while True:
+            tmp = target.with_name(f".{_part_stem(target.name)}.{os.getpid()}."
+                                   f"{secrets.token_hex(4)}.part")
+            if _create(tmp, target.parent):
+                break
         yield tmp
         os.replace(tmp, target)
+        tmp = None  # moved: nothing left to remove
     except OSError as exc:
         if exc.filename is None and exc.errno:  # the disk refused a write (full, quota, size)
             exc.filename = str(target)  # say which file: "No space left on device" alone
         raise
     finally:
-        if tmp is not None and tmp.exists():
-            tmp.unlink()
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+
+
+def _create(part: Path, folder: Path) -> bool:
+    """Make the empty file ``part`` with the mode a plain ``open()`` gives (0666 less the
+    umask); False if the name is taken. Its folder is made again if it went away since this
+    process first wrote there."""
+    try:
+        try:
+            handle = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+        except FileNotFoundError:
+            folder.mkdir(parents=True, exist_ok=True)
+            handle = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+    except FileExistsError:
+        return False
+    os.close(handle)
+    return True
+
+
+def _sweep_once(folder: Path) -> None:
+    """Make ``folder`` and remove the stale part files in it, at this process's first write
+    there."""
+    key = os.path.abspath(folder)
+    if key not in _swept:
+        folder.mkdir(parents=True, exist_ok=True)
+        remove_stale_parts_in(folder)
+        _swept.add(key)
+
+
+#: The folders this process has swept of stale part files (``remove_stale_parts_in``).
+_swept: set[str] = set()
 
 
 #: Longest target name kept whole in a part file's name: a name near the file system's 255
@@ -96,19 +116,26 @@ def _process_exists(pid: int) -> bool:
     return True
 
 
-def remove_stale_parts(target: str | os.PathLike[str]) -> list[Path]:
-    """Remove the part files of ``target`` left by writers that were killed; return them.
+def remove_stale_parts_in(folder: str | os.PathLike[str]) -> list[Path]:
+    """Remove the part files in ``folder`` left by writers that were killed; return them.
 
-    A part file of a live process (a concurrent writer) is left alone.
-    """
-    target = Path(target)
+    A part file is ``.<stem>.<pid>.<random>.part``; one of a live process (a concurrent
+    writer) is left alone."""
+    with os.scandir(folder) as entries:
+        names = [entry.name for entry in entries if entry.name.startswith(".")
+                 and entry.name.endswith(".part") and entry.is_file(follow_symlinks=False)]
     removed = []
-    stem = _part_stem(target.name)
-    for part in target.parent.glob(f".{glob.escape(stem)}.*.part"):
-        pid_text = part.name[len(stem) + 2:].split(".", 1)[0]
-        if pid_text.isdigit() and not _process_exists(int(pid_text)):
+    alive: dict[int, bool] = {}
+    for name in names:
+        fields = name[1:-len(".part")].rsplit(".", 2)  # stem (may hold dots), pid, random
+        if len(fields) < 3 or not fields[1].isdigit():
+            continue
+        pid = int(fields[1])
+        if pid not in alive:
+            alive[pid] = _process_exists(pid)
+        if not alive[pid]:
+            part = Path(folder) / name
             with contextlib.suppress(FileNotFoundError):
                 part.unlink()
                 removed.append(part)
     return removed
-
