@@ -706,6 +706,21 @@ def resolve_sensors(
     return chosen
 
 
+def _resolved_sensors(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                      target: str, sensors: Sequence[str] | None) -> list[str]:
+    """``resolve_sensors``, made once per training recording, test recordings, target and
+    sensor list (a study asks it again of the same recordings for each of its models, some
+    0.3 ms each time); a check that fails is not kept, so it raises again."""
+    recordings = tuple(tests.values())
+    listed = None if sensors is None else tuple(str(sensor) for sensor in sensors)
+    # kept by the training recording: the memo holds the test recordings, so their ids
+    # name them while it lives
+    key = ("resolved sensors", tuple(map(id, recordings)), target, listed)
+    resolved = train.memo(key, lambda: (recordings,
+                                        resolve_sensors(train, tests, target, sensors)))[1]
+    return list(resolved)
+
+
 def check_same_sensors(name: str, theirs: Sequence[str], chosen: Sequence[str],
                        train_name: str) -> None:
     """A held-out recording must offer the training file's sensors, found by the same rule
@@ -955,7 +970,7 @@ def evaluate_checked(
         raise SelectionError("at least one test recording is needed")
     choice = MethodChoice() if method is None else method
     train_name = train.name
-    chosen = resolve_sensors(train, tests, target, sensors)
+    chosen = _resolved_sensors(train, tests, target, sensors)
     checked = [*chosen, target]
     dynamic = is_dynamic(choice.regressor)
     if dynamic:  # the regressor reads the speed programme too: present and finite everywhere

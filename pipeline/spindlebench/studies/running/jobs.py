@@ -92,13 +92,19 @@ TrainingResult = pd.DataFrame | str
 class _TruthColumns:
     """A run's truth frame as float arrays from one conversion: looking its columns up in
     pandas, a few times per run, was some 6 % of an evaluation's time. The values are the
-    frame's (a copy of the same float64s, column-major as pandas gives a column block)."""
+    frame's (a frame of float64 columns gives its own column block, column-major).
+
+    The block serves when pandas gives every column as float64 in common: float64 columns
+    (or ints and narrower floats beside them, which it converts as ``to_numpy(float)``
+    converts each column). Asked of ``to_numpy``'s dtype rather than of ``truth.dtypes``,
+    a Series of the column names that pandas builds on each call (a seventh of
+    ``measured_frame``'s time)."""
 
     def __init__(self, truth: pd.DataFrame) -> None:
         self.frame = truth
-        self.block = truth.to_numpy(dtype=float) if truth.columns.is_unique and all(
-            dtype == np.float64 for dtype in truth.dtypes) else None
-        self.position = {column: i for i, column in enumerate(truth.columns)}
+        block = truth.to_numpy() if truth.columns.is_unique else None
+        self.block = block if block is not None and block.dtype == np.float64 else None
+        self.position = {column: i for i, column in enumerate(truth.columns.tolist())}
 
     def __contains__(self, column: str) -> bool:
         return column in self.position
@@ -157,7 +163,15 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
             values[:, at - 2] = values[:, at - 1]
     for i, column in enumerate(drivers):  # the programme, for the dynamic regressors
         values[:, at + i] = truth.column(column)
-    return pd.DataFrame(values, columns=[*MEASURED_COLUMNS, *drivers])
+    return pd.DataFrame(values, columns=_measured_columns(tuple(drivers)))
+
+
+@functools.cache
+def _measured_columns(drivers: tuple[str, ...]) -> pd.Index:
+    """The column index of ``measured_frame`` with ``drivers``, made once and shared by its
+    frames (an Index cannot be changed): pandas inferring it from the names again for
+    every frame was a fifth of ``measured_frame``'s time."""
+    return pd.Index([*MEASURED_COLUMNS, *drivers])
 
 
 def _measured_sensors(job: EvaluationJob, experiment: Experiment, held_out: bool,
@@ -261,23 +275,43 @@ def _evaluate_training_run(job: EvaluationJob, train: Experiment,
 def _result_frame(job: EvaluationJob, train: Experiment, tests: list[Experiment],
                  rows: list[dict[str, Any]]) -> pd.DataFrame:
     """The rows of one training run with the columns that say which case each is, built in
-    one go (a frame grown column by column was a twentieth of an evaluation)."""
+    one go (a frame grown column by column was a twentieth of an evaluation), each column
+    made in the dtype pandas would infer for it (text: ``_text_dtype``), so inferring it
+    from the values, per column and frame, is skipped."""
     by_id = {e.id: e for e in tests}
     tested = [by_id[row["test_experiment"]] for row in rows]
     n = len(rows)
     condition = job.condition
+
+    def text(values: list[str]) -> Any:
+        return pd.array(values, dtype=_text_dtype())
+
+    def floats(values: list[float]) -> np.ndarray:
+        return np.array(values, dtype=np.float64)
+
     columns: dict[str, Any] = {
-        "replica": [job.replica] * n,
-        "data": ["measured" if condition else NOISE_FREE] * n,
-        "noise": [condition.noise.name if condition else NOISE_FREE] * n,
-        "fault": [condition.fault_name if condition else "none"] * n,
-        "train_experiment": [train.id] * n,
+        "replica": np.full(n, job.replica, dtype=np.int64),
+        "data": text(["measured" if condition else NOISE_FREE] * n),
+        "noise": text([condition.noise.name if condition else NOISE_FREE] * n),
+        "fault": text([condition.fault_name if condition else "none"] * n),
+        "train_experiment": text([train.id] * n),
+        "method": text([row["method"] for row in rows]),
+        "k": pd.array([row["k"] for row in rows], dtype="Int64"),
+        "test_experiment": text([row["test_experiment"] for row in rows]),
+        "rmse_um": floats([row["rmse_um"] for row in rows]),
+        "rmse_true_um": floats([row["rmse_true_um"] for row in rows]),
+        "selected": text([row["selected"] for row in rows]),
+        "error": text([row["error"] for row in rows]),
+        "test_month": text([e.month for e in tested]),
+        "test_season": text([e.season for e in tested]),
+        "test_speed_rpm": floats([e.speed_rpm for e in tested]),
+        "test_programme": text([e.programme for e in tested]),
+        "test_cooling": text([e.cooling for e in tested]),
     }
-    columns.update({key: [row[key] for row in rows] for key in rows[0]})
-    columns["test_month"] = [e.month for e in tested]
-    columns["test_season"] = [e.season for e in tested]
-    columns["test_speed_rpm"] = [e.speed_rpm for e in tested]
-    columns["test_programme"] = [e.programme for e in tested]
-    columns["test_cooling"] = [e.cooling for e in tested]
-    columns["k"] = pd.array(columns["k"], dtype="Int64")  # made so: no column cast after
-    return pd.DataFrame(columns)
+    return pd.DataFrame(columns, copy=False)
+
+
+@functools.cache
+def _text_dtype() -> Any:
+    """The dtype pandas infers for a column of text (``str`` in pandas 3, object before)."""
+    return pd.Series(["text"]).dtype
