@@ -125,6 +125,26 @@ def test_rmse_each_is_rmse_of_each_pair_to_the_bit():
         rmse_each([np.ones(2), np.ones(2)], [np.ones(2)])
 
 
+
+def test_rmse_rows_is_rmse_of_each_row_to_the_bit():
+    """Runs stacked once (C-contiguous) score as rmse scores each run; any other stack
+    (another layout, dtype or shape) or a score that is not finite gives None, for the
+    caller's pair-by-pair way."""
+    from spindlebench.selection.regression import rmse_rows
+
+    rng = np.random.default_rng(5)
+    for n in (1, 8, 127, 129, 181, 4099):
+        ys = rng.normal(size=(23, n)) * 10.0 ** rng.uniform(-3, 3)
+        ps = rng.normal(size=(23, n)) * 50
+        assert rmse_rows(ys, ps) == [rmse(y, p) for y, p in zip(ys, ps, strict=True)]
+    ys, ps = rng.normal(size=(3, 9)), rng.normal(size=(3, 9))
+    assert rmse_rows(np.asfortranarray(ys), ps) is None
+    assert rmse_rows(ys, ps.astype(np.float32)) is None
+    assert rmse_rows(ys, ps[:, :8].copy()) is None
+    assert rmse_rows(np.empty((2, 0)), np.empty((2, 0))) is None
+    ys[1, 3] = np.nan
+    assert rmse_rows(ys, ps) is None
+
 def test_linear_fit_predict_each_is_predict_of_each():
     """The same product per input under one errstate: the same bits as predict."""
     from spindlebench.selection.regression import LinearFit

@@ -68,6 +68,7 @@ from spindlebench.selection.regression import (
     rises,
     rmse,
     rmse_each,
+    rmse_rows,
 )
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
@@ -865,17 +866,29 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     return out if np.isfinite(out).all() else None
 
 
-def _stacked_predictions(fit: LinearFit | EstimatorFit, shared: np.ndarray | None,
-                         values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-    """Every run's prediction in one product, where the runs' inputs are ``shared`` (stacked
-    in the order of ``values``) and the model is linear: each run's row is its own
-    product's bits (``LinearFit.predict_stacked``). None where a prediction is not finite
-    (or there is no stack): the runs are then predicted one by one, so the run that fails
-    raises its error in its turn."""
+def _stacked_test_values(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                         column: str) -> np.ndarray:
+    """Column ``column`` of every test recording stacked, (recordings, samples), for
+    recordings equally long: made once per training recording, tests and column, kept as
+    ``_stacked_candidates`` keeps its rises. Why: every model of a study scores its
+    predictions against the same measured values, which ``rmse_each`` stacked again for
+    each."""
+    recordings = tuple(tests.values())
+    return train.memo(("stacked test values", tuple(map(id, recordings)), column),
+                      lambda: (recordings, np.stack([r.values(column) for r in recordings])))[1]
+
+
+def _stacked_predictions(fit: LinearFit | EstimatorFit,
+                         shared: np.ndarray | None) -> np.ndarray | None:
+    """Every run's prediction in one product, (runs, samples), where the runs' inputs are
+    ``shared`` (stacked) and the model is linear: each run's row is its own product's bits
+    (``LinearFit.predict_stacked``). None where a prediction is not finite (or there is no
+    stack): the runs are then predicted one by one, so the run that fails raises its error
+    in its turn."""
     if not isinstance(fit, LinearFit) or shared is None:
         return None
     stacked = fit.predict_stacked(shared)
-    return dict(zip(values, stacked, strict=True)) if np.isfinite(stacked).all() else None
+    return stacked if np.isfinite(stacked).all() else None
 
 
 def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
@@ -883,11 +896,14 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
                  inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
                  fit: LinearFit | EstimatorFit,
                  batch: Callable[[], np.ndarray | None] | None = None,
+                 measured_stack: Callable[[], np.ndarray] | None = None,
                  ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, float],
                             dict[str, np.ndarray]]:
     """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
     test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
-    of every recording at once, stacked, or None, asked only when no sample is dropped).
+    of every recording at once, stacked, or None, asked only when no sample is dropped;
+    ``measured_stack()``: the measured values of every recording stacked, asked only when
+    ``batch()`` gave a stack).
 
     Why in three passes (inputs of every run, then every prediction, then every RMSE in one
     reduction, ``rmse_each``) rather than run by run: a study scores each of its many
@@ -915,8 +931,9 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
         except Exception as exc:  # raised once the runs before it are scored
             failure = _named(exc, name)
             break
-    stacked = _stacked_predictions(fit, shared, values) if failure is None else None
-    predictions: dict[str, np.ndarray] = {} if stacked is None else stacked
+    stacked = _stacked_predictions(fit, shared) if failure is None else None
+    predictions: dict[str, np.ndarray] = {} if stacked is None else \
+        dict(zip(values, stacked, strict=True))
     scored: list[str] = [] if stacked is None else list(values)
     if stacked is None:  # run by run: the first that fails raises, after those before it
         if isinstance(fit, LinearFit):
@@ -932,8 +949,12 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
                 failure = _named(exc, name)
                 break
             scored.append(name)
+    # every run whole and predicted in one product: its RMSE on the measured values stacked
+    found = None if stacked is None or measured_stack is None else \
+        rmse_rows(measured_stack(), stacked)
     try:
-        found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
+        if found is None:
+            found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
     except SelectionError:  # the first run that fails, named
         for name in scored:
             with _naming(name):
@@ -1039,8 +1060,11 @@ def evaluate_checked(
         return None if dynamic else _stacked_candidates(train, tests, candidates,
                                                         tuple(selection.selected))
 
+    def measured_stack() -> np.ndarray:
+        return _stacked_test_values(train, tests, target)
+
     predictions, measured, errors, test_rows = _score_tests(tests, target, missing, used,
-                                                            inputs, fit, batch)
+                                                            inputs, fit, batch, measured_stack)
     return Evaluation(
         train=train_name,
         target=target,

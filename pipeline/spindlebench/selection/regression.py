@@ -163,18 +163,32 @@ def rmse_each(ys: Sequence[np.ndarray], predictions: Sequence[np.ndarray]) -> li
     errors are its own, in its order."""
     if len(ys) != len(predictions):
         raise SelectionError(f"rmse_each: {len(ys)} measured but {len(predictions)} predicted")
-    stacked = _stacked(ys), _stacked(predictions)
-    if stacked[0] is not None and stacked[1] is not None \
-            and stacked[0].shape == stacked[1].shape and stacked[0].shape[1]:
-        with np.errstate(over="ignore", invalid="ignore"):
-            residuals = stacked[0] - stacked[1]
-            values = np.sqrt(np.add.reduce(residuals * residuals, axis=1) / residuals.shape[1])
-        if np.isfinite(values).all():
-            return values.tolist()
+    stacked = stacked_rows(ys), stacked_rows(predictions)
+    if stacked[0] is not None and stacked[1] is not None:
+        values = rmse_rows(stacked[0], stacked[1])
+        if values is not None:
+            return values
     return [rmse(y, p) for y, p in zip(ys, predictions, strict=True)]
 
 
-def _stacked(arrays: Sequence[np.ndarray]) -> np.ndarray | None:
+def rmse_rows(ys: np.ndarray, predictions: np.ndarray) -> list[float] | None:
+    """``rmse_each(list(ys), list(predictions))`` of two runs-by-samples arrays stacked
+    already (C-contiguous float64 of one shape), to the last bit: the same reduction on
+    the same layout. Why: a study scores each of its many models on the same held-out
+    runs, whose measured and true values are stacked once for all of them instead of once
+    per score. None for other arrays, or a result that is not finite (``rmse_each`` then
+    scores pair by pair, with ``rmse``'s errors)."""
+    if ys.ndim != 2 or ys.shape != predictions.shape or not ys.shape[1] \
+            or ys.dtype != np.float64 or predictions.dtype != np.float64 \
+            or not (ys.flags.c_contiguous and predictions.flags.c_contiguous):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        residuals = ys - predictions
+        values = np.sqrt(np.add.reduce(residuals * residuals, axis=1) / residuals.shape[1])
+    return values.tolist() if np.isfinite(values).all() else None
+
+
+def stacked_rows(arrays: Sequence[np.ndarray]) -> np.ndarray | None:
     """Equally long 1-D float64 arrays as the rows of one array; None for anything else
     (no arrays, other shapes or types: ``rmse`` converts those its own way)."""
     if not arrays or not all(type(a) is np.ndarray for a in arrays):
