@@ -90,6 +90,32 @@ def test_factored_cv_gives_the_full_svds_penalty(monkeypatch):
     assert calls == [5, 4]
 
 
+
+def test_factored_cv_folds_and_constant_candidates():
+    """The factored errors use KFold's blocks, and candidates constant in the data (a dead
+    sensor's zero rises, the difference of two identical sensors, one constant in a fold's
+    training part only) keep scale 1 as the full SVDs give them: the same errors to
+    rounding, the same penalty."""
+    from sklearn.model_selection import KFold
+    from spindlebench.selection import regressors
+    from spindlebench.selection.differences import with_differences_matrix
+
+    for n, k in ((181, 5), (10, 3), (7, 7), (12, 5)):
+        blocks = [len(valid) for _, valid in KFold(k).split(np.zeros(n))]
+        assert regressors.fold_sizes(n, k).tolist() == blocks
+    for seed in range(4):
+        rises, _, y = _low_rank_candidates(seed)
+        rises[:, 1] = 0.0  # a dead sensor
+        rises[:, 3] = rises[:, 2]  # two identical ones
+        rises[: len(rises) * 3 // 5, 4] = 0.0  # flat until the fourth fold
+        factors = (rises, with_differences_matrix(6))
+        X = rises @ factors[1]
+        full = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5)
+        factored = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5, factors)
+        assert np.allclose(full, factored, rtol=1e-9, atol=0)
+        assert regressors.blocked_cv_alpha(X, y, factors=factors) == \
+            regressors.blocked_cv_alpha(X, y)
+
 def test_rmse_is_the_textbook_formula_to_the_bit():
     """rmse sums the squares without np.mean's wrapper: the same bits as np.mean, also
     around the blocks of numpy's pairwise summation (8, 128 elements)."""
