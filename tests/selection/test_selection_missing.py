@@ -364,3 +364,28 @@ def test_stacked_candidates_are_each_recordings_matrix_to_the_bit_and_layout():
     assert _stacked_candidates(train, {**tests, "short": recording("short", 30)}, candidates,
                                (0, 1)) is None
     assert _stacked_candidates(train, tests, candidates, tuple(range(9))) is None
+
+
+def test_checked_recording_values_and_problems_whatever_the_column_dtypes():
+    """A frame whose columns pandas gives as one float64 block (float64 beside ints and
+    float32) is read from that block: the values of ``frame[column].to_numpy(float)`` and
+    the problems found column by column; text and booleans keep their own messages."""
+    from spindlebench.selection.evaluate import CheckedRecording, _column_problem
+
+    rng = np.random.default_rng(8)
+    frame = pd.DataFrame({"A": rng.normal(size=6), "B": np.arange(6),
+                          "C": rng.normal(size=6).astype(np.float32)})
+    frame.loc[2, "A"], frame.loc[4, "C"] = np.inf, np.nan
+    mixed = frame.assign(D=["x"] * 6, E=[True] * 6)
+    for table in (frame, mixed):
+        recording = CheckedRecording("run", table)
+        for column in table.columns:
+            for missing in ("error", "drop-rows"):
+                assert recording.problem(column, missing) == \
+                    _column_problem(table, column, missing)
+            if column in "ABC":
+                assert recording.values(column).dtype == np.float64
+                assert np.array_equal(recording.values(column),
+                                      table[column].to_numpy(dtype=float), equal_nan=True)
+    assert CheckedRecording("run", frame)._float_block() is not None
+    assert CheckedRecording("run", mixed)._float_block() is None

@@ -166,16 +166,23 @@ class CheckedRecording:
         return self._values[column]
 
     def _float_block(self) -> np.ndarray | None:
-        """All columns as one float64 array when every column is float64 and named once
-        (a frame's own columns are then views of it; one conversion instead of one lookup
-        per column)."""
+        """All columns as one float64 array when pandas gives them so in common and each
+        is named once (a float64 frame's own columns are then views of it; one conversion
+        instead of one lookup per column).
+
+        Asked of ``to_numpy``'s dtype, not of ``frame.dtypes`` (a Series pandas builds per
+        call: most of the conversion's time, once per recording of every evaluation): it
+        is float64 for float64 columns, and for ints or narrower floats beside them, whose
+        values it converts as ``frame[column].to_numpy(dtype=float)`` converts each (and
+        which hold no NaN or infinity, so ``problem`` finds the same on either); text,
+        booleans and nullable columns give another dtype."""
         if self._block is None and not self._positions:
             frame = self.frame
             if isinstance(frame, RecordingTable):
                 self._block = frame.values
                 self._positions = {column: i for i, column in enumerate(frame.columns)}
-            elif frame.columns.is_unique and all(dtype == np.float64 for dtype in frame.dtypes):
-                self._block = frame.to_numpy(dtype=float)
+            elif frame.columns.is_unique and (block := frame.to_numpy()).dtype == np.float64:
+                self._block = block
                 self._positions = {column: i for i, column in enumerate(frame.columns)}
             else:
                 self._positions = {"": -1}  # looked: not one float block
