@@ -389,3 +389,30 @@ def test_checked_recording_values_and_problems_whatever_the_column_dtypes():
                                       table[column].to_numpy(dtype=float), equal_nan=True)
     assert CheckedRecording("run", frame)._float_block() is not None
     assert CheckedRecording("run", mixed)._float_block() is None
+
+
+def test_checks_kept_per_recording_raise_again_in_order():
+    """evaluate_checked keeps that its recordings passed their checks (and that the target
+    varies): a recording that fails a check, or a constant target, raises the same error at
+    every call, and the recordings' order decides which one is named."""
+    from spindlebench.selection.evaluate import evaluate_checked, load_recordings
+
+    rng = np.random.default_rng(11)
+
+    def run() -> pd.DataFrame:
+        frame = pd.DataFrame(rng.normal(size=(30, 3)).cumsum(axis=0), columns=["A", "B", "C"])
+        frame["drift_um"] = frame["A"] * 2 + rng.normal(size=30) * 0.1
+        return frame
+
+    train, good, bad, worse = run(), run(), run(), run()
+    bad.loc[5, "B"], worse.loc[3, "A"] = np.inf, np.inf
+    recordings = load_recordings(train, {"good": good, "bad": bad, "worse": worse})
+    for _ in range(2):
+        with pytest.raises(SelectionError, match=r"^recording bad, row 5, column 'B'"):
+            evaluate_checked(*recordings, "drift_um", k=2)
+    assert evaluate_checked(recordings[0], {"good": recordings[1]["good"]}, "drift_um",
+                            k=2).rmse_um.keys() == {"good"}
+    flat = load_recordings(train.assign(drift_um=1.5), {"good": good})
+    for _ in range(2):
+        with pytest.raises(SelectionError, match="target column 'drift_um' is constant"):
+            evaluate_checked(*flat, "drift_um", k=2)

@@ -873,6 +873,24 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     return out if np.isfinite(out).all() else None
 
 
+def _check_recordings(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                      checked: tuple[str, ...], missing: str) -> None:
+    """``_check_values`` of every recording, training first, each check made once per
+    recording (one that passed is not repeated; one that failed raises again, in this
+    order); that all of them passed is kept by the training recording, as the resolved
+    sensors are (a study asks it again of the same 24 recordings for each of its models)."""
+    recordings = tuple(tests.values())
+    check = ("checked", checked, missing)
+
+    def check_each() -> tuple[CheckedRecording, ...]:
+        for recording in (train, *recordings):
+            recording.memo(check, lambda recording=recording: _check_values(
+                recording, checked, missing))
+        return recordings
+
+    train.memo(("checked tests", tuple(map(id, recordings)), checked, missing), check_each)
+
+
 def _stacked_test_values(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
                          column: str) -> np.ndarray:
     """Column ``column`` of every test recording stacked, (recordings, samples), for
@@ -1005,11 +1023,7 @@ def evaluate_checked(
         for recording in [train, *tests.values()]:
             check_drivers(choice.regressor, recording.name, recording.columns)
         checked += [c for c in driver_columns(choice.regressor) if c not in checked]
-    check = ("checked", tuple(checked), missing)
-    for recording in [train, *tests.values()]:
-        # a check that passed is not repeated; one that failed raises again, in this order
-        recording.memo(check,
-                       lambda recording=recording: _check_values(recording, checked, missing))
+    _check_recordings(train, tests, tuple(checked), missing)
 
     train_rows = np.arange(len(train))
     train_frame = train
@@ -1022,7 +1036,8 @@ def evaluate_checked(
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
     y_train = train_frame.values(target)
-    if constant_columns(y_train[:, None])[0]:
+    if train_frame.memo(("constant target", target),
+                        lambda: bool(constant_columns(y_train[:, None])[0])):
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
     with _naming(train_name):
