@@ -945,7 +945,16 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
     whole = missing != "drop-rows" or all(recording.complete(columns)
                                           for recording in tests.values())
     shared = batch() if batch is not None and whole else None
+    if shared is not None:  # whole runs, inputs stacked: each run's part of the loop below
+        try:
+            test_rows = {name: np.arange(len(recording)) for name, recording in tests.items()}
+            measured = {name: recording.values(target) for name, recording in tests.items()}
+            values = dict(zip(tests, shared, strict=True))
+        except Exception:  # the loop raises it, for the run it fails on
+            test_rows, measured, values = {}, {}, {}
     for i, (name, recording) in enumerate(tests.items()):
+        if name in values:
+            continue
         try:
             rows = np.arange(len(recording)) if whole else _complete_rows(recording, used)
             test_rows[name] = rows
