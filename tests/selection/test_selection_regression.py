@@ -198,3 +198,20 @@ def test_linear_fit_predict_stacked_is_predict_of_each_run_to_the_bit():
             stacked = fit.predict_stacked(runs)
             for row, each in zip(stacked, fit.predict_each(list(runs)), strict=True):
                 assert np.array_equal(row, each)
+
+
+def test_fit_ols_is_the_centred_lstsq_to_the_bit():
+    """fit_ols' means without np.mean's wrapper and its R^2 from the fit's own mean: the
+    intercept, coefficients and R^2 of the textbook steps (np.mean, lstsq, r2_score)."""
+    rng = np.random.default_rng(13)
+    for n, p in ((181, 3), (181, 20), (7, 2), (129, 1), (4099, 5)):
+        for _ in range(10):
+            X = np.asfortranarray(rng.normal(size=(n, p)) * 10 ** rng.uniform(-3, 3))
+            y = rng.normal(size=n) * 10 ** rng.uniform(-2, 2)
+            fit = fit_ols(X, y)
+            x_mean, y_mean = X.mean(axis=0), y.mean()
+            coefficients = np.linalg.lstsq(X - x_mean, y - y_mean, rcond=None)[0]
+            intercept = float(y_mean - x_mean @ coefficients)
+            assert fit.intercept == intercept
+            assert np.array_equal(fit.coefficients, coefficients)
+            assert fit.r2 == r2_score(y, intercept + X @ coefficients)

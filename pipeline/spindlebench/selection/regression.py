@@ -128,10 +128,17 @@ def r2_score(y: np.ndarray, predicted: np.ndarray) -> float:
     where the inputs hold NaN)."""
     y, predicted = _paired(y, predicted, "r2_score")
     with np.errstate(over="ignore", invalid="ignore"):
-        residual = y - predicted
-        total = y - y.mean()
-        ss_res, ss_tot = residual @ residual, total @ total
-    finite_input = np.isfinite(y).all() and np.isfinite(predicted).all()
+        return _r2(y, predicted, y.mean(), bool(np.isfinite(y).all()
+                                                and np.isfinite(predicted).all()))
+
+
+def _r2(y: np.ndarray, predicted: np.ndarray, y_mean: float, finite_input: bool) -> float:
+    """``r2_score`` of equally long 1-D float64 arrays, ``y_mean`` being ``y.mean()`` and
+    ``finite_input`` whether both are finite (a fit knows both already), under the
+    caller's ``errstate``."""
+    residual = y - predicted
+    total = y - y_mean
+    ss_res, ss_tot = residual @ residual, total @ total
     if finite_input and not (np.isfinite(ss_res) and np.isfinite(ss_tot)):
         raise SelectionOverflowError("values too large for R2 (overflow in the sums of squares)")
     if ss_tot == 0:
@@ -275,11 +282,13 @@ def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) ->
             f"{X.shape[0]} (with fewer, any data fit exactly)"
         )
     check_names(names, X.shape[1])
-    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
+    if not (np.isfinite(X).all() and np.isfinite(y).all()):
         raise SelectionError("regression inputs must be finite (no NaN or inf)")
     with np.errstate(over="ignore", invalid="ignore"):
-        x_mean = X.mean(axis=0)
-        y_mean = y.mean()
+        # X.mean(axis=0) and y.mean(): the same sums and divisions (as ``rmse``), without
+        # np.mean's Python wrapper (a sweep fits 18 models per training run)
+        x_mean = np.add.reduce(X, axis=0) / X.shape[0]
+        y_mean = np.add.reduce(y) / y.shape[0]
         centred = X - x_mean
         try:
             coefficients, _, rank, _ = np.linalg.lstsq(centred, y - y_mean, rcond=None)
@@ -289,12 +298,14 @@ def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) ->
             ) from exc
         intercept = float(y_mean - x_mean @ coefficients)
         fitted = intercept + X @ coefficients
-    if not (np.isfinite(intercept) and np.all(np.isfinite(coefficients))
-            and np.all(np.isfinite(fitted))):
+    if not (np.isfinite(intercept) and np.isfinite(coefficients).all()
+            and np.isfinite(fitted).all()):
         raise SelectionOverflowError("values too large to fit (overflow)")
     if rank < X.shape[1]:
         _warn_collinear(centred, int(rank), names)
-    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2_score(y, fitted))
+    with np.errstate(over="ignore", invalid="ignore"):  # r2_score(y, fitted): both finite
+        r2 = _r2(y, fitted, y_mean, True)
+    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2)
 
 
 def _warn_collinear(centred: np.ndarray, rank: int, names: Sequence[str] | None) -> None:
