@@ -246,6 +246,14 @@ class EvaluationData:
         rows = [position[name] for name in self.tests]
         return np.swapaxes(rises_T[np.ix_(rows, np.asarray(columns, dtype=np.intp))], 1, 2)
 
+    def target(self, name: str | None = None) -> np.ndarray:
+        """The measured drift of test run ``name`` (None: the training run) as float
+        (shared: do not modify): ``frame[TARGET].to_numpy(float)``, the same view of the
+        frame's float block, kept by its checked recording instead of asked of pandas again
+        by every baseline."""
+        recording = self.checked_train if name is None else self.checked_tests[str(name)]
+        return recording.values(TARGET)
+
     def column(self, name: str, column: str) -> np.ndarray:
         """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
         return self.checked_tests[str(name)].values(column)
@@ -351,7 +359,7 @@ def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dic
 
 def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
     X = data.raw_rises()
-    y = data.train[TARGET].to_numpy(float)
+    y = data.target()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         ranking = data.checked_train.memo("top-k ranking", lambda: _top_k_ranking(X, y))
@@ -391,7 +399,7 @@ def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
 
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
-    X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
+    X, y = data.raw_rises(), data.target()
     # finite rises: PairwiseDifferences().fit(X).transform(X) without its checks
     candidates = ridge_candidates(X) if np.isfinite(X).all() else \
         PairwiseDifferences().fit(X).transform(X)
@@ -492,8 +500,7 @@ def _oracle(data: EvaluationData) -> dict[str, Score]:
     def prediction(name: str) -> Callable[[], np.ndarray]:
         def fit() -> np.ndarray:
             X = data.raw_rises(name)
-            return fit_regressor(DEFAULT_REGRESSOR, X,
-                                 data.tests[name][TARGET].to_numpy(float)).predict(X)
+            return fit_regressor(DEFAULT_REGRESSOR, X, data.target(name)).predict(X)
         return fit
 
     predictions = {name: data.runs.memo(ORACLE, name, prediction(name)) for name in data.tests}
