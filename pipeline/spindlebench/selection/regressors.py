@@ -43,6 +43,8 @@ RIDGE_ALPHAS = np.logspace(-4, 4, 17)
 #: decided by the full SVDs. Measured on 336 training runs of the season sweep (every run of
 #: 2 replicas x 7 conditions): the two ways' errors differ by at most 4.4e-11 of the error
 #: (median 2e-14), the closest race was 3.1e-8 (1 % of the races are closer than 1e-7).
+#: The folds stacked (``_factored_fold_errors``), on the 280 training runs of a 10-replica
+#: sweep's jobs: at most 6.6e-11, no race within the margin, the full SVDs' penalty on all.
 FACTORED_MARGIN = 1e-8
 #: The factored cross-validation takes a candidate's deviation from the data, not from the
 #: factors, below this fraction of its fold's largest deviation (``_factored_fold_errors``).
