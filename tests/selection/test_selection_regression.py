@@ -215,3 +215,21 @@ def test_fit_ols_is_the_centred_lstsq_to_the_bit():
             assert fit.intercept == intercept
             assert np.array_equal(fit.coefficients, coefficients)
             assert fit.r2 == r2_score(y, intercept + X @ coefficients)
+
+
+def test_stacked_rows_is_np_stack_of_equally_long_runs():
+    """Equally long 1-D float64 runs (float32 ones converted as np.stack converts them)
+    stack as np.stack stacks them, C-contiguous; anything else is None."""
+    from spindlebench.selection.regression import stacked_rows
+
+    rng = np.random.default_rng(14)
+    runs = [rng.normal(size=181) for _ in range(23)]
+    strided = [np.asfortranarray(rng.normal(size=(181, 3)))[:, 1] for _ in range(3)]
+    for arrays in (runs, strided, [runs[0], runs[1].astype(np.float32)]):
+        stacked = stacked_rows(arrays)
+        assert stacked.flags.c_contiguous and stacked.tobytes() == np.stack(arrays).tobytes()
+    assert stacked_rows([]) is None
+    assert stacked_rows([runs[0], runs[1][:-1]]) is None
+    assert stacked_rows([runs[0][:, None], runs[1][:, None]]) is None
+    assert stacked_rows([runs[0], list(runs[1])]) is None
+    assert stacked_rows([np.arange(3), np.arange(3)]) is None
