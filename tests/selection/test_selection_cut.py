@@ -91,20 +91,26 @@ def test_linkage_gives_the_same_clusters_as_the_cut():
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_forest_components_are_scipys_connected_components(seed):
+@pytest.mark.parametrize("n", [21, 300])
+def test_forest_components_are_scipys_connected_components(seed, n, monkeypatch):
     """The cut's own component search (pointer jumping on the tree) against SciPy's graph
-    search, on random spanning trees with random edges removed: same partition, same order."""
+    search, on random spanning trees with random edges removed: same partition, same order,
+    by the one-pass grouping of a few vertices and by sorting."""
     from scipy.sparse import coo_array
     from scipy.sparse.csgraph import connected_components
+    from spindlebench.selection import cut
     from spindlebench.selection.cut import _components
 
     rng = np.random.default_rng(seed)
-    n = 300
     order = rng.permutation(n)
     child = order[1:]
     parent = np.array([order[rng.integers(0, i)] for i in range(1, n)])
-    keep = rng.random(n - 1) < 0.9
+    keep = rng.random(n - 1) < 0.75
     ours = _components(n, child[keep], parent[keep])
+    monkeypatch.setattr(cut, "FEW_VERTICES", 0)
+    sorted_way = _components(n, child[keep], parent[keep])
+    assert [c.tolist() for c in ours] == [c.tolist() for c in sorted_way]
+    assert all(c.dtype == np.intp for c in ours + sorted_way)
     graph = coo_array((np.ones(keep.sum()), (child[keep], parent[keep])), shape=(n, n))
     count, labels = connected_components(graph, directed=False)
     first = [np.flatnonzero(labels == label)[0] for label in range(count)]

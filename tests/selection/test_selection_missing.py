@@ -364,3 +364,55 @@ def test_stacked_candidates_are_each_recordings_matrix_to_the_bit_and_layout():
     assert _stacked_candidates(train, {**tests, "short": recording("short", 30)}, candidates,
                                (0, 1)) is None
     assert _stacked_candidates(train, tests, candidates, tuple(range(9))) is None
+
+
+def test_checked_recording_values_and_problems_whatever_the_column_dtypes():
+    """A frame whose columns pandas gives as one float64 block (float64 beside ints and
+    float32) is read from that block: the values of ``frame[column].to_numpy(float)`` and
+    the problems found column by column; text and booleans keep their own messages."""
+    from spindlebench.selection.evaluate import CheckedRecording, _column_problem
+
+    rng = np.random.default_rng(8)
+    frame = pd.DataFrame({"A": rng.normal(size=6), "B": np.arange(6),
+                          "C": rng.normal(size=6).astype(np.float32)})
+    frame.loc[2, "A"], frame.loc[4, "C"] = np.inf, np.nan
+    mixed = frame.assign(D=["x"] * 6, E=[True] * 6)
+    for table in (frame, mixed):
+        recording = CheckedRecording("run", table)
+        for column in table.columns:
+            for missing in ("error", "drop-rows"):
+                assert recording.problem(column, missing) == \
+                    _column_problem(table, column, missing)
+            if column in "ABC":
+                assert recording.values(column).dtype == np.float64
+                assert np.array_equal(recording.values(column),
+                                      table[column].to_numpy(dtype=float), equal_nan=True)
+    assert CheckedRecording("run", frame)._float_block() is not None
+    assert CheckedRecording("run", mixed)._float_block() is None
+
+
+def test_checks_kept_per_recording_raise_again_in_order():
+    """evaluate_checked keeps that its recordings passed their checks (and that the target
+    varies): a recording that fails a check, or a constant target, raises the same error at
+    every call, and the recordings' order decides which one is named."""
+    from spindlebench.selection.evaluate import evaluate_checked, load_recordings
+
+    rng = np.random.default_rng(11)
+
+    def run() -> pd.DataFrame:
+        frame = pd.DataFrame(rng.normal(size=(30, 3)).cumsum(axis=0), columns=["A", "B", "C"])
+        frame["drift_um"] = frame["A"] * 2 + rng.normal(size=30) * 0.1
+        return frame
+
+    train, good, bad, worse = run(), run(), run(), run()
+    bad.loc[5, "B"], worse.loc[3, "A"] = np.inf, np.inf
+    recordings = load_recordings(train, {"good": good, "bad": bad, "worse": worse})
+    for _ in range(2):
+        with pytest.raises(SelectionError, match=r"^recording bad, row 5, column 'B'"):
+            evaluate_checked(*recordings, "drift_um", k=2)
+    assert evaluate_checked(recordings[0], {"good": recordings[1]["good"]}, "drift_um",
+                            k=2).rmse_um.keys() == {"good"}
+    flat = load_recordings(train.assign(drift_um=1.5), {"good": good})
+    for _ in range(2):
+        with pytest.raises(SelectionError, match="target column 'drift_um' is constant"):
+            evaluate_checked(*flat, "drift_um", k=2)

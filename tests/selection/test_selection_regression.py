@@ -90,6 +90,32 @@ def test_factored_cv_gives_the_full_svds_penalty(monkeypatch):
     assert calls == [5, 4]
 
 
+
+def test_factored_cv_folds_and_constant_candidates():
+    """The factored errors use KFold's blocks, and candidates constant in the data (a dead
+    sensor's zero rises, the difference of two identical sensors, one constant in a fold's
+    training part only) keep scale 1 as the full SVDs give them: the same errors to
+    rounding, the same penalty."""
+    from sklearn.model_selection import KFold
+    from spindlebench.selection import regressors
+    from spindlebench.selection.differences import with_differences_matrix
+
+    for n, k in ((181, 5), (10, 3), (7, 7), (12, 5)):
+        blocks = [len(valid) for _, valid in KFold(k).split(np.zeros(n))]
+        assert regressors.fold_sizes(n, k).tolist() == blocks
+    for seed in range(4):
+        rises, _, y = _low_rank_candidates(seed)
+        rises[:, 1] = 0.0  # a dead sensor
+        rises[:, 3] = rises[:, 2]  # two identical ones
+        rises[: len(rises) * 3 // 5, 4] = 0.0  # flat until the fourth fold
+        factors = (rises, with_differences_matrix(6))
+        X = rises @ factors[1]
+        full = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5)
+        factored = regressors._fold_errors(X, y, regressors.RIDGE_ALPHAS, 5, factors)
+        assert np.allclose(full, factored, rtol=1e-9, atol=0)
+        assert regressors.blocked_cv_alpha(X, y, factors=factors) == \
+            regressors.blocked_cv_alpha(X, y)
+
 def test_rmse_is_the_textbook_formula_to_the_bit():
     """rmse sums the squares without np.mean's wrapper: the same bits as np.mean, also
     around the blocks of numpy's pairwise summation (8, 128 elements)."""
@@ -125,6 +151,26 @@ def test_rmse_each_is_rmse_of_each_pair_to_the_bit():
         rmse_each([np.ones(2), np.ones(2)], [np.ones(2)])
 
 
+
+def test_rmse_rows_is_rmse_of_each_row_to_the_bit():
+    """Runs stacked once (C-contiguous) score as rmse scores each run; any other stack
+    (another layout, dtype or shape) or a score that is not finite gives None, for the
+    caller's pair-by-pair way."""
+    from spindlebench.selection.regression import rmse_rows
+
+    rng = np.random.default_rng(5)
+    for n in (1, 8, 127, 129, 181, 4099):
+        ys = rng.normal(size=(23, n)) * 10.0 ** rng.uniform(-3, 3)
+        ps = rng.normal(size=(23, n)) * 50
+        assert rmse_rows(ys, ps) == [rmse(y, p) for y, p in zip(ys, ps, strict=True)]
+    ys, ps = rng.normal(size=(3, 9)), rng.normal(size=(3, 9))
+    assert rmse_rows(np.asfortranarray(ys), ps) is None
+    assert rmse_rows(ys, ps.astype(np.float32)) is None
+    assert rmse_rows(ys, ps[:, :8].copy()) is None
+    assert rmse_rows(np.empty((2, 0)), np.empty((2, 0))) is None
+    ys[1, 3] = np.nan
+    assert rmse_rows(ys, ps) is None
+
 def test_linear_fit_predict_each_is_predict_of_each():
     """The same product per input under one errstate: the same bits as predict."""
     from spindlebench.selection.regression import LinearFit
@@ -152,3 +198,38 @@ def test_linear_fit_predict_stacked_is_predict_of_each_run_to_the_bit():
             stacked = fit.predict_stacked(runs)
             for row, each in zip(stacked, fit.predict_each(list(runs)), strict=True):
                 assert np.array_equal(row, each)
+
+
+def test_fit_ols_is_the_centred_lstsq_to_the_bit():
+    """fit_ols' means without np.mean's wrapper and its R^2 from the fit's own mean: the
+    intercept, coefficients and R^2 of the textbook steps (np.mean, lstsq, r2_score)."""
+    rng = np.random.default_rng(13)
+    for n, p in ((181, 3), (181, 20), (7, 2), (129, 1), (4099, 5)):
+        for _ in range(10):
+            X = np.asfortranarray(rng.normal(size=(n, p)) * 10 ** rng.uniform(-3, 3))
+            y = rng.normal(size=n) * 10 ** rng.uniform(-2, 2)
+            fit = fit_ols(X, y)
+            x_mean, y_mean = X.mean(axis=0), y.mean()
+            coefficients = np.linalg.lstsq(X - x_mean, y - y_mean, rcond=None)[0]
+            intercept = float(y_mean - x_mean @ coefficients)
+            assert fit.intercept == intercept
+            assert np.array_equal(fit.coefficients, coefficients)
+            assert fit.r2 == r2_score(y, intercept + X @ coefficients)
+
+
+def test_stacked_rows_is_np_stack_of_equally_long_runs():
+    """Equally long 1-D float64 runs (float32 ones converted as np.stack converts them)
+    stack as np.stack stacks them, C-contiguous; anything else is None."""
+    from spindlebench.selection.regression import stacked_rows
+
+    rng = np.random.default_rng(14)
+    runs = [rng.normal(size=181) for _ in range(23)]
+    strided = [np.asfortranarray(rng.normal(size=(181, 3)))[:, 1] for _ in range(3)]
+    for arrays in (runs, strided, [runs[0], runs[1].astype(np.float32)]):
+        stacked = stacked_rows(arrays)
+        assert stacked.flags.c_contiguous and stacked.tobytes() == np.stack(arrays).tobytes()
+    assert stacked_rows([]) is None
+    assert stacked_rows([runs[0], runs[1][:-1]]) is None
+    assert stacked_rows([runs[0][:, None], runs[1][:, None]]) is None
+    assert stacked_rows([runs[0], list(runs[1])]) is None
+    assert stacked_rows([np.arange(3), np.arange(3)]) is None

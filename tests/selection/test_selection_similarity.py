@@ -81,3 +81,24 @@ def test_the_median_of_constant_columns_is_numpys_to_the_bit():
             got = _median(values)
             assert np.float64(got).tobytes() == np.float64(expected).tobytes() or \
                 (np.isnan(got) and np.isnan(expected)), (values, got, expected)
+
+
+def test_similarity_shares_its_standardised_columns_with_the_correlation():
+    """similarity_and_standardized gives similarity_matrix's R and standardized's columns,
+    and the correlation from those columns is correlation_with's, to the bit (both
+    readings of eq. 1)."""
+    from spindlebench.selection.similarity import (
+        correlation_with,
+        similarity_and_standardized,
+        similarity_matrix,
+        standardized,
+    )
+
+    rng = np.random.default_rng(12)
+    X = rng.normal(size=(181, 21)).cumsum(axis=0) * 0.3 + 25.0
+    y = X[:, 2] * 1.5 - X[:, 7] + rng.normal(size=181)
+    for method in ("abs-pearson", "literal"):
+        R, Z = similarity_and_standardized(X, method)
+        assert np.array_equal(R, similarity_matrix(X, method))
+        assert np.array_equal(Z, standardized(X))
+        assert np.array_equal(correlation_with(X, y, standardized_X=Z), correlation_with(X, y))

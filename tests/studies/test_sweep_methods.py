@@ -197,13 +197,20 @@ def test_ridge_candidates_are_the_transformers_to_the_bit_and_layout():
     values and the same memory layout as ``PairwiseDifferences().fit(X).transform(X)`` (its
     products round by layout), for the column-major rises the sweep makes and others."""
     from spindlebench.selection import PairwiseDifferences
+    from spindlebench.selection.differences import pairwise_differences
     from spindlebench.studies.family.methods import ridge_candidates
 
     rng = np.random.default_rng(7)
     raw = rng.normal(size=(181, 20)) * 5
-    for X in (np.asfortranarray(raw - raw[0]), raw - raw[0], raw[:, :6]):
-        made, transformed = ridge_candidates(X), PairwiseDifferences().fit(X).transform(X)
-        assert np.array_equal(made, transformed)
+    infinite = np.asfortranarray(raw[:, :5])
+    infinite[3, 1], infinite[4, 2] = np.inf, -np.inf
+    for X in (np.asfortranarray(raw - raw[0]), raw - raw[0], raw[:, :6],
+              np.asfortranarray(raw[:, :2]), np.asfortranarray(raw[:, :1]), infinite):
+        made = ridge_candidates(X)
+        transformed = np.hstack([X, pairwise_differences(X)]) if X is infinite else \
+            PairwiseDifferences().fit(X).transform(X)
+        assert np.array_equal(made, transformed, equal_nan=True)
+        assert made.tobytes("A") == transformed.tobytes("A")
         assert made.flags.c_contiguous == transformed.flags.c_contiguous
         assert made.flags.f_contiguous == transformed.flags.f_contiguous
 

@@ -41,6 +41,12 @@ class Cut:
         return labels
 
 
+#: ``_components`` groups at most this many vertices by their roots in one Python pass
+#: (the sweep's cuts have 6 to 21 candidates, where NumPy's unique, sorts and split took
+#: most of a cut's time); more by sorting.
+FEW_VERTICES = 256
+
+
 def _components(n: int, child: np.ndarray, parent: np.ndarray) -> list[np.ndarray]:
     """Connected components of a forest cut from a spanning tree (edges child -> parent),
     ordered by first member.
@@ -56,6 +62,11 @@ def _components(n: int, child: np.ndarray, parent: np.ndarray) -> list[np.ndarra
         if np.array_equal(jumped, root):
             break
         root = jumped
+    if n <= FEW_VERTICES:  # one pass in vertex order: each cluster opens at its first member
+        clusters: dict[int, list[int]] = {}
+        for vertex, vertex_root in enumerate(root.tolist()):
+            clusters.setdefault(vertex_root, []).append(vertex)
+        return [np.array(members, dtype=np.intp) for members in clusters.values()]
     _, first_member, labels = np.unique(root, return_index=True, return_inverse=True)
     ranked = np.argsort(first_member, kind="stable")  # clusters by their first member
     rank = np.empty_like(ranked)

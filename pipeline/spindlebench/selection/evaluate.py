@@ -68,6 +68,7 @@ from spindlebench.selection.regression import (
     rises,
     rmse,
     rmse_each,
+    rmse_rows,
 )
 from spindlebench.selection.select import Selection
 from spindlebench.selection.similarity import constant_columns
@@ -165,16 +166,23 @@ class CheckedRecording:
         return self._values[column]
 
     def _float_block(self) -> np.ndarray | None:
-        """All columns as one float64 array when every column is float64 and named once
-        (a frame's own columns are then views of it; one conversion instead of one lookup
-        per column)."""
+        """All columns as one float64 array when pandas gives them so in common and each
+        is named once (a float64 frame's own columns are then views of it; one conversion
+        instead of one lookup per column).
+
+        Asked of ``to_numpy``'s dtype, not of ``frame.dtypes`` (a Series pandas builds per
+        call: most of the conversion's time, once per recording of every evaluation): it
+        is float64 for float64 columns, and for ints or narrower floats beside them, whose
+        values it converts as ``frame[column].to_numpy(dtype=float)`` converts each (and
+        which hold no NaN or infinity, so ``problem`` finds the same on either); text,
+        booleans and nullable columns give another dtype."""
         if self._block is None and not self._positions:
             frame = self.frame
             if isinstance(frame, RecordingTable):
                 self._block = frame.values
                 self._positions = {column: i for i, column in enumerate(frame.columns)}
-            elif frame.columns.is_unique and all(dtype == np.float64 for dtype in frame.dtypes):
-                self._block = frame.to_numpy(dtype=float)
+            elif frame.columns.is_unique and (block := frame.to_numpy()).dtype == np.float64:
+                self._block = block
                 self._positions = {column: i for i, column in enumerate(frame.columns)}
             else:
                 self._positions = {"": -1}  # looked: not one float block
@@ -855,7 +863,8 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     try:
         for sensor in needed:
             if sensor not in stacks:
-                stacks[sensor] = np.stack([r.column_rises([sensor])[0] for r in recordings])
+                # np.array: np.stack's array of the equally long rises, a third faster
+                stacks[sensor] = np.array([r.column_rises([sensor])[0] for r in recordings])
     except SelectionError:  # a rise that cannot be made: each run raises its own error
         return None
     out = np.empty((len(recordings), len(recordings[0]), len(parts)))
@@ -865,17 +874,47 @@ def _stacked_candidates(train: CheckedRecording, tests: Mapping[str, CheckedReco
     return out if np.isfinite(out).all() else None
 
 
-def _stacked_predictions(fit: LinearFit | EstimatorFit, shared: np.ndarray | None,
-                         values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-    """Every run's prediction in one product, where the runs' inputs are ``shared`` (stacked
-    in the order of ``values``) and the model is linear: each run's row is its own
-    product's bits (``LinearFit.predict_stacked``). None where a prediction is not finite
-    (or there is no stack): the runs are then predicted one by one, so the run that fails
-    raises its error in its turn."""
+def _check_recordings(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                      checked: tuple[str, ...], missing: str) -> None:
+    """``_check_values`` of every recording, training first, each check made once per
+    recording (one that passed is not repeated; one that failed raises again, in this
+    order); that all of them passed is kept by the training recording, as the resolved
+    sensors are (a study asks it again of the same 24 recordings for each of its models)."""
+    recordings = tuple(tests.values())
+    check = ("checked", checked, missing)
+
+    def check_each() -> tuple[CheckedRecording, ...]:
+        for recording in (train, *recordings):
+            recording.memo(check, lambda recording=recording: _check_values(
+                recording, checked, missing))
+        return recordings
+
+    train.memo(("checked tests", tuple(map(id, recordings)), checked, missing), check_each)
+
+
+def _stacked_test_values(train: CheckedRecording, tests: Mapping[str, CheckedRecording],
+                         column: str) -> np.ndarray:
+    """Column ``column`` of every test recording stacked, (recordings, samples), for
+    recordings equally long: made once per training recording, tests and column, kept as
+    ``_stacked_candidates`` keeps its rises. Why: every model of a study scores its
+    predictions against the same measured values, which ``rmse_each`` stacked again for
+    each."""
+    recordings = tuple(tests.values())
+    return train.memo(("stacked test values", tuple(map(id, recordings)), column),
+                      lambda: (recordings, np.array([r.values(column) for r in recordings])))[1]
+
+
+def _stacked_predictions(fit: LinearFit | EstimatorFit,
+                         shared: np.ndarray | None) -> np.ndarray | None:
+    """Every run's prediction in one product, (runs, samples), where the runs' inputs are
+    ``shared`` (stacked) and the model is linear: each run's row is its own product's bits
+    (``LinearFit.predict_stacked``). None where a prediction is not finite (or there is no
+    stack): the runs are then predicted one by one, so the run that fails raises its error
+    in its turn."""
     if not isinstance(fit, LinearFit) or shared is None:
         return None
     stacked = fit.predict_stacked(shared)
-    return dict(zip(values, stacked, strict=True)) if np.isfinite(stacked).all() else None
+    return stacked if np.isfinite(stacked).all() else None
 
 
 def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: str,
@@ -883,11 +922,14 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
                  inputs: Callable[[CheckedRecording, CheckedRecording], np.ndarray],
                  fit: LinearFit | EstimatorFit,
                  batch: Callable[[], np.ndarray | None] | None = None,
+                 measured_stack: Callable[[], np.ndarray] | None = None,
                  ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, float],
                             dict[str, np.ndarray]]:
     """``evaluate_checked``'s predictions, measured values, RMSE and sample positions of every
     test recording (``inputs(recording, part used)``: the model's inputs; ``batch()``: those
-    of every recording at once, stacked, or None, asked only when no sample is dropped).
+    of every recording at once, stacked, or None, asked only when no sample is dropped;
+    ``measured_stack()``: the measured values of every recording stacked, asked only when
+    ``batch()`` gave a stack).
 
     Why in three passes (inputs of every run, then every prediction, then every RMSE in one
     reduction, ``rmse_each``) rather than run by run: a study scores each of its many
@@ -904,7 +946,16 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
     whole = missing != "drop-rows" or all(recording.complete(columns)
                                           for recording in tests.values())
     shared = batch() if batch is not None and whole else None
+    if shared is not None:  # whole runs, inputs stacked: each run's part of the loop below
+        try:
+            test_rows = {name: np.arange(len(recording)) for name, recording in tests.items()}
+            measured = {name: recording.values(target) for name, recording in tests.items()}
+            values = dict(zip(tests, shared, strict=True))
+        except Exception:  # the loop raises it, for the run it fails on
+            test_rows, measured, values = {}, {}, {}
     for i, (name, recording) in enumerate(tests.items()):
+        if name in values:
+            continue
         try:
             rows = np.arange(len(recording)) if whole else _complete_rows(recording, used)
             test_rows[name] = rows
@@ -915,8 +966,9 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
         except Exception as exc:  # raised once the runs before it are scored
             failure = _named(exc, name)
             break
-    stacked = _stacked_predictions(fit, shared, values) if failure is None else None
-    predictions: dict[str, np.ndarray] = {} if stacked is None else stacked
+    stacked = _stacked_predictions(fit, shared) if failure is None else None
+    predictions: dict[str, np.ndarray] = {} if stacked is None else \
+        dict(zip(values, stacked, strict=True))
     scored: list[str] = [] if stacked is None else list(values)
     if stacked is None:  # run by run: the first that fails raises, after those before it
         if isinstance(fit, LinearFit):
@@ -932,8 +984,12 @@ def _score_tests(tests: Mapping[str, CheckedRecording], target: str, missing: st
                 failure = _named(exc, name)
                 break
             scored.append(name)
+    # every run whole and predicted in one product: its RMSE on the measured values stacked
+    found = None if stacked is None or measured_stack is None else \
+        rmse_rows(measured_stack(), stacked)
     try:
-        found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
+        if found is None:
+            found = rmse_each([measured[n] for n in scored], [predictions[n] for n in scored])
     except SelectionError:  # the first run that fails, named
         for name in scored:
             with _naming(name):
@@ -977,11 +1033,7 @@ def evaluate_checked(
         for recording in [train, *tests.values()]:
             check_drivers(choice.regressor, recording.name, recording.columns)
         checked += [c for c in driver_columns(choice.regressor) if c not in checked]
-    check = ("checked", tuple(checked), missing)
-    for recording in [train, *tests.values()]:
-        # a check that passed is not repeated; one that failed raises again, in this order
-        recording.memo(check,
-                       lambda recording=recording: _check_values(recording, checked, missing))
+    _check_recordings(train, tests, tuple(checked), missing)
 
     train_rows = np.arange(len(train))
     train_frame = train
@@ -994,7 +1046,8 @@ def evaluate_checked(
     candidates = CandidateSet(tuple(chosen), differences)
     names = candidates.names
     y_train = train_frame.values(target)
-    if constant_columns(y_train[:, None])[0]:
+    if train_frame.memo(("constant target", target),
+                        lambda: bool(constant_columns(y_train[:, None])[0])):
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
     with _naming(train_name):
@@ -1039,8 +1092,11 @@ def evaluate_checked(
         return None if dynamic else _stacked_candidates(train, tests, candidates,
                                                         tuple(selection.selected))
 
+    def measured_stack() -> np.ndarray:
+        return _stacked_test_values(train, tests, target)
+
     predictions, measured, errors, test_rows = _score_tests(tests, target, missing, used,
-                                                            inputs, fit, batch)
+                                                            inputs, fit, batch, measured_stack)
     return Evaluation(
         train=train_name,
         target=target,

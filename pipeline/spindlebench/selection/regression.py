@@ -128,10 +128,17 @@ def r2_score(y: np.ndarray, predicted: np.ndarray) -> float:
     where the inputs hold NaN)."""
     y, predicted = _paired(y, predicted, "r2_score")
     with np.errstate(over="ignore", invalid="ignore"):
-        residual = y - predicted
-        total = y - y.mean()
-        ss_res, ss_tot = residual @ residual, total @ total
-    finite_input = np.isfinite(y).all() and np.isfinite(predicted).all()
+        return _r2(y, predicted, y.mean(), bool(np.isfinite(y).all()
+                                                and np.isfinite(predicted).all()))
+
+
+def _r2(y: np.ndarray, predicted: np.ndarray, y_mean: float, finite_input: bool) -> float:
+    """``r2_score`` of equally long 1-D float64 arrays, ``y_mean`` being ``y.mean()`` and
+    ``finite_input`` whether both are finite (a fit knows both already), under the
+    caller's ``errstate``."""
+    residual = y - predicted
+    total = y - y_mean
+    ss_res, ss_tot = residual @ residual, total @ total
     if finite_input and not (np.isfinite(ss_res) and np.isfinite(ss_tot)):
         raise SelectionOverflowError("values too large for R2 (overflow in the sums of squares)")
     if ss_tot == 0:
@@ -163,24 +170,38 @@ def rmse_each(ys: Sequence[np.ndarray], predictions: Sequence[np.ndarray]) -> li
     errors are its own, in its order."""
     if len(ys) != len(predictions):
         raise SelectionError(f"rmse_each: {len(ys)} measured but {len(predictions)} predicted")
-    stacked = _stacked(ys), _stacked(predictions)
-    if stacked[0] is not None and stacked[1] is not None \
-            and stacked[0].shape == stacked[1].shape and stacked[0].shape[1]:
-        with np.errstate(over="ignore", invalid="ignore"):
-            residuals = stacked[0] - stacked[1]
-            values = np.sqrt(np.add.reduce(residuals * residuals, axis=1) / residuals.shape[1])
-        if np.isfinite(values).all():
-            return values.tolist()
+    stacked = stacked_rows(ys), stacked_rows(predictions)
+    if stacked[0] is not None and stacked[1] is not None:
+        values = rmse_rows(stacked[0], stacked[1])
+        if values is not None:
+            return values
     return [rmse(y, p) for y, p in zip(ys, predictions, strict=True)]
 
 
-def _stacked(arrays: Sequence[np.ndarray]) -> np.ndarray | None:
+def rmse_rows(ys: np.ndarray, predictions: np.ndarray) -> list[float] | None:
+    """``rmse_each(list(ys), list(predictions))`` of two runs-by-samples arrays stacked
+    already (C-contiguous float64 of one shape), to the last bit: the same reduction on
+    the same layout. Why: a study scores each of its many models on the same held-out
+    runs, whose measured and true values are stacked once for all of them instead of once
+    per score. None for other arrays, or a result that is not finite (``rmse_each`` then
+    scores pair by pair, with ``rmse``'s errors)."""
+    if ys.ndim != 2 or ys.shape != predictions.shape or not ys.shape[1] \
+            or ys.dtype != np.float64 or predictions.dtype != np.float64 \
+            or not (ys.flags.c_contiguous and predictions.flags.c_contiguous):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        residuals = ys - predictions
+        values = np.sqrt(np.add.reduce(residuals * residuals, axis=1) / residuals.shape[1])
+    return values.tolist() if np.isfinite(values).all() else None
+
+
+def stacked_rows(arrays: Sequence[np.ndarray]) -> np.ndarray | None:
     """Equally long 1-D float64 arrays as the rows of one array; None for anything else
     (no arrays, other shapes or types: ``rmse`` converts those its own way)."""
     if not arrays or not all(type(a) is np.ndarray for a in arrays):
         return None
-    try:
-        stacked = np.stack(arrays)
+    try:  # np.array: np.stack's array of equal shapes (and its error for unequal ones),
+        stacked = np.array(arrays)  # without its Python wrapper (a third of the time)
     except ValueError:  # not equally long
         return None
     return stacked if stacked.ndim == 2 and stacked.dtype == np.float64 else None
@@ -261,11 +282,13 @@ def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) ->
             f"{X.shape[0]} (with fewer, any data fit exactly)"
         )
     check_names(names, X.shape[1])
-    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
+    if not (np.isfinite(X).all() and np.isfinite(y).all()):
         raise SelectionError("regression inputs must be finite (no NaN or inf)")
     with np.errstate(over="ignore", invalid="ignore"):
-        x_mean = X.mean(axis=0)
-        y_mean = y.mean()
+        # X.mean(axis=0) and y.mean(): the same sums and divisions (as ``rmse``), without
+        # np.mean's Python wrapper (a sweep fits 18 models per training run)
+        x_mean = np.add.reduce(X, axis=0) / X.shape[0]
+        y_mean = np.add.reduce(y) / y.shape[0]
         centred = X - x_mean
         try:
             coefficients, _, rank, _ = np.linalg.lstsq(centred, y - y_mean, rcond=None)
@@ -275,12 +298,14 @@ def fit_ols(X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None) ->
             ) from exc
         intercept = float(y_mean - x_mean @ coefficients)
         fitted = intercept + X @ coefficients
-    if not (np.isfinite(intercept) and np.all(np.isfinite(coefficients))
-            and np.all(np.isfinite(fitted))):
+    if not (np.isfinite(intercept) and np.isfinite(coefficients).all()
+            and np.isfinite(fitted).all()):
         raise SelectionOverflowError("values too large to fit (overflow)")
     if rank < X.shape[1]:
         _warn_collinear(centred, int(rank), names)
-    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2_score(y, fitted))
+    with np.errstate(over="ignore", invalid="ignore"):  # r2_score(y, fitted): both finite
+        r2 = _r2(y, fitted, y_mean, True)
+    return LinearFit(intercept=intercept, coefficients=coefficients, r2=r2)
 
 
 def _warn_collinear(centred: np.ndarray, rank: int, names: Sequence[str] | None) -> None:

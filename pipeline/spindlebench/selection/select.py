@@ -35,7 +35,7 @@ from spindlebench.selection.errors import (
 from spindlebench.selection.similarity import (
     constant_columns,
     correlation_with,
-    similarity_matrix,
+    similarity_and_standardized,
 )
 
 #: R or t(R), or a function that forms it on request (the row-wise selection over sensors
@@ -208,10 +208,11 @@ class SensitivePoints:
         kept, dropped = split_constant(self._constant, names, n_clusters)
         if self._prepared is None:  # a step that raises raises again at the next k
             kept_names = None if names is None else [names[i] for i in kept]
-            R = similarity_matrix(X[:, kept], self.similarity, kept_names)
+            varying = X[:, kept]
+            R, Z = similarity_and_standardized(varying, self.similarity, kept_names)
             T, tree = _closure_and_tree(R, self.closure)
             psi = np.full(X.shape[1], np.nan)
-            psi[kept] = correlation_with(X[:, kept], y, kept_names)
+            psi[kept] = correlation_with(varying, y, kept_names, standardized_X=Z)
             self._prepared = (R, T, psi, tree)
         R, T, psi, tree = self._prepared
         # cut_for_clusters(T, n_clusters), its tree made once

@@ -123,6 +123,16 @@ def similarity_matrix(
     NaN or inf anywhere is an error (it would make R, and every cluster, NaN); ``names``
     (one per column) only serve the messages.
     """
+    return similarity_and_standardized(X, method, names)[0]
+
+
+def similarity_and_standardized(
+    X: np.ndarray, method: str = DEFAULT_SIMILARITY, names: Sequence[str] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``similarity_matrix(X, method, names)`` and the ``standardized(X, names)`` it was
+    made of (read-only use), which ``correlation_with`` of the same ``X`` makes too: a
+    selection correlating the candidates it clusters standardises them once (a third of
+    the similarity's and the correlation's time)."""
     if method not in SIMILARITIES:
         raise SelectionError(
             f"unknown similarity {method!r}; choose one of {', '.join(SIMILARITIES)}"
@@ -142,24 +152,26 @@ def similarity_matrix(
             f"{LITERAL_MAX_CANDIDATES} candidates, got {X.shape[1]}; use abs-pearson (which "
             f"runs row-wise for sensors plus differences) or fewer sensors"
         )
-    Z = standardized(X, names)
-    if method == "literal":
-        Z = np.abs(Z)
+    standard = standardized(X, names)
+    Z = np.abs(standard) if method == "literal" else standard
     if Z.shape[1] > SINGLE_THREAD_ABOVE:
         with threadpool_limits(limits=1, user_api="blas"):
             product = Z.T @ Z
     else:
         product = Z.T @ Z
-    return _symmetric_unit(product if method == "literal" else np.abs(product))
+    return _symmetric_unit(product if method == "literal" else np.abs(product)), standard
 
 
 def correlation_with(
-    X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None
+    X: np.ndarray, y: np.ndarray, names: Sequence[str] | None = None,
+    standardized_X: np.ndarray | None = None,
 ) -> np.ndarray:
     """Pearson correlation of every column of ``X`` with ``y`` (eq. 4), sign kept.
 
     A column holding NaN or inf gets NaN (the studies rank such a dropped-out sensor last);
     values whose squares overflow are an error naming the column (``names``) or the target.
+    ``standardized_X``: ``standardized(X, names)`` made already
+    (``similarity_and_standardized``).
     """
     y = np.asarray(y, dtype=float).ravel()
     X = np.asarray(X, dtype=float)
@@ -169,5 +181,6 @@ def correlation_with(
     if constant_columns(y[:, None])[0]:
         raise SelectionError("the target (thermal error) is constant; no correlation exists")
     zy = standardized(y[:, None], ["the target"])[:, 0]
-    return np.clip(standardized(X, names).T @ zy, -1.0, 1.0)
+    Z = standardized(X, names) if standardized_X is None else standardized_X
+    return np.clip(Z.T @ zy, -1.0, 1.0)
 

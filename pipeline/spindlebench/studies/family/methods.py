@@ -64,7 +64,7 @@ from spindlebench.selection.registry import (
     parse_method,
     select_with,
 )
-from spindlebench.selection.regression import LinearFit, rmse_each
+from spindlebench.selection.regression import LinearFit, rmse_each, rmse_rows, stacked_rows
 from spindlebench.selection.regressors import (
     StandardisedRidge,
     blocked_cv_alpha,
@@ -220,6 +220,7 @@ class EvaluationData:
         self.checked_tests = {name: self.runs.checked(name, frame)
                               for name, frame in self.tests.items()}
         self._train_rises: np.ndarray | None = None
+        self._stacked_columns: dict[str, np.ndarray | None] = {}
 
     def raw_rises(self, name: str | None = None) -> np.ndarray:
         """The rises of the 20 raw sensors of test run ``name`` (None: the training run);
@@ -245,9 +246,25 @@ class EvaluationData:
         rows = [position[name] for name in self.tests]
         return np.swapaxes(rises_T[np.ix_(rows, np.asarray(columns, dtype=np.intp))], 1, 2)
 
+    def target(self, name: str | None = None) -> np.ndarray:
+        """The measured drift of test run ``name`` (None: the training run) as float
+        (shared: do not modify): ``frame[TARGET].to_numpy(float)``, the same view of the
+        frame's float block, kept by its checked recording instead of asked of pandas again
+        by every baseline."""
+        recording = self.checked_train if name is None else self.checked_tests[str(name)]
+        return recording.values(TARGET)
+
     def column(self, name: str, column: str) -> np.ndarray:
         """Column ``column`` of test recording ``name`` as float (shared: do not modify)."""
         return self.checked_tests[str(name)].values(column)
+
+    def stacked_column(self, column: str) -> np.ndarray | None:
+        """Column ``column`` of every test run stacked, (runs, samples), made once for every
+        method's scores (shared: do not modify); None when the runs differ in length."""
+        if column not in self._stacked_columns:
+            self._stacked_columns[column] = stacked_rows(
+                [self.column(name, column) for name in self.tests])
+        return self._stacked_columns[column]
 
 
 def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
@@ -270,11 +287,19 @@ def run_method(spec: MethodSpec, train: pd.DataFrame, tests: Mapping[str, pd.Dat
 
 def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
             rows: Mapping[str, np.ndarray] | None = None,
-            measured_rmse: Mapping[str, float] | None = None) -> dict[str, Score]:
+            measured_rmse: Mapping[str, float] | None = None,
+            stacked: np.ndarray | None = None) -> dict[str, Score]:
     """Scores of the predictions of every test run (on its samples ``rows`` if given), each
     RMSE of all runs in one reduction (``rmse_each``); ``measured_rmse``: the RMSE against
-    the measured drift where known already."""
+    the measured drift where known already; ``stacked``: the predictions stacked already
+    (runs, samples), in the order of ``data.tests``."""
     names = list(data.tests)
+    whole = rows is None or all(len(rows[name]) >= len(data.checked_tests[name])
+                                for name in names)
+    scores = _whole_scores(data, predictions, selected, measured_rmse, stacked) \
+        if whole else None
+    if scores is not None:
+        return scores
     truths, measured = [], []
     for name in names:
         truth, target = data.column(name, TRUTH), data.column(name, TARGET)
@@ -287,6 +312,32 @@ def _scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selecte
         rmse_each(measured, predicted)
     return {name: Score(score, truth_score, selected) for name, score, truth_score
             in zip(names, scores, rmse_each(truths, predicted), strict=True)}
+
+
+def _whole_scores(data: EvaluationData, predictions: Mapping[str, np.ndarray], selected: str,
+                  measured_rmse: Mapping[str, float] | None,
+                  stacked: np.ndarray | None) -> dict[str, Score] | None:
+    """``_scores`` of predictions of every sample of every test run, against the runs'
+    columns stacked once per evaluation (``EvaluationData.stacked_column``) instead of per
+    method: the same reductions on the same arrays (``rmse_rows``). None where the runs or
+    predictions are not equally long float64 runs or a score is not finite: ``_scores``
+    then scores run by run, with its errors."""
+    names = list(data.tests)
+    predicted = stacked_rows([predictions[name] for name in names]) if stacked is None \
+        else stacked
+    truths = data.stacked_column(TRUTH)
+    if predicted is None or truths is None:
+        return None
+    if measured_rmse is not None:
+        scores: list[float] | None = [measured_rmse[name] for name in names]
+    else:
+        measured = data.stacked_column(TARGET)
+        scores = None if measured is None else rmse_rows(measured, predicted)
+    truth_scores = None if scores is None else rmse_rows(truths, predicted)
+    if truth_scores is None:
+        return None
+    return {name: Score(score, truth_score, selected) for name, score, truth_score
+            in zip(names, scores, truth_scores, strict=True)}
 
 
 def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dict[str, Score]:
@@ -308,7 +359,7 @@ def _paper_group(spec: MethodSpec, data: EvaluationData, similarity: str) -> dic
 
 def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score]:
     X = data.raw_rises()
-    y = data.train[TARGET].to_numpy(float)
+    y = data.target()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # constant candidates are dropped, as documented
         ranking = data.checked_train.memo("top-k ranking", lambda: _top_k_ranking(X, y))
@@ -317,10 +368,12 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
             select_with(TOP_K, X, y, spec.k, names=SENSORS).selected
     fit = fit_with(TOP_K, X[:, chosen], y)
     stacked = data.test_raw_rises(chosen) if isinstance(fit, LinearFit) else None
+    predicted = None if stacked is None else fit.predict_stacked(stacked)
     predictions = dict(zip(data.tests, fit.predict_each(
-        [data.raw_rises(name)[:, chosen] for name in data.tests]) if stacked is None
-        else fit.predict_stacked(stacked), strict=True))
-    return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen))
+        [data.raw_rises(name)[:, chosen] for name in data.tests]) if predicted is None
+        else predicted, strict=True))
+    return _scores(data, predictions, ";".join(SENSORS[i] for i in chosen),
+                   stacked=predicted)
 
 
 def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
@@ -346,7 +399,7 @@ def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
 
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
-    X, y = data.raw_rises(), data.train[TARGET].to_numpy(float)
+    X, y = data.raw_rises(), data.target()
     # finite rises: PairwiseDifferences().fit(X).transform(X) without its checks
     candidates = ridge_candidates(X) if np.isfinite(X).all() else \
         PairwiseDifferences().fit(X).transform(X)
@@ -378,8 +431,24 @@ def ridge_candidates(raw: np.ndarray) -> np.ndarray:
     two calls on the same array (``pairwise_differences``, then ``np.hstack``), so the same
     bits and layout, without scikit-learn validating the array twice (an eighth of the
     ridge baseline's time). Values that are not finite pass here: ``_ridge_predictions`` then
-    takes ``model.predict``, which refuses them as before."""
-    return np.hstack([raw, pairwise_differences(raw)])
+    takes ``model.predict``, which refuses them as before.
+
+    Column-major rises (a run's, ``EvaluationData.raw_rises``), for which ``np.hstack``
+    gives a column-major block, are written into one such block directly: each sensor's
+    differences with the sensors after it in one subtraction, the same values as
+    ``pairwise_differences``' gathered columns, without gathering two copies of them and
+    copying the result again (the block was made 7 times per evaluation)."""
+    n_sensors = raw.shape[1] if raw.ndim == 2 else 0
+    if n_sensors < 2 or raw.dtype != np.float64 or raw.flags.c_contiguous \
+            or not raw.flags.f_contiguous:
+        return np.hstack([raw, pairwise_differences(raw)])
+    out = np.empty((raw.shape[0], n_sensors * (n_sensors + 1) // 2), order="F")
+    out[:, :n_sensors] = raw
+    at = n_sensors
+    for i in range(n_sensors - 1):  # T_i minus T_{i+1}, ..., T_n: the pairs' order
+        np.subtract(raw[:, i:i + 1], raw[:, i + 1:], out=out[:, at:at + n_sensors - 1 - i])
+        at += n_sensors - 1 - i
+    return out
 
 
 def _ridge_predictions(fitted: StandardisedRidge | None, model: Callable[[], Pipeline],
@@ -431,8 +500,7 @@ def _oracle(data: EvaluationData) -> dict[str, Score]:
     def prediction(name: str) -> Callable[[], np.ndarray]:
         def fit() -> np.ndarray:
             X = data.raw_rises(name)
-            return fit_regressor(DEFAULT_REGRESSOR, X,
-                                 data.tests[name][TARGET].to_numpy(float)).predict(X)
+            return fit_regressor(DEFAULT_REGRESSOR, X, data.target(name)).predict(X)
         return fit
 
     predictions = {name: data.runs.memo(ORACLE, name, prediction(name)) for name in data.tests}

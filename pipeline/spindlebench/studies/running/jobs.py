@@ -262,13 +262,15 @@ def _evaluate_training_run(job: EvaluationJob, train: Experiment,
         # without a fault the training run's frame is its held-out frame (same measurement)
         train_frame = runs.frames[train.id] if healthy else \
             measured_frame(job, train, held_out=False)
-        available = {e.id: runs.frames[e.id] for e in tests if e.id not in job.failures}
+        ids = [e.id for e in tests]  # (an id is formatted anew at each ask)
+        available = {i: runs.frames[i] for i in ids if i not in job.failures}
         if available:
             rows = score_all(list(job.specs), train_frame, available, job.similarity, runs)
-        rows += [{"method": s.name, "k": s.k, "test_experiment": e.id, "rmse_um": np.nan,
+        failed = [i for i in ids if i in job.failures]
+        rows += [{"method": s.name, "k": s.k, "test_experiment": i, "rmse_um": np.nan,
                   "rmse_true_um": np.nan, "selected": "",
-                  "error": f"simulation failed: {job.failures[e.id]}"}
-                 for s in job.specs for e in tests if e.id in job.failures]
+                  "error": f"simulation failed: {job.failures[i]}"}
+                 for s in job.specs for i in failed]
     return _result_frame(job, train, tests, rows)
 
 
