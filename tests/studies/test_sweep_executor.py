@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 
 import distributed
 import pytest
@@ -42,6 +43,44 @@ def test_a_failing_task_is_recorded_and_the_rest_complete(workers):
     assert outcomes["t3"].error == "ValueError: three is not allowed"
     assert "Traceback" in outcomes["t3"].detail
     assert [outcomes[f"t{i}"].value for i in (0, 1, 2, 4, 5)] == [0, 1, 4, 16, 25]
+
+
+class SlowToUnpickle:
+    """An argument whose unpickling burns ``seconds`` of CPU in the worker, before the task
+    function (and its CPU clock) starts."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+
+    def __reduce__(self):
+        return burn_then_make, (self.seconds,)
+
+
+def burn_then_make(seconds: float) -> SlowToUnpickle:
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+    return SlowToUnpickle(seconds)
+
+
+def seconds_of(slow: SlowToUnpickle) -> float:
+    return slow.seconds
+
+
+@pytest.mark.parametrize("workers", [0, 1])
+def test_worker_cpu_outside_the_tasks_is_counted_apart(workers):
+    """Unpickling a task's arguments happens in the worker before ``call_isolated`` starts
+    its clock: that CPU (and the worker's imports) is in ``outside_cpu_s``, not in the
+    tasks' ``cpu_s``; in-process the study process's own CPU holds it, so it is 0 there."""
+    tasks = [Task(f"s{i}", seconds_of, (SlowToUnpickle(0.2),)) for i in range(3)]
+    stats, outcomes = run(TaskRunner(workers=workers, progress=False), tasks)
+    assert all(o.value == 0.2 for o in outcomes.values())
+    assert stats.cpu_s["task"] < 0.2
+    if workers:
+        assert stats.outside_cpu_s >= 3 * 0.2
+        assert all(o.outside_cpu_s >= 0.2 for o in outcomes.values())
+    else:
+        assert stats.outside_cpu_s == 0.0
 
 
 def test_follow_up_tasks_run_after_their_trigger():

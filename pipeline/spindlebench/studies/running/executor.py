@@ -64,6 +64,9 @@ class Outcome:
     seconds: float = 0.0
     #: CPU seconds of the process that ran the task, spent inside the task function.
     cpu_s: float = 0.0
+    #: CPU seconds of the local worker that ran the task, spent outside any task function
+    #: since its previous task ended (``WorkerClock``).
+    outside_cpu_s: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -82,6 +85,11 @@ class RunStats:
     #: CPU seconds spent inside the task functions, summed over workers, per kind (on a
     #: shared machine the wall seconds above also hold other programs' time).
     cpu_s: dict[str, float] = field(default_factory=dict)
+    #: CPU seconds of the local worker processes outside the task functions: their start-up
+    #: (imports), unpickling each task's arguments, pickling each result but a worker's
+    #: last. Not in ``cpu_s`` and not in the study process's own CPU, yet spent for the
+    #: study (0 in-process, where that process's CPU holds it, and on Dask).
+    outside_cpu_s: float = 0.0
 
     def count(self, outcome: Outcome) -> None:
         kind = outcome.task.kind
@@ -89,6 +97,7 @@ class RunStats:
         bucket[kind] = bucket.get(kind, 0) + 1
         self.busy_s[kind] = self.busy_s.get(kind, 0.0) + outcome.seconds
         self.cpu_s[kind] = self.cpu_s.get(kind, 0.0) + outcome.cpu_s
+        self.outside_cpu_s += outcome.outside_cpu_s
 
     def total(self, kind: str | None = None) -> int:
         if kind is None:
@@ -96,17 +105,47 @@ class RunStats:
         return self.done.get(kind, 0) + self.failed.get(kind, 0)
 
 
+class WorkerClock:
+    """A local worker's CPU seconds counted so far, in or outside its tasks.
+
+    The pool unpickles a task's arguments before ``call_isolated`` starts its clock and
+    pickles the result after it stops it: in a worker, the CPU spent between two tasks (and
+    before the first: the imports) is the worker's outside a task function, reported with
+    the next task so that a study's CPU can be counted whole. ``counted`` is None outside a
+    local worker: in-process that CPU is the study process's own, already counted there."""
+
+    counted: float | None = None
+
+    @classmethod
+    def start(cls) -> None:
+        """In a fresh worker: everything the process spent so far is still to report."""
+        cls.counted = 0.0
+
+    @classmethod
+    def outside(cls, now: float) -> float:
+        """CPU seconds since the last count (0 outside a local worker)."""
+        return 0.0 if cls.counted is None else now - cls.counted
+
+    @classmethod
+    def count_to(cls, now: float) -> None:
+        if cls.counted is not None:
+            cls.counted = now
+
+
 def call_isolated(fn: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, str | None, str,
-                                                                          float, float]:
+                                                                          float, float, float]:
     """Run ``fn(*args)`` in a worker; an exception comes back as data, never as a raise.
-    Returns (value, error, traceback, wall seconds, CPU seconds)."""
+    Returns (value, error, traceback, wall seconds, CPU seconds, CPU seconds of this worker
+    outside any task since its last one: ``WorkerClock``)."""
     start, cpu = time.perf_counter(), time.process_time()
+    outside = WorkerClock.outside(cpu)
     try:
-        value = fn(*args)
+        value, error, detail = fn(*args), None, ""
     except Exception as exc:  # failure isolation: every error becomes a recorded outcome
-        return (None, one_line_error(exc), traceback.format_exc(), time.perf_counter() - start,
-                time.process_time() - cpu)
-    return value, None, "", time.perf_counter() - start, time.process_time() - cpu
+        value, error, detail = None, one_line_error(exc), traceback.format_exc()
+    end = time.process_time()
+    WorkerClock.count_to(end)
+    return value, error, detail, time.perf_counter() - start, end - cpu, outside
 
 
 class InlineExecutor(cf.Executor):
@@ -142,6 +181,7 @@ def single_threaded_worker(parent_pid: int | None = None) -> None:
 
     from spindlebench.core.console import print_warning
 
+    WorkerClock.start()
     threadpool_limits(limits=1)
     warnings.showwarning = print_warning  # one line, as in the study process, no source line
     if parent_pid is not None:
@@ -495,7 +535,7 @@ class TaskRunner:
                     for future in done:
                         task = running.pop(future)
                         try:
-                            value, error, detail, seconds, cpu_s = future.result()
+                            value, error, detail, seconds, cpu_s, outside = future.result()
                         except BrokenProcessPool:
                             broken = True
                             victims.append(task)
@@ -503,7 +543,7 @@ class TaskRunner:
                         except Exception as exc:  # a Dask worker lost, an unpicklable result
                             finish(Outcome(task, error=one_line_error(exc), detail=repr(exc)))
                             continue
-                        finish(Outcome(task, value, error, detail, seconds, cpu_s))
+                        finish(Outcome(task, value, error, detail, seconds, cpu_s, outside))
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM: stop now, keep what is written
                 broken = True
                 raise
@@ -594,7 +634,7 @@ def _run_quarantined(task: Task) -> Outcome:
     try:
         while True:
             try:
-                value, error, detail, seconds, cpu_s = future.result(timeout=WATCH_S)
+                value, error, detail, seconds, cpu_s, outside = future.result(timeout=WATCH_S)
                 break
             except cf.TimeoutError:
                 if _dead_worker(pool):
@@ -604,4 +644,4 @@ def _run_quarantined(task: Task) -> Outcome:
     finally:
         with interrupts.deferred():
             _close_pool(pool, kill=not future.done() or future.exception() is not None)
-    return Outcome(task, value, error, detail, seconds, cpu_s)
+    return Outcome(task, value, error, detail, seconds, cpu_s, outside)
