@@ -83,6 +83,22 @@ def test_worker_cpu_outside_the_tasks_is_counted_apart(workers):
         assert stats.outside_cpu_s == 0.0
 
 
+def test_workers_are_forked_with_their_tasks_modules_and_its_cpu_is_counted():
+    """The forkserver imports the tasks' modules once (the sweep's: 2.3 CPU-s) and the
+    workers are forked with them, instead of each importing them itself; that CPU is the
+    forkserver's and is counted in ``outside_cpu_s`` too."""
+    from multiprocessing import forkserver
+
+    from spindlebench.studies.sweep.sweep_run import condition_id
+
+    forkserver._forkserver._stop()  # a fresh one, started with this run's preload
+    tasks = [Task("c", condition_id, (None,))]
+    stats, outcomes = run(TaskRunner(workers=1, progress=False), tasks)
+    assert outcomes["c"].value == "noise-free"
+    worker = outcomes["c"].outside_cpu_s  # the worker's start-up, before its task
+    assert stats.outside_cpu_s - worker > worker  # the forkserver's imports outweigh it
+
+
 def test_follow_up_tasks_run_after_their_trigger():
     def follow(outcome):
         if outcome.task.kind == "first" and outcome.ok:
