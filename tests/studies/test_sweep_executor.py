@@ -99,6 +99,15 @@ def test_workers_are_forked_with_their_tasks_modules_and_its_cpu_is_counted():
     assert stats.outside_cpu_s - worker > worker  # the forkserver's imports outweigh it
 
 
+def test_the_study_process_start_up_is_frozen_out_of_the_collector():
+    """A full collection of the study process rescans its 140 000 start-up objects (0.1
+    CPU-s each): a run freezes them (``freeze_start_up``)."""
+    import gc
+
+    run(TaskRunner(workers=0, progress=False), [Task("t", square, (2,))])
+    assert gc.get_freeze_count() > 10_000
+
+
 def test_follow_up_tasks_run_after_their_trigger():
     def follow(outcome):
         if outcome.task.kind == "first" and outcome.ok:

@@ -18,6 +18,8 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import errno
+import functools
+import gc
 import multiprocessing
 import os
 import pickle
@@ -405,6 +407,22 @@ def one_blas_thread() -> dict[str, Any]:
                           for i in threadpool_info()]}
 
 
+@functools.cache
+def freeze_start_up() -> None:
+    """Leave this process's objects so far (its modules, the study) out of the cyclic
+    garbage collector's scans from now on; once per process, at its first run (a later
+    run's objects, a test session's, are collected as usual).
+
+    They are some 140 000 objects that live as long as the process, and a full collection
+    scans them all: 0.1 CPU-s each, 6 of them in a 12-replica season sweep's study process
+    (0.30-0.35 of its 0.41-0.46 CPU-s in the collector, 3 runs); frozen, the collector took
+    0.17-0.21 CPU-s (gc.callbacks, 5 runs). Not done in the workers: measured, a simulation
+    triggers no full collection and an evaluation job 0.5 ms of collections (0.4 %).
+    Without a ``gc.collect()`` first (a full collection itself): at most the few hundred
+    unreachable objects in the young generations are kept frozen with them."""
+    gc.freeze()
+
+
 class TaskRunner:
     """Runs tasks with failure isolation, follow-up tasks and a done/total progress bar."""
 
@@ -478,6 +496,7 @@ class TaskRunner:
         """
         stats = RunStats()
         start = time.perf_counter()
+        freeze_start_up()
         queue = list(tasks)
         bar = tqdm_class()(total=len(queue) + expected_follow_ups, desc=self.desc, unit=self.unit,
                    disable=not self.progress, dynamic_ncols=True, smoothing=0.1)
