@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 
 import distributed
 import pytest
@@ -42,6 +43,69 @@ def test_a_failing_task_is_recorded_and_the_rest_complete(workers):
     assert outcomes["t3"].error == "ValueError: three is not allowed"
     assert "Traceback" in outcomes["t3"].detail
     assert [outcomes[f"t{i}"].value for i in (0, 1, 2, 4, 5)] == [0, 1, 4, 16, 25]
+
+
+class SlowToUnpickle:
+    """An argument whose unpickling burns ``seconds`` of CPU in the worker, before the task
+    function (and its CPU clock) starts."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+
+    def __reduce__(self):
+        return burn_then_make, (self.seconds,)
+
+
+def burn_then_make(seconds: float) -> SlowToUnpickle:
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+    return SlowToUnpickle(seconds)
+
+
+def seconds_of(slow: SlowToUnpickle) -> float:
+    return slow.seconds
+
+
+@pytest.mark.parametrize("workers", [0, 1])
+def test_worker_cpu_outside_the_tasks_is_counted_apart(workers):
+    """Unpickling a task's arguments happens in the worker before ``call_isolated`` starts
+    its clock: that CPU (and the worker's imports) is in ``outside_cpu_s``, not in the
+    tasks' ``cpu_s``; in-process the study process's own CPU holds it, so it is 0 there."""
+    tasks = [Task(f"s{i}", seconds_of, (SlowToUnpickle(0.2),)) for i in range(3)]
+    stats, outcomes = run(TaskRunner(workers=workers, progress=False), tasks)
+    assert all(o.value == 0.2 for o in outcomes.values())
+    assert stats.cpu_s["task"] < 0.2
+    if workers:
+        assert stats.outside_cpu_s >= 3 * 0.2
+        assert all(o.outside_cpu_s >= 0.2 for o in outcomes.values())
+    else:
+        assert stats.outside_cpu_s == 0.0
+
+
+def test_workers_are_forked_with_their_tasks_modules_and_its_cpu_is_counted():
+    """The forkserver imports the tasks' modules once (the sweep's: 2.3 CPU-s) and the
+    workers are forked with them, instead of each importing them itself; that CPU is the
+    forkserver's and is counted in ``outside_cpu_s`` too."""
+    from multiprocessing import forkserver
+
+    from spindlebench.studies.sweep.sweep_run import condition_id
+
+    forkserver._forkserver._stop()  # a fresh one, started with this run's preload
+    tasks = [Task("c", condition_id, (None,))]
+    stats, outcomes = run(TaskRunner(workers=1, progress=False), tasks)
+    assert outcomes["c"].value == "noise-free"
+    worker = outcomes["c"].outside_cpu_s  # the worker's start-up, before its task
+    assert stats.outside_cpu_s - worker > worker  # the forkserver's imports outweigh it
+
+
+def test_the_study_process_start_up_is_frozen_out_of_the_collector():
+    """A full collection of the study process rescans its 140 000 start-up objects (0.1
+    CPU-s each): a run freezes them (``freeze_start_up``)."""
+    import gc
+
+    run(TaskRunner(workers=0, progress=False), [Task("t", square, (2,))])
+    assert gc.get_freeze_count() > 10_000
 
 
 def test_follow_up_tasks_run_after_their_trigger():

@@ -199,3 +199,35 @@ def test_measured_frame_is_the_same_from_a_truth_that_is_not_one_float_block(swe
             pd.testing.assert_frame_equal(measured_frame(job, train, held_out),
                                           measured_frame(other, train, held_out),
                                           check_exact=True)
+
+
+def test_a_pickled_job_gives_the_same_truths_and_result_frames(swept):
+    """A job reaches its worker pickled, with its truths as bare arrays
+    (``EvaluationJob.__reduce__``): the same truth frames (values, dtypes, memory layout,
+    columns) and the same result bytes; a truth that is not one float64 block goes as the
+    frame it is."""
+    import pickle
+
+    import numpy as np
+
+    sweep, _ = swept
+    for condition in sweep.conditions:
+        job = sweep.evaluation_task(1, condition, sweep.trains).args[0]
+        truths = dict(job.truths)
+        truths[next(iter(truths))] = truths[next(iter(truths))].assign(label="x")
+        for sent in (job, dataclasses.replace(job, truths=truths)):
+            shipped = pickle.loads(pickle.dumps(sent, protocol=pickle.HIGHEST_PROTOCOL))
+            assert dataclasses.replace(shipped, truths={}) == \
+                dataclasses.replace(sent, truths={})
+            assert list(shipped.truths) == list(sent.truths)
+            for name, truth in sent.truths.items():
+                got = shipped.truths[name]
+                pd.testing.assert_frame_equal(got, truth, check_exact=True)
+                a, b = got.to_numpy(), truth.to_numpy()
+                assert a.flags.f_contiguous == b.flags.f_contiguous
+                if a.dtype == np.float64:  # the same bits, a NaN's included
+                    assert np.array_equal(a.view(np.int64), b.view(np.int64))
+            ours, theirs = evaluate_job(shipped), evaluate_job(sent)
+            assert list(ours) == list(theirs)
+            for train in ours:
+                assert ours[train].to_csv(index=False) == theirs[train].to_csv(index=False)
