@@ -36,18 +36,28 @@ def floats_only(frame: pd.DataFrame) -> bool:
         and all(names) and not any(mark in joined for mark in ',"\r\n')
 
 
-def write_table(path: str | os.PathLike[str], frame: pd.DataFrame) -> None:
-    """``frame.to_csv(path, index=False, lineterminator="\\n")``, the same bytes (tested)."""
+def write_table(path: str | os.PathLike[str], frame: pd.DataFrame) -> bytes | None:
+    """``frame.to_csv(path, index=False, lineterminator="\\n")``, the same bytes (tested);
+    returns them (None where pandas wrote the frame itself), so a caller that records the
+    file's hash takes it from memory instead of reading the file back."""
+    data = table_bytes(frame)
+    if data is None:
+        frame.to_csv(path, index=False, lineterminator="\n")
+        return None
+    Path(path).write_bytes(data)
+    return data
+
+
+def table_bytes(frame: pd.DataFrame) -> bytes | None:
+    """The bytes ``write_table`` writes, or None where pandas is left to write the frame."""
     if floats_only(frame):
         header = ",".join(map(str, frame.columns))
-        Path(path).write_bytes(f"{header}\n".encode() + csv_rows(frame.to_numpy()))
-        return
+        return f"{header}\n".encode() + csv_rows(frame.to_numpy())
     columns = _column_texts(frame)
     if columns is None:
-        frame.to_csv(path, index=False, lineterminator="\n")
-        return
+        return None
     lines = [",".join(columns[0]), *map(",".join, zip(*columns[1:], strict=True))]
-    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8", newline="")
+    return ("\n".join(lines) + "\n").encode("utf-8")
 
 
 def _column_texts(frame: pd.DataFrame) -> list[list[str]] | None:

@@ -284,11 +284,13 @@ class ResultStore:
                               "sidecars and kept)", DamagedResultWarning, stacklevel=3)
         return self._manifest
 
-    def _written(self, relative: str | Path, save: bool = True) -> None:
-        """Record the piece's hash; the manifest is saved now unless ``save`` is False or a
+    def _written(self, relative: str | Path, save: bool = True,
+                 data: bytes | None = None) -> None:
+        """Record the piece's hash (of ``data``, its bytes as just written, when given: not
+        read back from disk); the manifest is saved now unless ``save`` is False or a
         ``one_manifest_save`` block is open (then with the next save)."""
         key = Path(relative).as_posix()
-        value = sha256_file(self.path(key))
+        value = sha256_file(self.path(key)) if data is None else hashlib.sha256(data).hexdigest()
         keys, lines = self._sorted_entries()
         at = bisect.bisect_left(keys, key)
         if at < len(keys) and keys[at] == key:
@@ -394,8 +396,8 @@ class ResultStore:
         """Write a table (``table_csv.write_table``: pandas' bytes, faster)."""
         target = self.path(relative)
         with atomic_path(target) as tmp:
-            write_table(tmp, frame)
-        self._written(relative)
+            data = write_table(tmp, frame)
+        self._written(relative, data=data)
         return target
 
     def read_frames(self, relatives: Sequence[str | Path]) -> pd.DataFrame:
