@@ -67,6 +67,7 @@ from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.paths import file_kind, refuse_shipped
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.json_text import indented_json
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
     import pandas as pd
@@ -746,7 +747,7 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
         data = write_csv(tmp_csv, frame, float_format)
         digest = sha256_file(tmp_csv) if data is None else hashlib.sha256(data).hexdigest()
         paired = {**sidecar, "recording_sha256": digest}
-        text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+        text = indented_json(paired, allow_nan=False) + "\n"  # json.dumps' text
         tmp_json.write_text(text, encoding="utf-8")
     return csv_path
 

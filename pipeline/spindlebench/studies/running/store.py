@@ -37,10 +37,11 @@ from typing import Any
 
 import pandas as pd
 
-from spindlebench.core.atomic import atomic_path, write_text
+from spindlebench.core.atomic import atomic_path, write_bytes, write_text
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import file_kind
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.json_text import indented_json
 from spindlebench.formats.recording import write_recording
 from spindlebench.formats.table_csv import write_table
 
@@ -381,8 +382,10 @@ class ResultStore:
 
     def write_json(self, relative: str | Path, data: Any) -> Path:
         target = self.path(relative)
-        write_text(target, json.dumps(data, indent=2, ensure_ascii=False, default=str) + "\n")
-        self._written(relative)
+        # json.dumps(data, indent=2, ensure_ascii=False, default=str)'s text
+        encoded = (indented_json(data, default=str) + "\n").encode("utf-8")
+        write_bytes(target, encoded)
+        self._written(relative, data=encoded)
         return target
 
     def read_json(self, relative: str | Path) -> Any:
