@@ -19,9 +19,11 @@ def _results_like(rows: int = 40) -> pd.DataFrame:
     rmse[::7] = np.nan
     return pd.DataFrame({
         "replica": np.arange(rows) % 3 + 1,
+        "big": np.array([-2**63, 2**63 - 1, 0, -1] * (rows // 4), dtype=np.int64),
         "data": pd.Series(["measured", "noise-free"] * (rows // 2), dtype="str"),
         "method": ["six_diff", "oracle", "ridge", "all_raw"] * (rows // 4),
-        "k": pd.array([2, None, 3, 4] * (rows // 4), dtype="Int64"),
+        "k": pd.array([2, None, 3, -2**63 + 1] * (rows // 4), dtype="Int64"),
+        "k_full": pd.array([2**62, 0, -7, 10] * (rows // 4), dtype="Int64"),
         "rmse_um": rmse,
         "test_speed_rpm": [2000.0, 4000.0] * (rows // 2),
         "selected": ["T1;T18", "all 20 sensors, fitted", 'a "quoted" name', ""] * (rows // 4),

@@ -46,6 +46,28 @@ def csv_rows(values: np.ndarray) -> bytes:
     return b"".join(joined)
 
 
+def float_cells(values: np.ndarray) -> list[str]:
+    """The CSV cells of a 1-D float64 array: each value as its ``repr``, a NaN as ``""``
+    (``csv_rows`` of the one-column array, cut into its lines).
+
+    Why: a sweep's result table has three float columns and is written column by column
+    (one file per training run and condition, over a thousand); ``csv_rows`` of a column
+    builds and cuts one line per value (~0.13 ms for 300 values), one orjson array cut at
+    its commas is a fifth of that."""
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if not values.size:
+        return []
+    magnitude = np.abs(values)
+    with np.errstate(invalid="ignore"):  # NaN compares False: not positional
+        odd = ~(((magnitude >= _POSITIONAL_FROM) & (magnitude < _POSITIONAL_BELOW))
+                | (values == 0.0))
+    cells = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)[1:-1].decode().split(",")
+    for index in np.flatnonzero(odd).tolist():
+        value = float(values[index])
+        cells[index] = repr(value) if value == value else ""
+    return cells
+
+
 def _orjson_rows(values: np.ndarray) -> bytes:
     """orjson's text of a non-empty 2-D array as CSV lines (NaN and the infinities as null).
 

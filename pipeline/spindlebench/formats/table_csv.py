@@ -20,8 +20,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+import orjson
 
-from spindlebench.formats.float_text import csv_rows
+from spindlebench.formats.float_text import csv_rows, float_cells
 
 if TYPE_CHECKING:  # imported where a frame is written: reading recordings needs no pandas
     import pandas as pd
@@ -91,20 +92,33 @@ def _cells(column: pd.Series) -> list[str] | None:
 
     dtype = column.dtype
     if dtype == np.float64:
-        return csv_rows(column.to_numpy()[:, None]).decode().split("\n")[:-1]
-    if dtype == np.int64 or dtype == np.bool_:
+        return float_cells(column.to_numpy())
+    if dtype == np.int64:
+        return _integer_cells(column.to_numpy())
+    if dtype == np.bool_:
         return list(map(str, column.to_numpy().tolist()))
     if isinstance(dtype, pd.StringDtype):  # every cell a str or missing
         return column.to_numpy(dtype=object, na_value="").tolist()
-    if isinstance(dtype, pd.Int64Dtype) or pd.api.types.is_object_dtype(dtype):
+    if isinstance(dtype, pd.Int64Dtype):  # every cell an int or missing
+        values = column.array
+        return _blank(_integer_cells(values.to_numpy(dtype=np.int64, na_value=0)),
+                      values.isna())
+    if pd.api.types.is_object_dtype(dtype):
         missing = column.isna().to_numpy()
         values = column.to_numpy(dtype=object, na_value="").tolist()
-        kind = int if isinstance(dtype, pd.Int64Dtype) else str
-        if not all(type(value) is kind or gap for value, gap in
+        if not all(type(value) is str or gap for value, gap in
                    zip(values, missing.tolist(), strict=True)):
             return None
         return _blank(list(map(str, values)), missing)
     return None
+
+
+def _integer_cells(values: np.ndarray) -> list[str]:
+    """Each int64 as ``str`` writes it: orjson's text of the array (the same decimal
+    digits and sign), cut at its commas, in a fifth of the time of ``str`` on each."""
+    if not values.size:
+        return []
+    return orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)[1:-1].decode().split(",")
 
 
 def _blank(cells: list[str], missing: np.ndarray) -> list[str]:
