@@ -787,7 +787,7 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
 
     from spindlebench.formats.table_csv import floats_only
 
-    names = [str(name) for name in frame.columns]
+    names = list(map(str, frame.columns.tolist()))
     wanted = [str(name) for name in columns]
     values = frame.to_numpy()
     place = {name: number for number, name in enumerate(names)}
