@@ -142,6 +142,8 @@ class ResultStore:
         #: ``root`` as text, and the folders inside it ``path`` found to be real folders
         self._root_text = str(self.root).rstrip("/")
         self._real_folders: set[str] = set()
+        #: each relative path asked for: its path, and the places on the way there as text
+        self._paths: dict[str, tuple[Path, list[str]]] = {}
         self._owned = owned
         self._manifest: dict[str, str] | None = None
         #: the manifest's keys in sorted order and their lines of manifest.json, kept in step
@@ -167,25 +169,31 @@ class ResultStore:
         in this process (the store's own folders do not turn into links while it holds
         their lock); the piece itself is looked at every time. Why: a sweep asks for ~22 000
         paths, and a pathlib walk with a link check per part was ~0.2 ms each."""
-        parts = [part for part in os.fspath(relative).split("/") if part and part != "."]
-        if os.fspath(relative).startswith("/") or ".." in parts:
-            raise ValueError(f"{relative}: not a path inside the results folder")
-        at = self._root_text
-        for number, part in enumerate(parts, start=1):
-            at = f"{at}/{part}"
-            if at in self._real_folders:
+        text = os.fspath(relative)
+        known = self._paths.get(text)
+        if known is None:
+            parts = [part for part in text.split("/") if part and part != "."]
+            if text.startswith("/") or ".." in parts:
+                raise ValueError(f"{relative}: not a path inside the results folder")
+            on_the_way = [self._root_text + "/" + "/".join(parts[:number])
+                          for number in range(1, len(parts) + 1)]
+            known = Path(on_the_way[-1]) if parts else self.root, on_the_way
+            self._paths[text] = known
+        at, on_the_way = known
+        for number, place in enumerate(on_the_way, start=1):
+            if place in self._real_folders:
                 continue
             try:
-                mode = os.lstat(at).st_mode
+                mode = os.lstat(place).st_mode
             except (FileNotFoundError, NotADirectoryError):
                 break  # nothing beyond is there either, so no link
             if stat.S_ISLNK(mode):
-                raise SpindlebenchError(f"{at}: is a symbolic link inside the results folder "
-                                        f"{self.root}; a study never writes through one "
-                                        "(remove it, or use a new output folder)")
-            if stat.S_ISDIR(mode) and number < len(parts):
-                self._real_folders.add(at)
-        return Path(self._root_text + "/" + "/".join(parts)) if parts else self.root
+                raise SpindlebenchError(f"{place}: is a symbolic link inside the results "
+                                        f"folder {self.root}; a study never writes through "
+                                        "one (remove it, or use a new output folder)")
+            if stat.S_ISDIR(mode) and number < len(on_the_way):
+                self._real_folders.add(place)
+        return at
 
     def exists(self, relative: str | Path) -> bool:
         """Whether the piece is there and intact; a damaged one is named and counts as
