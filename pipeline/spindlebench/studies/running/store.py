@@ -188,7 +188,7 @@ class ResultStore:
             except (FileNotFoundError, NotADirectoryError):
                 break  # nothing beyond is there either, so no link
             if stat.S_ISLNK(mode):
-                raise SpindlebenchError(f"{place}: is a symbolic link inside the results "
+                raise SpindlebenchError(f"{Path(place)}: is a symbolic link inside the results "
                                         f"folder {self.root}; a study never writes through "
                                         "one (remove it, or use a new output folder)")
             if stat.S_ISDIR(mode) and number < len(on_the_way):
