@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from spindlebench.formats.float_text import csv_rows
+from spindlebench.formats.float_text import csv_rows, float_cells
 
 #: Values where a shortest-digits writer can go wrong: zeros and signs, NaN and infinities,
 #: where ``repr`` switches to an exponent (1e-05, 1e+16), the smallest subnormal and normal,
@@ -24,8 +24,14 @@ def _repr_rows(values: np.ndarray) -> bytes:
                    for row in values.tolist()).encode()
 
 
+def _repr_cells(values: np.ndarray) -> list[str]:
+    return [repr(v) if v == v else "" for v in values.tolist()]
+
+
 def test_awkward_values_are_written_as_repr_writes_them():
     values = np.array(AWKWARD)
+    assert float_cells(values) == _repr_cells(values)
+    assert float_cells(np.array([np.nan, 1e-13, 2.0])) == ["", "1e-13", "2.0"]
     assert csv_rows(values[:, None]) == _repr_rows(values[:, None])
     assert csv_rows(values.reshape(1, -1)) == _repr_rows(values.reshape(1, -1))
 
@@ -56,12 +62,14 @@ def test_many_values_of_each_family_are_written_as_repr_writes_them(family):
         values = np.concatenate([np.nextafter(powers, np.inf), np.nextafter(powers, -np.inf)])
     else:
         values = rng.integers(1, 2 ** 52, n, dtype=np.uint64).view(np.float64)
+    assert float_cells(values) == _repr_cells(values)
     values = values[: len(values) // 10 * 10].reshape(-1, 10)
     assert csv_rows(values) == _repr_rows(values)
 
 
 def test_no_rows_is_no_text():
     assert csv_rows(np.empty((0, 3))) == b""
+    assert float_cells(np.empty(0)) == []
 
 
 def test_values_outside_the_positional_range_spread_over_rows_and_columns():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from spindlebench.formats.table_csv import _column_texts, write_table
+from spindlebench.formats.table_csv import _column_texts, table_bytes, write_table
 
 
 def _pandas(frame: pd.DataFrame, path) -> bytes:
@@ -19,9 +19,11 @@ def _results_like(rows: int = 40) -> pd.DataFrame:
     rmse[::7] = np.nan
     return pd.DataFrame({
         "replica": np.arange(rows) % 3 + 1,
+        "big": np.array([-2**63, 2**63 - 1, 0, -1] * (rows // 4), dtype=np.int64),
         "data": pd.Series(["measured", "noise-free"] * (rows // 2), dtype="str"),
         "method": ["six_diff", "oracle", "ridge", "all_raw"] * (rows // 4),
-        "k": pd.array([2, None, 3, 4] * (rows // 4), dtype="Int64"),
+        "k": pd.array([2, None, 3, -2**63 + 1] * (rows // 4), dtype="Int64"),
+        "k_full": pd.array([2**62, 0, -7, 10] * (rows // 4), dtype="Int64"),
         "rmse_um": rmse,
         "test_speed_rpm": [2000.0, 4000.0] * (rows // 2),
         "selected": ["T1;T18", "all 20 sensors, fitted", 'a "quoted" name', ""] * (rows // 4),
@@ -53,3 +55,19 @@ def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_pat
 def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame):
     write_table(tmp_path / "fast.csv", frame)
     assert (tmp_path / "fast.csv").read_bytes() == _pandas(frame, tmp_path / "pandas.csv")
+
+
+@pytest.mark.parametrize("frame", [
+    _results_like(),  # column by column
+    pd.DataFrame({"a": [0.5, 1e-5, np.nan], "b": [1e16, -0.0, 2.0]}),  # row by row
+    pd.DataFrame({"a": [1.0, np.nan]}),  # pandas writes it: nothing returned
+])
+def test_write_table_returns_the_bytes_it_wrote(tmp_path, frame):
+    """The store and the recording writer hash what write_table returns instead of reading
+    the file back: it must be the file's bytes, or None where pandas wrote them."""
+    data = write_table(tmp_path / "t.csv", frame)
+    assert data == table_bytes(frame)
+    if data is not None:
+        assert data == (tmp_path / "t.csv").read_bytes() == _pandas(frame, tmp_path / "p.csv")
+    else:
+        assert _column_texts(frame) is None

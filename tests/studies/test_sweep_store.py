@@ -231,3 +231,18 @@ def test_one_manifest_save_records_the_blocks_pieces_at_its_end(tmp_path):
     assert "runs/r001/Jan.json" in manifest
     assert path.read_text(encoding="utf-8") == json.dumps(dict(sorted(manifest.items())),
                                                           indent=1) + "\n"
+
+
+@pytest.mark.parametrize("frame", [
+    pd.DataFrame({"a": [1.0, 2.5e-7], "b": [3.0, 4.0]}),  # row by row
+    pd.DataFrame({"a": [1, 2], "b": ["x,y", 'q"']}),  # column by column
+    pd.DataFrame({"a": [1.0, 2.0]}),  # pandas writes it
+])
+def test_the_manifest_hash_of_a_table_is_the_hash_of_the_file_on_disk(tmp_path, frame):
+    """The store hashes a table's bytes as written, not read back: they must be the file's."""
+    from spindlebench.core.provenance import sha256_file
+
+    store = ResultStore(tmp_path)
+    store.write_frame("evals/t.csv", frame)
+    assert store.manifest()["evals/t.csv"] == sha256_file(tmp_path / "evals" / "t.csv")
+    assert ResultStore(tmp_path).exists("evals/t.csv")

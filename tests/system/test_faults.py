@@ -75,6 +75,36 @@ def test_a_symlinked_subfolder_of_a_results_folder_is_never_written_through(tmp_
     assert not any(elsewhere.iterdir())
 
 
+def test_a_piece_or_a_new_folder_turned_into_a_link_is_refused_after_earlier_writes(tmp_path):
+    """The store looks at a real folder once; a piece that is a link, or a folder it has not
+    found yet that is one, is refused however many writes came before."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    root = tmp_path / "results"
+    store = ResultStore(root)
+    store.write_json("runs/r000/x.json", {"a": 1})
+    store.write_json("runs/r000/y.json", {"a": 1})  # runs/ and r000/ seen to be real
+    (root / "runs" / "r000" / "x.json").unlink()
+    (root / "runs" / "r000" / "x.json").symlink_to(elsewhere / "x.json")
+    (root / "runs" / "r001").symlink_to(elsewhere, target_is_directory=True)
+    for piece in ("runs/r000/x.json", "runs/r001/x.json"):
+        with pytest.raises(SpindlebenchError, match="symbolic link inside the results folder"):
+            store.write_json(piece, {"a": 2})
+    assert not any(elsewhere.iterdir())
+
+
+def test_a_link_to_a_shipped_file_is_shipped_in_a_folder_checked_before(tmp_path):
+    """``shipped`` resolves a folder once per process, the file itself every time."""
+    (tmp_path / "plain.toml").write_text("", encoding="utf-8")
+    assert not shipped(tmp_path / "plain.toml")
+    (tmp_path / "machine.toml").symlink_to(DEFAULT_MACHINE)
+    (tmp_path / "scenarios").symlink_to(REPO / "scenarios", target_is_directory=True)
+    assert shipped(tmp_path / "machine.toml")
+    assert shipped(tmp_path / "scenarios" / "seasons" / "chongqing.toml")
+    with pytest.raises(SpindlebenchError, match="--overwrite-shipped"):
+        refuse_shipped(tmp_path / "machine.toml")
+
+
 def test_a_linked_results_root_is_still_allowed(tmp_path):
     """Results on another disk through a link is a user's choice, not an attack."""
     real = tmp_path / "disk"

@@ -12,6 +12,7 @@ import contextlib
 import contextvars
 import functools
 import os
+import stat
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -74,20 +75,53 @@ def shipped(path: str | os.PathLike[str]) -> bool:
     """Whether writing ``path`` would change what the package ships: an existing file in
     ``models/`` or ``scenarios/``, the committed FMU, or anything inside the package's source
     tree (links resolved, so ``./x/../scenarios/...`` or a link to it counts too)."""
-    resolved = Path(path).resolve()
-    fmu, folders = _shipped_places()
-    if resolved.is_relative_to(_PACKAGE) or resolved == fmu:
+    resolved = _resolved(Path(path))
+    fmu, package, folders = _shipped_places()
+    if _within(resolved, package) or resolved == fmu:
         return True
-    return resolved.is_file() and any(resolved.is_relative_to(d) for d in folders) \
-        and _committed(resolved)
+    return any(_within(resolved, folder) for folder in folders) \
+        and os.path.isfile(resolved) and _committed(Path(resolved))
+
+
+def _within(resolved: str, folder: str) -> bool:
+    """``Path(resolved).is_relative_to(folder)`` for two resolved paths, as text (pathlib
+    parsed both at every call, three calls per atomic write)."""
+    return resolved == folder or resolved.startswith(folder.rstrip("/") + "/")
+
+
+def _resolved(path: Path) -> str:
+    """``str(path.resolve())``, its folder resolved once per process (an existing folder is
+    taken to stay where it is while the process runs) and the file itself looked at each
+    time (a link is resolved in full). Why: a sweep checks ~6 000 outputs in a few hundred
+    folders, and resolving each path cost a ``stat`` per part of it, ~30 µs a write."""
+    name = path.name
+    if name in ("", ".."):
+        return str(path.resolve())
+    try:
+        if stat.S_ISLNK(os.lstat(path).st_mode):
+            return str(path.resolve())
+    except OSError:
+        pass  # not there (or not reachable): resolve() takes it as it is, so does this
+    folder = os.path.join(os.getcwd(), os.fspath(path.parent))
+    place = _resolved_folders.get(folder)
+    if place is None:
+        place = str(Path(folder).resolve())
+        if os.path.isdir(folder):
+            _resolved_folders[folder] = place
+    return os.path.join(place, name)
+
+
+#: Existing folders (absolute, as named) and where they resolve to (``_resolved``).
+_resolved_folders: dict[str, str] = {}
 
 
 @functools.cache
-def _shipped_places() -> tuple[Path, tuple[Path, ...]]:
-    """The committed FMU and ``SHIPPED_DIRS``, links resolved: once, as they do not move
-    while a process runs (resolving them at every atomic write was ~40 µs of its ~90 µs
-    check; a sweep makes ~6 000)."""
-    return DEFAULT_FMU.resolve(), tuple(folder.resolve() for folder in SHIPPED_DIRS)
+def _shipped_places() -> tuple[str, str, tuple[str, ...]]:
+    """The committed FMU, the package and ``SHIPPED_DIRS``, links resolved, as text: once, as
+    they do not move while a process runs (resolving them at every atomic write was ~40 µs
+    of its ~90 µs check; a sweep makes ~6 000)."""
+    return (str(DEFAULT_FMU.resolve()), str(_PACKAGE),
+            tuple(str(folder.resolve()) for folder in SHIPPED_DIRS))
 
 
 def _committed(resolved: Path) -> bool:
@@ -137,8 +171,6 @@ def refuse_shipped(path: str | os.PathLike[str]) -> None:
 def file_kind(path: str | os.PathLike[str]) -> str:
     """What ``path`` is, for a message: 'a file', 'a folder', or the special kind
     ``core.files.special_kind`` names ('a FIFO (named pipe)', 'a socket', ...)."""
-    import stat
-
     from spindlebench.core.files import special_kind
 
     mode = Path(path).stat().st_mode

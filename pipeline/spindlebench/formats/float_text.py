@@ -31,27 +31,62 @@ def csv_rows(values: np.ndarray) -> bytes:
     values = np.ascontiguousarray(values, dtype=np.float64)
     if not values.size:
         return b"\n" * values.shape[0]
+    odd = _odd(values)
+    text = orjson.dumps(np.where(odd, np.nan, values) if odd.any() else values,
+                        option=orjson.OPT_SERIALIZE_NUMPY)
+    return _rows_of(text, [repr(v).encode() if v == v else b""
+                           for v in values[odd].tolist()])  # row-major, as the nulls
+
+
+def _odd(values: np.ndarray) -> np.ndarray:
+    """Where orjson's text of a value is not its ``repr``: outside the positional range
+    (zero aside), NaN and the infinities."""
     magnitude = np.abs(values)
     with np.errstate(invalid="ignore"):  # NaN compares False: not positional
-        odd = ~(((magnitude >= _POSITIONAL_FROM) & (magnitude < _POSITIONAL_BELOW))
-                | (values == 0.0))
-    if not odd.any():
-        return _orjson_rows(values)
-    # cut at the "n" of each "null" (no number's text has an "n") and drop the "ull" after it
-    pieces = _orjson_rows(np.where(odd, np.nan, values)).split(b"n")
-    texts = [repr(v).encode() if v == v else b"" for v in values[odd].tolist()]  # row-major
-    joined: list[bytes] = [b""] * (2 * len(texts) + 1)
-    joined[0], joined[2::2] = pieces[0], [piece[3:] for piece in pieces[1:]]
-    joined[1::2] = texts
-    return b"".join(joined)
+        return ~(((magnitude >= _POSITIONAL_FROM) & (magnitude < _POSITIONAL_BELOW))
+                 | (values == 0.0))
 
 
-def _orjson_rows(values: np.ndarray) -> bytes:
-    """orjson's text of a non-empty 2-D array as CSV lines (NaN and the infinities as null).
+def _rows_of(text: bytes, texts: list[bytes]) -> bytes:
+    """orjson's ``[[a,b],[c,d]]`` of a non-empty 2-D array as CSV lines, the i-th ``null``
+    replaced by ``texts[i]``.
 
-    Cut at each row's "[" (a search for one byte; "],[" as a whole took three times as
-    long): ``[[a,b],[c,d]]`` gives ``a,b],`` and ``c,d]]``, each two bytes too long."""
-    text = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)
-    rows = [row[:-2] for row in text.split(b"[")[2:]]
-    rows.append(b"")  # the last line's newline
-    return b"\n".join(rows)
+    Each row lies between its ``[`` and ``]`` (the outer pair aside), and each ``null``
+    starts with the one ``n`` of the text (no number's text has one): found as byte
+    positions by numpy, the pieces between are joined as views of the text, so the text is
+    copied once (cutting it with ``split`` at ``[`` and at ``n`` copied it four times, a
+    quarter of a recording's write)."""
+    codes = np.frombuffer(text, dtype=np.uint8)
+    starts = (np.flatnonzero(codes == ord("["))[1:] + 1).tolist()
+    ends = np.flatnonzero(codes == ord("]"))[:-1].tolist()
+    nulls = np.flatnonzero(codes == ord("n")).tolist()
+    nulls.append(len(text))  # a sentinel past every row's end
+    view = memoryview(text)
+    pieces: list[bytes | memoryview] = []
+    odd = 0
+    for start, end in zip(starts, ends, strict=True):
+        while nulls[odd] < end:
+            pieces += (view[start:nulls[odd]], texts[odd])
+            start = nulls[odd] + len(b"null")
+            odd += 1
+        pieces += (view[start:end], b"\n")
+    return b"".join(pieces)
+
+
+def float_cells(values: np.ndarray) -> list[str]:
+    """The CSV cells of a 1-D float64 array: each value as its ``repr``, a NaN as ``""``
+    (``csv_rows`` of the one-column array, cut into its lines).
+
+    Why: a sweep's result table has three float columns and is written column by column
+    (one file per training run and condition, over a thousand); ``csv_rows`` of a column
+    builds and cuts one line per value (~0.13 ms for 300 values), one orjson array cut at
+    its commas is a fifth of that."""
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if not values.size:
+        return []
+    odd = _odd(values)
+    cells = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)[1:-1].decode().split(",")
+    for index in np.flatnonzero(odd).tolist():
+        value = float(values[index])
+        cells[index] = repr(value) if value == value else ""
+    return cells

@@ -48,6 +48,7 @@ from __future__ import annotations
 import codecs
 import csv
 import functools
+import hashlib
 import io
 import itertools
 import json
@@ -66,6 +67,7 @@ from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.paths import file_kind, refuse_shipped
 from spindlebench.core.provenance import sha256_file
+from spindlebench.formats.json_text import indented_json
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
     import pandas as pd
@@ -742,15 +744,16 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     # the JSON context is the outer one, so the CSV is moved into place first: if that move
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
     with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
-        write_csv(tmp_csv, frame, float_format)
-        paired = {**sidecar, "recording_sha256": sha256_file(tmp_csv)}
-        text = json.dumps(paired, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+        data = write_csv(tmp_csv, frame, float_format)
+        digest = sha256_file(tmp_csv) if data is None else hashlib.sha256(data).hexdigest()
+        paired = {**sidecar, "recording_sha256": digest}
+        text = indented_json(paired, allow_nan=False) + "\n"  # json.dumps' text
         tmp_json.write_text(text, encoding="utf-8")
     return csv_path
 
 
 def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame,
-              float_format: str | None = FLOAT_FORMAT) -> None:
+              float_format: str | None = FLOAT_FORMAT) -> bytes | None:
     """``frame.to_csv(path, index=False, float_format=..., lineterminator="\\n")``, the same
     bytes (tested): in the shortest round trip through ``table_csv.write_table``, 2-3x
     faster for the all-float frames the testbench writes (each value Python's ``repr``, what
@@ -784,7 +787,7 @@ def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
 
     from spindlebench.formats.table_csv import floats_only
 
-    names = [str(name) for name in frame.columns]
+    names = list(map(str, frame.columns.tolist()))
     wanted = [str(name) for name in columns]
     values = frame.to_numpy()
     place = {name: number for number, name in enumerate(names)}
