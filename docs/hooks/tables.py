@@ -204,6 +204,7 @@ BENCH_COLUMNS: dict[str, list[tuple[str, str]]] = {
 BENCH_COLUMNS["bench_sweep_goal"] = [
     ("experiments", "experiments"), ("workers", "workers"), ("cpu_s", "CPU s in all"),
     ("simulation_cpu_s", "simulations"), ("evaluation_cpu_s", "evaluations"),
+    ("workers_outside_tasks_cpu_s", "workers outside tasks"),
     ("coordinator_cpu_s", "coordinator"), ("outputs_cpu_s", "of which outputs"),
     ("over_floor", "× simulations"), ("goal_over_floor", "goal ×"), ("wall_s", "wall s")]
 #: ``bench_dask.py --example`` writes the same rows for the example sweep itself.
