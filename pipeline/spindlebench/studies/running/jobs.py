@@ -187,31 +187,43 @@ def measured_frame(job: EvaluationJob, experiment: Experiment,
     time_s = truth.column(TIME_COLUMN)
     drivers = [column for column in STUDY_DRIVER_COLUMNS if column in truth]
     # one float block, filled column group by column group, made a frame once: building it
-    # column by column was a third of an evaluation's time
-    values = np.empty((len(time_s), len(MEASURED_COLUMNS) + len(drivers)))
-    values[:, 0] = time_s
+    # column by column was a third of an evaluation's time. It is laid out as pandas keeps
+    # it (a row per column) and given to pandas as it is (``_block_frame``).
+    values = np.empty((len(MEASURED_COLUMNS) + len(drivers), len(time_s)))
+    values[0] = time_s
     at = len(MEASURED_COLUMNS)  # the drift columns are the two before ``at``
     if job.condition is None:
-        values[:, 1:at - 2] = truth.columns(list(TRUTH_COLUMNS[1:-1]))
-        values[:, at - 2] = drift - drift[0]
+        values[1:at - 2] = truth.columns(list(TRUTH_COLUMNS[1:-1])).T
+        values[at - 2] = drift - drift[0]
     else:
         model, measured_C, measured_drift = _measured_sensors(job, experiment, held_out,
                                                               truth)
-        values[:, 1:at - 2] = measured_C
-        values[:, at - 2] = measured_drift
+        values[1:at - 2] = measured_C.T
+        values[at - 2] = measured_drift
         if job.target != DRIFT_COLUMN:
-            values[:, at - 2] = measured_target(job.target, model, time_s, truth.frame,
-                                                measured_drift, job.seeds[experiment.id],
-                                                job.probe_geometry_m)
-    values[:, at - 1] = drift - drift[0]
+            values[at - 2] = measured_target(job.target, model, time_s, truth.frame,
+                                             measured_drift, job.seeds[experiment.id],
+                                             job.probe_geometry_m)
+    values[at - 1] = drift - drift[0]
     if job.target != DRIFT_COLUMN:
         true_target = truth.column(true_column(job.target))
-        values[:, at - 1] = true_target - true_target[0]
+        values[at - 1] = true_target - true_target[0]
         if job.condition is None:
-            values[:, at - 2] = values[:, at - 1]
+            values[at - 2] = values[at - 1]
     for i, column in enumerate(drivers):  # the programme, for the dynamic regressors
-        values[:, at + i] = truth.column(column)
-    return pd.DataFrame(values, columns=_measured_columns(tuple(drivers)))
+        values[at + i] = truth.column(column)
+    return _block_frame(values, _measured_columns(tuple(drivers)))
+
+
+def _block_frame(values: np.ndarray, columns: pd.Index) -> pd.DataFrame:
+    """``pd.DataFrame(values.T, columns=columns)`` for float ``values`` of one row per
+    column, C-contiguous: the block pandas 3 makes of a (samples, columns) array (it copies
+    one into that layout), here taken as it is, without the constructor's copy and checks
+    (a sixth of ``measured_frame``)."""
+    if _from_blocks is None:
+        return pd.DataFrame(values.T, columns=columns)
+    return _from_blocks([(values, np.arange(len(columns)))], pd.RangeIndex(values.shape[1]),
+                        columns)
 
 
 @functools.cache
