@@ -231,3 +231,28 @@ def test_a_pickled_job_gives_the_same_truths_and_result_frames(swept):
             assert list(ours) == list(theirs)
             for train in ours:
                 assert ours[train].to_csv(index=False) == theirs[train].to_csv(index=False)
+
+
+def test_measured_frame_is_the_frame_pandas_makes_of_its_values(swept):
+    """``measured_frame`` hands pandas its block as it is (``jobs._block_frame``): the frame
+    pandas' constructor makes of the same (samples, columns) values, to the memory layout
+    (which the methods' arrays inherit); the noise-free one holds the truth's values."""
+    import numpy as np
+
+    sweep, _ = swept
+    for condition in sweep.conditions:
+        job = sweep.evaluation_task(1, condition, sweep.trains[:1]).args[0]
+        for experiment in job.experiments[:3]:
+            made = measured_frame(job, experiment)
+            plain = pd.DataFrame(np.array(made.to_numpy()), columns=list(made.columns))
+            pd.testing.assert_frame_equal(made, plain, check_exact=True)
+            for frame in (made, plain):
+                (block,) = frame._mgr.blocks
+                assert block.values.flags.c_contiguous and block.dtype == np.float64
+            assert made.to_numpy().flags.f_contiguous == plain.to_numpy().flags.f_contiguous
+            assert isinstance(made.index, pd.RangeIndex) and made.index.equals(plain.index)
+            if condition is None:
+                truth = job.truths[experiment.id]
+                for column, name in (("T1", "true_T1_C"), ("T20", "true_T20_C"),
+                                     ("spindle_speed_rpm", "spindle_speed_rpm")):
+                    assert np.array_equal(made[column].to_numpy(), truth[name].to_numpy())

@@ -25,6 +25,9 @@ always gives the same recording, and white noise without drift is what it always
 
 from __future__ import annotations
 
+import functools
+from typing import Any
+
 import numpy as np
 from scipy.signal import lfilter
 
@@ -72,15 +75,47 @@ def coloured_noise(model: SensorModel, shocks: np.ndarray, time_s: np.ndarray) -
     return np.cumsum(shocks * step, axis=0)
 
 
-def probe_drift_um(model: SensorModel, rng: np.random.Generator,
+def probe_drift_um(model: SensorModel, rng: np.random.Generator | None,
                    time_s: np.ndarray) -> np.ndarray:
-    """The probe zero's slow drift (µm), 0 at the first sample; draws only if it wanders."""
+    """The probe zero's slow drift (µm), 0 at the first sample; draws only if it wanders
+    (``rng`` may be None where it does not)."""
     drift = model.probe_drift_rate_um_per_h * (time_s - time_s[0]) / 3600.0
     if model.probe_drift_um_per_sqrt_h > 0.0:
         steps = np.sqrt(np.diff(time_s) / 3600.0) * model.probe_drift_um_per_sqrt_h
         walk = np.concatenate(([0.0], np.cumsum(rng.standard_normal(steps.size) * steps)))
         drift = drift + walk
     return drift
+
+
+#: Up to this many temperature draws (samples x sensors) a run's draws are kept for the next
+#: measurement with its seed (``_draws``): a sweep's run is 181 x 20.
+_CACHED_DRAWS = 50_000
+
+
+def _drawn(seed: int, n: int, m: int) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """The standard-normal draws of ``measure`` in their order (temperatures (n, m), then the
+    probe's (n)), read-only, and the generator's state after them (for the probe drift's)."""
+    rng = np.random.default_rng(seed)
+    temperature, probe = rng.standard_normal((n, m)), rng.standard_normal(n)
+    temperature.setflags(write=False)
+    probe.setflags(write=False)
+    return temperature, probe, rng.bit_generator.state
+
+
+@functools.lru_cache(maxsize=64)
+def _draws(seed: int, n: int, m: int) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """``_drawn``, kept for the next measurement with the same seed and shape: a sweep
+    measures each run's truth once per condition with one seed (common random numbers), and
+    the draws and the generator made for them were half of ``measure``'s time (issue 26).
+    64 runs of at most ``_CACHED_DRAWS`` draws: at most 26 MB."""
+    return _drawn(seed, n, m)
+
+
+def _generator_at(state: dict[str, Any]) -> np.random.Generator:
+    """A generator continuing from ``state`` (a ``default_rng``'s, PCG64), as that one would."""
+    bits = np.random.PCG64()
+    bits.state = state
+    return np.random.Generator(bits)
 
 
 def measure(
@@ -92,11 +127,14 @@ def measure(
     seed: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Measured temperatures ``(n, len(sensor_names))`` and measured drift ``(n,)``."""
-    rng = np.random.default_rng(seed)
     n, m = true_temperatures_C.shape
-    temperature_noise = coloured_noise(model, rng.standard_normal((n, m)), time_s)
-    probe_noise = rng.standard_normal(n) * model.probe_noise_um
-    probe_noise = probe_noise + probe_drift_um(model, rng, time_s)
+    temperature_shocks, probe_shocks, state = _draws(seed, n, m) if n * m <= _CACHED_DRAWS \
+        else _drawn(seed, n, m)
+    temperature_noise = coloured_noise(model, temperature_shocks, time_s)
+    probe_noise = probe_shocks * model.probe_noise_um
+    wanders = model.probe_drift_um_per_sqrt_h > 0.0
+    probe_noise = probe_noise + probe_drift_um(model, _generator_at(state) if wanders else None,
+                                               time_s)
 
     raw = true_temperatures_C + temperature_noise
     for fault in model.faults:
