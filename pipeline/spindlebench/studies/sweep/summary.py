@@ -114,7 +114,7 @@ class Scored:
             if column == "k":
                 self._all_codes[column] = values.fillna(NO_K_KEY).to_numpy(dtype=np.int64)
             else:
-                self._all_codes[column], self._labels[column] = pd.factorize(values, sort=True)
+                self._all_codes[column], self._labels[column] = _factorized(values)
         return self._all_codes[column]
 
     def codes(self, column: str) -> np.ndarray:
@@ -216,6 +216,16 @@ class Scored:
         """A slice's value as the tables name it: a float in its shortest form."""
         value = self.label(column, code)
         return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _factorized(values: pd.Series) -> tuple[np.ndarray, pd.Index]:
+    """``pd.factorize(values, sort=True)``: the same codes and labels, a text column's
+    factorised as its object array (the str array's own path marks its missing values
+    first: a quarter more of the time, a dozen times on a 1 000-run sweep's 380 000 rows)."""
+    if not isinstance(values.dtype, pd.StringDtype):
+        return pd.factorize(values, sort=True)
+    codes, labels = pd.factorize(values.to_numpy(dtype=object), sort=True)
+    return codes, pd.Index(labels, dtype=values.dtype)
 
 
 def stability(results: pd.DataFrame, scored: Scored | None = None) -> pd.DataFrame:
