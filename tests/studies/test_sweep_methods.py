@@ -256,3 +256,20 @@ def test_scored_codes_and_labels_are_pandas_factorize_of_each_column():
     assert scored.code("method", "absent") == -1 and scored.all_codes("method")[2] == -1
     assert [scored.label("method", code) for code in range(4)] == ["", "NA", "None", "all_raw"]
 
+
+
+@pytest.mark.parametrize("run", [1, 3, 50])
+def test_scored_codes_a_text_column_of_long_runs_as_pandas_factorize(run):
+    """Runs of one value (coded once per run) or short runs (every cell coded), missing
+    cells and text pandas would read as missing among them: ``pd.factorize``'s codes and
+    labels on every row."""
+    rng = np.random.default_rng(run)
+    pool = np.array(["b", "NA", "a", "", "None", "é,\"q\"", "nan", None], dtype=object)
+    cells = np.repeat(pool[rng.integers(0, len(pool), 400)], rng.integers(1, 2 * run, 400))
+    results = pd.DataFrame({"method": pd.array(cells, dtype="str"),
+                            "rmse_um": rng.normal(size=len(cells))})
+    codes, labels = pd.factorize(results["method"], sort=True)
+    scored = Scored(results)
+    np.testing.assert_array_equal(scored.all_codes("method"), codes)
+    pd.testing.assert_index_equal(scored._labels["method"], labels, exact=True)
+    assert (codes == -1).any() and len(labels) == len(pool) - 1
