@@ -51,6 +51,10 @@ def test_a_results_like_table_takes_the_fast_path_and_gives_pandas_bytes(tmp_pat
     pd.DataFrame({"a": np.array([1, 2], dtype=np.int32), "b": [0.5, 1.5]}),
     pd.DataFrame({"a": np.array([1.5, 2.5], dtype=np.float32), "b": ["x", "y"]}),
     pd.DataFrame({"a": [np.nan, np.nan], "b": [None, None]}),
+    pd.DataFrame({"a": pd.array(["NA", None, "", "None", "x, y", np.nan, 'q"'], dtype="str"),
+                  "b": pd.array([None, "nan", "", None, "y", "z", "N/A"], dtype="str"),
+                  "c": pd.array([None] * 7, dtype="str"), "d": range(7)}),  # missing text
+    pd.DataFrame({"a": pd.array(["ok", None, "line\nbreak"], dtype="str"), "b": [1, 2, 3]}),
 ])
 def test_edge_cases_and_fallbacks_give_pandas_bytes(tmp_path, frame):
     write_table(tmp_path / "fast.csv", frame)

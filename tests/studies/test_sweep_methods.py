@@ -11,7 +11,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.names import SENSORS
 from spindlebench.studies.family.family_file import load_study
 from spindlebench.studies.family.methods import MethodSpec, method_specs, run_method
-from spindlebench.studies.sweep.summary import rank_by_slice
+from spindlebench.studies.sweep.summary import Scored, rank_by_slice
 
 TINY = REPO / "scenarios" / "studies" / "tiny_sweep.toml"
 
@@ -235,3 +235,41 @@ def test_top_k_choice_of_each_k_is_the_first_k_of_the_ranking():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert _top_k_ranking(X, y) is None
+
+
+def test_scored_codes_and_labels_are_pandas_factorize_of_each_column():
+    """Text columns are coded through their object array: the codes, labels (and their
+    dtype), lookups and missing values (-1) of ``pd.factorize(column, sort=True)``, text that
+    reads as "NA" or "None" and empty text included; other columns as they were."""
+    results = pd.DataFrame({
+        "method": pd.array(["ridge", "NA", None, "all_raw", "ridge", "", "None"], dtype="str"),
+        "replica": [3, 1, 2, 1, 3, 2, 1],
+        "test_speed_rpm": [2000.0, np.nan, 4000.0, 2000.0, np.nan, 4000.0, 2000.0],
+        "rmse_um": [1.0, 2.0, np.nan, 3.0, 4.0, 5.0, 6.0]})
+    scored = Scored(results)
+    for column in ("method", "replica", "test_speed_rpm"):
+        codes, labels = pd.factorize(results[column], sort=True)
+        np.testing.assert_array_equal(scored.all_codes(column), codes)
+        pd.testing.assert_index_equal(scored._labels[column], labels, exact=True)
+        np.testing.assert_array_equal(scored.codes(column), codes[scored.ok])
+        assert [scored.code(column, value) for value in labels] == list(range(len(labels)))
+    assert scored.code("method", "absent") == -1 and scored.all_codes("method")[2] == -1
+    assert [scored.label("method", code) for code in range(4)] == ["", "NA", "None", "all_raw"]
+
+
+
+@pytest.mark.parametrize("run", [1, 3, 50])
+def test_scored_codes_a_text_column_of_long_runs_as_pandas_factorize(run):
+    """Runs of one value (coded once per run) or short runs (every cell coded), missing
+    cells and text pandas would read as missing among them: ``pd.factorize``'s codes and
+    labels on every row."""
+    rng = np.random.default_rng(run)
+    pool = np.array(["b", "NA", "a", "", "None", "é,\"q\"", "nan", None], dtype=object)
+    cells = np.repeat(pool[rng.integers(0, len(pool), 400)], rng.integers(1, 2 * run, 400))
+    results = pd.DataFrame({"method": pd.array(cells, dtype="str"),
+                            "rmse_um": rng.normal(size=len(cells))})
+    codes, labels = pd.factorize(results["method"], sort=True)
+    scored = Scored(results)
+    np.testing.assert_array_equal(scored.all_codes("method"), codes)
+    pd.testing.assert_index_equal(scored._labels["method"], labels, exact=True)
+    assert (codes == -1).any() and len(labels) == len(pool) - 1

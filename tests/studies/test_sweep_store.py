@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
@@ -206,6 +207,23 @@ def test_read_frames_reads_the_tables_as_concatenating_each_one_read_alone(tmp_p
         store.write_frame("read.csv", read)
         store.write_frame("expected.csv", expected)
         assert (tmp_path / "read.csv").read_bytes() == (tmp_path / "expected.csv").read_bytes()
+
+
+def test_read_frames_parses_the_bytes_as_the_utf8_text_read_would(tmp_path):
+    """The bytes are parsed with their line ends as reading the text translates them (a
+    ``\\r`` in a quoted cell, ``\\r\\n`` line ends), and text pandas reads as missing
+    ("NA", "None", "nan") is missing as it was: the same frames as parsing the text."""
+    store = ResultStore(tmp_path)
+    texts = ['replica,selected,error\r\n1,"T1;\r\nT2",NA\r\n2,None,"évaluation, \r failed"\n',
+             "replica,selected,error\n3,nan,\n4,,N/A\n"]
+    for number, text in enumerate(texts):
+        (tmp_path / f"t{number}.csv").write_bytes(text.encode("utf-8"))
+    for names in (["t0.csv"], ["t0.csv", "t1.csv"], ["t1.csv", "t1.csv"]):
+        read = store.read_frames(names)
+        expected = pd.concat([pd.read_csv(io.StringIO((tmp_path / name).read_text(
+            encoding="utf-8"))) for name in names], ignore_index=True)
+        pd.testing.assert_frame_equal(read, expected, check_exact=True, check_dtype=False)
+    assert store.read_frames(["t0.csv"])["error"].iloc[1] == "évaluation, \n failed"
 
 
 def test_one_manifest_save_records_the_blocks_pieces_at_its_end(tmp_path):
