@@ -24,6 +24,12 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     return digest.hexdigest()
 
 
+def sha256_written(path: str | os.PathLike[str], data: bytes | None) -> str:
+    """Hex SHA-256 of a file just written: of ``data``, its bytes, where the writer kept
+    them (not read back from disk), else of the file."""
+    return sha256_file(path) if data is None else hashlib.sha256(data).hexdigest()
+
+
 def source_sha256(*modules: str) -> str:
     """One SHA-256 over the source files of ``modules`` (dotted names) and the tracked package
     versions: a cache of computed results keyed by it is redone when the code that computed

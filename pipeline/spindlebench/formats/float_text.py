@@ -22,7 +22,7 @@ import numpy as np
 import orjson
 
 #: ``repr`` writes |x| in [1e-4, 1e16) positionally, as orjson does; outside it, an exponent.
-_POSITIONAL_FROM, _POSITIONAL_BELOW = 1e-4, 1e16
+POSITIONAL_FROM, POSITIONAL_BELOW = 1e-4, 1e16
 
 
 def csv_rows(values: np.ndarray) -> bytes:
@@ -43,7 +43,7 @@ def _odd(values: np.ndarray) -> np.ndarray:
     (zero aside), NaN and the infinities."""
     magnitude = np.abs(values)
     with np.errstate(invalid="ignore"):  # NaN compares False: not positional
-        return ~(((magnitude >= _POSITIONAL_FROM) & (magnitude < _POSITIONAL_BELOW))
+        return ~(((magnitude >= POSITIONAL_FROM) & (magnitude < POSITIONAL_BELOW))
                  | (values == 0.0))
 
 

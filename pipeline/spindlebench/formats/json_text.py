@@ -23,8 +23,8 @@ from typing import Any
 
 import orjson
 
-#: ``repr`` writes |x| in [1e-4, 1e16) positionally, as orjson does (``float_text``).
-_POSITIONAL_FROM, _POSITIONAL_BELOW = 1e-4, 1e16
+from spindlebench.formats.float_text import POSITIONAL_BELOW, POSITIONAL_FROM
+
 #: orjson's integer range (64 bits, signed or unsigned); ``json`` has none.
 _INT_FROM, _INT_BELOW = -(1 << 63), 1 << 64
 
@@ -51,7 +51,7 @@ def _plain(value: Any) -> Any:
     if kind is str or kind is bool or value is None:
         return value
     if kind is float:
-        if value == 0.0 or _POSITIONAL_FROM <= abs(value) < _POSITIONAL_BELOW:
+        if value == 0.0 or POSITIONAL_FROM <= abs(value) < POSITIONAL_BELOW:
             return value
         if value != value or value in (float("inf"), float("-inf")):
             raise _UnsureError  # json writes NaN/Infinity, or refuses with allow_nan=False

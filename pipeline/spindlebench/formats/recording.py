@@ -48,7 +48,6 @@ from __future__ import annotations
 import codecs
 import csv
 import functools
-import hashlib
 import io
 import itertools
 import json
@@ -66,7 +65,7 @@ from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_nam
 from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
 from spindlebench.core.paths import file_kind, refuse_shipped
-from spindlebench.core.provenance import sha256_file
+from spindlebench.core.provenance import sha256_written
 from spindlebench.formats.json_text import indented_json
 
 if TYPE_CHECKING:  # pandas is imported where a DataFrame is made: ``evaluate`` needs none
@@ -745,8 +744,7 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
     with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
         data = write_csv(tmp_csv, frame, float_format)
-        digest = sha256_file(tmp_csv) if data is None else hashlib.sha256(data).hexdigest()
-        paired = {**sidecar, "recording_sha256": digest}
+        paired = {**sidecar, "recording_sha256": sha256_written(tmp_csv, data)}
         text = indented_json(paired, allow_nan=False) + "\n"  # json.dumps' text
         tmp_json.write_text(text, encoding="utf-8")
     return csv_path

@@ -40,7 +40,7 @@ import pandas as pd
 from spindlebench.core.atomic import atomic_path, write_bytes, write_text
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.paths import file_kind
-from spindlebench.core.provenance import sha256_file
+from spindlebench.core.provenance import sha256_file, sha256_written
 from spindlebench.formats.json_text import indented_json
 from spindlebench.formats.recording import write_recording
 from spindlebench.formats.table_csv import write_table
@@ -315,7 +315,7 @@ class ResultStore:
         read back from disk); the manifest is saved now unless ``save`` is False or a
         ``one_manifest_save`` block is open (then with the next save)."""
         key = Path(relative).as_posix()
-        value = sha256_file(self.path(key)) if data is None else hashlib.sha256(data).hexdigest()
+        value = sha256_written(self.path(key), data)
         keys, lines = self._sorted_entries()
         at = bisect.bisect_left(keys, key)
         if at < len(keys) and keys[at] == key:
