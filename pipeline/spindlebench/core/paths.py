@@ -51,8 +51,8 @@ CACHE_ENV = "SPINDLEBENCH_CACHE"
 
 
 def user_cache_dir() -> Path:
-    """The per-user folder for reusable computed data (soak states, the fingerprint
-    reference, the course's default working folders): ``$SPINDLEBENCH_CACHE``, else
+    """The per-user folder for reusable computed data (soak states, translated models, the
+    fingerprint reference, the course's default working folders): ``$SPINDLEBENCH_CACHE``, else
     ``$XDG_CACHE_HOME/spindlebench``, else ``~/.cache/spindlebench``.
 
     Never the current folder: a command writes there only what it is told to write (its

@@ -27,7 +27,7 @@ from spindlebench.core.names import KELVIN_OFFSET
 from spindlebench.formats.recording import node_of_output, node_output
 from spindlebench.model import DEFAULT_SEGMENTS, MODEL_CLASS
 from spindlebench.model.causalise import solve_explicitly
-from spindlebench.model.frontend import TranslatedModel, translate
+from spindlebench.model.frontend import TranslatedModel
 
 SENSOR_PREFIX = "sensor_"
 #: A temperature state's FMU name ends in this (``housing_3_T``).
@@ -332,6 +332,8 @@ def _bounds(translated, inputs, params, tunable_index) -> dict:
 
 def explicit_ode(model_dir: str | Path = "models", segments: int = DEFAULT_SEGMENTS,
                  model_class: str = MODEL_CLASS) -> ExplicitOde:
-    """Translate ``model_dir``'s Modelica package (its machine, or ``model_class``) and return
-    its explicit ODE."""
-    return build_explicit_ode(translate(model_dir, segments, model_class))
+    """The explicit ODE of ``model_dir``'s Modelica package (its machine, or ``model_class``):
+    translated once per source and kept on disk (``model.ode_cache``)."""
+    from spindlebench.model.ode_cache import cached_explicit_ode  # imports this module
+
+    return cached_explicit_ode(model_dir, segments, model_class)
