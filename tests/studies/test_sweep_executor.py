@@ -99,6 +99,19 @@ def test_workers_are_forked_with_their_tasks_modules_and_its_cpu_is_counted():
     assert stats.outside_cpu_s - worker > worker  # the forkserver's imports outweigh it
 
 
+def test_a_study_clusters_workers_are_forked_with_the_modules_the_local_pool_preloads():
+    """The local pool preloads its tasks' modules (``TaskRunner._opener``); a study cluster's
+    forkserver, started before any task is known, preloads ``TASK_MODULES``
+    (``dask_plugin.FORKSERVER_PRELOAD``): they must be the modules of a study's tasks."""
+    from spindlebench.studies.running import jobs
+    from spindlebench.studies.running.dask_plugin import FORKSERVER_PRELOAD
+    from spindlebench.studies.running.executor import TASK_MODULES
+
+    assert {jobs.simulate_job.__module__, jobs.evaluate_job.__module__} == set(TASK_MODULES)
+    assert FORKSERVER_PRELOAD[0] == "__main__"
+    assert set(TASK_MODULES) < set(FORKSERVER_PRELOAD)
+
+
 def test_the_study_process_start_up_is_frozen_out_of_the_collector():
     """A full collection of the study process rescans its 140 000 start-up objects (0.1
     CPU-s each): a run freezes them (``freeze_start_up``)."""
@@ -235,7 +248,7 @@ def test_dask_workers_and_nannies_are_quieted():
 
     def periods():
         callbacks = get_worker().periodic_callbacks
-        return (callbacks["profile"].is_running(), callbacks["tick"].callback_time,
+        return ("profile" in callbacks, callbacks["tick"].callback_time,
                 callbacks["monitor"].callback_time)
 
     with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,

@@ -41,6 +41,11 @@ from spindlebench.core.console import one_line_error
 from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.progress import tqdm_class
 
+#: The modules of a study's task functions (``jobs.simulate_job``, ``jobs.evaluate_job``): what
+#: the local pool preloads for a study (``TaskRunner._opener`` takes its tasks' modules) and
+#: what a study cluster's nannies preload for their workers (``dask_plugin.dask_setup``), which
+#: start before any study's tasks are known.
+TASK_MODULES = ("spindlebench.studies.running.jobs",)
 #: A Dask scheduler address: protocol://host:port (tcp, tls, ucx, ws, wss, inproc).
 DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|wss?)://[^\s/]+:\d+/?$")
 
