@@ -277,24 +277,40 @@ def test_dask_tasks_are_not_hashed_into_shared_keys():
     assert second > first
 
 
-def test_the_scheduler_is_handed_sealed_tasks():
+def test_the_scheduler_is_handed_sealed_tasks_and_the_workers_hold_sealed_values():
     """A study task reaches the scheduler as ``pickle.loads(BYTES)`` (``SealedCall``): the
     scheduler unpickles what it is given, and unpickling a study's task made it import the
     study's modules and rebuild every evaluation job's data. The worker still runs the call,
-    its exceptions come back as data."""
+    its exceptions come back as data, and it holds the value as bytes (``sealed_value``:
+    Dask measured every recording frame's columns), which the client's future unpickles."""
     import pickle
 
+    from distributed.diagnostics.plugin import SchedulerPlugin
     from spindlebench.studies.running.executor import dask_executor
+
+    class Seen(SchedulerPlugin):
+        """Each finished task's spec and the type of the value its worker holds (read as it
+        finishes: the scheduler forgets a task once its client has the value)."""
+
+        def __init__(self, scheduler):
+            self.scheduler, self.tasks = scheduler, []
+
+        def transition(self, key, start, finish, *args, **kwargs):
+            if finish == "memory":
+                task = self.scheduler.tasks[key]
+                self.tasks.append((task.run_spec, task.type))
 
     with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                    protocol="tcp://", dashboard_address=None) as cluster,
           dask_executor(cluster.scheduler_address) as executor):
+        seen = Seen(cluster.scheduler)
+        cluster.scheduler.add_plugin(seen)
         future = executor.submit(call_isolated, square, (2,))
         failed = executor.submit(call_isolated, square, (3,))
         assert future.result()[:2] == (4, None)
         assert failed.result()[1].startswith("ValueError")
-        specs = [task.run_spec for task in cluster.scheduler.tasks.values()]
-    assert len(specs) == 2
-    for spec in specs:
+    assert len(seen.tasks) == 2
+    for spec, held in seen.tasks:
         assert spec.func is pickle.loads
         assert [type(arg) for arg in spec.args] == [bytes]
+        assert held == "bytes"
