@@ -6,23 +6,26 @@ training run: 48 six-hour simulations and 14 evaluation jobs). Every configurati
 real command, ``spindlebench sweep STUDY -o DIR -q``, from scratch in its own folder:
 
 - ``local``: ``--workers N`` (forkserver pool of N processes);
-- ``dask``: a cluster of separate processes started here, ``dask scheduler`` and ``dask
-  worker --nworkers N --nthreads 1`` (each worker under its nanny), then the command with
+- ``dask``: a cluster of separate processes started here as docs/speed.md starts a study
+  cluster, ``dask scheduler`` and ``dask worker --nworkers N --nthreads 1 ...
+  --preload-nanny spindlebench.studies.running.dask_plugin`` (each worker under its nanny,
+  forked from one forkserver that has imported the task modules), then the command with
   ``--dask-address``; the cluster is stopped (SIGTERM) right after the command ends.
 
 CPU seconds are those of the whole process tree (user + system): this process makes itself
 the subreaper of its descendants (``prctl(PR_SET_CHILD_SUBREAPER)``), so a forkserver's
 workers, a nanny's worker and anything orphaned are reaped here and their CPU lands in
 ``RUSAGE_CHILDREN``. For Dask that includes the cluster's start-up and its idle time while
-the command starts; ``dask_idle`` measures that part alone (a cluster started, left idle,
-stopped, ``IDLE_S`` seconds in all). The scheduler runs with ``QUIET_SCHEDULER`` (the
-settings docs/speed.md gives for a study cluster); workers and nannies with Dask's defaults,
-quieted by the study's plugins. The results CSV of every run is compared with the
-first's, byte for byte.
+the command starts (the forkserver's imports included); ``dask_idle`` measures that part
+alone (a cluster started, left idle, stopped, ``IDLE_S`` seconds in all). The scheduler
+runs with ``QUIET_SCHEDULER``, the workers with ``WORKER_OPTIONS`` (the settings
+docs/speed.md gives for a study cluster). The results CSV of every run is compared with
+the first's, byte for byte.
 
 A Dask row also has the CPU of a cluster that was already running: the command's process
 tree plus the cluster's processes (``scheduler``, ``nanny``, ``workers``, read with psutil)
-while the command ran, without the cluster's start, stop and idle time before.
+while the command ran, without the cluster's start, stop and idle time before (so without
+the forkserver's imports, which a running cluster has paid when it started).
 
 Run: .venv/bin/python bench/bench_dask.py  (writes bench/results/bench_dask.json)
 or   .venv/bin/python bench/bench_dask.py --example  (the example season sweep itself, 5
@@ -67,10 +70,15 @@ WORKERS = (1, 2)
 CLUSTER_START_S = 120.0
 PR_SET_CHILD_SUBREAPER = 36
 #: The scheduler's settings for a study cluster (docs/speed.md): its event-loop tick and
-#: system monitor less often. The workers and nannies run Dask's defaults; the study's
-#: plugins quiet them (``dask_plugin.QUIET``).
+#: system monitor less often (the workers and nannies are quieted by the study's preload
+#: and plugins, ``dask_plugin.QUIET``).
 QUIET_SCHEDULER = {"DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "1s",
                    "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__INTERVAL": "5s"}
+#: ``dask worker``'s options for a study cluster (docs/speed.md): one thread per worker, no
+#: dashboard, no memory monitor, and the study's nanny preload (``dask_plugin.dask_setup``:
+#: the workers forked from one process that has imported the task modules, and quiet).
+WORKER_OPTIONS = ("--nthreads", "1", "--no-dashboard", "--memory-limit", "0",
+                  "--preload-nanny", "spindlebench.studies.running.dask_plugin")
 #: Wall seconds of the idle-cluster rows.
 IDLE_S = 60.0
 
@@ -132,7 +140,7 @@ class Cluster:
              "--no-dashboard"], env={**(env or os.environ), **QUIET_SCHEDULER}, **quiet)]
         self.processes.append(subprocess.Popen(
             [str(BIN / "dask"), "worker", self.address, "--nworkers", str(workers),
-             "--nthreads", "1", "--no-dashboard", "--memory-limit", "0"], env=env, **quiet))
+             *WORKER_OPTIONS], env=env, **quiet))
         self._wait_for(workers)
 
     def _wait_for(self, workers: int) -> None:
@@ -166,8 +174,8 @@ class Cluster:
                     spawned = process.pid != root.pid and "-c" in process.cmdline()
                 except psutil.Error:
                     continue
-                # the worker: `python -c 'from multiprocessing.spawn ...'`, like the
-                # resource tracker beside it (a few ms)
+                # the workers, the forkserver that forks them (its imports are theirs) and
+                # the resource tracker (a few ms): `python -c 'from multiprocessing...'`
                 roles["workers" if spawned else role] += times.user + times.system
         return roles
 

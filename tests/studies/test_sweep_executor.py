@@ -99,6 +99,19 @@ def test_workers_are_forked_with_their_tasks_modules_and_its_cpu_is_counted():
     assert stats.outside_cpu_s - worker > worker  # the forkserver's imports outweigh it
 
 
+def test_a_study_clusters_workers_are_forked_with_the_modules_the_local_pool_preloads():
+    """The local pool preloads its tasks' modules (``TaskRunner._opener``); a study cluster's
+    forkserver, started before any task is known, preloads ``TASK_MODULES``
+    (``dask_plugin.FORKSERVER_PRELOAD``): they must be the modules of a study's tasks."""
+    from spindlebench.studies.running import jobs
+    from spindlebench.studies.running.dask_plugin import FORKSERVER_PRELOAD
+    from spindlebench.studies.running.executor import TASK_MODULES
+
+    assert {jobs.simulate_job.__module__, jobs.evaluate_job.__module__} == set(TASK_MODULES)
+    assert FORKSERVER_PRELOAD[0] == "__main__"
+    assert set(TASK_MODULES) < set(FORKSERVER_PRELOAD)
+
+
 def test_the_study_process_start_up_is_frozen_out_of_the_collector():
     """A full collection of the study process rescans its 140 000 start-up objects (0.1
     CPU-s each): a run freezes them (``freeze_start_up``)."""
@@ -235,7 +248,7 @@ def test_dask_workers_and_nannies_are_quieted():
 
     def periods():
         callbacks = get_worker().periodic_callbacks
-        return (callbacks["profile"].is_running(), callbacks["tick"].callback_time,
+        return ("profile" in callbacks, callbacks["tick"].callback_time,
                 callbacks["monitor"].callback_time)
 
     with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
@@ -264,24 +277,40 @@ def test_dask_tasks_are_not_hashed_into_shared_keys():
     assert second > first
 
 
-def test_the_scheduler_is_handed_sealed_tasks():
+def test_the_scheduler_is_handed_sealed_tasks_and_the_workers_hold_sealed_values():
     """A study task reaches the scheduler as ``pickle.loads(BYTES)`` (``SealedCall``): the
     scheduler unpickles what it is given, and unpickling a study's task made it import the
     study's modules and rebuild every evaluation job's data. The worker still runs the call,
-    its exceptions come back as data."""
+    its exceptions come back as data, and it holds the value as bytes (``sealed_value``:
+    Dask measured every recording frame's columns), which the client's future unpickles."""
     import pickle
 
+    from distributed.diagnostics.plugin import SchedulerPlugin
     from spindlebench.studies.running.executor import dask_executor
+
+    class Seen(SchedulerPlugin):
+        """Each finished task's spec and the type of the value its worker holds (read as it
+        finishes: the scheduler forgets a task once its client has the value)."""
+
+        def __init__(self, scheduler):
+            self.scheduler, self.tasks = scheduler, []
+
+        def transition(self, key, start, finish, *args, **kwargs):
+            if finish == "memory":
+                task = self.scheduler.tasks[key]
+                self.tasks.append((task.run_spec, task.type))
 
     with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                    protocol="tcp://", dashboard_address=None) as cluster,
           dask_executor(cluster.scheduler_address) as executor):
+        seen = Seen(cluster.scheduler)
+        cluster.scheduler.add_plugin(seen)
         future = executor.submit(call_isolated, square, (2,))
         failed = executor.submit(call_isolated, square, (3,))
         assert future.result()[:2] == (4, None)
         assert failed.result()[1].startswith("ValueError")
-        specs = [task.run_spec for task in cluster.scheduler.tasks.values()]
-    assert len(specs) == 2
-    for spec in specs:
+    assert len(seen.tasks) == 2
+    for spec, held in seen.tasks:
         assert spec.func is pickle.loads
         assert [type(arg) for arg in spec.args] == [bytes]
+        assert held == "bytes"

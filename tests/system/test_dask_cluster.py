@@ -123,3 +123,61 @@ def test_an_address_that_cannot_work_is_one_line_and_nothing_else(tmp_path, addr
     assert child.returncode == 2
     assert address in one_error_line(stderr)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_a_study_cluster_forks_its_workers_preloaded_and_single_threaded_in_blas(tmp_path):
+    """``dask worker --preload-nanny spindlebench.studies.running.dask_plugin`` (the study
+    cluster of docs/speed.md): both workers are forked from one forkserver that has imported
+    the study's task modules, so they hold them before any task; each runs one BLAS thread
+    and no profiler before a study connects; and a study's task runs there, sealed."""
+    from spindlebench.studies.running.dask_plugin import FORKSERVER_PRELOAD
+    from spindlebench.studies.running.executor import TASK_MODULES, call_isolated, dask_executor
+    from spindlebench.studies.sweep.sweep_run import condition_id
+
+    address_file = tmp_path / "scheduler.json"
+    quiet = {"cwd": tmp_path, "env": _env(), "stdout": subprocess.DEVNULL,
+             "stderr": subprocess.DEVNULL}
+    processes = [subprocess.Popen([str(DASK), "scheduler", "--scheduler-file",
+                                   str(address_file), "--port", "0", "--no-dashboard"],
+                                  **quiet)]
+    try:
+        deadline = time.monotonic() + 180
+        while not address_file.is_file():
+            assert processes[0].poll() is None and time.monotonic() < deadline
+            time.sleep(0.1)
+        processes.append(subprocess.Popen(
+            [str(DASK), "worker", "--scheduler-file", str(address_file), "--nworkers", "2",
+             "--nthreads", "1", "--no-dashboard", "--memory-limit", "0", "--preload-nanny",
+             "spindlebench.studies.running.dask_plugin"], **quiet))
+        address = json.loads(address_file.read_text(encoding="utf-8"))["address"]
+        import distributed  # here, not at collection
+
+        def state(dask_worker):  # nested: pickled by value, run in each worker
+            import psutil
+            import threadpoolctl
+
+            return {"parent": os.getppid(),
+                    "parent_command": " ".join(psutil.Process(os.getppid()).cmdline()),
+                    "loaded": sorted(set(TASK_MODULES) & set(sys.modules)),
+                    "blas_threads": {pool["num_threads"]
+                                     for pool in threadpoolctl.threadpool_info()},
+                    "profiling": "profile" in dask_worker.periodic_callbacks}
+
+        with distributed.Client(address, timeout="120s") as client:
+            client.wait_for_workers(2, timeout=180)
+            workers = list(client.run(state).values())
+        with dask_executor(address) as executor:
+            done = executor.submit(call_isolated, condition_id, (None,)).result()
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+            process.wait(timeout=60)
+    assert len(workers) == 2 and len({worker["parent"] for worker in workers}) == 1
+    forkserver = workers[0]["parent_command"]
+    assert "multiprocessing.forkserver" in forkserver
+    assert str(list(FORKSERVER_PRELOAD)) in forkserver
+    for worker in workers:
+        assert worker["loaded"] == sorted(TASK_MODULES)  # before any task: preloaded
+        assert worker["blas_threads"] == {1} and not worker["profiling"]
+    assert done[:2] == ("noise-free", None)
