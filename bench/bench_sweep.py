@@ -10,13 +10,13 @@ run are checked to be identical (same seeds, any executor).
 
 Then issue 10's goal row: the same example study with 42 replicas, i.e. 24 x 42 = 1 008
 experiments (FMU simulations of 6 h, as the study's) and 42 x 7 x 4 = 1 176 evaluations of 14
-methods each (in 42 x 7 = 294 jobs: one per replica and condition covers its 4 training runs),
-on 2 worker processes, from scratch (goal: <= 3 min on this machine, results
-identical to the per-method evaluation, which tests check). It prints wall seconds,
-experiments per second, and CPU seconds (this process, which writes every recording and
-result, plus the workers' CPU inside their tasks and outside them: start-up, unpickling the
-tasks, pickling the results): on the shared machine the wall time holds
-the other users' work, the CPU seconds do not.
+methods each (in 42 x 7 = 294 jobs: one per replica and condition covers its 4 training runs;
+one task per replica holds its 7 jobs), on 2 worker processes, from scratch (goal: <= 3 min on
+this machine, results identical to the per-method evaluation, which tests check). It prints
+wall seconds, experiments per second, and CPU seconds (this process, which writes every
+recording and result, plus the workers' CPU inside their tasks and outside them: start-up,
+unpickling the tasks, pickling the results): on the shared machine the wall time holds the
+other users' work, the CPU seconds do not.
 
 Run: .venv/bin/python bench/bench_sweep.py [STUDY.toml] [--runs-only | --no-runs]
 (a given study runs as it is; --runs-only: only the 1 008-experiment row; --no-runs: without
@@ -119,7 +119,7 @@ def goal_row(study_path: Path) -> dict:
     print(f"CPU seconds: {total:.0f} = workers' simulations {sim_cpu:.0f} "
           f"({1000 * sim_cpu / max(1, stats.total('simulation')):.0f} ms each) + evaluations "
           f"{eval_cpu:.0f} ({1000 * eval_cpu / max(1, outcome.evaluated):.0f} ms per replica x "
-          f"condition x training run, {outcome.evaluated} in {stats.total('evaluation')} jobs) "
+          f"condition x training run, {outcome.evaluated} in {stats.total('evaluation')} tasks) "
           f"+ the workers outside their tasks {outside:.0f} (start-up, unpickling tasks, "
           f"pickling results) + this process {here:.0f} (recordings written and read back, "
           f"results, of which tables/plots/README {here - run_cpu:.0f})")

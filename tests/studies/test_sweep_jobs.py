@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pandas as pd
 import pytest
 from conftest import REPO
@@ -53,7 +54,8 @@ def rows_on_their_own(job, train):
 def test_one_job_per_condition_gives_each_training_runs_own_rows(swept):
     sweep, outcome = swept
     assert len(sweep.trains) == 2
-    assert outcome.stats.done == {"simulation": 8, "evaluation": 2 * len(sweep.conditions)}
+    # one task per replica holds its conditions' jobs
+    assert outcome.stats.done == {"simulation": 8, "evaluation": 2}
     assert outcome.evaluated == 2 * 2 * len(sweep.conditions)
     assert {c.fault_name for c in sweep.conditions if c is not None} == {"none", "T1-stuck"}
     for condition in sweep.conditions:
@@ -101,14 +103,15 @@ def test_a_training_run_whose_evaluation_raises_costs_only_itself(swept, seasons
     broken = sweep.trains[0]
     original = jobs._evaluate_training_run
 
-    def breaking(job, train, runs):
+    def breaking(job, train, *rest):
         if train == broken:
             raise RuntimeError("broken on purpose")
-        return original(job, train, runs)
+        return original(job, train, *rest)
 
     monkeypatch.setattr(jobs, "_evaluate_training_run", breaking)
     _, failing = run(seasons_study, out)
-    assert failing.stats.done == {"evaluation": len(sweep.conditions)}
+    assert failing.stats.done == {"evaluation": 1}  # replica 1's conditions in one task
+    assert failing.evaluated == 2 * len(sweep.conditions)
     results = failing.results
     failed = results[results["error"] != ""]
     assert set(failed["train_experiment"]) == {broken.id} and set(failed["replica"]) == {1}
@@ -256,3 +259,71 @@ def test_measured_frame_is_the_frame_pandas_makes_of_its_values(swept):
                 for column, name in (("T1", "true_T1_C"), ("T20", "true_T20_C"),
                                      ("spindle_speed_rpm", "spindle_speed_rpm")):
                     assert np.array_equal(made[column].to_numpy(), truth[name].to_numpy())
+
+
+def test_a_training_run_measured_alike_reuses_its_models_to_the_bit(swept, monkeypatch):
+    """A fault condition measures each training run healthy, into the healthy condition's
+    frame: in one task its job takes the recording the healthy job checked, with the models
+    trained on it (``jobs._training_recording``), and gives the rows of models trained
+    afresh (its job alone)."""
+    sweep, _ = swept
+    healthy = next(c for c in sweep.conditions if c is not None and c.fault is None)
+    faulty = next(c for c in sweep.conditions
+                  if c is not None and c.fault is not None and c.noise == healthy.noise)
+    job, sibling = (sweep.evaluation_task(2, c, sweep.trains).args[0] for c in (faulty, healthy))
+    fresh = evaluate_job(job)
+    made = []
+    original = jobs._training_recording
+
+    def watched(frame, kept):
+        recording = original(frame, kept)
+        made.append((recording, dict(recording._memo)))  # its memo as the job found it
+        return recording
+
+    monkeypatch.setattr(jobs, "_training_recording", watched)
+    _, reused = jobs.evaluate_jobs((sibling, job))
+    first, second = made[:len(sweep.trains)], made[len(sweep.trains):]
+    assert len(second) == len(sweep.trains)
+    for (recording, _), (again, memo) in zip(first, second, strict=True):
+        assert again is recording  # the healthy job's, with its models
+        assert {key[0] for key in memo if isinstance(key, tuple)} >= {"model", "top-k fit"}
+        assert "ridge fit" in memo
+    for train in sweep.trains:
+        pd.testing.assert_frame_equal(reused[train.id], fresh[train.id], check_exact=True)
+        assert reused[train.id].to_csv(index=False) == fresh[train.id].to_csv(index=False)
+
+
+def test_a_training_frame_differing_in_one_bit_is_a_recording_of_its_own(swept):
+    sweep, _ = swept
+    job = sweep.evaluation_task(2, sweep.conditions[0], sweep.trains).args[0]
+    frame = measured_frame(job, sweep.trains[0], held_out=False)
+    kept = {}
+    recording = jobs._training_recording(frame, kept)
+    assert jobs._training_recording(measured_frame(job, sweep.trains[0], held_out=False),
+                                    kept) is recording
+    changed = frame.copy()
+    changed.iloc[5, 3] = float(np.nextafter(changed.iloc[5, 3], np.inf))
+    assert jobs._training_recording(changed, kept) is not recording
+    named = frame.copy()
+    named.attrs["path"] = "somewhere.csv"  # its messages may name the file: not shared
+    assert jobs._training_recording(named, kept) is not jobs._training_recording(named, kept)
+
+
+def test_one_task_per_replica_gives_each_jobs_own_results_and_errors(swept):
+    """``evaluate_jobs`` (a replica's conditions in one task, the sweep's) gives each job
+    what ``evaluate_job`` gives it alone, whichever order the shared recordings are made in;
+    a job that raises gives its one-line error and costs no other job."""
+    sweep, _ = swept
+    together = tuple(sweep.evaluation_task(2, condition, sweep.trains).args[0]
+                     for condition in sweep.conditions)
+    broken = dataclasses.replace(together[1], truths={})
+    results = jobs.evaluate_jobs((together[0], broken, *together[2:]))
+    assert results[1].startswith("KeyError: ")
+    for job, result in zip(together, results, strict=True):
+        if job is together[1]:
+            continue
+        alone = evaluate_job(job)
+        assert list(result) == list(alone)
+        for train_id, frame in alone.items():
+            pd.testing.assert_frame_equal(result[train_id], frame, check_exact=True)
+            assert result[train_id].to_csv(index=False) == frame.to_csv(index=False)

@@ -144,11 +144,13 @@ def test_interrupted_sweep_resumes_without_redoing_finished_work(tmp_path, refer
     for results in (outcome.results, again.results):
         pd.testing.assert_frame_equal(ordered(results), reference_results)
 
-    # Losing one recording costs exactly that simulation and its replica's evaluations.
+    # Losing one recording costs exactly that simulation and its replica's evaluations (one
+    # task for the replica's conditions).
     lost = sweep.family[2]
     (out / recording_path(1, lost)).unlink()
     _, repaired = sweep_into(out)
-    assert repaired.stats.done == {"simulation": 1, "evaluation": 3}
+    assert repaired.stats.done == {"simulation": 1, "evaluation": 1}
+    assert repaired.evaluated == len(sweep.conditions) * len(sweep.trains) == 3
 
 
 class BrokenExperiment(Sweep):
@@ -188,7 +190,8 @@ def test_a_failed_simulation_is_recorded_and_the_sweep_goes_on(tmp_path, referen
 
     # Resuming retries the failed simulation only; then nothing is missing any more.
     _, fixed = sweep_into(out)
-    assert fixed.stats.done == {"simulation": 1, "evaluation": 3}
+    assert fixed.stats.done == {"simulation": 1, "evaluation": 1}  # the replica's 3 jobs
+    assert fixed.evaluated == 3
     assert not (out / failure_path(1, broken)).exists()
     pd.testing.assert_frame_equal(ordered(fixed.results), ordered(reference[1].results))
 
@@ -214,7 +217,8 @@ class BrokenEvaluation(Sweep):
 def test_a_failed_evaluation_is_reported_and_retried(tmp_path, reference):
     out = tmp_path / "bad-evaluation"
     _, outcome = sweep_into(out, BrokenEvaluation)
-    assert outcome.stats.failed == {"evaluation": 1}
+    # the job fails inside its replica's task, which reports it per job: the task is done
+    assert not outcome.stats.failed and outcome.stats.done["evaluation"] == 2
     failed = outcome.results[outcome.results["error"] != ""]
     assert len(failed) == 1 and failed["error"].iloc[0].startswith("evaluation failed: KeyError")
     assert failed["replica"].iloc[0] == 2 and failed["data"].iloc[0] == "noise-free"
@@ -230,7 +234,7 @@ def test_dask_local_cluster_gives_the_same_numbers(tmp_path, reference):
                                   protocol="tcp://", dashboard_address=None) as cluster:
         outcome = run_sweep(TINY, tmp_path / "dask", dask_address=cluster.scheduler_address,
                             progress=False)
-    assert outcome.stats.done == {"simulation": 8, "evaluation": 6}
+    assert outcome.stats.done == {"simulation": 8, "evaluation": 2}  # a task per replica
     pd.testing.assert_frame_equal(ordered(outcome.results), ordered(reference[1].results))
     assert "Dask cluster at tcp://" in (tmp_path / "dask" / "provenance.json").read_text()
 

@@ -1050,7 +1050,9 @@ def evaluate_checked(
                         lambda: bool(constant_columns(y_train[:, None])[0])):
         raise SelectionError(f"recording {train_name}: target column {target!r} is constant "
                              f"({y_train[0]:g} in every sample); nothing to select or fit")
-    with _naming(train_name):
+
+    def trained() -> tuple[Selection, LinearFit | EstimatorFit]:
+        """The selection on the training recording and the model fitted on it."""
         if choice.is_paper and row_wise(candidates, similarity, closure):  # R too large
             matrix = PairCandidates(
                 _finite(candidates.matrix(train_frame, range(len(chosen))), chosen))
@@ -1068,11 +1070,23 @@ def evaluate_checked(
         else:
             selection = select_with(choice, matrix, y_train, k, similarity, names, seed,
                                     closure)
-        selected_names = [names[i] for i in selection.selected]
         train_values = candidates.matrix(train_frame, selection.selected)
         if dynamic:  # the driver columns in front of the rises (``selection.dynamic``)
             train_values = model_inputs(choice.regressor, train_frame.values, train_values)
-        fit = fit_with(choice, train_values, y_train, names=selected_names, random_state=seed)
+        return selection, fit_with(choice, train_values, y_train,
+                                   names=[names[i] for i in selection.selected],
+                                   random_state=seed)
+
+    with _naming(train_name):
+        # kept by the training recording: a study asks the same model of it again (a sweep's
+        # measured conditions with one noise level train on the same recording, reused by
+        # content: ``jobs._training_recording``); a user's method or regressor, which may
+        # not give the same model twice, is trained at each call
+        user = choice.user_method is not None or choice.user_regressor is not None
+        selection, fit = trained() if user else train_frame.memo(
+            ("model", candidates, target, similarity, closure, choice, k, seed,
+             None if support is None else tuple(support)), trained)
+    selected_names = [names[i] for i in selection.selected]
     used = [*candidates.sensors_of(selection.selected), target]
     if dynamic:
         used += list(driver_columns(choice.regressor))

@@ -212,14 +212,15 @@ class EvaluationData:
     """
 
     def __init__(self, train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
-                 runs: SharedRuns | None = None) -> None:
+                 runs: SharedRuns | None = None,
+                 checked_train: CheckedRecording | None = None) -> None:
         self.train = train
         self.tests = {str(name): frame for name, frame in tests.items()}
         self.runs = SharedRuns(self.tests) if runs is None else runs
-        self.checked_train = CheckedRecording(recording_name(train, "train"), train)
+        self.checked_train = CheckedRecording(recording_name(train, "train"), train) \
+            if checked_train is None else checked_train
         self.checked_tests = {name: self.runs.checked(name, frame)
                               for name, frame in self.tests.items()}
-        self._train_rises: np.ndarray | None = None
         self._stacked_columns: dict[str, np.ndarray | None] = {}
 
     def raw_rises(self, name: str | None = None) -> np.ndarray:
@@ -230,9 +231,8 @@ class EvaluationData:
         of the fits below may round differently on another memory layout."""
         if name is not None:
             return self.runs.raw_rises(name)
-        if self._train_rises is None:
-            self._train_rises = rises(np.asfortranarray(self.checked_train.stack(SENSORS)))
-        return self._train_rises
+        checked = self.checked_train  # kept by it, as the models trained on it
+        return checked.memo("raw rises", lambda: rises(np.asfortranarray(checked.stack(SENSORS))))
 
     def test_raw_rises(self, columns: np.ndarray) -> np.ndarray | None:
         """(test runs, samples, len(columns)): run i's ``raw_rises(name)[:, columns]``, the
@@ -366,7 +366,9 @@ def _top_k_correlated(spec: MethodSpec, data: EvaluationData) -> dict[str, Score
         shared = ranking is not None and isinstance(spec.k, int) and 1 <= spec.k <= len(ranking)
         chosen = ranking[:spec.k] if shared else \
             select_with(TOP_K, X, y, spec.k, names=SENSORS).selected
-    fit = fit_with(TOP_K, X[:, chosen], y)
+    # kept by the training recording, as evaluate_checked keeps the groups' models
+    fit = data.checked_train.memo(("top-k fit", tuple(int(i) for i in chosen)),
+                                  lambda: fit_with(TOP_K, X[:, chosen], y))
     stacked = data.test_raw_rises(chosen) if isinstance(fit, LinearFit) else None
     predicted = None if stacked is None else fit.predict_stacked(stacked)
     predictions = dict(zip(data.tests, fit.predict_each(
@@ -400,12 +402,8 @@ def _top_k_ranking(X: np.ndarray, y: np.ndarray) -> np.ndarray | None:
 
 def _ridge(data: EvaluationData) -> dict[str, Score]:
     X, y = data.raw_rises(), data.target()
-    # finite rises: PairwiseDifferences().fit(X).transform(X) without its checks
-    candidates = ridge_candidates(X) if np.isfinite(X).all() else \
-        PairwiseDifferences().fit(X).transform(X)
-    # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
-    alpha = blocked_cv_alpha(candidates, y, factors=(X, with_differences_matrix(X.shape[1])))
-    fitted = standardised_ridge(candidates, y, alpha)
+    # kept by the training recording, as evaluate_checked keeps the groups' models
+    candidates, alpha, fitted = data.checked_train.memo("ridge fit", lambda: _ridge_fit(X, y))
 
     @functools.cache
     def model() -> Pipeline:
@@ -424,6 +422,18 @@ def _ridge(data: EvaluationData) -> dict[str, Score]:
                                        ridge.intercept_)
     return _scores(data, _ridge_predictions(fitted, model, data),
                    f"all 210 candidates (alpha={alpha:.3g})")
+
+
+def _ridge_fit(X: np.ndarray, y: np.ndarray
+               ) -> tuple[np.ndarray, float, StandardisedRidge | None]:
+    """The ridge baseline's candidates of training rises ``X``, its penalty (chosen by the
+    blocked CV) and its fit (None where ``standardised_ridge`` does not serve)."""
+    # finite rises: PairwiseDifferences().fit(X).transform(X) without its checks
+    candidates = ridge_candidates(X) if np.isfinite(X).all() else \
+        PairwiseDifferences().fit(X).transform(X)
+    # the 210 candidates are the 20 rises times a fixed matrix: the CV's SVDs are then small
+    alpha = blocked_cv_alpha(candidates, y, factors=(X, with_differences_matrix(X.shape[1])))
+    return candidates, alpha, standardised_ridge(candidates, y, alpha)
 
 
 def ridge_candidates(raw: np.ndarray) -> np.ndarray:
@@ -508,12 +518,16 @@ def _oracle(data: EvaluationData) -> dict[str, Score]:
 
 
 def score_all(specs: list[MethodSpec], train: pd.DataFrame, tests: Mapping[str, pd.DataFrame],
-              similarity: str, runs: SharedRuns | None = None) -> list[dict[str, object]]:
+              similarity: str, runs: SharedRuns | None = None,
+              checked_train: CheckedRecording | None = None) -> list[dict[str, object]]:
     """Rows (method, k, test, scores or error) for every spec; a failing method is recorded,
     never raised, so one bad fit does not cost the others. ``runs`` (holding the frames of
-    ``tests``) shares the test runs' conversions with other training runs."""
+    ``tests``) shares the test runs' conversions with other training runs; ``checked_train``
+    (``train`` checked, or a recording of the same content) the models trained on it with
+    other evaluations."""
     rows: list[dict[str, object]] = []
-    data = EvaluationData(train, tests, runs)  # the one pass: every spec works on its arrays
+    # the one pass: every spec works on its arrays
+    data = EvaluationData(train, tests, runs, checked_train)
     for spec in specs:
         try:
             scores = run_method(spec, train, tests, similarity, data)

@@ -8,7 +8,8 @@ file system.
 ``evaluate_job``: one (replica, condition) and its training experiments: re-measure every
 experiment's noise-free truth with the condition's instruments (once for all training runs),
 train every method on each training run and score it on all the others → tidy result rows
-per training run.
+per training run. ``evaluate_jobs``: the jobs of one replica's conditions in one task, so
+the conditions that measure a training run alike train its models once.
 """
 
 from __future__ import annotations
@@ -37,8 +38,10 @@ from spindlebench.formats.recording import (
     STUDY_DRIVER_COLUMNS,
     TIME_COLUMN,
     TRUTH_COLUMNS,
+    recording_name,
     true_column,
 )
+from spindlebench.selection.evaluate import CheckedRecording
 from spindlebench.studies.family.experiments import (
     Condition,
     Experiment,
@@ -281,7 +284,42 @@ def evaluate_job(job: EvaluationJob) -> dict[str, TrainingResult]:
     250 ms with OpenBLAS threads on a busy 2-core machine and 9 ms without.
     """
     with _thread_pools().limit(limits=1):
-        return _evaluate(job)
+        return _evaluate(job, {})
+
+
+#: The training recordings of one task's jobs, by content (``_training_recording``).
+TrainingRecordings = dict[tuple[Any, ...], CheckedRecording]
+
+
+#: What ``evaluate_jobs`` gives per job: ``evaluate_job``'s results, or the one-line error of
+#: that job if it raised (the other jobs keep theirs).
+JobResult = dict[str, TrainingResult] | str
+
+
+def evaluate_jobs(jobs: tuple[EvaluationJob, ...]) -> list[JobResult]:
+    """``evaluate_job`` of each of ``jobs`` (one replica's conditions), in one task: per job
+    its results, or its one-line error if it raised, as a task of its own reports it.
+
+    Why one task: the fault conditions of a noise level measure each training run healthy,
+    into the same frame, and the first of their jobs in the task trains the models that the
+    others reuse (``_training_recording``); as tasks of their own they are spread over the
+    workers, each of which trains them again."""
+    results: list[JobResult] = []
+    kept: TrainingRecordings = {}
+    noise: str | None = None
+    with _thread_pools().limit(limits=1):
+        for job in jobs:
+            # only a job of the same noise level can measure a training run alike: the
+            # recordings of another one are let go (with what they hold of their jobs)
+            level = job.condition.noise.name if job.condition is not None else NOISE_FREE
+            if level != noise:
+                kept.clear()
+                noise = level
+            try:
+                results.append(_evaluate(job, kept))
+            except Exception as exc:  # failure isolation per job, as one task each had
+                results.append(one_line_error(exc))
+    return results
 
 
 @functools.cache
@@ -293,7 +331,7 @@ def _thread_pools() -> ThreadpoolController:
     return ThreadpoolController()
 
 
-def _evaluate(job: EvaluationJob) -> dict[str, TrainingResult]:
+def _evaluate(job: EvaluationJob, kept: TrainingRecordings) -> dict[str, TrainingResult]:
     # Every run as a held-out run, measured once for all training runs: same seed, so the
     # same frame whichever run trains (one job per training run measured it once each).
     held_out = {e.id: measured_frame(job, e) for e in job.experiments
@@ -302,14 +340,14 @@ def _evaluate(job: EvaluationJob) -> dict[str, TrainingResult]:
     results: dict[str, TrainingResult] = {}
     for train in job.trains:
         try:
-            results[train.id] = _evaluate_training_run(job, train, runs)
+            results[train.id] = _evaluate_training_run(job, train, runs, kept)
         except Exception as exc:  # failure isolation per training run, as one job each had
             results[train.id] = one_line_error(exc)
     return results
 
 
-def _evaluate_training_run(job: EvaluationJob, train: Experiment,
-                           runs: SharedRuns) -> pd.DataFrame:
+def _evaluate_training_run(job: EvaluationJob, train: Experiment, runs: SharedRuns,
+                           kept: TrainingRecordings) -> pd.DataFrame:
     tests = [e for e in job.experiments if e != train]
     rows: list[dict[str, Any]] = []
     if train.id in job.failures:
@@ -325,13 +363,40 @@ def _evaluate_training_run(job: EvaluationJob, train: Experiment,
         ids = [e.id for e in tests]  # (an id is formatted anew at each ask)
         available = {i: runs.frames[i] for i in ids if i not in job.failures}
         if available:
-            rows = score_all(list(job.specs), train_frame, available, job.similarity, runs)
+            rows = score_all(list(job.specs), train_frame, available, job.similarity, runs,
+                             _training_recording(train_frame, kept))
         failed = [i for i in ids if i in job.failures]
         rows += [{"method": s.name, "k": s.k, "test_experiment": i, "rmse_um": np.nan,
                   "rmse_true_um": np.nan, "selected": "",
                   "error": f"simulation failed: {job.failures[i]}"}
                  for s in job.specs for i in failed]
     return _result_frame(job, train, tests, rows)
+
+
+def _training_recording(frame: pd.DataFrame, kept: TrainingRecordings) -> CheckedRecording:
+    """The checked recording of training frame ``frame``: the one an earlier job of the same
+    task made of a frame of the same content (kept in ``kept``), else a new one, kept there.
+
+    Why: a training run is measured healthy, so the three fault conditions of one noise
+    level measure it into the same frame, bit for bit (same truth, seed and sensor model);
+    the recording keeps every model trained on it (the groups' selections and fits, the
+    top-k fits, the ridge penalty and fit, ``score_all``), so the jobs after the first train
+    nothing again and score the same models (the same values: computed once from the same
+    bits). Matched by content (the names, the values' bytes), so a frame that differs in any
+    bit is a recording of its own (and one with attributes or another index, which its
+    messages may name, is not kept). Kept for one task only (``evaluate_jobs``: a
+    replica's) and one noise level, as the recordings hold what their jobs' held-out runs
+    made for them (some 40 MB for a noise level's three jobs of the season sweep). The
+    frames are ``measured_frame``'s, which nothing changes after."""
+    values = frame.to_numpy()
+    index = frame.index
+    if values.dtype != np.float64 or not frame.columns.is_unique or frame.attrs or not (
+            isinstance(index, pd.RangeIndex) and index.start == 0 and index.step == 1):
+        return CheckedRecording(recording_name(frame, "train"), frame)
+    key = (tuple(frame.columns.tolist()), values.shape, values.tobytes())
+    if key not in kept:
+        kept[key] = CheckedRecording(recording_name(frame, "train"), frame)
+    return kept[key]
 
 
 #: The keys of a result row (``score_all``'s and a failed run's), in the order

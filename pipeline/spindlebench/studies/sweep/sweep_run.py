@@ -60,7 +60,9 @@ from spindlebench.studies.running.executor import Outcome, RunStats, Task, TaskR
 from spindlebench.studies.running.jobs import (
     NOISE_FREE,
     EvaluationJob,
+    JobResult,
     evaluate_job,
+    evaluate_jobs,
 )
 from spindlebench.studies.running.simulations import (
     Simulations,
@@ -85,8 +87,8 @@ class SweepOutcome:
     stats: RunStats
     resumed: bool
     skipped: dict[str, int] = field(default_factory=dict)
-    #: (replica, condition, training run) evaluations done now; ``stats`` counts their jobs
-    #: (one per replica and condition)
+    #: (replica, condition, training run) evaluations done now; ``stats`` counts their tasks
+    #: (one per replica: its conditions' jobs, ``evaluate_jobs``)
     evaluated: int = 0
     #: Several targets: the study's folder (its README has the joint selections), while
     #: ``out_dir`` is the first target's; None for one target.
@@ -95,6 +97,12 @@ class SweepOutcome:
 
 def condition_id(condition: Condition | None) -> str:
     return condition.id if condition is not None else NOISE_FREE
+
+
+def task_jobs(task: Task) -> tuple[EvaluationJob, ...]:
+    """The evaluation jobs of a sweep's evaluation task: one (``evaluate_job``) or one
+    replica's (``evaluate_jobs``)."""
+    return task.args[0] if task.fn is evaluate_jobs else (task.args[0],)
 
 
 def evaluation_path(replica: int, condition: Condition | None, train: Experiment) -> str:
@@ -222,7 +230,7 @@ class Sweep:
             else:
                 todo = self._evaluations_to_do(replica)
                 skipped["evaluation"] += len(self.evaluation_keys(replica)) - sum(
-                    len(task.args[0].trains) for task in todo)
+                    len(job.trains) for task in todo for job in task_jobs(task))
                 tasks.extend(todo)
 
         evaluated = [0]  # training-run evaluations written (a job holds several)
@@ -231,17 +239,19 @@ class Sweep:
             if outcome.task.kind == "simulation":
                 return self._record_simulation(outcome, waiting)
             self._record_evaluation(outcome)
-            evaluated[0] += len(outcome.task.args[0].trains)
+            evaluated[0] += sum(len(job.trains) for job in task_jobs(outcome.task))
             return ()
 
-        follow_ups = len(self.conditions) * sum(1 for exps in pending.values() if exps)
+        follow_ups = sum(1 for exps in pending.values() if exps)  # a task per replica
         stats = runner.run(tasks, on_outcome, expected_follow_ups=follow_ups)
         results = self.collect()
         return SweepOutcome(self.results.root, results, stats, resumed, skipped, evaluated[0])
 
     def _evaluations_to_do(self, replica: int) -> list[Task]:
-        """One task per condition of ``replica`` for its training runs without a result file
-        (a run whose file is lost is redone, the others are kept)."""
+        """The evaluations of ``replica``'s training runs without a result file (a run whose
+        file is lost is redone, the others are kept): one job per condition
+        (``evaluation_task``), all in one task (``evaluate_jobs``: the conditions that measure
+        a training run alike then train its models once)."""
         tasks = []
         for condition in self.conditions:
             missing = [train for train in self.trains
@@ -250,28 +260,46 @@ class Sweep:
                 tasks.append(self.evaluation_task(replica, condition, missing))
         for experiment in self.family:  # the jobs hold their data now: free the cache
             self._truths.pop((replica, experiment.id), None)
-        return tasks
+        jobs = [task for task in tasks if task.fn is evaluate_job]
+        if len(jobs) < 2:
+            return tasks
+        joined = Task(f"evaluate r{replica}", evaluate_jobs,
+                      (tuple(task.args[0] for task in jobs),), kind="evaluation")
+        return [joined, *(task for task in tasks if task.fn is not evaluate_job)]
 
     def _record_evaluation(self, outcome: Outcome) -> None:
         """Write each training run's rows, or its error file (kept apart so that the next run
-        retries it): a job that raised fails all its training runs, a training run whose
-        evaluation raised only itself. One manifest save records them all."""
-        job: EvaluationJob = outcome.task.args[0]
-        condition = job.condition
+        retries it): a task that raised fails all its training runs, a job that raised all
+        of its own, a training run whose evaluation raised only itself. One manifest save
+        records them all."""
+        jobs = task_jobs(outcome.task)
+        if not outcome.ok:
+            results: list[JobResult] = [str(outcome.error)] * len(jobs)
+        elif outcome.task.fn is evaluate_jobs:
+            results = list(outcome.value)
+        else:
+            results = [outcome.value]
         with self.results.one_manifest_save():
-            for train in job.trains:
-                path = evaluation_path(job.replica, condition, train)
-                value = outcome.value[train.id] if outcome.ok else outcome.error
-                if isinstance(value, pd.DataFrame):
-                    self.results.write_frame(path, value)
-                    self.results.remove(error_path(path))
-                    continue
-                self.results.write_frame(error_path(path), pd.DataFrame([{
-                    "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
-                    "noise": condition.noise.name if condition else NOISE_FREE,
-                    "fault": condition.fault_name if condition else "none",
-                    "train_experiment": train.id,
-                    "error": f"evaluation failed: {value}"}]))
+            for job, result in zip(jobs, results, strict=True):
+                self._record_job(job, result)
+
+    def _record_job(self, job: EvaluationJob, result: JobResult) -> None:
+        """Write the rows or error file of each training run of ``job`` (``result``: its
+        results, or the one-line error that failed it)."""
+        condition = job.condition
+        for train in job.trains:
+            path = evaluation_path(job.replica, condition, train)
+            value = result if isinstance(result, str) else result[train.id]
+            if isinstance(value, pd.DataFrame):
+                self.results.write_frame(path, value)
+                self.results.remove(error_path(path))
+                continue
+            self.results.write_frame(error_path(path), pd.DataFrame([{
+                "replica": job.replica, "data": "measured" if condition else NOISE_FREE,
+                "noise": condition.noise.name if condition else NOISE_FREE,
+                "fault": condition.fault_name if condition else "none",
+                "train_experiment": train.id,
+                "error": f"evaluation failed: {value}"}]))
 
     def _record_simulation(self, outcome: Outcome, waiting: dict[int, set[str]]) -> list[Task]:
         replica, experiment = self.simulations.store_outcome(outcome)
