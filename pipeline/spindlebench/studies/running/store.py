@@ -447,7 +447,10 @@ class ResultStore:
         if len(texts) == 1 or any(not text.startswith(header + b"\n") for text in texts):
             return pd.concat([_parse(text, low_memory=True) for text in texts],
                              ignore_index=True)
-        return _parse(texts[0] + b"".join(text[len(header) + 1:] for text in texts[1:]),
+        # one copy: each file after its header as a view (slicing the bytes, joining them
+        # and adding the first file copied a large sweep's 66 MB three times, 0.2 CPU-s)
+        skip = len(header) + 1
+        return _parse(b"".join([texts[0], *(memoryview(text)[skip:] for text in texts[1:])]),
                       low_memory=False)
 
     def lock(self) -> None:
