@@ -43,7 +43,7 @@ from spindlebench.core.paths import file_kind
 from spindlebench.core.provenance import sha256_file, sha256_written
 from spindlebench.formats.json_text import indented_json
 from spindlebench.formats.recording import write_recording
-from spindlebench.formats.table_csv import write_table
+from spindlebench.formats.table_csv import table_bytes, write_table
 
 STATE_FILE = "state.json"
 MANIFEST_FILE = "manifest.json"
@@ -422,8 +422,12 @@ class ResultStore:
     def write_frame(self, relative: str | Path, frame: pd.DataFrame) -> Path:
         """Write a table (``table_csv.write_table``: pandas' bytes, faster)."""
         target = self.path(relative)
-        with atomic_path(target) as tmp:
-            data = write_table(tmp, frame)
+        data = table_bytes(frame)
+        if data is None:  # pandas writes it
+            with atomic_path(target) as tmp:
+                data = write_table(tmp, frame)
+        else:
+            write_bytes(target, data)
         self._written(relative, data=data)
         return target
 
