@@ -1,5 +1,7 @@
 """Shared helpers: atomic writes and provenance."""
 
+import os
+
 import pytest
 from spindlebench.core import atomic, provenance
 
@@ -64,3 +66,21 @@ def test_a_folder_removed_after_a_write_is_made_again(tmp_path):
     shutil.rmtree(target.parent)
     atomic.write_text(target, "two")
     assert target.read_text() == "two"
+
+
+def test_a_kept_file_hash_is_redone_once_the_file_changes(tmp_path, monkeypatch):
+    """``sha256_unchanged`` keeps a settled file's hash while its status is the same: a
+    rewrite (here of the same size, its times set apart as a later tick would) is hashed
+    anew, and a file changed just now is not kept at all (its next change could share the
+    timestamp)."""
+    path = tmp_path / "machine.toml"
+    path.write_text("a = 1\n")
+    assert provenance.sha256_unchanged(path) == provenance.sha256_file(path)
+    assert not any(key[0] == str(path) for key in provenance._unchanged)  # changed just now
+    monkeypatch.setattr(provenance, "_SETTLED_NS", -1)  # as if it had been there for long
+    first = provenance.sha256_unchanged(path)
+    assert any(key[0] == str(path) for key in provenance._unchanged)  # kept now
+    path.write_text("a = 2\n")
+    stamp = path.stat().st_mtime_ns + 10_000_000
+    os.utime(path, ns=(stamp, stamp))
+    assert provenance.sha256_unchanged(path) == provenance.sha256_file(path) != first

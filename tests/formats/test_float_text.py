@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import orjson
 import pytest
-from spindlebench.formats.float_text import csv_rows, float_cells
+from spindlebench.formats.float_text import _odd, csv_rows, float_cells, orjson_writes_repr
 
 #: Values where a shortest-digits writer can go wrong: zeros and signs, NaN and infinities,
 #: where ``repr`` switches to an exponent (1e-05, 1e+16), the smallest subnormal and normal,
@@ -79,3 +80,25 @@ def test_values_outside_the_positional_range_spread_over_rows_and_columns():
     values[:, 4] = rng.uniform(-1e-12, 1e-12, 60)
     values.flat[rng.choice(values.size, len(AWKWARD), replace=False)] = AWKWARD
     assert csv_rows(values) == _repr_rows(values)
+
+
+def test_orjson_text_is_taken_only_where_it_is_repr_and_a_heat_flow_column_is_not_odd():
+    """``orjson_writes_repr`` (and ``_odd``, its array form) trust orjson's text outside
+    1e-10 <= |x| < 1e-4: there it must be ``repr``'s, scalar and array alike, at every power
+    of 2 and 10, their neighbours and random bit patterns; a recording's ~1e-13 W column and
+    large values are then written by orjson (``repr`` of each was most of a write)."""
+    powers = np.array([2.0 ** e for e in range(-1074, 1024)]
+                      + [float(f"1e{e}") for e in range(-323, 309)])
+    bits = np.random.default_rng(26).integers(0, 2 ** 64, 50_000, dtype=np.uint64).view(
+        np.float64)
+    values = np.concatenate([powers, np.nextafter(powers, np.inf),
+                             np.nextafter(powers, -np.inf), bits])
+    values = np.concatenate([values, -values])
+    values = values[np.isfinite(values)]
+    trusted = ~_odd(values)
+    assert trusted.tolist() == [orjson_writes_repr(v) for v in values.tolist()]
+    texts = orjson.dumps(values[trusted], option=orjson.OPT_SERIALIZE_NUMPY)[1:-1].split(b",")
+    assert [t.decode() for t in texts] == [repr(v) for v in values[trusted].tolist()]
+    assert all(orjson.dumps(v).decode() == repr(v) for v in values[trusted][::7].tolist())
+    assert not _odd(np.array([1e-13, -3.2e-12, 1e16, 1e300, 0.0, 1e-4])).any()
+    assert _odd(np.array([1e-5, 9.99e-5, 2.5e-7, 1e-10, np.nan, np.inf, -np.inf])).all()

@@ -26,19 +26,57 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
 
     Use it for writers that want a path (``DataFrame.to_csv``, ``savefig``, zip files).
     """
+    with atomic_file(target) as part:
+        part.close()  # the writer opens the path itself
+        yield part.path
+
+
+class PartFile:
+    """The part file of an ``atomic_file`` block: its ``path``, open for ``write``."""
+
+    def __init__(self, path: Path, handle: int) -> None:
+        self.path = path
+        self._handle: int | None = handle
+
+    def write(self, data: bytes) -> None:
+        """Write all of ``data`` (a bytes-like object) at the file's current end."""
+        if self._handle is None:
+            raise ValueError(f"{self.path}: closed")
+        view = memoryview(data).cast("B")
+        while view:
+            view = view[os.write(self._handle, view):]
+
+    def close(self) -> None:
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            os.close(handle)
+
+
+@contextlib.contextmanager
+def atomic_file(target: str | os.PathLike[str]) -> Iterator[PartFile]:
+    """Yield the part file beside ``target``, open for writing; close it and move it into
+    place only if the block succeeds.
+
+    Why a handle and not only a path: the part file is made (``O_EXCL``) open already, and a
+    writer that has its bytes in memory (a sweep's ~3 500 recordings, sidecars, result tables
+    and manifests) wrote them by opening the same file again by path."""
     target = Path(target)
     refuse_shipped(target)  # never a shipped file, unless --overwrite-shipped says so
     _sweep_once(target.parent)
     tmp: Path | None = None
+    part: PartFile | None = None
     try:
         # named before it is made, so a signal at any point (Ctrl-C right after the file was
         # made left it behind) finds ``tmp`` naming the file to remove
         while True:
             tmp = target.with_name(f".{_part_stem(target.name)}.{os.getpid()}."
                                    f"{secrets.token_hex(4)}.part")
-            if _create(tmp, target.parent):
+            handle = _create(tmp, target.parent)
+            if handle is not None:
+                part = PartFile(tmp, handle)
                 break
-        yield tmp
+        yield part
+        part.close()
         os.replace(tmp, target)
         tmp = None  # moved: nothing left to remove
     except OSError as exc:
@@ -46,24 +84,24 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
             exc.filename = str(target)  # say which file: "No space left on device" alone
         raise
     finally:
+        if part is not None:
+            part.close()
         if tmp is not None:
             tmp.unlink(missing_ok=True)
 
 
-def _create(part: Path, folder: Path) -> bool:
+def _create(part: Path, folder: Path) -> int | None:
     """Make the empty file ``part`` with the mode a plain ``open()`` gives (0666 less the
-    umask); False if the name is taken. Its folder is made again if it went away since this
-    process first wrote there."""
+    umask) and return its handle, open for writing; None if the name is taken. Its folder is
+    made again if it went away since this process first wrote there."""
     try:
         try:
-            handle = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+            return os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
         except FileNotFoundError:
             folder.mkdir(parents=True, exist_ok=True)
-            handle = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+            return os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
     except FileExistsError:
-        return False
-    os.close(handle)
-    return True
+        return None
 
 
 def _sweep_once(folder: Path) -> None:
@@ -96,14 +134,13 @@ def _part_stem(name: str) -> str:
 
 def write_text(target: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``target`` atomically (UTF-8)."""
-    with atomic_path(target) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+    write_bytes(target, text.encode("utf-8"))
 
 
 def write_bytes(target: str | os.PathLike[str], data: bytes) -> None:
     """Write ``data`` to ``target`` atomically."""
-    with atomic_path(target) as tmp:
-        tmp.write_bytes(data)
+    with atomic_file(target) as part:
+        part.write(data)
 
 
 def _process_exists(pid: int) -> bool:

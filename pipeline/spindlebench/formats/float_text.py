@@ -5,15 +5,18 @@ process; ``repr`` of each (CPython's ``dtoa``, ~350 ns a value here) was ~10 ms 
 recording, most of that process's CPU while its workers simulate. orjson (a compiled JSON
 writer) writes the same shortest round-trip digits (Ryu: the shortest decimal that reads
 back to the same float, on ties of length the closest) about twenty times faster, a whole
-array in one call; it differs from ``repr`` only in the notation outside ``repr``'s
-positional range (``0.00001`` for ``1e-05``, ``1e16`` for ``1e+16``) and writes ``null``
-for NaN and the infinities. So each value outside ``1e-4 <= |x| < 1e16`` (zero aside) is
-written by ``repr`` and every other is orjson's text as it is. Those values are few but
-spread (a simulated recording has a column of ~1e-13 W in every row: ``repr`` of every such
-row was ~11 ms a recording), so they are not taken row by row: orjson writes them as NaN,
-whose ``null`` no number's text contains, and the text is cut at each ``null`` and rejoined
-with their ``repr`` in between (~1 ms a recording). Tests hold the result equal to ``repr``
-on awkward values and on hundreds of thousands of random ones.
+array in one call; it differs from ``repr`` only in the notation of the decimal exponents
+-5 to -9, which it writes as JavaScript does (``0.00001`` and ``1e-7`` for ``1e-05`` and
+``1e-07``), and writes ``null`` for NaN and the infinities: from ``1e-10`` down and from
+``1e16`` up both write the same exponent form (``1e-13``, ``1e+16``; the module once took
+every value outside ``repr``'s positional range ``1e-4 <= |x| < 1e16`` as different, so
+that a simulated recording's column of ~1e-13 W heat flows, 180 values, went through
+``repr`` in every recording). So each value with ``1e-10 <= |x| < 1e-4`` (a decade of margin
+below the last one that differs) or not finite is written by ``repr`` and every other is
+orjson's text as it is. Those values are few but may be spread over the rows, so they are not
+taken row by row: orjson writes them as NaN, whose ``null`` no number's text contains, and
+the text is cut at each ``null`` and rejoined with their ``repr`` in between. Tests hold the
+result equal to ``repr`` on awkward values and on hundreds of thousands of random ones.
 """
 
 from __future__ import annotations
@@ -21,8 +24,12 @@ from __future__ import annotations
 import numpy as np
 import orjson
 
-#: ``repr`` writes |x| in [1e-4, 1e16) positionally, as orjson does; outside it, an exponent.
-POSITIONAL_FROM, POSITIONAL_BELOW = 1e-4, 1e16
+#: The finite values whose orjson text may not be their ``repr``: 1e-10 <= |x| < 1e-4 (orjson
+#: writes the exponents -5 to -9 otherwise; below and above that range the two agree, tested on
+#: every power of 2 and 10 and their neighbours, and on random bit patterns).
+REPR_ONLY_FROM, REPR_ONLY_BELOW = 1e-10, 1e-4
+#: The largest finite float64 (an infinity above it is written by neither).
+_LARGEST = float(np.finfo(np.float64).max)
 
 
 def csv_rows(values: np.ndarray) -> bytes:
@@ -38,13 +45,19 @@ def csv_rows(values: np.ndarray) -> bytes:
                            for v in values[odd].tolist()])  # row-major, as the nulls
 
 
+def orjson_writes_repr(value: float) -> bool:
+    """Whether orjson's text of the float ``value`` is its ``repr`` (``_odd`` of one value)."""
+    magnitude = abs(value)
+    return magnitude < REPR_ONLY_FROM or REPR_ONLY_BELOW <= magnitude <= _LARGEST
+
+
 def _odd(values: np.ndarray) -> np.ndarray:
-    """Where orjson's text of a value is not its ``repr``: outside the positional range
-    (zero aside), NaN and the infinities."""
+    """Where orjson's text of a value may not be its ``repr``: ``REPR_ONLY_FROM <= |x| <
+    REPR_ONLY_BELOW``, NaN and the infinities."""
     magnitude = np.abs(values)
-    with np.errstate(invalid="ignore"):  # NaN compares False: not positional
-        return ~(((magnitude >= POSITIONAL_FROM) & (magnitude < POSITIONAL_BELOW))
-                 | (values == 0.0))
+    with np.errstate(invalid="ignore"):  # NaN compares False: odd
+        return ~((magnitude < REPR_ONLY_FROM)
+                 | ((magnitude >= REPR_ONLY_BELOW) & (magnitude <= _LARGEST)))
 
 
 def _rows_of(text: bytes, texts: list[bytes]) -> bytes:

@@ -6,8 +6,9 @@ encodes in Python (~0.9 ms a sidecar, 1.5 million calls in a 1 008-experiment sw
 orjson (a pinned dependency, see ``float_text``) writes the same text with ``OPT_INDENT_2``
 (the same layout, ``": "`` after a key, ``{}`` and ``[]`` for empty ones, the same string
 escapes with ``ensure_ascii=False``) for the values it and ``json`` treat alike; the
-differences are floats outside ``repr``'s positional range (``1e-05``, ``1e+16``: orjson
-writes ``0.00001``, ``1e16``), which are handed to it as their ``repr`` (``orjson.Fragment``),
+differences are the floats of decimal exponents -5 to -9 (``1e-05``, ``1e-07``: orjson writes
+``0.00001``, ``1e-7``; ``float_text.orjson_writes_repr`` says which), which are handed to it
+as their ``repr`` (``orjson.Fragment``),
 and everything orjson would write otherwise or refuse: NaN and the infinities, integers
 beyond 64 bits, keys that are not strings, subclasses (an ``IntEnum``, ``numpy.float64``),
 enums, UUIDs, dataclasses, dates. Any of those, or anything else unknown, takes the
@@ -23,7 +24,7 @@ from typing import Any
 
 import orjson
 
-from spindlebench.formats.float_text import POSITIONAL_BELOW, POSITIONAL_FROM
+from spindlebench.formats.float_text import orjson_writes_repr
 
 #: orjson's integer range (64 bits, signed or unsigned); ``json`` has none.
 _INT_FROM, _INT_BELOW = -(1 << 63), 1 << 64
@@ -51,7 +52,7 @@ def _plain(value: Any) -> Any:
     if kind is str or kind is bool or value is None:
         return value
     if kind is float:
-        if value == 0.0 or POSITIONAL_FROM <= abs(value) < POSITIONAL_BELOW:
+        if orjson_writes_repr(value):
             return value
         if value != value or value in (float("inf"), float("-inf")):
             raise _UnsureError  # json writes NaN/Infinity, or refuses with allow_nan=False

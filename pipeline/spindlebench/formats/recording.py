@@ -60,7 +60,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from spindlebench.core.atomic import atomic_path
+from spindlebench.core.atomic import atomic_file
 from spindlebench.core.errors import SpindlebenchError, columns_hint, quoted_name
 from spindlebench.core.files import MAX_RECORDING_BYTES, check_input
 from spindlebench.core.names import SENSORS
@@ -742,11 +742,16 @@ def write_recording(csv_path: str | os.PathLike[str], frame: pd.DataFrame,
     csv_path, json_path = check_recording_targets(csv_path)
     # the JSON context is the outer one, so the CSV is moved into place first: if that move
     # fails, the sidecar is not replaced either (no new sidecar beside an old CSV)
-    with atomic_path(json_path) as tmp_json, atomic_path(csv_path) as tmp_csv:
-        data = write_csv(tmp_csv, frame, float_format)
-        paired = {**sidecar, "recording_sha256": sha256_written(tmp_csv, data)}
+    with atomic_file(json_path) as part_json, atomic_file(csv_path) as part_csv:
+        data = csv_bytes(frame, float_format)
+        if data is None:  # pandas writes it
+            part_csv.close()
+            write_csv(part_csv.path, frame, float_format)
+        else:
+            part_csv.write(data)
+        paired = {**sidecar, "recording_sha256": sha256_written(part_csv.path, data)}
         text = indented_json(paired, allow_nan=False) + "\n"  # json.dumps' text
-        tmp_json.write_text(text, encoding="utf-8")
+        part_json.write(text.encode("utf-8"))
     return csv_path
 
 
@@ -761,9 +766,18 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame,
     if float_format is None:
         from spindlebench.formats.table_csv import write_table
 
-        write_table(path, frame)
-        return
+        return write_table(path, frame)
     frame.to_csv(path, index=False, float_format=float_format, lineterminator="\n")
+    return None
+
+
+def csv_bytes(frame: pd.DataFrame, float_format: str | None = FLOAT_FORMAT) -> bytes | None:
+    """The bytes ``write_csv`` writes, or None where pandas is left to write them."""
+    if float_format is not None:
+        return None
+    from spindlebench.formats.table_csv import table_bytes
+
+    return table_bytes(frame)
 
 
 def read_back(csv_path: str | os.PathLike[str], frame: pd.DataFrame,

@@ -30,7 +30,7 @@ from spindlebench.core.errors import SpindlebenchError
 from spindlebench.core.files import check_input
 from spindlebench.core.names import FINGERPRINT_KEYS as KEYS
 from spindlebench.core.paths import SCENARIOS_DIR
-from spindlebench.core.provenance import sha256_file
+from spindlebench.core.provenance import sha256_unchanged
 from spindlebench.formats.toml import Table, load_toml
 
 MACHINES_DIR: Path = SCENARIOS_DIR / "machines"
@@ -126,10 +126,10 @@ def _load_cached(path: Path, sha256: str) -> Machine:
 
 
 def _load(path: Path) -> Machine:
-    check_input(path, "machine file (.toml)")  # before sha256_file reads a FIFO forever
+    check_input(path, "machine file (.toml)")  # before the hash reads a FIFO forever
     if not path.is_file():
         raise SpindlebenchError(f"{path}: machine file not found")
-    return _load_cached(path, sha256_file(path))
+    return _load_cached(path, sha256_unchanged(path))  # re-read only when changed
 
 
 def _read_target(t: Table) -> Target:

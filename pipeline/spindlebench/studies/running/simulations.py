@@ -9,6 +9,8 @@ line every study shares is ``commands.arguments.register_study_command``.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -33,18 +35,19 @@ def failure_path(replica: int, experiment: Experiment) -> str:
     return f"{run_dir(replica)}/{experiment.id}.error.json"
 
 
-def on_any_worker(scenario: Scenario) -> Scenario:
-    """``scenario`` with every file it names made absolute here, before it is submitted: a
-    Dask worker started in another folder read ``scenarios/studies/x.toml`` relative to its
-    own folder and every simulation failed with ``FileNotFoundError``. The same for the
-    local pool, so a recording's sidecar reads the same on every backend."""
+def on_any_worker(scenario: Scenario,
+                  resolve: Callable[[Path], Path] = Path.resolve) -> Scenario:
+    """``scenario`` with every file it names made absolute here (by ``resolve``), before it
+    is submitted: a Dask worker started in another folder read ``scenarios/studies/x.toml``
+    relative to its own folder and every simulation failed with ``FileNotFoundError``. The
+    same for the local pool, so a recording's sidecar reads the same on every backend."""
     if isinstance(scenario.ambient, MeasuredAmbient):
         scenario = replace(scenario, ambient=replace(scenario.ambient,
-                                                     file=scenario.ambient.file.resolve()))
+                                                     file=resolve(scenario.ambient.file)))
     if scenario.initial.from_file is not None:
         scenario = replace(scenario, initial=replace(
-            scenario.initial, from_file=scenario.initial.from_file.resolve()))
-    return replace(scenario, path=Path(scenario.path).resolve())
+            scenario.initial, from_file=resolve(scenario.initial.from_file)))
+    return replace(scenario, path=resolve(Path(scenario.path)))
 
 
 class Simulations:
@@ -58,6 +61,10 @@ class Simulations:
         self.family = family
         self.fmu = fmu
         self._keys: dict[str, tuple[int, Experiment]] = {}
+        #: the files the study's scenarios name (the study's, a measured ambient's) and the
+        #: FMU, resolved at their first task: each of a thousand tasks resolved them again,
+        #: a ``stat`` per part of each path
+        self._resolve = functools.cache(Path.resolve)
 
     def claim(self) -> bool:
         """Pin the study's content and the FMU (True: resuming a folder pinned to them)."""
@@ -85,8 +92,8 @@ class Simulations:
         """The task that simulates one run (in a worker; the result comes back here)."""
         key = f"simulate r{replica} {experiment.id}"
         self._keys[key] = (replica, experiment)
-        scenario = on_any_worker(scenario_for(self.study, replica, experiment))
-        return Task(key, simulate_job, (scenario, self.fmu.resolve()), kind="simulation")
+        scenario = on_any_worker(scenario_for(self.study, replica, experiment), self._resolve)
+        return Task(key, simulate_job, (scenario, self._resolve(self.fmu)), kind="simulation")
 
     def store_outcome(self, outcome: Outcome) -> tuple[int, Experiment]:
         """Write a simulation's recording (or its error); return which run it was."""
