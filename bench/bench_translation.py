@@ -10,8 +10,8 @@ machine), ``RUNS`` times each:
 
 - ``explicit_ode`` alone in a fresh interpreter (imports included), with an empty cache
   folder (the translation, then the file written) and then with the file there;
-- a small ``spindlebench calibrate`` end to end (a 1 h twin recording of 2 sensors and the
-  drift, one parameter fitted), the same two ways.
+- a small ``spindlebench calibrate`` end to end (the 30 min ``scenarios/examples/quick.toml``
+  recording through 2 sensors and the drift, one parameter fitted), the same two ways.
 
 The minimum and the median are printed with the ratio of cold to warm, and written to
 ``bench/results/bench_translation.json`` with the machine, load and date.
@@ -36,24 +36,8 @@ from results import record
 
 RUNS = 3
 REPO = Path(__file__).resolve().parents[1]
-#: The twin that is calibrated (tests/system/test_kill9.py's, one hour).
-TWIN = """description = "bench_translation calibration twin"
-duration_s = 3600
-step_s = 60.0
-sample_interval_s = 60.0
-seed = 5
-[speed]
-kind = "steps"
-steps = [{at_s = 0, rpm = 6000}, {at_s = 1800, rpm = 0}]
-[feed]
-kind = "with_spindle"
-x_mm_per_min = 1500
-y_mm_per_min = 1500
-[ambient]
-kind = "season"
-low_C = 19
-high_C = 22
-"""
+#: The twin that is calibrated: the shipped 30-minute smoke-test scenario.
+TWIN = REPO / "scenarios" / "examples" / "quick.toml"
 
 
 def spindlebench() -> list[str]:
@@ -75,15 +59,14 @@ def main() -> int:
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-translation-") as name:
         folder = Path(name)
-        (folder / "twin.toml").write_text(TWIN, encoding="utf-8")
         (folder / "map.toml").write_text(recording_map_text(["T1", "T4"]), encoding="utf-8")
-        subprocess.run([*spindlebench(), "simulate", "twin.toml", "-o", "twin.csv", "-q"],
+        subprocess.run([*spindlebench(), "simulate", str(TWIN), "-o", "twin.csv", "-q"],
                        cwd=folder, check=True)
         commands = {
             "explicit_ode in a fresh interpreter": [
                 sys.executable, "-c", "from spindlebench.model.equations import explicit_ode; "
                 f"explicit_ode({str(REPO / 'models')!r})"],
-            "small calibrate (1 h, 1 parameter)": [
+            "small calibrate (30 min, 1 parameter)": [
                 *spindlebench(), "calibrate", "twin.csv", "--map", "map.toml", "-o",
                 "out/twin.toml", "--models", str(REPO / "models"), "--fit",
                 "front_bearing_friction_f0", "-q"],
