@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from conftest import MODELS
+from spindlebench.core.errors import StaleCacheWarning
 from spindlebench.model import DEFAULT_SEGMENTS, MODEL_CLASS, MODEL_FILE, ode_cache
 from spindlebench.model.equations import ExplicitOde, explicit_ode
 
@@ -48,7 +49,7 @@ def test_a_cached_model_is_the_translated_one_bit_for_bit(cache):
     assert loaded is not translated
     _same(translated, loaded)
     entry.write_text(entry.read_text().replace('"segments": ', '"segments": 1'))
-    with pytest.warns(ode_cache.StaleOdeCacheWarning, match=str(entry)):
+    with pytest.warns(StaleCacheWarning, match=str(entry)):
         assert ode_cache._load(entry, entry.stem) is None  # the hash no longer matches
 
 
@@ -77,7 +78,7 @@ def test_a_damaged_entry_is_named_and_not_used(cache, damage):
         if damage == "function edited":
             entry["function"] = "y"
         file.write_text(json.dumps(entry))  # "incomplete": hash right, the fields missing
-    with pytest.warns(ode_cache.StaleOdeCacheWarning, match=str(file)):
+    with pytest.warns(StaleCacheWarning, match=str(file)):
         assert ode_cache._load(file, "k") is None
 
 

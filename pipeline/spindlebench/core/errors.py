@@ -29,3 +29,8 @@ def columns_hint(header: list[str] | tuple[str, ...], wanted: str) -> str:
 def quoted_name(name: str) -> str:
     """A column name as a message quotes it: in quotes, cut to a few words."""
     return repr(name if len(name) <= _QUOTED_CHARS else name[:_QUOTED_CHARS - 1] + "…")
+
+
+class StaleCacheWarning(UserWarning):
+    """A cache file does not match its inputs or its own checksum; it is recomputed (the
+    per-user caches: soak states, translated models)."""

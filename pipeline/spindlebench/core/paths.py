@@ -62,6 +62,13 @@ def user_cache_dir() -> Path:
         return Path(os.environ[CACHE_ENV])
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(base) / "spindlebench"
+
+
+def user_cache_folder(name: str, env: str) -> Path:
+    """One cache's folder: ``$env`` where set, else ``name`` in ``user_cache_dir()``."""
+    return Path(os.environ.get(env) or user_cache_dir() / name)
+
+
 #: The folders whose existing files are shipped with the package (with the committed FMU): a
 #: command writing there would replace the default machine, a climate or the model.
 SHIPPED_DIRS: tuple[Path, ...] = (MODELS_DIR, SCENARIOS_DIR)

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -31,7 +30,8 @@ import casadi as ca
 import numpy as np
 
 from spindlebench.core import atomic
-from spindlebench.core.paths import user_cache_dir
+from spindlebench.core.errors import StaleCacheWarning
+from spindlebench.core.paths import user_cache_folder
 from spindlebench.core.provenance import sha256_file, source_sha256
 from spindlebench.model.equations import ExplicitOde, build_explicit_ode
 from spindlebench.model.frontend import check_segments, model_source, translate
@@ -48,14 +48,10 @@ ODE_CODE = ("spindlebench.model.frontend", "spindlebench.model.units",
 _PLAIN = ("states", "inputs", "parameters", "outputs", "segments", "units", "descriptions")
 
 
-class StaleOdeCacheWarning(UserWarning):
-    """A cached ODE file did not match its key or its hash and is computed again."""
-
-
 def cache_dir() -> Path:
     """Where translated models are kept: ``$SPINDLEBENCH_ODE_CACHE``, else ``ode/`` in the
     per-user cache (``paths.user_cache_dir``), never the current folder."""
-    return Path(os.environ.get(CACHE_ENV) or user_cache_dir() / "ode")
+    return user_cache_folder("ode", CACHE_ENV)
 
 
 def ode_key(source: Path, segments: int, model_class: str) -> str:
@@ -97,7 +93,7 @@ def _store(file: Path, key: str, ode: ExplicitOde) -> None:
         atomic.write_text(file, json.dumps(entry))
     except OSError as exc:
         warnings.warn(f"{file}: could not keep the translated model ({exc.strerror or exc}); "
-                      "the next run translates it again", StaleOdeCacheWarning, stacklevel=3)
+                      "the next run translates it again", StaleCacheWarning, stacklevel=3)
 
 
 def _load(file: Path, key: str) -> ExplicitOde | None:
@@ -135,5 +131,5 @@ def _entry_sha256(entry: dict[str, Any]) -> str:
 
 def _stale(file: Path, why: str) -> None:
     warnings.warn(f"{file}: translated-model cache {why}; translating again",
-                  StaleOdeCacheWarning, stacklevel=3)
+                  StaleCacheWarning, stacklevel=3)
     return None

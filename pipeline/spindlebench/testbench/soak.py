@@ -34,15 +34,14 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
 import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from spindlebench.core import atomic
-from spindlebench.core.errors import SpindlebenchError
-from spindlebench.core.paths import user_cache_dir
+from spindlebench.core.errors import SpindlebenchError, StaleCacheWarning
+from spindlebench.core.paths import user_cache_folder
 from spindlebench.core.provenance import sha256_file, source_sha256
 from spindlebench.testbench.runner import co_simulate
 from spindlebench.testbench.scenario import (
@@ -79,7 +78,7 @@ FMU_STATE_MAGIC = b"SBFMUST\x00"
 def cache_dir() -> Path:
     """Where soak states are kept: ``$SPINDLEBENCH_SOAK_CACHE``, else ``soak/`` in the
     per-user cache (``paths.user_cache_dir``), never the current folder."""
-    return Path(os.environ.get(CACHE_ENV) or user_cache_dir() / "soak")
+    return user_cache_folder("soak", CACHE_ENV)
 
 
 def soak_scenario(scenario: Scenario) -> Scenario:
@@ -213,10 +212,6 @@ def states_sha256(states: dict[str, float]) -> str:
     text = json.dumps({str(k): float(v) for k, v in states.items()}, sort_keys=True,
                       separators=(",", ":"))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
-class StaleCacheWarning(UserWarning):
-    """A cache file does not match its inputs or its own checksum; it is recomputed."""
 
 
 def _read_cached(file: Path, key: str) -> dict[str, float] | None:
