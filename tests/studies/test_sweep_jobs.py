@@ -236,6 +236,26 @@ def test_a_pickled_job_gives_the_same_truths_and_result_frames(swept):
                 assert ours[train].to_csv(index=False) == theirs[train].to_csv(index=False)
 
 
+def test_a_replica_task_stores_its_shared_truths_once(swept):
+    """A replica's task holds one job per condition, all with the same truth frames: pickled
+    together they store those truths once (``jobs._packed_frames``), not once per job, and
+    each job unpickles to the same truths."""
+    import pickle
+
+    sweep, _ = swept
+    task_jobs = tuple(sweep.evaluation_task(1, c, sweep.trains).args[0]
+                      for c in sweep.conditions)
+    assert len(task_jobs) >= 3
+    one = len(pickle.dumps(task_jobs[0], protocol=pickle.HIGHEST_PROTOCOL))
+    together = pickle.dumps(task_jobs, protocol=pickle.HIGHEST_PROTOCOL)
+    truth_bytes = sum(t.to_numpy().nbytes for t in task_jobs[0].truths.values())
+    assert truth_bytes > one / 2  # the truths are most of a job
+    assert len(together) < one + truth_bytes / 2  # ... and are there once for all jobs
+    for sent, got in zip(task_jobs, pickle.loads(together), strict=True):
+        for name, truth in sent.truths.items():
+            pd.testing.assert_frame_equal(got.truths[name], truth, check_exact=True)
+
+
 def test_measured_frame_is_the_frame_pandas_makes_of_its_values(swept):
     """``measured_frame`` hands pandas its block as it is (``jobs._block_frame``): the frame
     pandas' constructor makes of the same (samples, columns) values, to the memory layout
