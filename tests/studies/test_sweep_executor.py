@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import os
 import time
 
@@ -314,3 +315,19 @@ def test_the_scheduler_is_handed_sealed_tasks_and_the_workers_hold_sealed_values
         assert spec.func is pickle.loads
         assert [type(arg) for arg in spec.args] == [bytes]
         assert held == "bytes"
+
+
+def test_cancelling_a_sealed_task_s_future_cancels_the_task_it_stands_for(tmp_path):
+    """``SealedExecutor``'s futures stand for the inner executor's (a Dask client's, which
+    passes a cancel on to the scheduler): a task cancelled while it waits is never run."""
+    from spindlebench.studies.running.executor import SealedExecutor
+
+    ran = tmp_path / "ran"  # a task runs a copy of what it was given: a file tells
+    with cf.ThreadPoolExecutor(max_workers=1) as pool:
+        executor = SealedExecutor(pool)
+        first = executor.submit(time.sleep, 1.0)  # holds the one thread for a second
+        second = executor.submit(ran.touch)
+        assert second.cancel()
+        assert first.result() is None
+    assert not ran.exists()  # the pool ran the first task only
+

@@ -393,12 +393,22 @@ class SealedExecutor(cf.Executor):
 
 def _unsealed(sealed: cf.Future[bytes]) -> cf.Future[Any]:
     """A future of ``pickle.loads`` of ``sealed``'s bytes (its exception or cancellation as
-    they are)."""
+    they are). Cancelling it cancels ``sealed`` too, which a Dask client's executor passes
+    on to the scheduler (``distributed.cfexecutor``): the task is dropped, not run for
+    nobody."""
     future: cf.Future[Any] = cf.Future()
+
+    def cancelled(future: cf.Future[Any]) -> None:
+        if future.cancelled():
+            sealed.cancel()
+
+    future.add_done_callback(cancelled)
 
     def done(sealed: cf.Future[bytes]) -> None:
         if sealed.cancelled():
             future.cancel()
+            return
+        if future.cancelled():  # cancelled here while it ran: nobody waits for its value
             return
         try:
             future.set_result(pickle.loads(sealed.result()))
