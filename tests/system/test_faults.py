@@ -698,8 +698,16 @@ def test_calibrate_says_what_is_wrong_instead_of_did_not_converge(tmp_path, caps
 
 def test_a_signal_right_after_the_part_file_is_made_leaves_no_part_file(tmp_path, monkeypatch):
     """Ctrl-C between making the part file (then ``mkstemp``) and the ``try`` that removes
-    it left ``.manifest.json.<pid>.<random>.part`` in a study folder."""
+    it left ``.manifest.json.<pid>.<random>.part`` in a study folder; and, with the file
+    made open, its handle open in the process (a notebook's or a library user's, which
+    goes on after the Ctrl-C)."""
     from spindlebench.core import atomic, interrupts
+
+    def open_handles():
+        return {fd: os.readlink(f"/proc/self/fd/{fd}") for fd in os.listdir("/proc/self/fd")
+                if os.path.exists(f"/proc/self/fd/{fd}")}
+
+    before = open_handles()
 
     made = atomic._create
 
@@ -718,3 +726,5 @@ def test_a_signal_right_after_the_part_file_is_made_leaves_no_part_file(tmp_path
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         interrupts._pending.clear()
     assert list(tmp_path.iterdir()) == []
+    left = {fd: name for fd, name in open_handles().items() if fd not in before}
+    assert not [name for name in left.values() if ".part" in name], left  # "... (deleted)"

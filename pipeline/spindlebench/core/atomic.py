@@ -86,8 +86,28 @@ def atomic_file(target: str | os.PathLike[str]) -> Iterator[PartFile]:
     finally:
         if part is not None:
             part.close()
+        elif tmp is not None:  # a signal between making the file and holding its handle
+            _close_handles_of(tmp)
         if tmp is not None:
             tmp.unlink(missing_ok=True)
+
+
+def _close_handles_of(part: Path) -> None:
+    """Close this process's handles of file ``part``: those a signal left open (it lands
+    at the first bytecode after ``os.open`` returned, before the handle has a name). Read
+    from ``/proc/self/fd`` (Linux; elsewhere such a handle stays open until the process
+    ends). Only on that path, so a write pays nothing for it."""
+    fds = "/proc/self/fd"
+    if not os.path.isdir(fds):
+        return
+    try:
+        wanted = os.path.realpath(part)
+    except OSError:
+        return
+    for name in os.listdir(fds):
+        with contextlib.suppress(OSError, ValueError):
+            if os.readlink(os.path.join(fds, name)) == wanted:
+                os.close(int(name))
 
 
 def _create(part: Path, folder: Path) -> int | None:
