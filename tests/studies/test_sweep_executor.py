@@ -331,3 +331,34 @@ def test_cancelling_a_sealed_task_s_future_cancels_the_task_it_stands_for(tmp_pa
         assert first.result() is None
     assert not ran.exists()  # the pool ran the first task only
 
+
+
+def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
+    """Each local worker imports the main script: one that starts its run at the top level,
+    without ``if __name__ == "__main__":``, started it again in every worker, which died
+    with a traceback, and the run said only "worker process died". Now each worker says in
+    one line what to do; with the guard the same script runs its task."""
+    import subprocess
+    import sys
+
+    body = ("import os\n"
+            "from spindlebench.studies.running.executor import Task, TaskRunner\n"
+            "{indent}stats = TaskRunner(workers=1, progress=False).run([Task('t', os.getpid)])\n"
+            "{indent}print('done', stats.total('task'))\n")
+    env = {**os.environ, "PYTHONPATH": str(REPO / "pipeline")}
+    for guarded in (False, True):
+        script = tmp_path / f"run_{guarded}.py"
+        text = body.format(indent="    " if guarded else "")
+        if guarded:
+            text = text.replace("    stats", "if __name__ == '__main__':\n    stats", 1)
+        script.write_text(text, encoding="utf-8")
+        run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                             env=env, timeout=120, check=False)
+        errors = [line for line in run.stderr.splitlines() if line.startswith("error: ")]
+        if guarded:
+            assert run.returncode == 0 and errors == [], run.stderr
+        else:
+            assert errors and "Traceback" not in run.stderr, run.stderr
+            assert f"error: {script}: a worker process imported it" in errors[0]
+            assert '`if __name__ == "__main__":`' in errors[0]
+        assert "done" in run.stdout, run.stdout + run.stderr
