@@ -336,29 +336,45 @@ def test_cancelling_a_sealed_task_s_future_cancels_the_task_it_stands_for(tmp_pa
 def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
     """Each local worker imports the main script: one that starts its run at the top level,
     without ``if __name__ == "__main__":``, started it again in every worker, which died
-    with a traceback, and the run said only "worker process died". Now each worker says in
-    one line what to do; with the guard the same script runs its task."""
+    with a traceback, and the run said only "worker process died". Now the script stops
+    before the pool starts, in one line naming its file and line (``main_guard``); where its
+    source is not a ``.py`` file to read, each worker says the same in one line, no
+    traceback; with the guard the same script runs its task."""
     import subprocess
     import sys
 
     body = ("import os\n"
             "from spindlebench.studies.running.executor import Task, TaskRunner\n"
+            "{guard}"
             "{indent}stats = TaskRunner(workers=1, progress=False).run([Task('t', os.getpid)])\n"
             "{indent}print('done', stats.total('task'))\n")
     env = {**os.environ, "PYTHONPATH": str(REPO / "pipeline")}
-    for guarded in (False, True):
-        script = tmp_path / f"run_{guarded}.py"
-        text = body.format(indent="    " if guarded else "")
-        if guarded:
-            text = text.replace("    stats", "if __name__ == '__main__':\n    stats", 1)
-        script.write_text(text, encoding="utf-8")
-        run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                             env=env, timeout=120, check=False)
-        errors = [line for line in run.stderr.splitlines() if line.startswith("error: ")]
-        if guarded:
-            assert run.returncode == 0 and errors == [], run.stderr
-        else:
-            assert errors and "Traceback" not in run.stderr, run.stderr
-            assert f"error: {script}: a worker process imported it" in errors[0]
-            assert '`if __name__ == "__main__":`' in errors[0]
-        assert "done" in run.stdout, run.stdout + run.stderr
+
+    def run(name, guarded):
+        script = tmp_path / name
+        script.write_text(body.format(guard="if __name__ == '__main__':\n" if guarded else "",
+                                      indent="    " if guarded else ""), encoding="utf-8")
+        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                              env=env, timeout=120, check=False)
+        return script, done
+
+    script, done = run("guarded.py", guarded=True)
+    assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
+    script, done = run("unguarded.py", guarded=False)
+    assert done.returncode != 0 and "done" not in done.stdout
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"spindlebench.core.errors.SpindlebenchError: {script}:3: starts a "
+                           "run with worker processes at the script's top level"), done.stderr
+    assert '`if __name__ == "__main__":`' in last
+    assert "worker process died" not in done.stderr
+    package = tmp_path / "package"  # a package's __main__ is never imported again
+    package.mkdir()
+    (package / "__init__.py").write_text("", encoding="utf-8")
+    (package / "__main__.py").write_text((tmp_path / "unguarded.py").read_text())
+    done = subprocess.run([sys.executable, "-m", "package"], capture_output=True, text=True,
+                          env=env, cwd=tmp_path, timeout=120, check=False)
+    assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
+    script, done = run("unguarded_script", guarded=False)  # not .py: the workers tell
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error: ")]
+    assert errors and "Traceback" not in done.stderr, done.stderr
+    assert errors[0].startswith(f"error: {script}: starts a run with worker processes")

@@ -470,13 +470,19 @@ def freeze_start_up() -> None:
     gc.freeze()
 
 
-def _importing_main_in_a_worker() -> bool:
-    """Whether this process is a worker of a local pool still importing the main script
-    (multiprocessing's own test, ``spawn._check_not_importing_main``): a script that starts
-    a run at its top level then starts it again in each worker, where it found the results
-    folder locked by the real run and died, which the run reported only as "worker process
-    died" for every task."""
-    return bool(getattr(multiprocessing.current_process(), "_inheriting", False))
+def _refuse_an_unguarded_main() -> None:
+    """Stop, in one line, a run with local workers that each worker would start again
+    (``main_guard``): in the script, before anything starts; in a worker importing it (where
+    the script's source could not be read), with the same line and no traceback."""
+    from spindlebench.studies.running import main_guard
+
+    if main_guard.importing_main_in_a_worker():
+        print(f"error: {main_guard.guard_message(sys.argv[0] or 'the main script')}",
+              file=sys.stderr, flush=True)
+        raise SystemExit(1)
+    unguarded = main_guard.unguarded_main_line()
+    if unguarded is not None:
+        raise SpindlebenchError(main_guard.guard_message(*unguarded))
 
 
 class TaskRunner:
@@ -488,13 +494,8 @@ class TaskRunner:
         if workers is not None and workers < 0:
             raise SpindlebenchError(f"--workers must be >= 0, got {workers}")
         self.workers = default_workers() if workers is None else workers
-        if self.workers and not dask_address and _importing_main_in_a_worker():
-            # a line, not a traceback, from each worker that imports the script, and its end
-            print(f"error: {sys.argv[0] or 'the main script'}: a worker process imported it "
-                  "and it started a run of its own; start the run under `if __name__ == "
-                  "\"__main__\":` (each worker imports the main script, as Python's "
-                  "multiprocessing does)", file=sys.stderr, flush=True)
-            raise SystemExit(1)
+        if self.workers and not dask_address:
+            _refuse_an_unguarded_main()
         if dask_address is not None and dask_address.startswith("inproc://"):
             raise SpindlebenchError(f"--dask-address {dask_address!r}: an in-process address "
                                     "names a scheduler inside this very process, and there is "
