@@ -254,6 +254,21 @@ def test_a_replica_task_stores_its_shared_truths_once(swept):
     for sent, got in zip(task_jobs, pickle.loads(together), strict=True):
         for name, truth in sent.truths.items():
             pd.testing.assert_frame_equal(got.truths[name], truth, check_exact=True)
+    # a truth changed after a pickling goes as it is now: a value in place, a column set
+    # anew, a column added, the columns renamed
+    job = dataclasses.replace(task_jobs[0], truths={
+        name: truth.copy() for name, truth in task_jobs[0].truths.items()})
+    truth = next(iter(job.truths.values()))
+    column = truth.columns[1]
+    changes = [lambda: truth.iloc.__setitem__((0, 1), -1.0),
+               lambda: truth.__setitem__(column, truth[column] + 1.0),
+               lambda: truth.__setitem__("added", 2.0),
+               lambda: setattr(truth, "columns", [f"{c}_renamed" for c in truth.columns])]
+    for change in changes:
+        pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)
+        change()
+        got = pickle.loads(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL))
+        pd.testing.assert_frame_equal(next(iter(got.truths.values())), truth, check_exact=True)
 
 
 def test_measured_frame_is_the_frame_pandas_makes_of_its_values(swept):

@@ -122,8 +122,10 @@ def _packed_truths(truths: dict[str, pd.DataFrame]) -> dict[str, Any]:
     shared: dict[tuple[str, ...], pd.Index] = {}
     for key, frame in truths.items():
         known = _packed_frames.get(id(frame))
-        if known is not None and known[0]() is frame:
-            packed[key] = known[1]
+        if known is not None and known[0]() is frame and known[1] is frame.columns \
+                and getattr(frame._mgr, "is_single_block", False) \
+                and frame._mgr.blocks[0].values is known[2]:
+            packed[key] = known[3]
             continue
         index = frame.index
         if not (getattr(frame._mgr, "is_single_block", False) and isinstance(index, pd.RangeIndex)
@@ -136,16 +138,19 @@ def _packed_truths(truths: dict[str, pd.DataFrame]) -> dict[str, Any]:
             continue
         names = tuple(frame.columns.tolist())
         packed[key] = (values, shared.setdefault(names, frame.columns))
-        _packed_frames[id(frame)] = (weakref.ref(frame), packed[key])
+        _packed_frames[id(frame)] = (weakref.ref(frame), frame.columns,
+                                     frame._mgr.blocks[0].values, packed[key])
         weakref.finalize(frame, _packed_frames.pop, id(frame), None)
     return packed
 
 
-#: ``_packed_truths``'s pair of each truth frame alive, by the frame's ``id`` (with a weak
-#: reference to tell a new frame at a reused address from it); a frame's entry goes with it.
-#: Safe because a truth frame is not changed after it is made (the sweep's are read from
-#: their recordings and kept as read).
-_packed_frames: dict[int, tuple[weakref.ref[pd.DataFrame], tuple[np.ndarray, pd.Index]]] = {}
+#: ``_packed_truths``'s pair of each truth frame alive, by the frame's ``id``, with what
+#: tells that it still stands for the frame: a weak reference (not a new frame at a reused
+#: address), the frame's columns object and its block's array (a column set, added or
+#: renamed gives the frame new ones; a value changed in place is in the pair's view too).
+#: A frame's entry goes with it.
+_packed_frames: dict[int, tuple[weakref.ref[pd.DataFrame], pd.Index, np.ndarray,
+                                tuple[np.ndarray, pd.Index]]] = {}
 
 
 def _unpickled_job(fields: dict[str, Any]) -> EvaluationJob:
