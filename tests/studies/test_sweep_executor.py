@@ -360,6 +360,12 @@ def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
 
     script, done = run("guarded.py", guarded=True)
     assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
+    script.write_text(script.read_text().replace("if __name__ == '__main__':",
+                                                 "if len(sys.argv) and '__main__' == __name__:")
+                      .replace("import os\n", "import os\nimport sys\n"))
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          env=env, timeout=120, check=False)  # a guard written another way
+    assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
     script, done = run("unguarded.py", guarded=False)
     assert done.returncode != 0 and "done" not in done.stdout
     last = done.stderr.strip().splitlines()[-1]
