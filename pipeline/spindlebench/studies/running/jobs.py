@@ -138,9 +138,10 @@ def _packed_truths(truths: dict[str, pd.DataFrame]) -> dict[str, Any]:
             continue
         names = tuple(frame.columns.tolist())
         packed[key] = (values, shared.setdefault(names, frame.columns))
+        if known is None or known[0]() is not frame:  # one finalizer a frame, not a change
+            weakref.finalize(frame, _packed_frames.pop, id(frame), None)
         _packed_frames[id(frame)] = (weakref.ref(frame), frame.columns,
                                      frame._mgr.blocks[0].values, packed[key])
-        weakref.finalize(frame, _packed_frames.pop, id(frame), None)
     return packed
 
 
