@@ -332,7 +332,6 @@ def test_cancelling_a_sealed_task_s_future_cancels_the_task_it_stands_for(tmp_pa
     assert not ran.exists()  # the pool ran the first task only
 
 
-
 def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
     """Each local worker imports the main script: one that starts its run at the top level,
     without ``if __name__ == "__main__":``, started it again in every worker, which died
@@ -350,21 +349,22 @@ def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
             "{indent}print('done', stats.total('task'))\n")
     env = {**os.environ, "PYTHONPATH": str(REPO / "pipeline")}
 
+    def python(*args):
+        return subprocess.run([sys.executable, *map(str, args)], capture_output=True,
+                              text=True, env=env, cwd=tmp_path, timeout=120, check=False)
+
     def run(name, guarded):
         script = tmp_path / name
         script.write_text(body.format(guard="if __name__ == '__main__':\n" if guarded else "",
                                       indent="    " if guarded else ""), encoding="utf-8")
-        done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                              env=env, timeout=120, check=False)
-        return script, done
+        return script, python(script)
 
     script, done = run("guarded.py", guarded=True)
     assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
     script.write_text(script.read_text().replace("if __name__ == '__main__':",
                                                  "if len(sys.argv) and '__main__' == __name__:")
                       .replace("import os\n", "import os\nimport sys\n"))
-    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                          env=env, timeout=120, check=False)  # a guard written another way
+    done = python(script)  # a guard written another way
     assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
     script, done = run("unguarded.py", guarded=False)
     assert done.returncode != 0 and "done" not in done.stdout
@@ -377,8 +377,7 @@ def test_a_script_that_runs_at_its_top_level_is_told_to_guard_it(tmp_path):
     package.mkdir()
     (package / "__init__.py").write_text("", encoding="utf-8")
     (package / "__main__.py").write_text((tmp_path / "unguarded.py").read_text())
-    done = subprocess.run([sys.executable, "-m", "package"], capture_output=True, text=True,
-                          env=env, cwd=tmp_path, timeout=120, check=False)
+    done = python("-m", "package")
     assert done.returncode == 0 and "done 1" in done.stdout, done.stderr
     script, done = run("unguarded_script", guarded=False)  # not .py: the workers tell
     errors = [line for line in done.stderr.splitlines() if line.startswith("error: ")]
