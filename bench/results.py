@@ -4,7 +4,8 @@
 Every bench script prints its table for a reader and, at the end of its ``main``, hands the
 same numbers to ``record`` so that docs and the lead can quote a figure with the machine, the
 load and the date it was measured on (a number in CPU seconds without its load and machine is
-not comparable across runs on this shared machine). The file is written atomically
+not comparable across runs on this shared machine), and with the speed of a CPU second at the
+script's start and end (``speed_probe_ms``). The file is written atomically
 (``spindlebench.core.atomic``): a benchmark interrupted half-way leaves the previous result.
 """
 
@@ -14,6 +15,7 @@ import datetime
 import json
 import os
 import subprocess
+import time
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +23,37 @@ from spindlebench.core import atomic
 
 #: Where the results go: ``bench/results/<script>.json`` beside the scripts.
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
+
+
+#: The fixed work ``speed_probe_ms`` times: this many integer additions in a Python loop.
+PROBE_ADDITIONS = 1_000_000
+#: ``speed_probe_ms`` keeps the fastest of this many timings (a slower one is interference).
+PROBE_REPEATS = 3
+
+
+def speed_probe_ms() -> float:
+    """CPU milliseconds of a fixed pure-Python workload (``PROBE_ADDITIONS`` additions), the
+    fastest of ``PROBE_REPEATS``: how much work a CPU second did when a figure was measured.
+
+    Why: CPU seconds are not a fixed amount of work on this shared virtual machine. On
+    2026-12-03 the same 3 million additions took 0.26 to 0.71 CPU-s within minutes at a load
+    average near 0, their CPU time equal to their wall time (none stolen: a neighbour on the
+    host slows the core itself, which neither the load average nor ``/proc/stat``'s steal
+    time shows), and the 1 008-experiment sweep's
+    simulations cost 2.4x their CPU of the day before. Ratios measured in one run (the goals
+    are ratios or per-figure limits) hold; CPU seconds compare across runs only at similar
+    probes."""
+    best = float("inf")
+    for _ in range(PROBE_REPEATS):
+        start, total = time.process_time(), 0
+        for number in range(PROBE_ADDITIONS):
+            total += number
+        best = min(best, time.process_time() - start)
+    return 1000.0 * best
+
+
+#: The probe when the bench script imported this module (at its start).
+PROBE_AT_START_MS = speed_probe_ms()
 
 
 def cpu_model() -> str:
@@ -56,15 +89,18 @@ def machine() -> dict[str, Any]:
 
 def record(script: str, rows: list[dict], goals: dict | None = None,
            folder: Path = RESULTS_DIR, name: str | None = None) -> Path:
-    """Write ``<folder>/<script>.json`` with the machine, load average, UTC date, git commit,
-    the goals and the rows; return its path. ``script`` is the bench script's stem
-    (``bench_startup``); ``name``, when given, the file's stem instead, for a second kind of
-    run of the same script (``bench_dask --compare`` writes ``bench_dask_compare.json``)."""
+    """Write ``<folder>/<script>.json`` with the machine, load average, speed probe (at the
+    script's start and now), UTC date, git commit, the goals and the rows; return its path.
+    ``script`` is the bench script's stem (``bench_startup``); ``name``, when given, the
+    file's stem instead, for a second kind of run of the same script (``bench_dask
+    --compare`` writes ``bench_dask_compare.json``)."""
     document = {
         "script": script,
         "date_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "machine": machine(),
         "load_average": list(os.getloadavg()),
+        "speed_probe_ms": {"start": PROBE_AT_START_MS, "end": speed_probe_ms(),
+                           "additions": PROBE_ADDITIONS},
         "git_commit": git_commit(),
         "goals": goals or {},
         "rows": rows,

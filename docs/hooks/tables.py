@@ -215,9 +215,13 @@ def bench_provenance(document: Mapping[str, Any], source: str) -> str:
     machine = document.get("machine", {})
     load = document.get("load_average") or []
     commit = document.get("git_commit") or "unknown"
+    probe = document.get("speed_probe_ms") or {}
+    speed = (f", speed probe {probe['start']:.0f} / {probe['end']:.0f} ms at the start / end "
+             f"(CPU time of {probe.get('additions', 0):,} Python additions: lower is faster)"
+             if "start" in probe and "end" in probe else "")
     return (f"From `{source}`: measured {document.get('date_utc', 'at an unknown date')} on "
             f"{machine.get('nproc', '?')} cores ({machine.get('cpu_model', 'unknown CPU')}), "
-            f"load average {' / '.join(f'{v:.1f}' for v in load) or 'unknown'}, commit "
+            f"load average {' / '.join(f'{v:.1f}' for v in load) or 'unknown'}{speed}, commit "
             f"`{commit[:12]}{'+dirty' if commit.endswith('+dirty') else ''}`")
 
 

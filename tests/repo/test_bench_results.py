@@ -28,6 +28,9 @@ def test_record_writes_the_rows_with_machine_load_date_and_commit(tmp_path):
     assert document["machine"]["cpu_model"]
     assert len(document["load_average"]) == 3
     assert document["date_utc"].endswith("+00:00")
+    probe = document["speed_probe_ms"]
+    assert probe["additions"] == results.PROBE_ADDITIONS
+    assert probe["start"] == results.PROBE_AT_START_MS and 0 < probe["end"] < 60_000
     assert document["git_commit"] is None or len(document["git_commit"].split("+")[0]) == 40
     assert [p.name for p in tmp_path.iterdir()] == ["bench_example.json"]  # no temporary left
 

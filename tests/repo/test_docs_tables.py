@@ -211,6 +211,16 @@ def test_an_unknown_bench_file_is_rendered_key_by_key(tmp_path):
     page = tables.speed_section(tables.Sources(root=tmp_path, bench=bench))
     assert "| size | wall_s | peak_MB |" in page and "| 20 | 1.5 | 40 |" in page
     assert "| wall_s | 5 |" in page and "load average 1.0 / 2.0 / 3.0" in page
+    assert "speed probe" not in page  # a file from before the probe: nothing made up
+
+
+def test_the_provenance_gives_the_speed_probe_at_start_and_end():
+    document = {"date_utc": "2026-12-03T00:00:00+00:00", "git_commit": "abc",
+                "load_average": [0.1, 0.2, 0.3], "machine": {"nproc": 2, "cpu_model": "x"},
+                "speed_probe_ms": {"start": 93.4, "end": 236.6, "additions": 1_000_000}}
+    text = tables.bench_provenance(document, "bench/results/bench_x.json")
+    assert "speed probe 93 / 237 ms at the start / end" in text
+    assert "1,000,000 Python additions" in text
 
 
 @pytest.mark.slow
