@@ -35,7 +35,6 @@ from spindlebench.studies.compensation.compensation_file import (
     load_compensation,
 )
 from spindlebench.studies.family.family_file import check_fmu
-from spindlebench.studies.running.store import ResultStore
 
 if TYPE_CHECKING:
     from spindlebench.studies.family.family_file import SweepStudy
@@ -107,6 +106,7 @@ def _run_one(args: argparse.Namespace, out: Path, machine: str | None) -> None:
         summary,
     )
     from spindlebench.studies.family.experiments import probe_geometry_m
+    from spindlebench.studies.running.store import ResultStore  # pandas
 
     study = load_compensation(args.study, machine)
     if args.days is not None and args.days != study.days:
