@@ -41,9 +41,10 @@ def speed_probe_ms() -> float:
     host slows the core itself, which neither the load average nor ``/proc/stat``'s steal
     time shows); the probe itself moved from 41 to 81 ms in three processes started one
     after another. The machine's host changes between sessions as well (the CPU model in
-    ``machine`` names it): the 1 008-experiment sweep's simulations cost 2.4x their CPU of a
-    run three hours earlier on another CPU model. So the probe marks a slow phase rather
-    than correcting a figure; ratios measured in one run hold."""
+    ``machine`` names it): the 1 008-experiment sweep's simulations cost 1.8x their CPU of a
+    run three hours earlier on another CPU model (34.9 against 19.5 CPU-s). So the probe
+    marks a slow phase rather than correcting a figure; ratios measured in one run move far
+    less (that sweep's over its simulations: 2.29x against 2.14x)."""
     best = float("inf")
     for _ in range(PROBE_REPEATS):
         start, total = time.process_time(), 0

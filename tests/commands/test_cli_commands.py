@@ -94,7 +94,6 @@ def test_a_commands_help_imports_only_that_command():
     assert set(commands) <= {"spindlebench.commands.sweep", "spindlebench.commands.arguments"}
 
 
-
 @pytest.mark.parametrize("name", sorted(cli.COMMANDS))
 def test_no_commands_help_imports_a_heavy_library(name):
     """The parser of every command needs numpy at most: ``compensate --help`` imported pandas
