@@ -37,14 +37,15 @@ def speed_probe_ms() -> float:
 
     Why: CPU seconds are not a fixed amount of work on this shared virtual machine. On
     2026-12-03 the same 3 million additions took 0.26 to 0.71 CPU-s within minutes at a load
-    average near 0, their CPU time equal to their wall time (none stolen: a neighbour on the
-    host slows the core itself, which neither the load average nor ``/proc/stat``'s steal
-    time shows); the probe itself moved from 41 to 81 ms in three processes started one
-    after another. The machine's host changes between sessions as well (the CPU model in
-    ``machine`` names it): the 1 008-experiment sweep's simulations cost 1.8x their CPU of a
-    run three hours earlier on another CPU model (34.9 against 19.5 CPU-s). So the probe
-    marks a slow phase rather than correcting a figure; ratios measured in one run move far
-    less (that sweep's over its simulations: 2.29x against 2.14x)."""
+    average near 0, their CPU time equal to their wall time (none stolen: presumably a
+    neighbour on the host slows the core itself, which neither the load average nor
+    ``/proc/stat``'s steal time shows); the probe itself moved from 41 to 81 ms in three
+    processes started one after another. The machine's host changes between sessions as
+    well (the CPU model in ``machine`` names it): the 1 008-experiment sweep's simulations
+    cost 1.8x their CPU of a run three hours earlier on another CPU model (34.9 against
+    19.5 CPU-s). So the probe marks a slow phase rather than correcting a figure; ratios
+    measured in one run move far less (that sweep's over its simulations: 2.29x against
+    2.14x)."""
     best = float("inf")
     for _ in range(PROBE_REPEATS):
         start, total = time.process_time(), 0
