@@ -1,6 +1,6 @@
 """The README's set-up block: exactly two commands, one for the main job and one for the
-tests, and ``.ci/run`` calls the second and nothing else (a heading once said "Three
-commands" above two; CI then ran what the README did not say)."""
+tests, and ``.ci/run`` calls the second and no other make, pytest or python step (the
+heading once said "Three commands" above two)."""
 
 from __future__ import annotations
 
